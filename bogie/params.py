@@ -1,0 +1,416 @@
+"""Parameters of one side of an n-axle mechanically equalised leaf-spring bogie.
+
+Coordinates: ``x`` is measured rearward from the king pin [m], ``z`` upward [m]. Every length, stiffness and
+mass is SI. The geometry is given in the *design position*: chassis level, equalisers level, every spring and
+tyre carrying its design share of the payload (see ``docs/models.md``).
+
+The chain of one side, front to rear, is::
+
+    front hanger -a_f[0]- axle 0 -a_r[0]- tip -b_f[0]- pivot 0 -b_r[0]- tip -a_f[1]- axle 1 ... -a_r[n-1]- rear hanger
+
+so the axle positions, spring half-lengths and arm lengths must close: the rear end of spring ``i`` and the
+front arm tip of equaliser ``i`` sit at the same ``x``. :func:`Bogie.__post_init__` checks that, and every other
+range, and raises ``ValueError`` naming the field, its value, the allowed range and the unit.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from dataclasses import dataclass, field
+from typing import Any
+
+GRAVITY = 9.81  # [m/s^2]
+
+#: allowed range and unit of every scalar field: name -> (low, high, unit, low_inclusive)
+_SCALAR_RANGES: dict[str, tuple[float, float, str, bool]] = {
+    "road_spring_stiffness": (0.0, 1e9, "N/m", False),
+    "tyre_stiffness": (0.0, 1e10, "N/m", False),
+    "tyre_damping": (0.0, 1e7, "N s/m", True),
+    "tyre_radius": (0.05, 2.0, "m", True),
+    "axle_mass": (0.0, 5000.0, "kg", True),
+    "equaliser_inertia": (0.0, 100.0, "kg m^2", True),
+    "payload_mass": (0.0, 1e6, "kg", False),
+    "payload_cg_x": (0.0, 50.0, "m", False),
+    "chassis_pitch_inertia": (0.0, 1e9, "kg m^2", False),
+    "equaliser_front_tip_drop": (-0.5, 0.5, "m", True),
+    "equaliser_rear_tip_drop": (-0.5, 0.5, "m", True),
+    "spring_length_rate": (0.0, 2.0, "m/m", True),
+    "spring_end_slope_rate": (-20.0, 20.0, "rad/m", True),
+    "contact_tangential_stiffness": (0.0, 1e10, "N/m", False),
+    "chassis_tilt": (-math.radians(10.0), math.radians(10.0), "rad", True),
+    "bush_stiffness": (0.0, 1e7, "N m/rad", True),
+    "bush_damping": (0.0, 1e6, "N m s/rad", True),
+    "contact_roll_radius": (0.0, 0.5, "m", True),
+    "friction_coefficient": (0.0, 1.5, "-", True),
+}
+
+#: per-axle (length n) and per-equaliser (length n - 1) fields: name -> (low, high, unit, low_inclusive)
+_AXLE_RANGES: dict[str, tuple[float, float, str, bool]] = {
+    "axle_x": (0.0, 50.0, "m", False),
+    "spring_front_half_length": (0.05, 2.0, "m", True),
+    "spring_rear_half_length": (0.05, 2.0, "m", True),
+    "tyre_wear": (0.0, 0.05, "m", True),
+}
+_EQUALISER_RANGES: dict[str, tuple[float, float, str, bool]] = {
+    "equaliser_front_arm": (0.01, 1.0, "m", True),
+    "equaliser_rear_arm": (0.01, 1.0, "m", True),
+}
+
+#: the four inhibitors of equalisation and the value that switches each one off
+INHIBITORS: dict[str, float] = {
+    "bush_stiffness": 0.0,
+    "bush_damping": 0.0,
+    "contact_roll_radius": 0.0,
+    "friction_coefficient": 0.0,
+}
+
+#: the reference's Stage 1 chassis downward displacement alpha [m] (Figure 2)
+STAGE1_CHASSIS_DEFLECTION = 0.057
+
+#: tolerance on the closure of the spring/equaliser chain [m]
+_CLOSURE_TOL = 1e-6
+
+
+def _range_text(low: float, high: float, unit: str, low_inclusive: bool) -> str:
+    bracket = "[" if low_inclusive else "("
+    return f"{bracket}{low:g}, {high:g}] {unit}"
+
+
+def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
+    try:
+        v = float(value)
+    except (TypeError, ValueError):
+        raise ValueError(
+            f"{name} = {value!r} is not a number: must be in {_range_text(low, high, unit, low_inclusive)}"
+        ) from None
+    ok_low = v >= low if low_inclusive else v > low
+    if not math.isfinite(v) or not ok_low or v > high:
+        raise ValueError(f"{name} = {v!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}")
+    return v
+
+
+def _check_vector(
+    name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
+) -> tuple[float, ...]:
+    if isinstance(value, (int, float)):
+        raise ValueError(f"{name} = {value!r} must be a sequence of {length} values (one per {what}) in {unit}")
+    values = tuple(value)
+    if len(values) != length:
+        raise ValueError(
+            f"{name} has {len(values)} values but the bogie has {length} {what}s: give one per {what} in {unit}"
+        )
+    return tuple(_check_scalar(f"{name}[{k}]", v, low, high, unit, low_inclusive) for k, v in enumerate(values))
+
+
+@dataclass(frozen=True)
+class Bogie:
+    """One side of an n-axle mechanically equalised leaf-spring bogie (n >= 2, n - 1 equalisers).
+
+    Parameters
+    ----------
+    axle_x
+        Axle positions rearward of the king pin, front to rear [m].
+    spring_front_half_length, spring_rear_half_length
+        Distance from each axle seat to the front and rear spring-end contact [m], one per axle.
+    equaliser_front_arm, equaliser_rear_arm
+        Horizontal distance from each equaliser pivot to its front and rear arm-tip contact [m], one per
+        equaliser. The pivot positions follow from the chain (:attr:`equaliser_pivot_x`).
+    road_spring_stiffness
+        Vertical rate of one leaf spring at its axle seat [N/m].
+    tyre_stiffness
+        Vertical stiffness of the tyres at one axle end (a twin pair) [N/m].
+    tyre_damping
+        Vertical viscous damping of the tyres at one axle end [N s/m].
+    tyre_radius
+        Unloaded radius of a new tyre [m].
+    tyre_wear
+        Loss of radius of each axle's tyres from tread wear [m], one per axle.
+    axle_mass
+        Unsprung mass per axle end (half axle, hub, wheels) [kg].
+    equaliser_inertia
+        Moment of inertia of one equaliser about its pivot [kg m^2].
+    payload_mass
+        Sprung mass carried by this side (chassis and payload) [kg]; the geometry is the design position under
+        this load.
+    payload_cg_x
+        Position of that mass's centre of gravity rearward of the king pin [m].
+    chassis_pitch_inertia
+        Pitch moment of inertia of the sprung mass about the king pin [kg m^2].
+    equaliser_front_tip_drop, equaliser_rear_tip_drop
+        Height of the equaliser pivot above its front and rear arm-tip contacts [m] (negative: tip above pivot).
+    spring_length_rate
+        Growth of a spring's end-to-end length per unit deflection at its seat [m/m]; the ends slide on their
+        pads by half of it each.
+    spring_end_slope_rate
+        Rotation of each spring end (flattening) per unit deflection [rad/m].
+    contact_tangential_stiffness
+        Shear stiffness of a spring end on its pad while it sticks [N/m].
+    chassis_tilt
+        Pitch of the chassis in the design position, nose up positive [rad]; made by raising the king pin
+        (:attr:`kingpin_height_offset`).
+    bush_stiffness
+        Rotational stiffness of each equaliser bush [N m/rad]. Inhibitor 1; 0 switches it off.
+    bush_damping
+        Rotational viscous damping of each equaliser bush [N m s/rad]. Inhibitor 2; 0 switches it off.
+    contact_roll_radius
+        Effective radius of the cylindrical spring-end/pad contact [m]: relative rotation moves the contact
+        point along the pad by this radius times the rotation. Inhibitor 3; 0 fixes the contact point.
+    friction_coefficient
+        Coulomb friction coefficient at the spring ends [-]. Inhibitor 4; 0 switches it off.
+    """
+
+    axle_x: tuple[float, ...]
+    spring_front_half_length: tuple[float, ...]
+    spring_rear_half_length: tuple[float, ...]
+    equaliser_front_arm: tuple[float, ...]
+    equaliser_rear_arm: tuple[float, ...]
+    road_spring_stiffness: float
+    tyre_stiffness: float
+    tyre_radius: float
+    axle_mass: float
+    payload_mass: float
+    payload_cg_x: float
+    chassis_pitch_inertia: float
+    tyre_wear: tuple[float, ...] = field(default=())
+    tyre_damping: float = 0.0
+    equaliser_inertia: float = 0.2
+    equaliser_front_tip_drop: float = 0.0
+    equaliser_rear_tip_drop: float = 0.0
+    spring_length_rate: float = 0.3
+    spring_end_slope_rate: float = 0.0
+    contact_tangential_stiffness: float = 5e6
+    chassis_tilt: float = 0.0
+    bush_stiffness: float = 0.0
+    bush_damping: float = 0.0
+    contact_roll_radius: float = 0.0
+    friction_coefficient: float = 0.0
+
+    def __post_init__(self) -> None:
+        axle_x = self.axle_x
+        if isinstance(axle_x, (int, float)) or len(tuple(axle_x)) < 2:
+            raise ValueError(f"axle_x = {axle_x!r} must list at least 2 axle positions in m (n >= 2)")
+        n = len(tuple(axle_x))
+        if self.tyre_wear == ():
+            object.__setattr__(self, "tyre_wear", (0.0,) * n)
+        for name, (low, high, unit, inc) in _AXLE_RANGES.items():
+            object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))
+        for name, (low, high, unit, inc) in _EQUALISER_RANGES.items():
+            vec = _check_vector(name, getattr(self, name), n - 1, "equaliser", low, high, unit, inc)
+            object.__setattr__(self, name, vec)
+        for name, (low, high, unit, inc) in _SCALAR_RANGES.items():
+            object.__setattr__(self, name, _check_scalar(name, getattr(self, name), low, high, unit, inc))
+        self._check_chain()
+        if self.payload_cg_x >= self.axle_x[-1] + self.spring_rear_half_length[-1]:
+            raise ValueError(
+                f"payload_cg_x = {self.payload_cg_x!r} must lie ahead of the rear hanger "
+                f"(x < {self.rear_hanger_x:g} m) so that the king pin carries a downward load"
+            )
+        if self.chassis_pitch_inertia < self.payload_mass * self.payload_cg_x**2:
+            raise ValueError(
+                f"chassis_pitch_inertia = {self.chassis_pitch_inertia!r} is below payload_mass * payload_cg_x^2 = "
+                f"{self.payload_mass * self.payload_cg_x**2:g} kg m^2, the least a body with that mass and centre of "
+                "gravity can have about the king pin"
+            )
+        for i, w in enumerate(self.tyre_wear):
+            if w >= self.tyre_radius:
+                raise ValueError(f"tyre_wear[{i}] = {w!r} must be less than tyre_radius = {self.tyre_radius!r} m")
+
+    def _check_chain(self) -> None:
+        ax = self.axle_x
+        for i in range(self.n_axles - 1):
+            if ax[i + 1] <= ax[i]:
+                raise ValueError(f"axle_x = {ax!r} must increase from front to rear (m)")
+        for j in range(self.n_axles - 1):
+            tip_front = ax[j] + self.spring_rear_half_length[j]
+            tip_rear = ax[j + 1] - self.spring_front_half_length[j + 1]
+            span = self.equaliser_front_arm[j] + self.equaliser_rear_arm[j]
+            if abs((tip_rear - tip_front) - span) > _CLOSURE_TOL:
+                raise ValueError(
+                    f"geometry does not close at equaliser {j}: spring ends at x = {tip_front:.6g} and "
+                    f"{tip_rear:.6g} m are {tip_rear - tip_front:.6g} m apart but equaliser_front_arm[{j}] + "
+                    f"equaliser_rear_arm[{j}] = {span:.6g} m; axle spacing must equal spring_rear_half_length[{j}] "
+                    f"+ equaliser arms + spring_front_half_length[{j + 1}]"
+                )
+        if ax[0] - self.spring_front_half_length[0] <= 0.0:
+            raise ValueError(
+                f"spring_front_half_length[0] = {self.spring_front_half_length[0]!r} puts the front hanger at or ahead "
+                "of the king pin: must be less than axle_x[0] m"
+            )
+
+    # ---- derived geometry -------------------------------------------------------------------------------
+    @property
+    def n_axles(self) -> int:
+        """Number of axles n [-]."""
+        return len(self.axle_x)
+
+    @property
+    def equaliser_pivot_x(self) -> tuple[float, ...]:
+        """Equaliser pivot positions rearward of the king pin [m]."""
+        return tuple(
+            self.axle_x[j] + self.spring_rear_half_length[j] + self.equaliser_front_arm[j]
+            for j in range(self.n_axles - 1)
+        )
+
+    @property
+    def front_hanger_x(self) -> float:
+        """Front hanger contact position [m]."""
+        return self.axle_x[0] - self.spring_front_half_length[0]
+
+    @property
+    def rear_hanger_x(self) -> float:
+        """Rear hanger contact position [m]."""
+        return self.axle_x[-1] + self.spring_rear_half_length[-1]
+
+    @property
+    def bogie_centre_x(self) -> float:
+        """Mean of the axle positions [m]."""
+        return sum(self.axle_x) / self.n_axles
+
+    @property
+    def kingpin_height_offset(self) -> float:
+        """Rise of the king pin above its design height that makes :attr:`chassis_tilt` [m]."""
+        return self.bogie_centre_x * math.tan(self.chassis_tilt)
+
+    @property
+    def combined_stiffness(self) -> float:
+        """Road spring and tyre in series, the reference's K_S: 1/K_S = 1/K_T + 1/K_R [N/m]."""
+        return 1.0 / (1.0 / self.tyre_stiffness + 1.0 / self.road_spring_stiffness)
+
+    @property
+    def sprung_weight_on_bogie(self) -> float:
+        """Weight of the sprung mass carried by the bogie's springs in the design position [N]."""
+        return sum(design_spring_loads(self))
+
+    def q(self, equaliser: int = 0) -> float:
+        """The reference's stiffness ratio q = b^2 K_S / (4 K_B) for one equaliser [-] (Equation 1).
+
+        ``b`` is the mean arm length of that equaliser; q is infinite for a free bush.
+        """
+        b = 0.5 * (self.equaliser_front_arm[equaliser] + self.equaliser_rear_arm[equaliser])
+        if self.bush_stiffness == 0.0:
+            return math.inf
+        return b * b * self.combined_stiffness / (4.0 * self.bush_stiffness)
+
+    def replace(self, **changes: Any) -> Bogie:
+        """A copy with ``changes`` applied and re-validated (same as :func:`dataclasses.replace`)."""
+        return dataclasses.replace(self, **changes)
+
+    def without(self, *inhibitors: str) -> Bogie:
+        """A copy with the named inhibitors switched off (each set to its ideal value); all four if none named."""
+        names = inhibitors or tuple(INHIBITORS)
+        unknown = [n for n in names if n not in INHIBITORS]
+        if unknown:
+            raise ValueError(f"unknown inhibitor {unknown[0]!r}: must be one of {', '.join(INHIBITORS)}")
+        return self.replace(**{n: INHIBITORS[n] for n in names})
+
+
+def _design_shares(bogie: Bogie) -> list[float]:
+    """Relative spring loads in the design position with moment-free equalisers (sum = n) [-].
+
+    A level equaliser carries its two spring-end loads in inverse ratio of its arms, and each spring splits its
+    seat load to its ends by the lever rule, so W_{j+1} / W_j = (b_f c_r,j) / (b_r c_f,j+1).
+    """
+    n = bogie.n_axles
+    shares = [1.0]
+    for j in range(n - 1):
+        a_f0, a_r0 = bogie.spring_front_half_length[j], bogie.spring_rear_half_length[j]
+        a_f1, a_r1 = bogie.spring_front_half_length[j + 1], bogie.spring_rear_half_length[j + 1]
+        c_r = a_f0 / (a_f0 + a_r0)  # fraction of spring j's load at its rear end
+        c_f = a_r1 / (a_f1 + a_r1)  # fraction of spring j+1's load at its front end
+        shares.append(shares[-1] * bogie.equaliser_front_arm[j] * c_r / (bogie.equaliser_rear_arm[j] * c_f))
+    total = sum(shares)
+    return [n * s / total for s in shares]
+
+
+def design_spring_loads(bogie: Bogie) -> tuple[float, ...]:
+    """Spring seat loads in the design position [N], one per axle.
+
+    The chassis is level, the equalisers are level and carry no bush moment, and the springs carry the sprung
+    weight not taken by the king pin: sum_i W_i x_i = m g x_cg (moments about the king pin).
+    """
+    shares = _design_shares(bogie)
+    scale = bogie.payload_mass * GRAVITY * bogie.payload_cg_x / sum(s * x for s, x in zip(shares, bogie.axle_x))
+    return tuple(scale * s for s in shares)
+
+
+# ---- presets --------------------------------------------------------------------------------------------------
+def tandem_trrl(**changes: Any) -> Bogie:
+    """The two-axle suspension of the reference's Stages 3 and 4 (one side); provenance in ``docs/presets.md``."""
+    base = Bogie(
+        axle_x=(7.345, 8.655),
+        spring_front_half_length=(0.5, 0.5),
+        spring_rear_half_length=(0.5, 0.5),
+        equaliser_front_arm=(0.155,),
+        equaliser_rear_arm=(0.155,),
+        road_spring_stiffness=0.6e6,
+        tyre_stiffness=1.6e6,
+        tyre_damping=2.0e3,
+        tyre_radius=0.5,
+        axle_mass=300.0,
+        equaliser_inertia=0.2,
+        payload_mass=6500.0,
+        payload_cg_x=4.8,
+        chassis_pitch_inertia=6500.0 * (4.8**2 + 3.5**2),
+        equaliser_front_tip_drop=0.04,
+        equaliser_rear_tip_drop=0.04,
+        spring_length_rate=0.3,
+        spring_end_slope_rate=2.0,
+        contact_tangential_stiffness=5e6,
+        bush_stiffness=1000.0,
+        bush_damping=0.0,
+        contact_roll_radius=0.075,
+        friction_coefficient=0.3,
+    )
+    return base.replace(**changes) if changes else base
+
+
+def triaxle_stage1(**changes: Any) -> Bogie:
+    """The tri-axle suspension of the reference's Stages 1 and 2 (one side), with q = 4.3.
+
+    Same springs, tyres and arms as :func:`tandem_trrl`; the bush stiffness is chosen so that
+    q = b^2 K_S / (4 K_B) = 4.3, the value the reference gives for its Stage 1 suspension, and the payload so that
+    the design load deflects spring and tyre by the reference's alpha = 57 mm.
+    """
+    b = 0.155
+    k_s = 1.0 / (1.0 / 1.6e6 + 1.0 / 0.6e6)
+    # the reference's chassis deflection alpha = 57 mm under the design load: 3 K_S alpha x_b = m g x_cg
+    payload = 3.0 * k_s * STAGE1_CHASSIS_DEFLECTION * 8.0 / (GRAVITY * 4.8)
+    base = Bogie(
+        axle_x=(6.69, 8.0, 9.31),
+        spring_front_half_length=(0.5, 0.5, 0.5),
+        spring_rear_half_length=(0.5, 0.5, 0.5),
+        equaliser_front_arm=(b, b),
+        equaliser_rear_arm=(b, b),
+        road_spring_stiffness=0.6e6,
+        tyre_stiffness=1.6e6,
+        tyre_damping=2.0e3,
+        tyre_radius=0.5,
+        axle_mass=300.0,
+        equaliser_inertia=0.2,
+        payload_mass=payload,
+        payload_cg_x=4.8,
+        chassis_pitch_inertia=payload * (4.8**2 + 3.5**2),
+        equaliser_front_tip_drop=0.04,
+        equaliser_rear_tip_drop=0.04,
+        spring_length_rate=0.3,
+        spring_end_slope_rate=2.0,
+        contact_tangential_stiffness=5e6,
+        bush_stiffness=b * b * k_s / (4.0 * 4.3),
+        bush_damping=0.0,
+        contact_roll_radius=0.075,
+        friction_coefficient=0.3,
+    )
+    return base.replace(**changes) if changes else base
+
+
+PRESETS = {"tandem_trrl": tandem_trrl, "triaxle_stage1": triaxle_stage1}
+
+
+def preset(name: str, **changes: Any) -> Bogie:
+    """A named preset (``tandem_trrl`` or ``triaxle_stage1``) with optional field changes."""
+    try:
+        factory = PRESETS[name]
+    except KeyError:
+        raise ValueError(f"unknown preset {name!r}: must be one of {', '.join(PRESETS)}") from None
+    return factory(**changes)

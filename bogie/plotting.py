@@ -1,0 +1,97 @@
+"""Figures shared by the command line and the report. Each function returns a matplotlib Figure and writes nothing."""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Sequence
+from pathlib import Path
+
+import numpy as np
+from matplotlib.figure import Figure
+
+from bogie.metrics import p
+from bogie.params import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
+from bogie.static import nondimensional_loads
+
+#: the reference's Figure 2: chassis slopes 0 to 2 degrees in half-degree steps
+FIGURE2_SLOPES_DEG = (0.0, 0.5, 1.0, 1.5, 2.0)
+
+
+def new_figure(width: float = 6.4, height: float = 4.2) -> Figure:
+    """A figure with the project's style (no pyplot state, safe in worker processes)."""
+    fig = Figure(figsize=(width, height), layout="constrained")
+    return fig
+
+
+def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> None:
+    """Write ``fig`` to ``path`` atomically (temporary name, then rename); the format follows the suffix."""
+    out = Path(path)
+    out.parent.mkdir(parents=True, exist_ok=True)
+    tmp = out.with_name(f".{out.name}.tmp{out.suffix}")
+    fig.savefig(tmp, dpi=dpi)
+    tmp.replace(out)
+
+
+def figure2(
+    q_max: float = 20.0,
+    slopes_deg: Sequence[float] = FIGURE2_SLOPES_DEG,
+    chassis_deflection: float = STAGE1_CHASSIS_DEFLECTION,
+    axle_spacing: float | None = None,
+    stage1_q: float | None = None,
+    fe_points: dict[float, tuple[float, float]] | None = None,
+) -> Figure:
+    """The reference's Figure 2: wheel load deviation p (Equation 2) against q for a tri-axle bogie.
+
+    Parameters
+    ----------
+    q_max
+        Largest stiffness ratio on the axis [-].
+    slopes_deg
+        Chassis slopes, one curve each [degree].
+    chassis_deflection
+        Chassis downward displacement alpha [m]; the reference's 57 mm by default.
+    axle_spacing
+        Axle spacing s in d = psi s / alpha [m]; that of :func:`~bogie.params.triaxle_stage1` by default.
+    stage1_q
+        q of the Stage 1 suspension to mark [-]; that of :func:`~bogie.params.triaxle_stage1` (4.3) by default.
+    fe_points
+        Optional finite element results to overlay: slope [degree] -> (q, p).
+    """
+    if not (math.isfinite(q_max) and q_max > 0.0):
+        raise ValueError(f"q_max = {q_max!r} is out of range: must be > 0 (stiffness ratio, dimensionless)")
+    if not (math.isfinite(chassis_deflection) and chassis_deflection > 0.0):
+        raise ValueError(f"chassis_deflection = {chassis_deflection!r} is out of range: must be > 0 m")
+    stage1 = triaxle_stage1()
+    spacing = stage1.axle_x[1] - stage1.axle_x[0] if axle_spacing is None else axle_spacing
+    q_mark = stage1.q(0) if stage1_q is None else stage1_q
+    q = np.linspace(0.0, q_max, 401)
+    fig = new_figure()
+    ax = fig.add_subplot()
+    for slope in slopes_deg:
+        d = math.radians(slope) * spacing / chassis_deflection
+        ax.plot(q, p(nondimensional_loads(q, d)), lw=1.6, label=f"{slope:g}°", clip_on=False)
+        p_mark = float(p(nondimensional_loads(q_mark, d)))
+        ax.plot([q_mark], [p_mark], "o", color="0.2", ms=3.5, zorder=3)
+    ax.axvline(q_mark, color="0.5", lw=0.8, ls="--")
+    ax.annotate(
+        f"Stage 1 suspension, q = {q_mark:.1f}",
+        xy=(q_mark, ax.get_ylim()[1] * 0.92),
+        xytext=(6, 0),
+        textcoords="offset points",
+        fontsize=8,
+        color="0.3",
+    )
+    if fe_points:
+        qs, ps = zip(*fe_points.values())
+        ax.plot(qs, ps, "*", color="k", ms=9, label="finite element (Stage 1)")
+    ax.set_xlim(0.0, q_max)
+    ax.set_ylim(bottom=0.0)
+    ax.set_xlabel(r"relative stiffness parameter $q = b^2 K_S / 4 K_B$ [-]")
+    ax.set_ylabel(r"wheel load deviation $p$ (Equation 2) [-]")
+    ax.set_title(
+        f"Tri-axle static equalisation (Equation 1), α = {chassis_deflection * 1e3:.0f} mm, s = {spacing:.2f} m",
+        fontsize=10,
+    )
+    ax.legend(title="chassis slope", fontsize=8, title_fontsize=8)
+    ax.grid(True, lw=0.4, alpha=0.5)
+    return fig

@@ -1,0 +1,113 @@
+import dataclasses
+import math
+
+import pytest
+
+from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, tandem_trrl, triaxle_stage1
+
+
+def test_presets_are_valid_and_triaxle_has_q_of_stage1():
+    assert tandem_trrl().n_axles == 2
+    tri = triaxle_stage1()
+    assert tri.n_axles == 3
+    assert tri.q(0) == pytest.approx(4.3, rel=1e-12)
+    assert tri.q(1) == pytest.approx(4.3, rel=1e-12)
+
+
+def test_triaxle_design_load_deflects_by_reference_alpha():
+    tri = triaxle_stage1()
+    loads = design_spring_loads(tri)
+    assert loads == pytest.approx([tri.combined_stiffness * 0.057] * 3, rel=1e-12)
+
+
+def test_design_loads_balance_the_chassis_about_the_king_pin():
+    for bogie in (tandem_trrl(), triaxle_stage1(), tandem_trrl(equaliser_front_arm=(0.2,), equaliser_rear_arm=(0.11,))):
+        loads = design_spring_loads(bogie)
+        moment = sum(w * x for w, x in zip(loads, bogie.axle_x))
+        assert moment == pytest.approx(bogie.payload_mass * GRAVITY * bogie.payload_cg_x, rel=1e-12)
+
+
+def test_derived_geometry_closes():
+    b = triaxle_stage1()
+    assert b.equaliser_pivot_x == pytest.approx((6.69 + 0.5 + 0.155, 8.0 + 0.5 + 0.155))
+    assert b.front_hanger_x == pytest.approx(6.19)
+    assert b.rear_hanger_x == pytest.approx(9.81)
+    assert b.kingpin_height_offset == 0.0
+    tilted = b.replace(chassis_tilt=math.radians(1.0))
+    assert tilted.kingpin_height_offset == pytest.approx(8.0 * math.tan(math.radians(1.0)))
+
+
+def test_replace_switches_one_inhibitor_off_and_nothing_else():
+    b = tandem_trrl()
+    off = dataclasses.replace(b, friction_coefficient=0.0)
+    assert off.friction_coefficient == 0.0
+    changed = {f.name for f in dataclasses.fields(b) if getattr(b, f.name) != getattr(off, f.name)}
+    assert changed == {"friction_coefficient"}
+    all_off = b.without()
+    assert {name: getattr(all_off, name) for name in INHIBITORS} == INHIBITORS
+
+
+@pytest.mark.parametrize(
+    "field, value, fragment",
+    [
+        ("road_spring_stiffness", -1.0, "road_spring_stiffness = -1.0 is out of range: must be in (0, 1e+09] N/m"),
+        ("tyre_stiffness", 0.0, "tyre_stiffness = 0.0 is out of range"),
+        ("axle_mass", -5.0, "axle_mass = -5.0 is out of range: must be in [0, 5000] kg"),
+        ("payload_mass", float("nan"), "payload_mass = nan is out of range"),
+        ("bush_stiffness", float("inf"), "bush_stiffness = inf is out of range: must be in [0, 1e+07] N m/rad"),
+        ("bush_damping", -1.0, "bush_damping = -1.0 is out of range: must be in [0, 1e+06] N m s/rad"),
+        ("friction_coefficient", 1.6, "friction_coefficient = 1.6 is out of range: must be in [0, 1.5] -"),
+        ("friction_coefficient", -0.1, "friction_coefficient = -0.1"),
+        ("contact_roll_radius", -0.01, "contact_roll_radius = -0.01 is out of range: must be in [0, 0.5] m"),
+        ("chassis_tilt", math.radians(10.5), "chassis_tilt = 0.1832"),
+        ("tyre_damping", "soft", "tyre_damping = 'soft' is not a number"),
+    ],
+)
+def test_validation_names_field_value_range_and_unit(field, value, fragment):
+    with pytest.raises(ValueError) as err:
+        tandem_trrl(**{field: value})
+    assert fragment in str(err.value)
+    assert field in str(err.value)
+
+
+def test_tilt_limit_is_ten_degrees():
+    tandem_trrl(chassis_tilt=math.radians(9.99))
+    with pytest.raises(ValueError, match=r"chassis_tilt .* \[-0.174533, 0.174533\] rad"):
+        tandem_trrl(chassis_tilt=-math.radians(10.01))
+
+
+def test_wrong_number_of_per_axle_values():
+    with pytest.raises(ValueError, match="tyre_wear has 3 values but the bogie has 2 axles"):
+        tandem_trrl(tyre_wear=(0.0, 0.001, 0.002))
+    with pytest.raises(ValueError, match="equaliser_front_arm has 2 values but the bogie has 1 equalisers"):
+        tandem_trrl(equaliser_front_arm=(0.155, 0.155))
+    with pytest.raises(ValueError, match=r"tyre_wear\[1\] = 0.07 is out of range: must be in \[0, 0.05\] m"):
+        tandem_trrl(tyre_wear=(0.0, 0.07))
+    with pytest.raises(ValueError, match="at least 2 axle positions"):
+        Bogie(**{**_fields(tandem_trrl()), "axle_x": (8.0,)})
+
+
+def test_geometry_that_does_not_close_is_refused():
+    with pytest.raises(ValueError, match=r"geometry does not close at equaliser 0.*equaliser_front_arm\[0\]"):
+        tandem_trrl(equaliser_front_arm=(0.2,))
+
+
+def test_inertia_below_point_mass_is_refused():
+    with pytest.raises(ValueError, match="chassis_pitch_inertia"):
+        tandem_trrl(chassis_pitch_inertia=1000.0)
+
+
+def test_unknown_preset_and_inhibitor():
+    with pytest.raises(ValueError, match="unknown preset 'quad'"):
+        preset("quad")
+    with pytest.raises(ValueError, match="unknown inhibitor 'bush'"):
+        tandem_trrl().without("bush")
+
+
+def test_frozen():
+    with pytest.raises(dataclasses.FrozenInstanceError):
+        tandem_trrl().bush_stiffness = 3.0
+
+
+def _fields(b):
+    return {f.name: getattr(b, f.name) for f in dataclasses.fields(b)}
