@@ -4,7 +4,30 @@ Modules: :mod:`bogie.params` (the bogie and its presets), :mod:`bogie.static` (S
 :mod:`bogie.metrics` (p, P1, RMS, LSC, DLC, road-wear factor), :mod:`bogie.plotting` (figures).
 """
 
-from bogie.params import INHIBITORS, Bogie, preset, tandem_trrl, triaxle_stage1
+import hashlib
+import os
+from pathlib import Path
+
+
+def _set_numba_cache_dir() -> None:
+    """Key numba's on-disk cache by a hash of the compiled sources.
+
+    numba invalidates a cached function only when its own file changes, not when a compiled function it calls
+    (in another module) does; a cache directory per source hash rules out running stale machine code.
+    """
+    if "NUMBA_CACHE_DIR" in os.environ:
+        return
+    here = Path(__file__).parent
+    digest = hashlib.sha256()
+    for path in sorted(here.glob("*.py")):
+        digest.update(path.read_bytes())
+    base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
+    os.environ["NUMBA_CACHE_DIR"] = str(base / "bogie-numba" / digest.hexdigest()[:16])
+
+
+_set_numba_cache_dir()
+
+from bogie.params import INHIBITORS, Bogie, preset, tandem_trrl, triaxle_stage1  # noqa: E402
 
 __all__ = ["INHIBITORS", "Bogie", "preset", "tandem_trrl", "triaxle_stage1"]
 __version__ = "0.1.0"

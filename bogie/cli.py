@@ -17,6 +17,30 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
     return 0
 
 
+def _cmd_case(args: argparse.Namespace) -> int:
+    from bogie import cases
+    from bogie.plotting import case_history, save_figure
+
+    case = cases.get(args.name)
+    result = cases.run(case.name)
+    ref = ", ".join(f"{k} {v}" for k, v in case.reference.items())
+    print(f"{case.name}: {case.description}")
+    print(f"status {result.status}: {result.message}")
+    print(f"peak p {result.peak_p:.3f}, peak P1 {result.peak_p1:.3f} (reference: {ref})")
+    if args.csv:
+        out = Path(args.csv)
+        out.parent.mkdir(parents=True, exist_ok=True)
+        tmp = out.with_name(f".{out.name}.tmp")
+        result.to_frame().to_csv(tmp)
+        tmp.replace(out)
+        print(f"wrote {args.csv}")
+    if args.plot:
+        fig = case_history(result, title=f"Run {case.name}", note=f"reference: {ref}")
+        save_figure(fig, Path(args.plot))
+        print(f"wrote {args.plot}")
+    return 0 if result.success else 1
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="bogie", description="Axle load equalisation in mechanically equalised trailer bogies."
@@ -27,6 +51,11 @@ def build_parser() -> argparse.ArgumentParser:
     fig2.add_argument("--q-max", type=float, default=20.0, help="largest q on the axis [-] (default 20)")
     fig2.add_argument("--alpha-mm", type=float, default=57.0, help="chassis deflection alpha [mm] (default 57)")
     fig2.set_defaults(func=_cmd_figure2)
+    case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, ...)")
+    case.add_argument("name", help="run name, e.g. L01")
+    case.add_argument("--plot", help="write the histories (as the reference's Figures 5-12) to this image file")
+    case.add_argument("--csv", help="write the histories to this CSV file")
+    case.set_defaults(func=_cmd_case)
     return parser
 
 

@@ -95,3 +95,39 @@ def figure2(
     ax.legend(title="chassis slope", fontsize=8, title_fontsize=8)
     ax.grid(True, lw=0.4, alpha=0.5)
     return fig
+
+
+def case_history(result, title: str = "", note: str = "") -> Figure:
+    """Histories of one dynamic run, as the reference's Figures 5-12: centre displacement, p and P1, wheel loads.
+
+    Parameters
+    ----------
+    result
+        A :class:`bogie.results.DynamicResult`.
+    title
+        Figure title.
+    note
+        A line printed under the title (e.g. what the reference reported).
+    """
+    panels = 3 if "centre_displacement" in result.extras else 2
+    fig = new_figure(7.0, 2.0 + 1.9 * panels)
+    axes = fig.subplots(panels, 1, sharex=True)
+    k = 0
+    if panels == 3:
+        axes[0].plot(result.t, np.asarray(result.extras["centre_displacement"]) * 1e3, color="C0", lw=1.2)
+        axes[0].set_ylabel("centre displacement\n[mm]")
+        k = 1
+    axes[k].plot(result.t, result.p, lw=1.2, label="p (Eq. 2)")
+    axes[k].plot(result.t, result.p1, lw=1.2, ls="--", label="P1 (Eq. 4)")
+    axes[k].set_ylabel("wheel load\nparameter [-]")
+    axes[k].legend(fontsize=8, loc="upper right")
+    for i in range(result.wheel_loads.shape[1]):
+        axes[k + 1].plot(result.t, result.wheel_loads[:, i] / 1e3, lw=1.2, label=f"axle {i + 1}")
+    axes[k + 1].set_ylabel("wheel load\n[kN]")
+    axes[k + 1].set_xlabel("time [s]")
+    axes[k + 1].legend(fontsize=8, loc="upper right", ncol=result.wheel_loads.shape[1])
+    for ax in axes:
+        ax.grid(True, lw=0.4, alpha=0.5)
+    if title or note:
+        fig.suptitle(title + (f"\n{note}" if note else ""), fontsize=10)
+    return fig

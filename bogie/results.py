@@ -1,0 +1,105 @@
+"""The result type shared by the dynamic models (linear Stage 3 and non-linear Stage 4)."""
+
+from __future__ import annotations
+
+from collections.abc import Callable, Mapping
+from dataclasses import dataclass, field
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bogie import metrics
+
+#: a road profile: height [m] as a function of distance along the road [m]
+Profile = Callable[[ArrayLike], NDArray[np.float64]]
+
+
+@dataclass(frozen=True)
+class DynamicResult:
+    """Time history of one dynamic simulation.
+
+    Attributes
+    ----------
+    t
+        Times [s], shape (n_t,).
+    wheel_loads
+        Load of each axle's tyres on the road [N], shape (n_t, n_axles).
+    reference_load
+        The equal share W_ref of the bogie's static load used to make loads non-dimensional [N].
+    status
+        "ok" or "failed"; a failed run holds the history up to the failure.
+    message
+        "ok" or why the run failed, with the time and residual.
+    extras
+        Further named histories of the model (chassis pitch, equaliser rotations, contact positions, friction
+        forces, ...), each of shape (n_t,) or (n_t, k).
+    """
+
+    t: NDArray[np.float64]
+    wheel_loads: NDArray[np.float64]
+    reference_load: float
+    status: str
+    message: str
+    extras: Mapping[str, NDArray[Any]] = field(default_factory=dict)
+
+    @classmethod
+    def from_loads(cls, **kwargs: Any) -> DynamicResult:
+        """Build a result (same arguments as the constructor)."""
+        return cls(**kwargs)
+
+    @property
+    def success(self) -> bool:
+        """True if the run completed."""
+        return self.status == "ok"
+
+    @property
+    def nondimensional_loads(self) -> NDArray[np.float64]:
+        """Wheel loads over the reference load W / W_ref [-]."""
+        return self.wheel_loads / self.reference_load
+
+    @property
+    def p(self) -> NDArray[np.float64]:
+        """History of the wheel load deviation p (Equation 2) of the non-dimensional loads [-]."""
+        return metrics.p(self.nondimensional_loads)
+
+    @property
+    def p1(self) -> NDArray[np.float64]:
+        """History of P1 (Equation 4) of the non-dimensional loads [-]."""
+        return metrics.p1(self.nondimensional_loads)
+
+    @property
+    def peak_p(self) -> float:
+        """Largest p over the run [-]."""
+        return float(np.max(self.p))
+
+    @property
+    def peak_p1(self) -> float:
+        """Largest P1 over the run [-]."""
+        return float(np.max(self.p1))
+
+    @property
+    def rms(self) -> float:
+        """RMS equalisation parameter of Equation 5 over the run [-]."""
+        return float(metrics.rms(self.wheel_loads))
+
+    def to_frame(self):
+        """The histories as a pandas DataFrame indexed by time (loads in N, non-dimensional loads, p, p1, extras)."""
+        import pandas as pd
+
+        n = self.wheel_loads.shape[1]
+        cols: dict[str, NDArray[Any]] = {}
+        for i in range(n):
+            cols[f"wheel_load_{i}"] = self.wheel_loads[:, i]
+        for i in range(n):
+            cols[f"nondimensional_load_{i}"] = self.nondimensional_loads[:, i]
+        cols["p"] = self.p
+        cols["p1"] = self.p1
+        for name, values in self.extras.items():
+            arr = np.asarray(values)
+            if arr.ndim == 1:
+                cols[name] = arr
+            else:
+                for k in range(arr.shape[1]):
+                    cols[f"{name}_{k}"] = arr[:, k]
+        return pd.DataFrame(cols, index=pd.Index(self.t, name="t"))

@@ -1,0 +1,71 @@
+"""The reference's Table 1 runs: the trends it reports, each asserted (exact numbers differ; see docs/validation.md)."""
+
+import numpy as np
+import pytest
+
+from bogie import cases, linear
+from bogie.road import RampedStep
+
+
+@pytest.fixture(scope="module")
+def runs():
+    return {name: cases.run(name) for name in ("L01", "L02", "L03", "L04", "L05", "L06", "L07")}
+
+
+def test_every_run_succeeds_and_two_axle_p1_is_half_of_p(runs):
+    for name, r in runs.items():
+        assert r.success, name
+        assert np.allclose(r.p1, r.p / 2.0), name
+        case = cases.get(name)
+        assert len(r.t) == case.n_steps + 1
+        assert r.t[-1] == pytest.approx(case.n_steps * case.dt)
+
+
+def test_soft_bush_equalises_better_at_low_speed(runs):
+    assert runs["L03"].peak_p < 0.25 * runs["L01"].peak_p
+
+
+def test_high_speed_is_much_worse_than_low_speed(runs):
+    low = max(runs["L01"].peak_p, runs["L03"].peak_p)
+    assert runs["L02"].peak_p > 3.0 * low
+    assert runs["L04"].peak_p > 3.0 * low
+
+
+def test_bush_damping_worsens_low_speed_equalisation(runs):
+    assert runs["L06"].peak_p > 2.0 * runs["L01"].peak_p
+    assert runs["L07"].peak_p > 2.0 * runs["L01"].peak_p
+
+
+def test_bush_damping_worsens_high_speed_equalisation_when_the_equaliser_cannot_rock():
+    # Our L05 peaks below L02 because damping quiets the equaliser's rocking mode (inertia 0.2 kg m^2); without
+    # that mode the reference's finding (L05 worse than L02) holds. See docs/validation.md.
+    l02 = cases.run("L02", equaliser_inertia=0.0)
+    l05 = cases.run("L05", equaliser_inertia=0.0)
+    assert l05.peak_p > 3.0 * l02.peak_p
+    rocking = lambda r: np.max(np.abs(np.gradient(r.extras["equaliser_rotation_0"], r.t)))  # noqa: E731
+    assert rocking(cases.run("L05")) < 0.5 * rocking(cases.run("L02"))
+
+
+def test_low_speed_run_settles_to_the_quasi_static_state_with_the_front_wheel_on_the_step(runs):
+    r = runs["L01"]
+    case = cases.get("L01")
+    bogie = case.bogie()
+    # front wheel alone on the plateau from 3.25 s to 9.05 s (0.5 m lead, 0.15 m ramp, 1.5 m plateau, 0.2 m/s)
+    early = r.p[(r.t > 3.5) & (r.t < 5.0)]
+    late = r.p[(r.t > 7.5) & (r.t < 9.0)]
+    m = linear.matrices(bogie)
+    road = np.array([RampedStep().rise, 0.0])
+    u = np.linalg.solve(m.K, m.road_stiffness @ road)
+    loads = linear.wheel_loads_from_state(bogie, m, u, u * 0.0, np.zeros(2))
+    p_static = abs(loads[0] - loads[1]) / r.reference_load
+    assert late.mean() == pytest.approx(p_static, rel=0.03)
+    assert np.ptp(late) < 0.8 * np.ptp(early)
+    assert np.ptp(late) < 0.1 * p_static
+
+
+def test_unknown_case_and_frame():
+    with pytest.raises(ValueError, match="unknown case 'L99'"):
+        cases.get("L99")
+    frame = cases.run("L03").to_frame()
+    assert {"wheel_load_0", "wheel_load_1", "p", "p1", "centre_displacement"} <= set(frame.columns)
+    assert frame.index.name == "t"
