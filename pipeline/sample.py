@@ -1,0 +1,396 @@
+"""DVC stage ``sample``: the fleet, the Sobol' sensitivity design and the switch-off ablation -> data/samples/.
+
+``python -m pipeline.sample`` reads params.yaml and writes one Parquet table per study
+(``data/samples/fleet.parquet``, ``sensitivity.parquet``, ``ablation.parquet``), one row per bogie, every
+parameter in SI. Every study is a uniform design of the unit hypercube mapped through the distributions' inverse
+CDFs, so the fleet and the sensitivity design share exactly the same marginals.
+
+Seeds: every random stream is a :class:`numpy.random.SeedSequence` of the master ``seed`` with the spawn key
+(study, stream[, sample_id]), so each study, each stream and each bogie's road is independent of the others and
+of row order, chunking and the number of workers.
+"""
+
+from __future__ import annotations
+
+import argparse
+import os
+import sys
+import tempfile
+import warnings
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import yaml
+from SALib.sample import sobol
+from scipy.stats import qmc
+
+from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset
+from pipeline.config import GROUP_AXLES, Config, ConfigError, load_config
+from pipeline.distributions import Choice
+
+STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
+
+#: ablation variants: the baseline, each inhibitor switched off alone, and all four off
+VARIANTS: tuple[str, ...] = ("baseline", *INHIBITORS, "all")
+
+#: radius of gyration of the sprung mass about its centre of gravity in pitch [m]
+PITCH_RADIUS_OF_GYRATION = 3.5
+
+MAX_AXLES = max(GROUP_AXLES.values())
+TYRE_WEAR_COLUMNS: tuple[str, ...] = tuple(f"tyre_wear_{i}" for i in range(MAX_AXLES))
+
+#: the sampled quantities with one value per bogie, in the order of the fleet design's dimensions
+_SCALARS: tuple[str, ...] = (
+    "bush_stiffness",
+    "bush_damping",
+    "friction_coefficient",
+    "contact_roll_radius",
+    "chassis_tilt",
+    "payload_fraction",
+)
+
+#: dimensions of the fleet design, in order; the order is part of the design (changing it changes the draws)
+_FLEET_DIMENSIONS: tuple[str, ...] = ("group", *_SCALARS, *TYRE_WEAR_COLUMNS, "road_class")
+
+#: column -> dtype of every study table, in order; units in the README of data/samples
+COLUMNS: dict[str, str] = {
+    "sample_id": "int64",  # row index within the study [-]
+    "base_id": "int64",  # fleet: sample_id; ablation: the fleet sample_id; sensitivity: Saltelli base row [-]
+    "study": "str",
+    "group": "str",  # tandem | triaxle
+    "n_axles": "int64",
+    "preset": "str",  # bogie.params preset of the group
+    "variant": "str",  # baseline, or the inhibitor switched off (ablation)
+    "bush_stiffness": "float64",  # [N m/rad]
+    "bush_damping": "float64",  # [N m s/rad]
+    "friction_coefficient": "float64",  # [-]
+    "contact_roll_radius": "float64",  # [m]
+    **{c: "float64" for c in TYRE_WEAR_COLUMNS},  # [m], 0 for an axle the group does not have
+    "chassis_tilt": "float64",  # nose up positive [rad]
+    "payload_fraction": "float64",  # of the legal group load [-]
+    "road_class": "str",  # ISO 8608 class
+    "road_seed": "int64",  # seed of the approach road's random profile [-]
+    "legal_group_load": "float64",  # both sides [N]
+    "payload_mass": "float64",  # sprung mass per side of the fully laden design bogie [kg]
+    "chassis_pitch_inertia": "float64",  # [kg m^2]
+}
+
+_STREAM_DESIGN = 0
+_STREAM_ROAD = 1
+
+
+# ---- seeds -----------------------------------------------------------------------------------------------------
+def _study_code(study: str) -> int:
+    # the name's bytes, not hash(): Python salts str hashes per process
+    return int.from_bytes(study.encode("utf-8"), "big")
+
+
+def _seed_sequence(seed: int, study: str, stream: int, *ids: int) -> np.random.SeedSequence:
+    return np.random.SeedSequence(seed, spawn_key=(_study_code(study), stream, *ids))
+
+
+def _seed_int(sequence: np.random.SeedSequence) -> int:
+    # 63 bits: a non-negative int64, what Parquet stores and every numpy generator accepts
+    return int(sequence.generate_state(1, np.uint64)[0] >> np.uint64(1))
+
+
+def road_seed(seed: int, study: str, sample_id: int) -> int:
+    """Seed of one bogie's random approach road, from the master seed, the study and the sample id.
+
+    Parameters
+    ----------
+    seed
+        Master seed of params.yaml [-].
+    study
+        Study name.
+    sample_id
+        Row index within the study [-].
+
+    Returns
+    -------
+    int
+        A non-negative int64, the same whatever the row order or chunking.
+    """
+    return _seed_int(_seed_sequence(seed, study, _STREAM_ROAD, sample_id))
+
+
+def design_seed(seed: int, study: str) -> int:
+    """Seed of a study's uniform design (Latin hypercube, Sobol' scrambling, Saltelli) [-]."""
+    return _seed_int(_seed_sequence(seed, study, _STREAM_DESIGN))
+
+
+# ---- the design bogie ------------------------------------------------------------------------------------------
+def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
+    """The preset with the sprung mass that makes its fully laden design load the legal group load.
+
+    Per side: (sprung weight on the bogie) + n m_axle g = legal_group_load / 2. The sprung weight on the bogie,
+    m g x_cg / x_b (:func:`bogie.params.design_spring_loads`), is linear in the payload mass m, so one evaluation on
+    the preset gives the exact m. The pitch inertia is m (x_cg^2 + r^2) with r = :data:`PITCH_RADIUS_OF_GYRATION`.
+
+    Parameters
+    ----------
+    preset_name
+        Name of a bogie.params preset.
+    legal_group_load
+        Legal load of the axle group, both sides together [N].
+
+    Returns
+    -------
+    Bogie
+        The preset with ``payload_mass`` [kg] and ``chassis_pitch_inertia`` [kg m^2] set.
+    """
+    base = preset(preset_name)
+    weight_per_kg = sum(design_spring_loads(base)) / base.payload_mass  # [N/kg]
+    unsprung_weight = base.n_axles * base.axle_mass * GRAVITY
+    payload = (0.5 * legal_group_load - unsprung_weight) / weight_per_kg
+    return base.replace(
+        payload_mass=payload,
+        chassis_pitch_inertia=payload * (base.payload_cg_x**2 + PITCH_RADIUS_OF_GYRATION**2),
+    )
+
+
+def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
+    """The bogie of one sample row: its group's preset with the sampled parameters and the design payload.
+
+    Parameters
+    ----------
+    row
+        One row of a study table (a dict or a pandas Series) with the columns of :data:`COLUMNS`.
+
+    Returns
+    -------
+    Bogie
+        The validated bogie. ``payload_fraction`` is not applied: the protocol applies it as a load factor.
+    """
+    n_axles = int(row["n_axles"])
+    return preset(
+        str(row["preset"]),
+        bush_stiffness=float(row["bush_stiffness"]),
+        bush_damping=float(row["bush_damping"]),
+        friction_coefficient=float(row["friction_coefficient"]),
+        contact_roll_radius=float(row["contact_roll_radius"]),
+        tyre_wear=tuple(float(row[c]) for c in TYRE_WEAR_COLUMNS[:n_axles]),
+        chassis_tilt=float(row["chassis_tilt"]),
+        payload_mass=float(row["payload_mass"]),
+        chassis_pitch_inertia=float(row["chassis_pitch_inertia"]),
+    )
+
+
+# ---- studies ---------------------------------------------------------------------------------------------------
+def _unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
+    """``n`` points of a seeded, scrambled design of the d-dimensional unit hypercube [0, 1)^d."""
+    rng = np.random.default_rng(seed)
+    if method == "lhs":
+        return qmc.LatinHypercube(d, rng=rng).random(n)
+    with warnings.catch_warnings():
+        # the first n points of a scrambled Sobol' sequence are still a low-discrepancy design; they only lose
+        # the exact balance of a power of 2, which nothing here relies on
+        warnings.filterwarnings("ignore", message=".*balance properties of Sobol.*", category=UserWarning)
+        return qmc.Sobol(d, scramble=True, rng=rng).random(n)
+
+
+def _frame(
+    config: Config, study: str, groups: np.ndarray, values: dict[str, np.ndarray], base_id: np.ndarray
+) -> pd.DataFrame:
+    """Assemble a study table from per-row groups and sampled values, adding the group constants and seeds."""
+    n = len(groups)
+    fleet = config.fleet
+    design = {g: design_bogie(fleet.presets[g], fleet.legal_group_load[g]) for g in GROUP_AXLES}
+    n_axles = np.array([GROUP_AXLES[g] for g in groups], dtype=np.int64)
+    columns: dict[str, Any] = {
+        **values,
+        "sample_id": np.arange(n, dtype=np.int64),
+        "base_id": base_id,
+        "study": np.full(n, study, dtype=object),
+        "group": groups,
+        "n_axles": n_axles,
+        "preset": np.array([fleet.presets[g] for g in groups], dtype=object),
+        "variant": np.full(n, "baseline", dtype=object),
+        "legal_group_load": np.array([fleet.legal_group_load[g] for g in groups], dtype=float),
+        "payload_mass": np.array([design[g].payload_mass for g in groups], dtype=float),
+        "chassis_pitch_inertia": np.array([design[g].chassis_pitch_inertia for g in groups], dtype=float),
+    }
+    for i, c in enumerate(TYRE_WEAR_COLUMNS):
+        # an axle the group does not have wears nothing: 0.0 keeps the table free of NaN
+        columns[c] = np.where(n_axles > i, values[c], 0.0)
+    return pd.DataFrame({c: columns[c] for c in COLUMNS}).astype(COLUMNS)
+
+
+def sample_fleet(config: Config) -> pd.DataFrame:
+    """The fleet study: ``fleet.size`` bogies from one Latin hypercube or scrambled Sobol' design.
+
+    Every dimension of the design, including the axle group (a choice weighted by ``fleet.axle_mix``) and each
+    axle's tyre wear, is mapped through its distribution's inverse CDF, so the stratification of the design carries
+    over to every marginal.
+
+    Parameters
+    ----------
+    config
+        The validated parameters.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per bogie with the columns of :data:`COLUMNS`, SI.
+    """
+    n = config.fleet.size
+    u = _unit_design(n, len(_FLEET_DIMENSIONS), config.fleet.sampling, design_seed(config.seed, "fleet"))
+    mix = config.fleet.axle_mix
+    values: dict[str, np.ndarray] = {}
+    for j, dim in enumerate(_FLEET_DIMENSIONS):
+        if dim == "group":
+            dist = Choice(values=tuple(mix), weights=tuple(mix.values()))
+        elif dim.startswith("tyre_wear_"):
+            dist = config.distributions["tyre_wear"]
+        else:
+            dist = config.distributions[dim]
+        values[dim] = dist.ppf(u[:, j])
+    values["road_seed"] = np.array([road_seed(config.seed, "fleet", i) for i in range(n)], dtype=np.int64)
+    return _frame(config, "fleet", values.pop("group"), values, np.arange(n))
+
+
+def sensitivity_problem(config: Config) -> dict[str, Any]:
+    """The SALib problem of the sensitivity design, over the unit hypercube.
+
+    One variable per factor, except tyre wear, which has one variable per axle of ``sensitivity.group`` (named
+    ``tyre_wear_<i>``) gathered in the SALib group ``tyre_wear``. Pass the same dict to
+    ``SALib.analyze.sobol.analyze`` with ``calc_second_order=False``.
+
+    Parameters
+    ----------
+    config
+        The validated parameters.
+
+    Returns
+    -------
+    dict
+        ``num_vars``, ``names``, ``bounds`` (all [0, 1]) and ``groups`` (one per factor, in the order of
+        ``sensitivity.factors``). A new dict at every call: SALib adds keys to the one it is given.
+    """
+    n_axles = GROUP_AXLES[config.sensitivity.group]
+    names: list[str] = []
+    groups: list[str] = []
+    for factor in config.sensitivity.factors:
+        members = list(TYRE_WEAR_COLUMNS[:n_axles]) if factor == "tyre_wear" else [factor]
+        names += members
+        groups += [factor] * len(members)
+    return {"num_vars": len(names), "names": names, "bounds": [[0.0, 1.0]] * len(names), "groups": groups}
+
+
+def sample_sensitivity(config: Config) -> pd.DataFrame:
+    """The Sobol' sensitivity design: SALib's Saltelli sampling of the factors, N (G + 2) rows.
+
+    The base bogie is the group's preset; each factor is mapped from SALib's unit design through the same
+    distribution as in the fleet, and every other quantity is held at its distribution's median. All rows share one
+    approach road, ``road_seed(seed, "sensitivity", 0)``: the road is a non-factor too, and a road per row would add
+    variance that no factor explains.
+
+    Parameters
+    ----------
+    config
+        The validated parameters.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Rows in SALib's order (``sample_id``), the columns of :data:`COLUMNS`, SI; ``base_id`` is the Saltelli
+        base row a row belongs to.
+    """
+    sens = config.sensitivity
+    problem = sensitivity_problem(config)
+    u = sobol.sample(
+        problem, sens.base_size, calc_second_order=False, scramble=True, seed=design_seed(config.seed, "sensitivity")
+    )
+    n = len(u)
+    n_groups = len(sens.factors)
+    values: dict[str, np.ndarray] = {}
+    for name in (*_SCALARS, "road_class"):
+        values[name] = np.full(
+            n, config.distributions[name].quantile(0.5), dtype=object if name == "road_class" else float
+        )
+    for c in TYRE_WEAR_COLUMNS:
+        values[c] = np.full(n, config.distributions["tyre_wear"].quantile(0.5))
+    for j, name in enumerate(problem["names"]):
+        dist = config.distributions["tyre_wear" if name.startswith("tyre_wear_") else name]
+        values[name] = dist.ppf(u[:, j])
+    values["road_seed"] = np.full(n, road_seed(config.seed, "sensitivity", 0), dtype=np.int64)
+    groups = np.full(n, sens.group, dtype=object)
+    return _frame(config, "sensitivity", groups, values, np.arange(n) // (n_groups + 2))
+
+
+def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
+    """The switch-off ablation: the first ``ablation.size`` fleet bogies, each as the variants of :data:`VARIANTS`.
+
+    A variant differs from its baseline only in the inhibitor(s) set to the ideal value of
+    :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed, so the baseline rows equal the fleet rows.
+
+    Parameters
+    ----------
+    config
+        The validated parameters.
+    fleet
+        The fleet study (:func:`sample_fleet`).
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``len(VARIANTS)`` consecutive rows per fleet bogie, ``base_id`` its fleet ``sample_id``.
+    """
+    base = fleet.iloc[: config.ablation.size]
+    frame = base.loc[base.index.repeat(len(VARIANTS))].reset_index(drop=True)
+    variant = np.tile(np.array(VARIANTS, dtype=object), len(base))
+    for name, ideal in INHIBITORS.items():
+        frame.loc[(variant == name) | (variant == "all"), name] = ideal
+    frame["sample_id"] = np.arange(len(frame), dtype=np.int64)
+    frame["study"] = "ablation"
+    frame["variant"] = variant
+    return frame.astype(COLUMNS)
+
+
+def sample_studies(config: Config) -> dict[str, pd.DataFrame]:
+    """Every study table, by study name (:data:`STUDIES`)."""
+    fleet = sample_fleet(config)
+    return {"fleet": fleet, "sensitivity": sample_sensitivity(config), "ablation": sample_ablation(config, fleet)}
+
+
+# ---- output ----------------------------------------------------------------------------------------------------
+def write_parquet_atomic(frame: pd.DataFrame, path: str | Path) -> None:
+    """Write ``frame`` to ``path`` through a temporary file in the same directory, so no reader sees half a file."""
+    path = Path(path)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        frame.to_parquet(tmp, index=False)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage: validate params.yaml, sample every study, then write them all."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.sample", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--out", default="data/samples", help="output directory (default: data/samples)")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+    except (ConfigError, OSError, yaml.YAMLError) as exc:
+        print(f"sample: {args.params}: {exc}", file=sys.stderr)
+        return 2
+    # everything is sampled before anything is written: a failure leaves the previous outputs untouched
+    frames = sample_studies(config)
+    out = Path(args.out)
+    out.mkdir(parents=True, exist_ok=True)
+    for study, frame in frames.items():
+        write_parquet_atomic(frame, out / f"{study}.parquet")
+    counts = ", ".join(f"{study} {len(frame)}" for study, frame in frames.items())
+    print(f"sample: wrote {counts} rows to {out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

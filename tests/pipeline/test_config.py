@@ -1,0 +1,241 @@
+"""params.yaml validation and SI conversion (pipeline.config) and the distributions' inverse CDFs."""
+
+import copy
+import math
+import pickle
+from pathlib import Path
+
+import numpy as np
+import pytest
+from scipy import stats
+
+from bogie.params import GRAVITY
+from pipeline.config import ConfigError, load_config, load_params, parse_config
+from pipeline.distributions import Choice, Constant, LogNormal, LogUniform, Normal, TruncNormal, Uniform
+
+PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
+_DELETE = object()
+
+
+@pytest.fixture(scope="module")
+def raw():
+    return load_params(PARAMS)
+
+
+def changed(raw, path, value):
+    """A deep copy of ``raw`` with the dotted ``path`` set to ``value`` (or deleted for _DELETE)."""
+    new = copy.deepcopy(raw)
+    *parents, last = path.split(".")
+    node = new
+    for key in parents:
+        node = node[key]
+    if value is _DELETE:
+        del node[last]
+    else:
+        node[last] = value
+    return new
+
+
+# ---- the default file --------------------------------------------------------------------------------------------
+def test_default_params_load_and_are_converted_to_si():
+    config = load_config(PARAMS)
+    d = config.distributions
+    assert d["chassis_tilt"].support == pytest.approx((-math.radians(2.0), math.radians(2.0)), rel=1e-15)
+    assert d["contact_roll_radius"].support == (0.0, 0.12)
+    assert d["tyre_wear"].support == (0.0, 0.012)
+    assert d["bush_stiffness"].support == (1.0, 3000.0)
+    assert config.fleet.legal_group_load["triaxle"] == pytest.approx(24_000 * GRAVITY, rel=1e-15)
+    assert config.fleet.legal_axle_load == pytest.approx(10_000 * GRAVITY, rel=1e-15)
+    assert sum(config.fleet.axle_mix.values()) == pytest.approx(1.0)
+    assert config.sensitivity.factors == (
+        "bush_stiffness",
+        "bush_damping",
+        "friction_coefficient",
+        "contact_roll_radius",
+        "chassis_tilt",
+        "tyre_wear",
+    )
+    assert config.protocol.run == ("static", "wim")
+    assert config.execution.backend == "loky" and config.execution.n_jobs == 2
+
+
+def test_figure2_section_is_still_read_raw():
+    assert load_params(PARAMS)["figure2"]["chassis_deflection_mm"] == 57.0
+
+
+def test_config_survives_pickling_for_worker_processes(raw):
+    config = parse_config(raw)
+    clone = pickle.loads(pickle.dumps(config))
+    assert clone == config
+    assert hash(clone) == hash(config)
+
+
+def test_dask_backend_with_a_scheduler_address_is_accepted(raw):
+    config = parse_config(
+        changed(changed(raw, "execution.dask_scheduler", "tcp://127.0.0.1:8786"), "execution.backend", "dask")
+    )
+    assert config.execution.dask_scheduler == "tcp://127.0.0.1:8786"
+
+
+def test_bounded_and_truncated_kinds_are_accepted_on_bounded_quantities(raw):
+    new = changed(
+        raw, "distributions.bush_stiffness", {"kind": "lognormal", "median": 100.0, "sigma": 1.5, "high": 5e3}
+    )
+    new = changed(new, "distributions.tyre_wear_mm", {"kind": "choice", "values": [0.0, 6.0, 12.0]})
+    new = changed(new, "distributions.friction_coefficient", {"kind": "constant", "value": 0.3})
+    config = parse_config(new)
+    assert config.distributions["bush_stiffness"].support == (0.0, 5e3)
+    assert config.distributions["tyre_wear"].values == (0.0, 0.006, 0.012)
+
+
+# ---- one clear error per bad key ---------------------------------------------------------------------------------
+BAD = [
+    # (key path changed, new value, key named by the error, words the message must contain)
+    ("fleet.size", _DELETE, "fleet.size", ["missing key", "integer"]),
+    ("distributions", _DELETE, "distributions", ["missing key"]),
+    ("distributions.tyre_wear_mm.high", _DELETE, "distributions.tyre_wear_mm.high", ["missing key", "mm"]),
+    ("fleet.sise", 100, "fleet.sise", ["unknown key", "did you mean size"]),
+    ("bush_stiffness", {}, "bush_stiffness", ["unknown key", "top level"]),
+    (
+        "distributions.bush_stifness",
+        {"kind": "uniform", "low": 1.0, "high": 2.0},
+        "distributions.bush_stifness",
+        ["unknown key", "did you mean bush_stiffness"],
+    ),
+    ("distributions.bush_stiffness.kind", "gamma", "distributions.bush_stiffness.kind", ["unknown distribution kind"]),
+    ("fleet.size", "2000", "fleet.size", ["'2000'", "integer"]),
+    ("fleet.size", 2000.5, "fleet.size", ["2000.5", "integer"]),
+    ("distributions.bush_stiffness.high", "1e7", "distributions.bush_stiffness.high", ["text, not a number", "1.0e3"]),
+    (
+        "distributions.bush_stiffness",
+        {"kind": "uniform", "low": -10.0, "high": 100.0},
+        "distributions.bush_stiffness.low",
+        ["-10.0", "[0, 1e+07] N m/rad"],
+    ),
+    ("distributions.bush_stiffness.low", -10.0, "distributions.bush_stiffness.low", ["-10.0", "> 0", "N m/rad"]),
+    ("distributions.bush_stiffness.low", 5000.0, "distributions.bush_stiffness.high", ["3000.0", "greater than low"]),
+    ("distributions.bush_stiffness.high", 2e7, "distributions.bush_stiffness.high", ["20000000.0", "N m/rad"]),
+    ("distributions.friction_coefficient.high", 2.0, "distributions.friction_coefficient.high", ["[0, 1.5]"]),
+    ("distributions.contact_roll_radius_mm.high", 600.0, "distributions.contact_roll_radius_mm.high", ["[0, 500] mm"]),
+    ("distributions.tyre_wear_mm.high", 60.0, "distributions.tyre_wear_mm.high", ["60.0", "[0, 50] mm"]),
+    ("distributions.chassis_tilt_deg.low", -12.0, "distributions.chassis_tilt_deg.low", ["[-10, 10] degree"]),
+    ("distributions.payload_fraction.low", 0.0, "distributions.payload_fraction.low", ["(0, 1.5]"]),
+    (
+        "distributions.chassis_tilt_deg",
+        {"kind": "normal", "mean": 0.3, "sd": 0.8},
+        "distributions.chassis_tilt_deg.kind",
+        ["'normal'", "unbounded", "truncnormal"],
+    ),
+    (
+        "distributions.bush_stiffness",
+        {"kind": "lognormal", "median": 100.0, "sigma": 1.0},
+        "distributions.bush_stiffness.kind",
+        ["'lognormal'", "unbounded", "give high"],
+    ),
+    (
+        "distributions.friction_coefficient.sd",
+        -0.1,
+        "distributions.friction_coefficient.sd",
+        ["-0.1", "> 0"],
+    ),
+    ("distributions.road_class.values", ["A", "Z"], "distributions.road_class.values[1]", ["'Z'", "ISO 8608"]),
+    ("distributions.road_class.weights", [0.5, 0.5], "distributions.road_class.weights", ["one weight per value"]),
+    ("fleet.axle_mix", {"tandem": 0.5, "triaxle": 0.6}, "fleet.axle_mix", ["sum to 1", "1.1"]),
+    ("fleet.axle_mix", {"tandem": 0.5, "quad": 0.5}, "fleet.axle_mix.quad", ["unknown key"]),
+    ("fleet.presets", {"tandem": "tandem_trrl", "triaxle": "tri"}, "fleet.presets.triaxle", ["'tri'", "preset"]),
+    (
+        "fleet.presets",
+        {"tandem": "triaxle_stage1", "triaxle": "triaxle_stage1"},
+        "fleet.presets.tandem",
+        ["3 axles"],
+    ),
+    ("fleet.sampling", "halton", "fleet.sampling", ["'halton'", "lhs, sobol"]),
+    ("fleet.legal_group_load_t", {"tandem": 1.0, "triaxle": 24.0}, "fleet.legal_group_load_t.tandem", ["1.2 t"]),
+    ("sensitivity.base_size", 500, "sensitivity.base_size", ["500", "power of 2"]),
+    (
+        "sensitivity.factors",
+        ["bush_stiffness", "contact_roll_radius"],
+        "sensitivity.factors[1]",
+        ["'contact_roll_radius'", "did you mean contact_roll_radius_mm"],
+    ),
+    ("sensitivity.group", "quad", "sensitivity.group", ["'quad'", "tandem, triaxle"]),
+    ("sensitivity.protocol", "dynamic", "sensitivity.protocol", ["'dynamic'", "static, wim"]),
+    ("protocol.run", ["static", "dynamic"], "protocol.run[1]", ["'dynamic'", "unknown protocol"]),
+    ("protocol.run", ["wim"], "sensitivity.protocol", ["'static'", "not run"]),
+    ("protocol.wim.speed_m_s", 80.0, "protocol.wim.speed_m_s", ["80.0", "(0, 50] m/s"]),
+    ("execution.backend", "threads", "execution.backend", ["'threads'", "loky, dask"]),
+    ("execution.backend", "dask", "execution.dask_scheduler", ["None", "tcp://"]),
+    ("execution.n_jobs", 0, "execution.n_jobs", ["= 0", "integer"]),
+    ("execution.chunk_size", 0, "execution.chunk_size", ["= 0", "integer"]),
+    ("ablation.size", 5000, "ablation.size", ["5000", "fleet.size"]),
+    ("seed", -1, "seed", ["-1", "integer"]),
+]
+
+
+@pytest.mark.parametrize(("path", "value", "key", "words"), BAD, ids=[f"{b[0]}={b[1]!r}" for b in BAD])
+def test_each_bad_key_is_named_with_its_value_and_the_expected_form(raw, path, value, key, words):
+    with pytest.raises(ConfigError) as excinfo:
+        parse_config(changed(raw, path, value))
+    message = str(excinfo.value)
+    assert excinfo.value.key == key
+    assert message.startswith(f"{key} = ") or message.startswith(f"unknown key {key}") or "missing key" in message
+    assert key in message
+    for word in words:
+        assert word in message
+
+
+def test_config_error_is_a_value_error(raw):
+    with pytest.raises(ValueError):
+        parse_config(changed(raw, "execution.n_jobs", -1))
+
+
+def test_yaml_that_is_not_a_mapping_is_refused(tmp_path):
+    bad = tmp_path / "params.yaml"
+    bad.write_text("- just\n- a list\n", encoding="utf-8")
+    with pytest.raises(ConfigError, match="mapping"):
+        load_config(bad)
+
+
+# ---- the distributions' inverse CDFs -----------------------------------------------------------------------------
+U = np.linspace(0.0, 0.999, 37)
+
+
+def test_uniform_and_loguniform_inverse_cdfs_are_the_closed_forms():
+    assert Uniform(2.0, 6.0).ppf(U) == pytest.approx(2.0 + 4.0 * U, rel=1e-15)
+    assert LogUniform(1.0, 1000.0).ppf(U) == pytest.approx(1000.0**U, rel=1e-12)
+    assert LogUniform(1.0, 1000.0).quantile(0.5) == pytest.approx(math.sqrt(1000.0), rel=1e-12)
+
+
+def test_normal_kinds_match_scipy_and_stay_in_their_support():
+    assert Normal(1.0, 2.0).ppf(U[1:]) == pytest.approx(stats.norm.ppf(U[1:], 1.0, 2.0), rel=1e-12)
+    assert np.isfinite(Normal(1.0, 2.0).ppf([0.0])).all()
+    t = TruncNormal(0.25, 0.12, 0.05, 0.6)
+    expected = stats.truncnorm.ppf(U, (0.05 - 0.25) / 0.12, (0.6 - 0.25) / 0.12, loc=0.25, scale=0.12)
+    assert t.ppf(U) == pytest.approx(expected, rel=1e-12)
+    assert t.ppf([0.0])[0] >= 0.05
+    ln = LogNormal(median=100.0, sigma=0.5)
+    assert ln.ppf(U[1:]) == pytest.approx(stats.lognorm.ppf(U[1:], 0.5, scale=100.0), rel=1e-10)
+    capped = LogNormal(median=100.0, sigma=2.0, high=300.0)
+    assert capped.ppf(np.linspace(0.0, 1.0, 101)).max() <= 300.0
+    assert capped.quantile(0.5) < 100.0  # truncating the upper tail moves the median down
+
+
+def test_choice_gives_each_value_its_share_of_a_stratified_design():
+    n = 1000
+    u = (np.arange(n) + 0.5) / n
+    draws = Choice(values=("A", "B", "C"), weights=(3.0, 5.0, 2.0)).ppf(u)
+    assert [int((draws == v).sum()) for v in "ABC"] == [300, 500, 200]
+    assert Choice(values=(1.0, 2.0)).ppf([0.0, 0.49, 0.5, 0.999]).tolist() == [1.0, 1.0, 2.0, 2.0]
+    assert Choice(values=(1.0, 2.0, 3.0), weights=(1.0, 0.0, 1.0)).ppf(u).tolist().count(2.0) == 0
+    assert Constant(0.3).ppf(U) == pytest.approx(np.full_like(U, 0.3))
+
+
+def test_scaling_changes_the_unit_not_the_distribution():
+    mm = TruncNormal(mean=5.0, sd=2.0, low=0.0, high=12.0)
+    m = mm.scaled(lambda x: x / 1000.0)
+    assert m.ppf(U) == pytest.approx(mm.ppf(U) / 1000.0, rel=1e-12)
+
+
+def test_design_points_outside_the_unit_interval_are_refused():
+    with pytest.raises(ValueError, match=r"\[0, 1\]"):
+        Uniform(0.0, 1.0).ppf([1.5])
