@@ -11,7 +11,12 @@ from pathlib import Path
 def _cmd_figure2(args: argparse.Namespace) -> int:
     from bogie.plotting import figure2, save_figure
 
-    fig = figure2(q_max=args.q_max, chassis_deflection=args.alpha_mm / 1e3)
+    fe_points = None
+    if args.fe:
+        from bogie.fe import figure2_points
+
+        fe_points = figure2_points(chassis_deflection=args.alpha_mm / 1e3)
+    fig = figure2(q_max=args.q_max, chassis_deflection=args.alpha_mm / 1e3, fe_points=fe_points)
     save_figure(fig, Path(args.out))
     print(f"wrote {args.out}")
     return 0
@@ -50,6 +55,9 @@ def build_parser() -> argparse.ArgumentParser:
     fig2.add_argument("--out", required=True, help="output file; the format follows the suffix (.png, .pdf, .svg)")
     fig2.add_argument("--q-max", type=float, default=20.0, help="largest q on the axis [-] (default 20)")
     fig2.add_argument("--alpha-mm", type=float, default=57.0, help="chassis deflection alpha [mm] (default 57)")
+    fig2.add_argument(
+        "--fe", action="store_true", help="overlay the Stage 1 finite element points at q = 4.3 (bogie.fe)"
+    )
     fig2.set_defaults(func=_cmd_figure2)
     case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, ...)")
     case.add_argument("name", help="run name, e.g. L01")
