@@ -25,6 +25,8 @@ import numpy as np
 from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import _nonlinear_core as nlc
+
 MODEL_LINEAR = 0
 MODEL_NONLINEAR = 1
 
@@ -110,9 +112,11 @@ def _linear_force(u, v, drv, data_f, data_i, f, kt, ct):
 
 
 @njit(cache=True)
-def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record):
+def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent):
     if model == MODEL_LINEAR:
         _linear_force(u, v, drv, data_f, data_i, f, kt, ct)
+    else:
+        nlc.force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent)
 
 
 # ---- the stepping kernel ---------------------------------------------------------------------------------------
@@ -122,7 +126,11 @@ def _attempt(
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec,
 ):  # fmt: skip
-    """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters)."""
+    """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
+
+    Newton-Raphson on the full residual. The iteration matrix is formed with the tangent at the first iterate
+    and kept while the residual falls at least fourfold per iteration; otherwise it is formed anew.
+    """
     n = u.shape[0]
     for k in range(drv.shape[0]):
         drv[k] = drv0[k] + frac1 * (drv1[k] - drv0[k])
@@ -132,11 +140,13 @@ def _attempt(
     for i in range(n):
         u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
     rnorm = 0.0
+    r_prev = 0.0
+    want = True
     for it in range(max_iter + 1):
         for i in range(n):
             a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
             v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
-        _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False)
+        _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, want)
         rnorm = 0.0
         finite = True
         for i in range(n):
@@ -155,11 +165,18 @@ def _attempt(
             return STATUS_OK, rnorm, it
         if it == max_iter:
             break
-        for i in range(n):
-            for j in range(n):
-                jac[i, j] = (1.0 - alpha_m) * c_a * mass[i, j] + (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
-        if not lu_factor(jac, piv):
-            return STATUS_SINGULAR, rnorm, it
+        if it > 0 and not want and rnorm > 0.25 * r_prev:
+            # slow contraction with a stale matrix: form the tangent at this iterate and solve again
+            _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True)
+            want = True
+        if want:
+            for i in range(n):
+                for j in range(n):
+                    jac[i, j] = (1.0 - alpha_m) * c_a * mass[i, j] + (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+            if not lu_factor(jac, piv):
+                return STATUS_SINGULAR, rnorm, it
+            want = False
+        r_prev = rnorm
         lu_solve(jac, piv, res)
         for i in range(n):
             u_new[i] += res[i]
@@ -190,7 +207,7 @@ def _integrate(
     rec = np.zeros(n_rec)
     hist_new = hist0.copy()
     drv = drive[0].copy()
-    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True)
+    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False)
     uu[0] = u
     vv[0] = v
     aa[0] = a
@@ -243,7 +260,7 @@ def _integrate(
         if status != STATUS_OK:
             return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
         # commit: record the model's outputs at the converged state
-        _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True)
+        _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, False)
         uu[step + 1] = u
         vv[step + 1] = v
         aa[step + 1] = a

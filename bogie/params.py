@@ -33,6 +33,7 @@ _SCALAR_RANGES: dict[str, tuple[float, float, str, bool]] = {
     "payload_mass": (0.0, 1e6, "kg", False),
     "payload_cg_x": (0.0, 50.0, "m", False),
     "chassis_pitch_inertia": (0.0, 1e9, "kg m^2", False),
+    "pad_drop": (0.0, 3.0, "m", True),
     "equaliser_front_tip_drop": (-0.5, 0.5, "m", True),
     "equaliser_rear_tip_drop": (-0.5, 0.5, "m", True),
     "spring_length_rate": (0.0, 2.0, "m/m", True),
@@ -137,6 +138,9 @@ class Bogie:
         Position of that mass's centre of gravity rearward of the king pin [m].
     chassis_pitch_inertia
         Pitch moment of inertia of the sprung mass about the king pin [kg m^2].
+    pad_drop
+        Height of the king pin above the hanger pads in the design position [m]; with chassis pitch the pads
+        swing fore and aft by this lever.
     equaliser_front_tip_drop, equaliser_rear_tip_drop
         Height of the equaliser pivot above its front and rear arm-tip contacts [m] (negative: tip above pivot).
     spring_length_rate
@@ -175,6 +179,7 @@ class Bogie:
     tyre_wear: tuple[float, ...] = field(default=())
     tyre_damping: float = 0.0
     equaliser_inertia: float = 0.2
+    pad_drop: float = 0.3
     equaliser_front_tip_drop: float = 0.0
     equaliser_rear_tip_drop: float = 0.0
     spring_length_rate: float = 0.3

@@ -1,0 +1,413 @@
+"""Stage 4: the full non-linear suspension model of one side of an n-axle bogie.
+
+Finite chassis pitch and equaliser rotation, spring-end contact points that roll along cylindrical pads
+(``contact_roll_radius``), Coulomb friction with stick and slip at the spring ends (``friction_coefficient``,
+elastic-plastic return map), bush stiffness and damping, unilateral tyres with per-axle wear, axle masses,
+payload on the chassis and chassis tilt from a king pin rise. The equations are in ``docs/models.md``; the
+compiled force is :mod:`bogie._nonlinear_core`; time stepping is :mod:`bogie.newmark`.
+
+A simulation is driven by :class:`Inputs` (road height and rate under each axle, payload load factor, king pin
+rise, each per time step) and starts from a :class:`State`; its result carries the final state, so runs chain:
+load application, a crawl over a road, settling on a weighbridge, each starting where the last one stopped.
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bogie import _nonlinear_core as core
+from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate, lu_factor, lu_solve
+from bogie.params import GRAVITY, Bogie, design_spring_loads
+from bogie.results import DynamicResult, Profile
+from bogie.road import axle_heights
+
+
+# ---- inputs and state ------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Inputs:
+    """Time histories that drive the model, one row per time step (n_steps + 1 rows).
+
+    Attributes
+    ----------
+    dt
+        Time step [s].
+    road_height
+        Road height under each axle [m], shape (n_t, n_axles).
+    road_rate
+        Its time derivative [m/s], shape (n_t, n_axles).
+    load_factor
+        Payload weight as a fraction of the design payload [-], shape (n_t,).
+    kingpin_rise
+        Rise of the king pin above the height that makes the bogie's ``chassis_tilt`` [m], shape (n_t,).
+    """
+
+    dt: float
+    road_height: NDArray[np.float64]
+    road_rate: NDArray[np.float64]
+    load_factor: NDArray[np.float64]
+    kingpin_rise: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        if not (math.isfinite(self.dt) and self.dt > 0.0):
+            raise ValueError(f"dt = {self.dt!r} is out of range: must be > 0 s")
+        n_t = self.road_height.shape[0]
+        if n_t < 2:
+            raise ValueError(f"inputs have {n_t} rows: at least 2 (one step) are needed")
+        for name in ("road_rate", "load_factor", "kingpin_rise"):
+            if getattr(self, name).shape[0] != n_t:
+                raise ValueError(f"{name} has {getattr(self, name).shape[0]} rows but road_height has {n_t}")
+        for name in ("road_height", "road_rate", "load_factor", "kingpin_rise"):
+            if not np.all(np.isfinite(getattr(self, name))):
+                raise ValueError(f"{name} contains NaN or infinity: inputs must be finite")
+        if np.any(self.load_factor <= 0.0) or np.any(self.load_factor > 2.0):
+            bad = self.load_factor[(self.load_factor <= 0.0) | (self.load_factor > 2.0)][0]
+            raise ValueError(
+                f"load_factor = {bad!r} is out of range: must be in (0, 2] (fraction of the design payload, -); "
+                "an empty trailer still has its chassis weight"
+            )
+
+    @property
+    def n_steps(self) -> int:
+        """Number of time steps."""
+        return self.road_height.shape[0] - 1
+
+    @property
+    def t(self) -> NDArray[np.float64]:
+        """Times from the start of these inputs [s]."""
+        return np.arange(self.n_steps + 1) * self.dt
+
+    def then(self, other: Inputs) -> Inputs:
+        """These inputs followed by ``other`` (its first row replaces this one's last)."""
+        if other.dt != self.dt:
+            raise ValueError(f"cannot join inputs with dt = {self.dt} s and dt = {other.dt} s")
+        return Inputs(
+            self.dt,
+            np.concatenate([self.road_height, other.road_height[1:]]),
+            np.concatenate([self.road_rate, other.road_rate[1:]]),
+            np.concatenate([self.load_factor, other.load_factor[1:]]),
+            np.concatenate([self.kingpin_rise, other.kingpin_rise[1:]]),
+        )
+
+    def drive(self, bogie: Bogie) -> NDArray[np.float64]:
+        """The kernel's drive rows [road heights, road rates, load factor, king pin rise] for ``bogie``."""
+        n = bogie.n_axles
+        if self.road_height.shape[1] != n:
+            raise ValueError(f"inputs are for {self.road_height.shape[1]} axles but the bogie has {n}")
+        return np.ascontiguousarray(
+            np.column_stack(
+                [
+                    self.road_height,
+                    self.road_rate,
+                    self.load_factor,
+                    bogie.kingpin_height_offset + self.kingpin_rise,
+                ]
+            )
+        )
+
+
+def _steps(duration: float, dt: float) -> int:
+    if not (math.isfinite(duration) and duration > 0.0):
+        raise ValueError(f"duration = {duration!r} is out of range: must be > 0 s")
+    if not (math.isfinite(dt) and dt > 0.0):
+        raise ValueError(f"dt = {dt!r} is out of range: must be > 0 s")
+    return max(1, int(round(duration / dt)))
+
+
+def road_inputs(
+    bogie: Bogie,
+    profile: Profile,
+    speed: float,
+    duration: float,
+    dt: float,
+    front_axle_start: float = 0.0,
+    load_factor: float = 1.0,
+) -> Inputs:
+    """Inputs for a pass over ``profile`` at constant ``speed`` [m/s] for ``duration`` [s].
+
+    Each axle sees the profile at its own position (the wheel-path delay); road rates are the exact derivative
+    of the linearly interpolated heights between steps.
+    """
+    n_steps = _steps(duration, dt)
+    t = np.arange(n_steps + 1) * dt
+    heights = axle_heights(profile, bogie.axle_x, speed, t, front_axle_start)
+    rates = np.gradient(heights, t, axis=0)
+    ones = np.ones(n_steps + 1)
+    return Inputs(dt, heights, rates, load_factor * ones, 0.0 * ones)
+
+
+def load_ramp(bogie: Bogie, start: float, end: float, duration: float, dt: float) -> Inputs:
+    """Inputs that change the payload load factor from ``start`` to ``end`` [-] over ``duration`` [s], level road.
+
+    The ramp is a smooth cosine so that the loading excites the bogie as little as a crane or a forklift would.
+    """
+    n_steps = _steps(duration, dt)
+    s = np.linspace(0.0, 1.0, n_steps + 1)
+    factor = start + (end - start) * 0.5 * (1.0 - np.cos(np.pi * s))
+    zeros = np.zeros((n_steps + 1, bogie.n_axles))
+    return Inputs(dt, zeros, zeros.copy(), factor, np.zeros(n_steps + 1))
+
+
+def hold(bogie: Bogie, duration: float, dt: float, load_factor: float = 1.0, road: ArrayLike | None = None) -> Inputs:
+    """Inputs that hold everything constant for ``duration`` [s]: a level (or given) road, a fixed load factor."""
+    n_steps = _steps(duration, dt)
+    heights = np.zeros((n_steps + 1, bogie.n_axles))
+    if road is not None:
+        heights[:] = np.asarray(road, dtype=float)
+    return Inputs(
+        dt, heights, np.zeros_like(heights), np.full(n_steps + 1, float(load_factor)), np.zeros(n_steps + 1)
+    )
+
+
+@dataclass(frozen=True)
+class State:
+    """Configuration of the model: displacements, velocities, accelerations and friction slips.
+
+    ``u`` = [chassis pitch [rad], equaliser rotations [rad], axle displacements [m]] from the design position.
+    """
+
+    u: NDArray[np.float64]
+    v: NDArray[np.float64]
+    a: NDArray[np.float64]
+    slip: NDArray[np.float64]
+
+
+@dataclass(frozen=True)
+class NonlinearResult(DynamicResult):
+    """A :class:`~bogie.results.DynamicResult` with the state at its end, to continue from."""
+
+    final_state: State | None = None
+
+
+# ---- packing ---------------------------------------------------------------------------------------------------
+def dof_names(n_axles: int) -> tuple[str, ...]:
+    """Names of the 2n freedoms of the non-linear model."""
+    return (
+        ("chassis_pitch",)
+        + tuple(f"equaliser_{j}" for j in range(n_axles - 1))
+        + tuple(f"axle_{i}" for i in range(n_axles))
+    )
+
+
+def design_wheel_loads(bogie: Bogie) -> NDArray[np.float64]:
+    """Tyre loads in the design position [N]: spring loads plus the axle weight."""
+    return np.asarray(design_spring_loads(bogie)) + bogie.axle_mass * GRAVITY
+
+
+def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Mass matrix and the packed parameters (``data_f``, ``data_i``) of :mod:`bogie._nonlinear_core`."""
+    n = bogie.n_axles
+    ne = n - 1
+    pivots = bogie.equaliser_pivot_x
+    z_pad = -bogie.pad_drop
+    h_f, h_r = bogie.equaliser_front_tip_drop, bogie.equaliser_rear_tip_drop
+    pivot_z = [z_pad + h_f] * ne
+    # contact e: (body, offset in the body's frame from its origin: king pin for the chassis, pivot otherwise)
+    bodies, pad_x, pad_z, world_x, world_z = [], [], [], [], []
+    for i in range(n):
+        if i == 0:
+            front = (-1, bogie.front_hanger_x, z_pad)
+        else:
+            front = (i - 1, bogie.equaliser_rear_arm[i - 1], -h_r)
+        if i == n - 1:
+            rear = (-1, bogie.rear_hanger_x, z_pad)
+        else:
+            rear = (i, -bogie.equaliser_front_arm[i], -h_f)
+        for body, dx, dz in (front, rear):
+            bodies.append(body)
+            pad_x.append(dx)
+            pad_z.append(dz)
+            ox, oz = (0.0, 0.0) if body < 0 else (pivots[body], pivot_z[body])
+            world_x.append(ox + dx)
+            world_z.append(oz + dz)
+    a_f = np.asarray(bogie.spring_front_half_length)
+    a_r = np.asarray(bogie.spring_rear_half_length)
+    x_a = np.asarray(bogie.axle_x)
+    wx, wz = np.asarray(world_x), np.asarray(world_z)
+    xf, xr, zf, zr = wx[0::2], wx[1::2], wz[0::2], wz[1::2]
+    w_front = (xr - x_a) / (xr - xf)
+    chord_height = w_front * zf + (1.0 - w_front) * zr
+    chord_angle = np.arctan2(-(zr - zf), xr - xf)
+    loads = np.asarray(design_spring_loads(bogie))
+    tyre_loads = loads + bogie.axle_mass * GRAVITY
+    scalars = {
+        "road_spring_stiffness": bogie.road_spring_stiffness,
+        "tyre_stiffness": bogie.tyre_stiffness,
+        "tyre_damping": bogie.tyre_damping,
+        "bush_stiffness": bogie.bush_stiffness,
+        "bush_damping": bogie.bush_damping,
+        "contact_roll_radius": bogie.contact_roll_radius,
+        "friction_coefficient": bogie.friction_coefficient,
+        "contact_tangential_stiffness": bogie.contact_tangential_stiffness,
+        "spring_end_slope_rate": bogie.spring_end_slope_rate,
+        "payload_weight": bogie.payload_mass * GRAVITY,
+        "payload_cg_x": bogie.payload_cg_x,
+        "axle_weight": bogie.axle_mass * GRAVITY,
+    }
+    arrays = {
+        "axle_x": x_a,
+        "elongation_front": bogie.spring_length_rate * a_f / (a_f + a_r),
+        "elongation_rear": bogie.spring_length_rate * a_r / (a_f + a_r),
+        "design_spring_load": loads,
+        "design_tyre_compression": tyre_loads / bogie.tyre_stiffness,
+        "tyre_wear": np.asarray(bogie.tyre_wear),
+        "design_chord_height": chord_height,
+        "design_chord_angle": chord_angle,
+        "pad_x": np.asarray(pad_x),
+        "pad_z": np.asarray(pad_z),
+        "design_contact_x": wx,
+        "pivot_x": np.asarray(pivots, dtype=float),
+        "pivot_z": np.asarray(pivot_z, dtype=float),
+    }
+    data_f = np.concatenate([[scalars[k] for k in core.SCALARS]] + [arrays[name] for name, _ in core.ARRAYS])
+    data_i = np.asarray([n, *bodies], dtype=np.int64)
+    mass = np.diag([bogie.chassis_pitch_inertia] + [bogie.equaliser_inertia] * ne + [bogie.axle_mass] * n)
+    return mass, data_f.astype(float), data_i
+
+
+def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
+    """Residual tolerance per freedom: 1e-6 of the design wheel load times each freedom's lever [N, N m]."""
+    w = float(np.mean(design_wheel_loads(bogie)))
+    arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
+    levers = [bogie.bogie_centre_x] + [arm] * (bogie.n_axles - 1) + [1.0] * bogie.n_axles
+    return 1e-6 * w * np.asarray(levers)
+
+
+# ---- static equilibrium ----------------------------------------------------------------------------------------
+def equilibrium(bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = None, u0: ArrayLike | None = None) -> State:
+    """Static equilibrium for one drive row (no inertia, no damping).
+
+    With ``slip`` None the friction is relaxed: the equilibrium is solved without friction and each contact's
+    slip is set so that it carries no friction force there (no locked-in forces, as after a long vibration).
+    With ``slip`` given, friction holds those slips and the equilibrium includes the friction forces.
+    """
+    n = bogie.n_axles
+    ndof = 2 * n
+    relaxed = slip is None
+    _, data_f, data_i = pack(bogie.replace(friction_coefficient=0.0) if relaxed else bogie)
+    drv = np.asarray(drive_row, dtype=float)
+    hist = np.zeros(ndof) if relaxed else np.asarray(slip, dtype=float).copy()
+    hist_new = hist.copy()
+    u = np.zeros(ndof) if u0 is None else np.asarray(u0, dtype=float).copy()
+    v = np.zeros(ndof)
+    f = np.zeros(ndof)
+    kt = np.zeros((ndof, ndof))
+    ct = np.zeros((ndof, ndof))
+    rec = np.zeros(8 * n)
+    piv = np.zeros(ndof, dtype=np.int64)
+    tol = _tolerance(bogie)
+    for _ in range(60):
+        core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True)
+        if np.all(np.abs(f) <= tol):
+            break
+        if not lu_factor(kt, piv):
+            raise RuntimeError("static equilibrium: singular stiffness (a wheel and its spring both unloaded?)")
+        step = -f.copy()
+        lu_solve(kt, piv, step)
+        # limit the rotation and displacement of one iteration to keep Newton inside the physical range
+        scale = max(1.0, np.max(np.abs(step[:n])) / 0.05, np.max(np.abs(step[n:])) / 0.05)
+        u += step / scale
+    else:
+        raise RuntimeError(f"static equilibrium did not converge: largest force residual {np.max(np.abs(f)):.3g}")
+    return State(u=u, v=v, a=np.zeros(ndof), slip=hist_new.copy() if relaxed else hist.copy())
+
+
+# ---- running ---------------------------------------------------------------------------------------------------
+def _result(bogie: Bogie, run, inputs: Inputs, final: State | None) -> NonlinearResult:
+    n = bogie.n_axles
+    rec = run.record
+    keep = len(run.t)
+    extras = {
+        "chassis_pitch": run.u[:, 0],
+        "equaliser_rotation": run.u[:, 1:n] - run.u[:, :1],
+        "axle_displacement": run.u[:, n:],
+        "spring_load": rec[:, n : 2 * n],
+        "friction_force": rec[:, 2 * n : 4 * n],
+        "stick": rec[:, 4 * n : 6 * n],
+        "contact_shift": rec[:, 6 * n : 8 * n],
+        "road_height": inputs.road_height[:keep],
+        "load_factor": inputs.load_factor[:keep],
+    }
+    return NonlinearResult(
+        t=run.t,
+        wheel_loads=rec[:, :n],
+        reference_load=float(np.mean(design_wheel_loads(bogie))),
+        status="ok" if run.success else "failed",
+        message=run.message,
+        extras=extras,
+        final_state=final,
+    )
+
+
+def simulate(
+    bogie: Bogie,
+    inputs: Inputs,
+    initial: State | None = None,
+    rho_inf: float | None = None,
+    max_iter: int = 25,
+    max_halvings: int = 5,
+) -> NonlinearResult:
+    """Integrate the non-linear model over ``inputs``.
+
+    Parameters
+    ----------
+    bogie
+        The bogie.
+    inputs
+        Road, load and king pin histories (:func:`road_inputs`, :func:`load_ramp`, :func:`hold`, ``then``).
+    initial
+        State to start from; by default the static equilibrium at the first input row with relaxed friction.
+    rho_inf
+        Generalised-alpha spectral radius; None for average-acceleration Newmark.
+    max_iter, max_halvings
+        Newton iterations per step, and how many times a step that fails is split in two before the run stops.
+
+    Returns
+    -------
+    NonlinearResult
+        Wheel loads [N] and the model's histories; ``status`` "failed" with the solver's message if a step could
+        not be solved (the history up to there is kept), never NaN.
+    """
+    mass, data_f, data_i = pack(bogie)
+    drive = inputs.drive(bogie)
+    state = equilibrium(bogie, drive[0]) if initial is None else initial
+    n_rec = 8 * bogie.n_axles
+    ndof = 2 * bogie.n_axles
+    f0 = np.zeros(ndof)
+    hist_new = state.slip.copy()
+    core.force(
+        state.u, state.v, drive[0], data_f, data_i, state.slip, hist_new, f0,
+        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False,
+    )  # fmt: skip
+    a0 = consistent_acceleration(mass, f0) if initial is None else state.a
+    run = integrate(
+        MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.slip.copy(),
+        inputs.dt, inputs.n_steps, _tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
+        max_halvings=max_halvings, n_record=n_rec,
+    )  # fmt: skip
+    final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), slip=run.history.copy())
+    return _result(bogie, run, inputs, final if run.success else None)
+
+
+def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> NonlinearResult:
+    """Quasi-static path through ``inputs`` (no inertia, no damping): the weighbridge model.
+
+    Each row is an equilibrium; friction slips carry from row to row, so the loads depend on the load history
+    (apply and remove the payload, tilt the chassis, raise a wheel). Consistent with :func:`simulate` at very low
+    speed.
+    """
+    quiet = bogie.replace(tyre_damping=0.0, bush_damping=0.0)
+    _, data_f, data_i = pack(quiet)
+    drive = inputs.drive(quiet)
+    state = equilibrium(quiet, drive[0]) if initial is None else initial
+    ndof = 2 * bogie.n_axles
+    run = integrate(
+        MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
+        np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=40,
+        max_halvings=5, n_record=8 * bogie.n_axles,
+    )  # fmt: skip
+    final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
+    return _result(bogie, run, inputs, final if run.success else None)
