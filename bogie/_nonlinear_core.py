@@ -87,7 +87,13 @@ def array_offsets(n: int) -> dict[str, tuple[int, int]]:
 
 
 @njit(cache=True)
-def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record):
+def scratch_size(n):
+    """Length of the work array :func:`force` needs for n axles."""
+    return 4 * (n - 1) + 9 * 2 * n + n
+
+
+@njit(cache=True)
+def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work):
     n = data_i[0]
     ne = n - 1
     # offsets, in the order of ARRAYS
@@ -124,20 +130,34 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record):
     for k in range(2 * n):
         f[k] = 0.0
 
-    # pivots (chassis points) in the world
-    piv_x = np.empty(ne)
-    piv_z = np.empty(ne)
+    # work arrays are views into one buffer: no allocation in the stepping loop
+    m2 = 2 * n
+    piv_x = work[0:ne]
+    piv_z = work[ne : 2 * ne]
+    w0 = 2 * ne
+    m_x = work[w0 : w0 + m2]
+    m_z = work[w0 + m2 : w0 + 2 * m2]
+    pad_s = work[w0 + 2 * m2 : w0 + 3 * m2]
+    pad_c = work[w0 + 3 * m2 : w0 + 4 * m2]
+    p_x = work[w0 + 4 * m2 : w0 + 5 * m2]
+    p_z = work[w0 + 5 * m2 : w0 + 6 * m2]
+    t_fric = work[w0 + 6 * m2 : w0 + 7 * m2]
+    stick = work[w0 + 7 * m2 : w0 + 8 * m2]
+    n_load = work[w0 + 8 * m2 : w0 + 9 * m2]
+    f_spring = work[w0 + 9 * m2 : w0 + 9 * m2 + n]
+    eq_c = work[w0 + 9 * m2 + n : w0 + 9 * m2 + n + ne]
+    eq_s = work[w0 + 9 * m2 + n + ne : w0 + 9 * m2 + n + 2 * ne]
+
+    # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(ne):
+        eq_c[j] = math.cos(u[1 + j])
+        eq_s[j] = math.sin(u[1 + j])
         bx = data_f[o_vx + j]
         bz = data_f[o_vz + j]
         piv_x[j] = bx * cc + bz * sc
         piv_z[j] = dh - bx * sc + bz * cc
 
     # material design contact points M_e and the pad rotation
-    m_x = np.empty(2 * n)
-    m_z = np.empty(2 * n)
-    pad_s = np.empty(2 * n)
-    pad_c = np.empty(2 * n)
     for e in range(2 * n):
         body = data_i[1 + e]
         dx = data_f[o_px + e]
@@ -150,20 +170,14 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record):
         else:
             ox = piv_x[body]
             oz = piv_z[body]
-            c = math.cos(u[1 + body])
-            s = math.sin(u[1 + body])
+            c = eq_c[body]
+            s = eq_s[body]
         m_x[e] = ox + dx * c + dz * s
         m_z[e] = oz - dx * s + dz * c
         pad_s[e] = s
         pad_c[e] = c
 
     # springs: contact points (rolling), deflection, friction, loads
-    f_spring = np.empty(n)
-    p_x = np.empty(2 * n)
-    p_z = np.empty(2 * n)
-    t_fric = np.empty(2 * n)
-    stick = np.empty(2 * n)
-    n_load = np.empty(2 * n)
     for i in range(n):
         ef = 2 * i
         er = 2 * i + 1
@@ -179,10 +193,16 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record):
         g_rear = beta + kappa * d_tilde
         # a leaf end on a convex pad of radius rho touches it where their tangents agree: the contact point
         # moves along the pad by rho x (pad rotation - leaf end rotation)
-        p_x[ef] = m_x[ef] + rho * (pad_s[ef] - math.sin(g_front))
-        p_z[ef] = m_z[ef] + rho * (pad_c[ef] - math.cos(g_front))
-        p_x[er] = m_x[er] + rho * (pad_s[er] - math.sin(g_rear))
-        p_z[er] = m_z[er] + rho * (pad_c[er] - math.cos(g_rear))
+        if rho > 0.0:
+            p_x[ef] = m_x[ef] + rho * (pad_s[ef] - math.sin(g_front))
+            p_z[ef] = m_z[ef] + rho * (pad_c[ef] - math.cos(g_front))
+            p_x[er] = m_x[er] + rho * (pad_s[er] - math.sin(g_rear))
+            p_z[er] = m_z[er] + rho * (pad_c[er] - math.cos(g_rear))
+        else:
+            p_x[ef] = m_x[ef]
+            p_z[ef] = m_z[ef]
+            p_x[er] = m_x[er]
+            p_z[er] = m_z[er]
         span = p_x[er] - p_x[ef]
         wf = (p_x[er] - xa) / span
         wr = 1.0 - wf
@@ -261,16 +281,22 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record):
 
 
 @njit(cache=True)
-def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent):
-    """Internal force f(u, v) and, if ``want_tangent``, K_T by forward differences and the exact C_T."""
+def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
+    """Internal force f(u, v) and, if ``want_tangent``, K_T by forward differences and the exact C_T.
+
+    ``work`` is a scratch buffer of :func:`scratch_size` plus 4n entries.
+    """
     n = data_i[0]
     ndof = 2 * n
+    base = scratch_size(n)
     if want_tangent:
-        fp = np.empty(ndof)
-        up = u.copy()
+        fp = work[base : base + ndof]
+        up = work[base + ndof : base + 2 * ndof]
+        for j in range(ndof):
+            up[j] = u[j]
         for j in range(ndof):
             up[j] = u[j] + FD_STEP
-            _internal(up, v, drv, data_f, data_i, hist_old, hist_new, fp, rec, False)
+            _internal(up, v, drv, data_f, data_i, hist_old, hist_new, fp, rec, False, work)
             for i in range(ndof):
                 kt[i, j] = fp[i]
             up[j] = u[j]
@@ -283,7 +309,7 @@ def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record,
             ct[1 + j, 0] -= c_b
             ct[0, 1 + j] -= c_b
             ct[0, 0] += c_b
-    _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record)
+    _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work)
     if want_tangent:
         for j in range(ndof):
             for i in range(ndof):

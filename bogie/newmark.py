@@ -112,11 +112,11 @@ def _linear_force(u, v, drv, data_f, data_i, f, kt, ct):
 
 
 @njit(cache=True)
-def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent):
+def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     if model == MODEL_LINEAR:
         _linear_force(u, v, drv, data_f, data_i, f, kt, ct)
     else:
-        nlc.force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent)
+        nlc.force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work)
 
 
 # ---- the stepping kernel ---------------------------------------------------------------------------------------
@@ -124,12 +124,14 @@ def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec,
 def _attempt(
     model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec,
+    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state,
 ):  # fmt: skip
     """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
 
-    Newton-Raphson on the full residual. The iteration matrix is formed with the tangent at the first iterate
-    and kept while the residual falls at least fourfold per iteration; otherwise it is formed anew.
+    Newton-Raphson on the full residual. The factored iteration matrix is kept from step to step
+    (``jac_state`` = [valid, dt it was formed for]) while the residual falls at least fourfold per iteration; when
+    it does not, or dt changed, the tangent is formed anew at the current iterate. Convergence is always judged
+    on the full residual, so keeping the matrix changes the cost, never the answer's accuracy.
     """
     n = u.shape[0]
     for k in range(drv.shape[0]):
@@ -141,12 +143,13 @@ def _attempt(
         u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
     rnorm = 0.0
     r_prev = 0.0
-    want = True
+    want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
+    fresh = want
     for it in range(max_iter + 1):
         for i in range(n):
             a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
             v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
-        _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, want)
+        _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
         rnorm = 0.0
         finite = True
         for i in range(n):
@@ -162,20 +165,26 @@ def _attempt(
         if not finite:
             return STATUS_NOT_FINITE, rnorm, it
         if rnorm <= 1.0 and it > 0:
+            if it > 2:
+                jac_state[0] = 0.0
             return STATUS_OK, rnorm, it
         if it == max_iter:
             break
-        if it > 0 and not want and rnorm > 0.25 * r_prev:
+        if it > 0 and not fresh and rnorm > 0.25 * r_prev:
             # slow contraction with a stale matrix: form the tangent at this iterate and solve again
-            _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True)
+            _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True, work)
             want = True
         if want:
             for i in range(n):
                 for j in range(n):
                     jac[i, j] = (1.0 - alpha_m) * c_a * mass[i, j] + (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+            jac_state[0] = 0.0
             if not lu_factor(jac, piv):
                 return STATUS_SINGULAR, rnorm, it
+            jac_state[0] = 1.0
+            jac_state[1] = dt
             want = False
+            fresh = True
         r_prev = rnorm
         lu_solve(jac, piv, res)
         for i in range(n):
@@ -186,7 +195,7 @@ def _attempt(
 @njit(cache=True)
 def _integrate(
     model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec,
+    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size,
 ):  # fmt: skip
     n = u0.shape[0]
     n_hist = hist0.shape[0]
@@ -207,7 +216,9 @@ def _integrate(
     rec = np.zeros(n_rec)
     hist_new = hist0.copy()
     drv = drive[0].copy()
-    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False)
+    work = np.zeros(work_size)
+    jac_state = np.zeros(2)
+    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
     uu[0] = u
     vv[0] = v
     aa[0] = a
@@ -245,10 +256,11 @@ def _integrate(
                 status, rnorm, iters = _attempt(
                     model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist, h,
                     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec,
+                    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state,
                 )  # fmt: skip
                 total_iter += iters
                 if status != STATUS_OK:
+                    jac_state[0] = 0.0
                     break
                 u[:] = u_new
                 v[:] = v_new
@@ -259,8 +271,7 @@ def _integrate(
                 break
         if status != STATUS_OK:
             return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
-        # commit: record the model's outputs at the converged state
-        _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, False)
+        # commit: the last residual evaluation recorded the model's outputs at the converged state
         uu[step + 1] = u
         vv[step + 1] = v
         aa[step + 1] = a
@@ -357,6 +368,7 @@ def integrate(
     max_iter: int = 20,
     max_halvings: int = 4,
     n_record: int = 0,
+    work_size: int = 0,
 ) -> IntegrationResult:
     """Run the compiled kernel for a model; see the module docstring. Arrays must already be float64/int64."""
     _check_positive("dt", dt, "s")
@@ -368,6 +380,7 @@ def integrate(
     uu, vv, aa, rr, hist, status, last, rnorm, iters = _integrate(
         model, mass, drive, data_f, data_i, u0, v0, a0, history0, float(dt), int(n_steps),
         beta, gamma, alpha_m, alpha_f, residual_tolerance, int(max_iter), int(max_halvings), int(n_record),
+        int(work_size),
     )  # fmt: skip
     t = np.arange(n_steps + 1) * dt
     if status == STATUS_OK:

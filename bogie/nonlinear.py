@@ -268,12 +268,16 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
     return mass, data_f.astype(float), data_i
 
 
+def _work_size(bogie: Bogie) -> int:
+    return int(core.scratch_size(bogie.n_axles)) + 4 * bogie.n_axles
+
+
 def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
-    """Residual tolerance per freedom: 1e-6 of the design wheel load times each freedom's lever [N, N m]."""
+    """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]."""
     w = float(np.mean(design_wheel_loads(bogie)))
     arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
     levers = [bogie.bogie_centre_x] + [arm] * (bogie.n_axles - 1) + [1.0] * bogie.n_axles
-    return 1e-6 * w * np.asarray(levers)
+    return 1e-5 * w * np.asarray(levers)
 
 
 # ---- static equilibrium ----------------------------------------------------------------------------------------
@@ -298,9 +302,10 @@ def equilibrium(bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = Non
     ct = np.zeros((ndof, ndof))
     rec = np.zeros(8 * n)
     piv = np.zeros(ndof, dtype=np.int64)
+    work = np.zeros(_work_size(bogie))
     tol = _tolerance(bogie)
     for _ in range(60):
-        core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True)
+        core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True, work)
         if np.all(np.abs(f) <= tol):
             break
         if not lu_factor(kt, piv):
@@ -380,13 +385,13 @@ def simulate(
     hist_new = state.slip.copy()
     core.force(
         state.u, state.v, drive[0], data_f, data_i, state.slip, hist_new, f0,
-        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False,
+        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False, np.zeros(_work_size(bogie)),
     )  # fmt: skip
     a0 = consistent_acceleration(mass, f0) if initial is None else state.a
     run = integrate(
         MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.slip.copy(),
         inputs.dt, inputs.n_steps, _tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
-        max_halvings=max_halvings, n_record=n_rec,
+        max_halvings=max_halvings, n_record=n_rec, work_size=_work_size(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
@@ -407,7 +412,7 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
         np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=40,
-        max_halvings=5, n_record=8 * bogie.n_axles,
+        max_halvings=5, n_record=8 * bogie.n_axles, work_size=_work_size(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
