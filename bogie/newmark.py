@@ -124,14 +124,16 @@ def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec,
 def _attempt(
     model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state,
+    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
 ):  # fmt: skip
     """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
 
     Newton-Raphson on the full residual. The factored iteration matrix is kept from step to step
     (``jac_state`` = [valid, dt it was formed for]) while the residual falls at least fourfold per iteration; when
     it does not, or dt changed, the tangent is formed anew at the current iterate. Convergence is always judged
-    on the full residual, so keeping the matrix changes the cost, never the answer's accuracy.
+    on the full residual, so keeping the matrix changes the cost, never the answer's accuracy. Friction makes the
+    residual piecewise smooth, and Newton can then cycle between stick and slip: when an update makes the residual
+    grow, it is halved (backtracking) before a new direction is taken.
     """
     n = u.shape[0]
     for k in range(drv.shape[0]):
@@ -145,6 +147,7 @@ def _attempt(
     r_prev = 0.0
     want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
     fresh = want
+    backtracks = 0
     for it in range(max_iter + 1):
         for i in range(n):
             a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
@@ -170,6 +173,14 @@ def _attempt(
             return STATUS_OK, rnorm, it
         if it == max_iter:
             break
+        if it > 0 and rnorm > r_prev and backtracks < 6:
+            # the last update overshot: go back half of it and look again
+            backtracks += 1
+            for i in range(n):
+                du[i] *= 0.5
+                u_new[i] -= du[i]
+            continue
+        backtracks = 0
         if it > 0 and not fresh and rnorm > 0.25 * r_prev:
             # slow contraction with a stale matrix: form the tangent at this iterate and solve again
             _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True, work)
@@ -188,6 +199,7 @@ def _attempt(
         r_prev = rnorm
         lu_solve(jac, piv, res)
         for i in range(n):
+            du[i] = res[i]
             u_new[i] += res[i]
     return STATUS_NO_CONVERGENCE, rnorm, max_iter
 
@@ -218,6 +230,7 @@ def _integrate(
     drv = drive[0].copy()
     work = np.zeros(work_size)
     jac_state = np.zeros(2)
+    du = np.zeros(n)
     _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
     uu[0] = u
     vv[0] = v
@@ -256,7 +269,7 @@ def _integrate(
                 status, rnorm, iters = _attempt(
                     model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist, h,
                     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state,
+                    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
                 )  # fmt: skip
                 total_iter += iters
                 if status != STATUS_OK:

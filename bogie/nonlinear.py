@@ -157,9 +157,7 @@ def hold(bogie: Bogie, duration: float, dt: float, load_factor: float = 1.0, roa
     heights = np.zeros((n_steps + 1, bogie.n_axles))
     if road is not None:
         heights[:] = np.asarray(road, dtype=float)
-    return Inputs(
-        dt, heights, np.zeros_like(heights), np.full(n_steps + 1, float(load_factor)), np.zeros(n_steps + 1)
-    )
+    return Inputs(dt, heights, np.zeros_like(heights), np.full(n_steps + 1, float(load_factor)), np.zeros(n_steps + 1))
 
 
 @dataclass(frozen=True)
@@ -281,7 +279,9 @@ def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
 
 
 # ---- static equilibrium ----------------------------------------------------------------------------------------
-def equilibrium(bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = None, u0: ArrayLike | None = None) -> State:
+def equilibrium(
+    bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = None, u0: ArrayLike | None = None
+) -> State:
     """Static equilibrium for one drive row (no inertia, no damping).
 
     With ``slip`` None the friction is relaxed: the equilibrium is solved without friction and each contact's
@@ -296,6 +296,9 @@ def equilibrium(bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = Non
     hist = np.zeros(ndof) if relaxed else np.asarray(slip, dtype=float).copy()
     hist_new = hist.copy()
     u = np.zeros(ndof) if u0 is None else np.asarray(u0, dtype=float).copy()
+    if u0 is None:
+        # start with the bogie end of the chassis at its design height, so that no spring starts slack
+        u[0] = math.atan2(float(drv[2 * n + 1]), bogie.bogie_centre_x)
     v = np.zeros(ndof)
     f = np.zeros(ndof)
     kt = np.zeros((ndof, ndof))
@@ -309,7 +312,10 @@ def equilibrium(bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = Non
         if np.all(np.abs(f) <= tol):
             break
         if not lu_factor(kt, piv):
-            raise RuntimeError("static equilibrium: singular stiffness (a wheel and its spring both unloaded?)")
+            raise RuntimeError(
+                f"static equilibrium: singular stiffness at u = {np.array2string(u, precision=4)} "
+                "(a spring and its tyre both unloaded: is the load factor or king pin rise out of reach?)"
+            )
         step = -f.copy()
         lu_solve(kt, piv, step)
         # limit the rotation and displacement of one iteration to keep Newton inside the physical range
@@ -402,7 +408,8 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
 
     Each row is an equilibrium; friction slips carry from row to row, so the loads depend on the load history
     (apply and remove the payload, tilt the chassis, raise a wheel). Consistent with :func:`simulate` at very low
-    speed.
+    speed. Without inertia the friction problem is only piecewise smooth and Newton may need many iterations
+    near stick-slip transitions; rows are cheap, so the iteration budget is generous.
     """
     quiet = bogie.replace(tyre_damping=0.0, bush_damping=0.0)
     _, data_f, data_i = pack(quiet)
@@ -411,8 +418,8 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     ndof = 2 * bogie.n_axles
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
-        np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=40,
-        max_halvings=5, n_record=8 * bogie.n_axles, work_size=_work_size(bogie),
+        np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
+        max_halvings=8, n_record=8 * bogie.n_axles, work_size=_work_size(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)

@@ -339,6 +339,27 @@ def design_spring_loads(bogie: Bogie) -> tuple[float, ...]:
     return tuple(scale * s for s in shares)
 
 
+def with_equaliser_arms(bogie: Bogie, front: float, rear: float | None = None) -> Bogie:
+    """A copy with every equaliser's arms set to ``front`` and ``rear`` [m], axle positions and pivots kept.
+
+    The spring halves beside each equaliser shorten (or lengthen) by the change, so the chain still closes at the
+    same axle spacing, as when a longer equaliser is fitted to the same axle layout.
+    """
+    rear = front if rear is None else rear
+    n = bogie.n_axles
+    a_f = list(bogie.spring_front_half_length)
+    a_r = list(bogie.spring_rear_half_length)
+    for j in range(n - 1):
+        a_r[j] -= front - bogie.equaliser_front_arm[j]
+        a_f[j + 1] -= rear - bogie.equaliser_rear_arm[j]
+    return bogie.replace(
+        equaliser_front_arm=(front,) * (n - 1),
+        equaliser_rear_arm=(rear,) * (n - 1),
+        spring_front_half_length=tuple(a_f),
+        spring_rear_half_length=tuple(a_r),
+    )
+
+
 # ---- presets --------------------------------------------------------------------------------------------------
 def tandem_trrl(**changes: Any) -> Bogie:
     """The two-axle suspension of the reference's Stages 3 and 4 (one side); provenance in ``docs/presets.md``."""
