@@ -1,0 +1,178 @@
+"""How one sampled bogie is weighed: a static weighbridge and a weigh-in-motion (WIM) pass.
+
+``static``: the empty trailer (a quarter of the design payload weight: chassis and body) is loaded to its
+payload fraction on level ground, crawls at walking pace over a few metres of random road (ISO 8608, the sample's
+class and seed) onto a level weighbridge, stops and settles; the axle loads are the mean over the last half
+second. The load history and the approach leave friction forces locked in, as on a real weighbridge.
+
+``wim``: the laden trailer passes at road speed over the random approach road and a WIM sensor at its end; each
+axle's dynamic load is recorded as that axle crosses the sensor.
+
+Both run the full non-linear model (:mod:`bogie.nonlinear`). One side of the bogie is modelled; axle loads are
+twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
+failed simulation: the row then has ``status = "failed"`` and the solver's message, and its loads are 0.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Mapping
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+from bogie import metrics, nonlinear
+from bogie.params import GRAVITY, Bogie
+from bogie.road import ISO8608Profile
+from pipeline.config import StaticProtocol, WimProtocol
+
+#: the empty trailer's weight as a fraction of the design payload weight [-]
+TARE_FRACTION = 0.25
+#: the weighbridge reads the mean over this last part of the settling time [s]
+READ_TIME = 0.5
+#: length over which the random approach road blends into the level weighbridge or starts from level [m]
+BLEND_LENGTH = 1.0
+#: most axles in a group (columns axle_load_0..2)
+MAX_AXLES = 3
+#: random approach roads are generated this much longer than needed [m]
+ROAD_MARGIN = 20.0
+
+
+@dataclass(frozen=True)
+class ApproachRoad:
+    """A random ISO 8608 road of ``length`` [m] that starts and ends level (cosine blends of BLEND_LENGTH)."""
+
+    profile: ISO8608Profile
+    length: float
+
+    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+        xx = np.asarray(x, dtype=float)
+        ramp_in = np.clip(xx / BLEND_LENGTH, 0.0, 1.0)
+        ramp_out = np.clip((self.length - xx) / BLEND_LENGTH, 0.0, 1.0)
+        taper = 0.5 * (1.0 - np.cos(np.pi * np.minimum(ramp_in, ramp_out)))
+        return self.profile(np.clip(xx, 0.0, self.profile.length)) * taper
+
+
+def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
+    profile = ISO8608Profile(road_class, length=max(50.0, length + ROAD_MARGIN), seed=int(seed))
+    return ApproachRoad(profile, length)
+
+
+def static_weighbridge(
+    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
+) -> nonlinear.NonlinearResult:
+    """Run the static protocol; the result's ``extras["reading"]`` holds the weighbridge's wheel loads [N]."""
+    dt = spec.dt
+    lead = 0.5  # the front axle starts this far before the random road [m]
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    load = nonlinear.load_ramp(bogie, TARE_FRACTION, payload_fraction, spec.load_time, dt)
+    loaded = nonlinear.simulate(bogie, load)
+    if not loaded.success:
+        return loaded
+    road = _approach(road_class, road_seed, spec.approach_length)
+    distance = lead + spec.approach_length + group_length + 0.5
+    crawl = nonlinear.road_inputs(
+        bogie, road, spec.crawl_speed, distance / spec.crawl_speed, dt, -lead, load_factor=payload_fraction
+    )
+    crawled = nonlinear.simulate(bogie, crawl, initial=loaded.final_state)
+    if not crawled.success:
+        return crawled
+    settle = nonlinear.hold(bogie, spec.settle_time, dt, load_factor=payload_fraction)
+    settled = nonlinear.simulate(bogie, settle, initial=crawled.final_state)
+    if settled.success:
+        window = settled.t >= settled.t[-1] - READ_TIME
+        settled.extras["reading"] = np.mean(settled.wheel_loads[window], axis=0)
+    return settled
+
+
+def wim_pass(
+    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
+) -> nonlinear.NonlinearResult:
+    """Run the WIM protocol; ``extras["reading"]`` holds each wheel's load as its axle crosses the sensor [N]."""
+    dt = spec.dt
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    road = _approach(road_class, road_seed, spec.approach_length + group_length + 5.0)
+    # the sensor lies inside the random road (WIM sites are on ordinary road), not on the level run-out
+    sensor = spec.approach_length
+    duration = (sensor + group_length) / spec.speed + 0.05
+    inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, dt, 0.0, load_factor=payload_fraction)
+    state = nonlinear.equilibrium(bogie, inputs.drive(bogie)[0])
+    run = nonlinear.simulate(bogie, inputs, initial=state)
+    if run.success:
+        crossing = (sensor + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / spec.speed
+        run.extras["reading"] = np.array(
+            [np.interp(crossing[i], run.t, run.wheel_loads[:, i]) for i in range(bogie.n_axles)]
+        )
+    return run
+
+
+RESULT_COLUMNS = (
+    ["protocol", "status", "message", "wall_time", "n_axles"]
+    + [f"axle_load_{i}" for i in range(MAX_AXLES)]
+    + [f"load_share_{i}" for i in range(MAX_AXLES)]
+    + ["group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch"]
+)
+
+
+def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float) -> dict[str, Any]:
+    """The result columns for one weighing: axle loads [N] are twice the wheel loads (both sides)."""
+    row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}
+    axle = np.zeros(MAX_AXLES)
+    share = np.zeros(MAX_AXLES)
+    if wheel_loads is not None:
+        loads = 2.0 * np.asarray(wheel_loads, dtype=float)
+        axle[:n_axles] = loads
+        share[:n_axles] = metrics.lsc(loads)
+        row.update(
+            group_load=float(loads.sum()),
+            p=float(metrics.p(loads / loads.mean())),
+            p1=float(metrics.p1(loads / loads.mean())),
+            max_deviation=float(metrics.max_deviation(loads)),
+            spread=float(metrics.spread(loads)),
+            spread_kg=float(metrics.spread(loads) / GRAVITY),
+            road_wear_factor=float(metrics.road_wear_factor(loads)),
+            chassis_pitch=float(pitch),
+        )
+    else:
+        row.update(
+            group_load=0.0, p=0.0, p1=0.0, max_deviation=0.0, spread=0.0, spread_kg=0.0, road_wear_factor=0.0,
+            chassis_pitch=0.0,
+        )  # fmt: skip
+    for i in range(MAX_AXLES):
+        row[f"axle_load_{i}"] = float(axle[i])
+        row[f"load_share_{i}"] = float(share[i])
+    return row
+
+
+def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol) -> dict:
+    """Weigh one sampled bogie by ``protocol``; never raises for a failed simulation (see the module text)."""
+    start = time.perf_counter()
+    status, message = "ok", "ok"
+    reading = None
+    pitch = 0.0
+    try:
+        runner = static_weighbridge if protocol == "static" else wim_pass
+        run = runner(
+            bogie, float(sample["payload_fraction"]), str(sample["road_class"]), int(sample["road_seed"]), spec
+        )
+        if run.success and np.all(np.isfinite(run.extras["reading"])):
+            reading = run.extras["reading"]
+            pitch = float(run.extras["chassis_pitch"][-1])
+            if np.any(reading <= 0.0):
+                status, message = "failed", "an axle carries no load at the reading (wheel off the ground)"
+                reading = None
+        else:
+            status, message = "failed", run.message
+    except (RuntimeError, ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+        status, message = "failed", f"{type(exc).__name__}: {exc}"
+    row = result_row(protocol, bogie.n_axles, reading, pitch)
+    row.update(status=status, message=message, wall_time=time.perf_counter() - start)
+    return row
+
+
+def nose_up_degrees(pitch: float) -> float:
+    """Chassis pitch in degrees (nose up positive), for labels."""
+    return math.degrees(pitch)
