@@ -15,7 +15,8 @@ Packed parameters (built by :func:`bogie.nonlinear.pack`):
 * ``data_f``: the scalars of :data:`SCALARS` then the arrays of :data:`ARRAYS`, in that order.
 * drive row: ``[road height 0..n-1, road rate 0..n-1, load factor, king pin rise]``.
 * history: the plastic slip s_e of each contact (2n).
-* record: ``[tyre load (n), spring load (n), friction force (2n), stick flag (2n), contact shift (2n)]``.
+* record: ``[tyre load (n), spring load (n), friction force (2n), stick flag (2n), contact shift (2n),
+  plastic slip (2n)]``.
 """
 
 from __future__ import annotations
@@ -83,6 +84,10 @@ def array_offsets(n: int) -> dict[str, tuple[int, int]]:
         out[name] = (pos, length)
         pos += length
     return out
+
+
+#: record entries per axle
+RECORD_PER_AXLE = 10
 
 
 @njit(cache=True)
@@ -277,6 +282,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
             rec[2 * n + e] = t_fric[e]
             rec[4 * n + e] = stick[e]
             rec[6 * n + e] = p_x[e] - m_x[e]
+            rec[8 * n + e] = hist_new[e]
 
 
 @njit(cache=True)

@@ -34,12 +34,14 @@ STATUS_OK = 0
 STATUS_NO_CONVERGENCE = 1
 STATUS_NOT_FINITE = 2
 STATUS_SINGULAR = 3
+STATUS_OUT_OF_RANGE = 4
 
 _STATUS_TEXT = {
     STATUS_OK: "ok",
     STATUS_NO_CONVERGENCE: "Newton iterations did not converge",
     STATUS_NOT_FINITE: "non-finite state",
     STATUS_SINGULAR: "singular iteration matrix",
+    STATUS_OUT_OF_RANGE: "the solution left the model's range of validity (see the freedoms' limits)",
 }
 
 
@@ -124,7 +126,7 @@ def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec,
 def _attempt(
     model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
+    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
 ):  # fmt: skip
     """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
 
@@ -133,7 +135,8 @@ def _attempt(
     it does not, or dt changed, the tangent is formed anew at the current iterate. Convergence is always judged
     on the full residual, so keeping the matrix changes the cost, never the answer's accuracy. Friction makes the
     residual piecewise smooth, and Newton can then cycle between stick and slip: when an update makes the residual
-    grow, it is halved (backtracking) before a new direction is taken.
+    grow, or leaves the freedoms' limits ``u_limit`` (beyond which the model has spurious equilibria, e.g. a
+    chassis pitched 90 degrees on slack springs), it is halved (backtracking) before a new direction is taken.
     """
     n = u.shape[0]
     for k in range(drv.shape[0]):
@@ -201,13 +204,25 @@ def _attempt(
         for i in range(n):
             du[i] = res[i]
             u_new[i] += res[i]
+        for _ in range(30):
+            inside = True
+            for i in range(n):
+                if abs(u_new[i]) > u_limit[i]:
+                    inside = False
+            if inside:
+                break
+            for i in range(n):
+                du[i] *= 0.5
+                u_new[i] -= du[i]
+        else:
+            return STATUS_OUT_OF_RANGE, rnorm, it
     return STATUS_NO_CONVERGENCE, rnorm, max_iter
 
 
 @njit(cache=True)
 def _integrate(
     model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size,
+    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit,
 ):  # fmt: skip
     n = u0.shape[0]
     n_hist = hist0.shape[0]
@@ -270,6 +285,7 @@ def _integrate(
                     model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist, h,
                     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
                     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
+                    u_limit,
                 )  # fmt: skip
                 total_iter += iters
                 if status != STATUS_OK:
@@ -382,8 +398,13 @@ def integrate(
     max_halvings: int = 4,
     n_record: int = 0,
     work_size: int = 0,
+    limits: NDArray[np.float64] | None = None,
 ) -> IntegrationResult:
-    """Run the compiled kernel for a model; see the module docstring. Arrays must already be float64/int64."""
+    """Run the compiled kernel for a model; see the module docstring. Arrays must already be float64/int64.
+
+    ``limits`` bounds each freedom's magnitude; a step whose solution would leave them fails with its own status.
+    """
+    u_limit = np.full(u0.shape[0], np.inf) if limits is None else np.asarray(limits, dtype=float)
     _check_positive("dt", dt, "s")
     if int(n_steps) != n_steps or n_steps < 1:
         raise ValueError(f"n_steps = {n_steps!r} must be an integer >= 1")
@@ -393,7 +414,7 @@ def integrate(
     uu, vv, aa, rr, hist, status, last, rnorm, iters = _integrate(
         model, mass, drive, data_f, data_i, u0, v0, a0, history0, float(dt), int(n_steps),
         beta, gamma, alpha_m, alpha_f, residual_tolerance, int(max_iter), int(max_halvings), int(n_record),
-        int(work_size),
+        int(work_size), u_limit,
     )  # fmt: skip
     t = np.arange(n_steps + 1) * dt
     if status == STATUS_OK:

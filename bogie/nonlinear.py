@@ -270,6 +270,16 @@ def _work_size(bogie: Bogie) -> int:
     return int(core.scratch_size(bogie.n_axles)) + 4 * bogie.n_axles
 
 
+def limits(bogie: Bogie) -> NDArray[np.float64]:
+    """Range of validity of each freedom: chassis pitch 20 degrees, equaliser rotation 60 degrees, axle 0.5 m.
+
+    Beyond these the model has spurious equilibria (a chassis pitched 90 degrees on slack springs carries its
+    weight without a moment) and a real bogie would have hit its stops long before.
+    """
+    n = bogie.n_axles
+    return np.asarray([math.radians(20.0)] + [math.radians(60.0)] * (n - 1) + [0.5] * n)
+
+
 def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
     """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]."""
     w = float(np.mean(design_wheel_loads(bogie)))
@@ -303,7 +313,7 @@ def equilibrium(
     f = np.zeros(ndof)
     kt = np.zeros((ndof, ndof))
     ct = np.zeros((ndof, ndof))
-    rec = np.zeros(8 * n)
+    rec = np.zeros(core.RECORD_PER_AXLE * n)
     piv = np.zeros(ndof, dtype=np.int64)
     work = np.zeros(_work_size(bogie))
     tol = _tolerance(bogie)
@@ -339,6 +349,7 @@ def _result(bogie: Bogie, run, inputs: Inputs, final: State | None) -> Nonlinear
         "friction_force": rec[:, 2 * n : 4 * n],
         "stick": rec[:, 4 * n : 6 * n],
         "contact_shift": rec[:, 6 * n : 8 * n],
+        "plastic_slip": rec[:, 8 * n : 10 * n],
         "road_height": inputs.road_height[:keep],
         "load_factor": inputs.load_factor[:keep],
     }
@@ -385,7 +396,7 @@ def simulate(
     mass, data_f, data_i = pack(bogie)
     drive = inputs.drive(bogie)
     state = equilibrium(bogie, drive[0]) if initial is None else initial
-    n_rec = 8 * bogie.n_axles
+    n_rec = core.RECORD_PER_AXLE * bogie.n_axles
     ndof = 2 * bogie.n_axles
     f0 = np.zeros(ndof)
     hist_new = state.slip.copy()
@@ -397,7 +408,7 @@ def simulate(
     run = integrate(
         MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.slip.copy(),
         inputs.dt, inputs.n_steps, _tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
-        max_halvings=max_halvings, n_record=n_rec, work_size=_work_size(bogie),
+        max_halvings=max_halvings, n_record=n_rec, work_size=_work_size(bogie), limits=limits(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
@@ -419,7 +430,8 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
         np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
-        max_halvings=8, n_record=8 * bogie.n_axles, work_size=_work_size(bogie),
+        max_halvings=8, n_record=core.RECORD_PER_AXLE * bogie.n_axles, work_size=_work_size(bogie),
+        limits=limits(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
