@@ -1,0 +1,21 @@
+"""Run every benchmark in :data:`BENCHMARKS` and print each one's table: ``python -m bench`` from the project root."""
+
+from __future__ import annotations
+
+import importlib
+import time
+
+#: benchmark modules, each with a ``main()`` that prints its table
+BENCHMARKS = ("bench.bench_linear",)
+
+
+def main() -> None:
+    for name in BENCHMARKS:
+        print(f"== {name} ==", flush=True)
+        start = time.perf_counter()
+        importlib.import_module(name).main()
+        print(f"({name} took {time.perf_counter() - start:.0f} s)\n", flush=True)
+
+
+if __name__ == "__main__":
+    main()
