@@ -127,6 +127,7 @@ def _attempt(
     model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
+    quasi_static,
 ):  # fmt: skip
     """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
 
@@ -143,9 +144,9 @@ def _attempt(
         drv[k] = drv0[k] + frac1 * (drv1[k] - drv0[k])
     c_a = 1.0 / (beta * dt * dt)
     c_v = gamma / (beta * dt)
-    # predictor: constant acceleration
+    # predictor: constant acceleration; a quasi-static path has no rates and starts from the last equilibrium
     for i in range(n):
-        u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
+        u_new[i] = u[i] if quasi_static else u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
     rnorm = 0.0
     r_prev = 0.0
     want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
@@ -153,8 +154,12 @@ def _attempt(
     backtracks = 0
     for it in range(max_iter + 1):
         for i in range(n):
-            a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
-            v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
+            if quasi_static:
+                a_new[i] = 0.0
+                v_new[i] = 0.0
+            else:
+                a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
+                v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
         _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
         rnorm = 0.0
         finite = True
@@ -222,7 +227,7 @@ def _attempt(
 @njit(cache=True)
 def _integrate(
     model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit,
+    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit, quasi_static,
 ):  # fmt: skip
     n = u0.shape[0]
     n_hist = hist0.shape[0]
@@ -285,7 +290,7 @@ def _integrate(
                     model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist, h,
                     beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
                     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                    u_limit,
+                    u_limit, quasi_static,
                 )  # fmt: skip
                 total_iter += iters
                 if status != STATUS_OK:
@@ -399,10 +404,13 @@ def integrate(
     n_record: int = 0,
     work_size: int = 0,
     limits: NDArray[np.float64] | None = None,
+    quasi_static: bool = False,
 ) -> IntegrationResult:
     """Run the compiled kernel for a model; see the module docstring. Arrays must already be float64/int64.
 
     ``limits`` bounds each freedom's magnitude; a step whose solution would leave them fails with its own status.
+    ``quasi_static`` solves each row as an equilibrium (no inertia or damping; pass a zero mass matrix): rates
+    are zero and each step starts from the last equilibrium.
     """
     u_limit = np.full(u0.shape[0], np.inf) if limits is None else np.asarray(limits, dtype=float)
     _check_positive("dt", dt, "s")
@@ -414,7 +422,7 @@ def integrate(
     uu, vv, aa, rr, hist, status, last, rnorm, iters = _integrate(
         model, mass, drive, data_f, data_i, u0, v0, a0, history0, float(dt), int(n_steps),
         beta, gamma, alpha_m, alpha_f, residual_tolerance, int(max_iter), int(max_halvings), int(n_record),
-        int(work_size), u_limit,
+        int(work_size), u_limit, bool(quasi_static),
     )  # fmt: skip
     t = np.arange(n_steps + 1) * dt
     if status == STATUS_OK:

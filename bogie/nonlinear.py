@@ -64,7 +64,7 @@ class Inputs:
             if not np.all(np.isfinite(getattr(self, name))):
                 raise ValueError(f"{name} contains NaN or infinity: inputs must be finite")
         if np.any(self.load_factor <= 0.0) or np.any(self.load_factor > 2.0):
-            bad = self.load_factor[(self.load_factor <= 0.0) | (self.load_factor > 2.0)][0]
+            bad = float(self.load_factor[(self.load_factor <= 0.0) | (self.load_factor > 2.0)][0])
             raise ValueError(
                 f"load_factor = {bad!r} is out of range: must be in (0, 2] (fraction of the design payload, -); "
                 "an empty trailer still has its chassis weight"
@@ -431,7 +431,7 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
         np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
         max_halvings=8, n_record=core.RECORD_PER_AXLE * bogie.n_axles, work_size=_work_size(bogie),
-        limits=limits(bogie),
+        limits=limits(bogie), quasi_static=True,
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
