@@ -99,24 +99,25 @@ def lu_solve(lu, piv, b):
 
 # ---- model forces ----------------------------------------------------------------------------------------------
 @njit(cache=True)
-def _linear_force(u, v, drv, data_f, data_i, f, kt, ct):
-    """f = C v + K u - R(t); data_f = [K.ravel(), C.ravel()], the drive row is R(t)."""
+def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
+    """f = C v + K u - R(t); data_f = [K.ravel(), C.ravel()], the drive row is R(t). The tangents are K and C."""
     n = u.shape[0]
     for i in range(n):
         s = -drv[i]
         for j in range(n):
-            kij = data_f[i * n + j]
-            cij = data_f[n * n + i * n + j]
-            s += kij * u[j] + cij * v[j]
-            kt[i, j] = kij
-            ct[i, j] = cij
+            s += data_f[i * n + j] * u[j] + data_f[n * n + i * n + j] * v[j]
         f[i] = s
+    if want_tangent:
+        for i in range(n):
+            for j in range(n):
+                kt[i, j] = data_f[i * n + j]
+                ct[i, j] = data_f[n * n + i * n + j]
 
 
 @njit(cache=True)
 def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     if model == MODEL_LINEAR:
-        _linear_force(u, v, drv, data_f, data_i, f, kt, ct)
+        _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent)
     else:
         nlc.force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work)
 
