@@ -1,0 +1,522 @@
+"""DVC stage ``sensitivity``: Sobol' indices and the switch-off ablation -> data/sensitivity/, metrics/sensitivity.json.
+
+``python -m pipeline.sensitivity`` reads the runs of the ``sensitivity`` study (SALib's Saltelli design over the
+four inhibitors, chassis tilt and tyre wear, see :func:`pipeline.sample.sample_sensitivity`) and of the
+``ablation`` study (fleet bogies with each inhibitor switched off), and writes:
+
+- first-order and total Sobol' indices with bootstrap confidence intervals of the inequality measures
+  (:data:`SOBOL_MEASURES`) under ``sensitivity.protocol``, and the ranking of the four inhibitors by the total
+  index of ``max_deviation``;
+- the ablation: the fleet's mean inequality and tolerance exceedance for each variant, and what removing each
+  inhibitor buys against the baseline, with paired bootstrap intervals over bogies.
+
+Failed runs of the Sobol' design: Saltelli's estimators are means over the base rows, each of which needs all
+G + 2 runs of its block (A, the G cross rows, B). A block with a failed run is dropped whole; the indices are then
+the same estimators over the remaining blocks. No value is imputed, since an invented output would enter the
+variance being apportioned. If more than :data:`MAX_DROPPED_FRACTION` of the blocks are lost the stage refuses,
+naming the failed runs: the failures would then cut a region out of the factor space and bias the indices. The
+method and its caveats: ``docs/sensitivity.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import sys
+from collections.abc import Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import yaml
+from SALib.analyze import sobol
+from SALib.util import extract_group_names
+
+from bogie.params import INHIBITORS
+from pipeline.config import Config, ConfigError, load_config
+from pipeline.sample import TYRE_WEAR_COLUMNS, VARIANTS, design_seed, sensitivity_problem
+from pipeline.survey import (
+    AXLE_LOAD_COLUMNS,
+    RunsError,
+    inequality_columns,
+    read_runs,
+    rounded,
+    write_outputs,
+)
+
+#: inequality measures (result columns) whose Sobol' indices are computed
+SOBOL_MEASURES: tuple[str, ...] = ("max_deviation", "p1", "road_wear_factor")
+#: the measure whose total index ranks the inhibitors
+RANKING_MEASURE = "max_deviation"
+#: the four inhibitors, ranked against each other
+INHIBITOR_NAMES: tuple[str, ...] = tuple(INHIBITORS)
+#: most Saltelli blocks that failed runs may remove before the Sobol' analysis refuses [-]
+MAX_DROPPED_FRACTION = 0.05
+#: ablation statistic -> per-bogie column it averages
+ABLATION_STATISTICS: dict[str, str] = {
+    "mean_max_deviation": "max_deviation",
+    "mean_p1": "p1",
+    "share_outside_5pct": "outside_5pct",
+    "share_outside_10pct": "outside_10pct",
+}
+
+
+#: columns of :func:`ablation_effects` after the keys and counts
+EFFECT_COLUMNS: tuple[str, ...] = (
+    "baseline", "value", "difference", "difference_low", "difference_high", "reduction", "reduction_low",
+    "reduction_high", "relative_reduction", "relative_reduction_low", "relative_reduction_high",
+)  # fmt: skip
+
+
+class SensitivityDataError(RunsError):
+    """The runs cannot give a trustworthy Sobol' analysis or ablation (missing, failed or misordered rows)."""
+
+
+def bootstrap_seed(seed: int, name: str) -> int:
+    """A positive seed for one bootstrap stream, from the master seed (SALib treats a seed of 0 as none)."""
+    return max(1, design_seed(seed, name))
+
+
+# ---- Sobol' ------------------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class SaltelliOutputs:
+    """The outputs of a Saltelli design in SALib's order, after dropping the blocks with a failed run.
+
+    Attributes
+    ----------
+    outputs
+        Measure -> outputs Y of the kept blocks, in SALib's row order.
+    base_size
+        Base rows N of the design [-].
+    n_blocks
+        Base rows (blocks of G + 2 runs) kept [-].
+    excluded
+        The failed runs: ``sample_id``, ``base_id``, ``message``; their blocks are dropped.
+    """
+
+    outputs: dict[str, np.ndarray]
+    base_size: int
+    n_blocks: int
+    excluded: pd.DataFrame
+
+
+def _ids_text(ids: Sequence[int], limit: int = 20) -> str:
+    shown = ", ".join(str(int(i)) for i in ids[:limit])
+    return shown + (f", ... ({len(ids)} in all)" if len(ids) > limit else "")
+
+
+def protocol_runs(runs: pd.DataFrame, protocol: str) -> pd.DataFrame:
+    """The runs of one protocol; a clear error if there are none."""
+    chosen = runs[runs["protocol"] == protocol]
+    if chosen.empty:
+        present = ", ".join(sorted(runs["protocol"].astype(str).unique())) or "none"
+        raise SensitivityDataError(f"no sensitivity runs under protocol {protocol!r} (the runs have: {present})")
+    return chosen
+
+
+def check_saltelli_order(frame: pd.DataFrame, problem: Mapping[str, Any]) -> None:
+    """Check that rows sorted by ``sample_id`` are SALib's Saltelli blocks (without second order).
+
+    In each block of G + 2 rows, row k + 1 must equal row 0 (matrix A) except in the columns of group k, which
+    must equal the last row (matrix B). The sampled values are deterministic functions of SALib's unit values, so
+    the check is exact.
+
+    Raises
+    ------
+    SensitivityDataError
+        Naming the first block that breaks the pattern.
+    """
+    names = list(problem["names"])
+    groups = list(problem.get("groups") or names)
+    group_names, n_groups = extract_group_names(problem)
+    step = n_groups + 2
+    x = frame[names].to_numpy(dtype=float).reshape(-1, step, len(names))
+    a, b = x[:, :1, :], x[:, -1:, :]
+    member = np.array([[g == name for g in groups] for name in group_names])  # (G, D)
+    expected = np.where(member[None, :, :], b, a)
+    bad = np.any(x[:, 1:-1, :] != expected, axis=(1, 2))
+    if bad.any():
+        block = int(np.argmax(bad))
+        raise SensitivityDataError(
+            f"the runs sorted by sample_id are not in SALib's Saltelli order: block {block} (sample_id "
+            f"{block * step}-{block * step + step - 1}) does not cross A and B group by group over "
+            f"{', '.join(group_names)}; were the runs made from this params.yaml's sensitivity design?"
+        )
+
+
+def saltelli_outputs(
+    runs: pd.DataFrame,
+    problem: Mapping[str, Any],
+    base_size: int,
+    measures: Sequence[str] = SOBOL_MEASURES,
+    max_dropped_fraction: float = MAX_DROPPED_FRACTION,
+) -> SaltelliOutputs:
+    """The outputs Y of a Saltelli design from its runs (one protocol), checked and in SALib's order.
+
+    Parameters
+    ----------
+    runs
+        Runs of the sensitivity study under one protocol, any row order, failed rows included.
+    problem
+        The SALib problem of the design (:func:`pipeline.sample.sensitivity_problem`).
+    base_size
+        Base size N of the design [-].
+    measures
+        Result columns to return.
+    max_dropped_fraction
+        Largest fraction of blocks that failed runs may remove [-].
+
+    Raises
+    ------
+    SensitivityDataError
+        If a run is missing or duplicated, the rows are not the design's Saltelli blocks, or failed runs remove
+        more than ``max_dropped_fraction`` of the blocks (the message names the failed sample ids).
+    """
+    _, n_groups = extract_group_names(problem)
+    step = n_groups + 2
+    n_rows = base_size * step
+    duplicated = runs["sample_id"][runs["sample_id"].duplicated()].unique()
+    if len(duplicated):
+        raise SensitivityDataError(f"the sensitivity runs hold sample_id {_ids_text(sorted(duplicated))} twice")
+    frame = runs.sort_values("sample_id").reset_index(drop=True)
+    ids = frame["sample_id"].to_numpy()
+    missing = np.setdiff1d(np.arange(n_rows), ids)
+    if len(missing):
+        raise SensitivityDataError(
+            f"the sensitivity design has {n_rows} runs (base size {base_size} x {step}) but {len(missing)} are "
+            f"missing: sample_id {_ids_text(missing)}; rerun the simulate stage"
+        )
+    if len(ids) != n_rows:
+        raise SensitivityDataError(
+            f"the sensitivity runs have {len(ids)} rows, sample_id up to {ids.max()}, but the design has {n_rows} "
+            f"(base size {base_size} x {step}); were they made from this params.yaml?"
+        )
+    if not np.array_equal(frame["base_id"].to_numpy(), ids // step):
+        raise SensitivityDataError(f"the sensitivity runs' base_id is not sample_id // {step} (G + 2 = {step})")
+    check_saltelli_order(frame, problem)
+    failed = frame[frame["status"] != "ok"]
+    dropped = np.unique(failed["base_id"].to_numpy())
+    if len(dropped) > max_dropped_fraction * base_size:
+        messages = failed["message"].value_counts().head(3)
+        reasons = "; ".join(f"{n} x {m!r}" for m, n in messages.items())
+        raise SensitivityDataError(
+            f"{len(failed)} of {n_rows} sensitivity runs failed (sample_id {_ids_text(failed['sample_id'].tolist())}"
+            f"; {reasons}), which removes {len(dropped)} of {base_size} Saltelli blocks, more than "
+            f"{max_dropped_fraction:.0%}: the Sobol' indices would describe only the region where the model "
+            "converges. Fix the failures (or raise the base size) before ranking the factors"
+        )
+    kept = frame[~frame["base_id"].isin(dropped)]
+    outputs = {m: kept[m].to_numpy(dtype=float) for m in measures}
+    excluded = failed[["sample_id", "base_id", "message"]].reset_index(drop=True)
+    return SaltelliOutputs(outputs, base_size, base_size - len(dropped), excluded)
+
+
+def sobol_indices(
+    problem: Mapping[str, Any], y: np.ndarray, num_resamples: int, conf_level: float, seed: int
+) -> pd.DataFrame:
+    """First-order and total Sobol' indices of one output, with bootstrap confidence intervals (SALib).
+
+    Parameters
+    ----------
+    problem
+        The SALib problem, with groups; indices are per group.
+    y
+        Outputs in SALib's Saltelli order without second order, N (G + 2) values.
+    num_resamples
+        Bootstrap resamples [-].
+    conf_level
+        Confidence level [-].
+    seed
+        Positive seed of the bootstrap.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per factor (group): ``S1``, ``S1_conf`` (half-width of SALib's normal-approximation interval,
+        ``z sd`` of the bootstrap), ``S1_low``, ``S1_high``, and the same for ``ST``.
+
+    Raises
+    ------
+    SensitivityDataError
+        If an output is not finite or the outputs do not vary (the indices are then undefined).
+    """
+    if seed <= 0:
+        raise ValueError(f"seed = {seed}: must be a positive integer (SALib ignores a seed of 0)")
+    y = np.asarray(y, dtype=float)
+    if not np.all(np.isfinite(y)):
+        raise SensitivityDataError(f"{int(np.sum(~np.isfinite(y)))} outputs are not finite")
+    if np.ptp(y) == 0.0:
+        raise SensitivityDataError(f"the output is constant ({y[0]:g}) over the design: no variance to apportion")
+    result = sobol.analyze(
+        dict(problem), y, calc_second_order=False, num_resamples=num_resamples, conf_level=conf_level, seed=seed
+    )
+    names, _ = extract_group_names(problem)
+    table = pd.DataFrame({"factor": names})
+    for index in ("S1", "ST"):
+        table[index] = np.asarray(result[index], dtype=float)
+        table[f"{index}_conf"] = np.asarray(result[f"{index}_conf"], dtype=float)
+        table[f"{index}_low"] = table[index] - table[f"{index}_conf"]
+        table[f"{index}_high"] = table[index] + table[f"{index}_conf"]
+    return table
+
+
+def sobol_table(
+    design: SaltelliOutputs, problem: Mapping[str, Any], num_resamples: int, conf_level: float, seed: int
+) -> pd.DataFrame:
+    """:func:`sobol_indices` of every measure of ``design``, stacked with a ``measure`` column."""
+    tables = [
+        sobol_indices(problem, y, num_resamples, conf_level, seed).assign(measure=measure, n_blocks=design.n_blocks)
+        for measure, y in design.outputs.items()
+    ]
+    table = pd.concat(tables, ignore_index=True)
+    return table[["measure", *[c for c in table.columns if c != "measure"]]]
+
+
+def rank_inhibitors(indices: pd.DataFrame, inhibitors: Sequence[str] = INHIBITOR_NAMES) -> pd.DataFrame:
+    """The inhibitors ordered by total index, largest first, with ``rank`` (1 = most influential).
+
+    Parameters
+    ----------
+    indices
+        One measure's table from :func:`sobol_indices`.
+    inhibitors
+        Factors to rank.
+    """
+    table = indices[indices["factor"].isin(inhibitors)].sort_values("ST", ascending=False, kind="stable")
+    return table.assign(rank=np.arange(1, len(table) + 1)).reset_index(drop=True)
+
+
+def reference_check(ranking: pd.DataFrame) -> dict[str, bool | None]:
+    """The reference's conclusion, friction below bush stiffness and contact movement, against a ranking.
+
+    Returns
+    -------
+    dict
+        ``agrees``: friction's total index is below both point estimates; ``resolved``: the upper end of its
+        interval is below the lower ends of both, so the bootstrap separates them. Both None when the design
+        leaves out one of the three factors.
+    """
+    row = ranking.set_index("factor")
+    if not {"friction_coefficient", "bush_stiffness", "contact_roll_radius"} <= set(row.index):
+        return {"agrees": None, "resolved": None}
+    friction, others = row.loc["friction_coefficient"], row.loc[["bush_stiffness", "contact_roll_radius"]]
+    return {
+        "agrees": bool((friction["ST"] < others["ST"]).all()),
+        "resolved": bool((friction["ST_high"] < others["ST_low"]).all()),
+    }
+
+
+# ---- ablation ------------------------------------------------------------------------------------------------------
+def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
+    """Each ablation variant paired with its baseline bogie (same ``base_id`` and protocol).
+
+    Parameters
+    ----------
+    runs
+        Runs of the ablation study, failed rows included.
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per protocol, bogie and variant (the baseline included): ``ok`` (variant and baseline succeeded),
+        and ``max_deviation``, ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of
+        the variant and of the baseline (suffix ``_baseline``); NaN for a failed run.
+
+    Raises
+    ------
+    SensitivityDataError
+        If a bogie lacks a variant or has one twice under a protocol.
+    """
+    counts = runs.groupby(["protocol", "base_id", "variant"], observed=True).size()
+    complete = counts.unstack("variant").reindex(columns=list(VARIANTS))
+    bad = complete[(complete != 1).any(axis=1)]
+    if len(bad):
+        (protocol, base_id), row = bad.index[0], bad.iloc[0]
+        wrong = ", ".join(f"{v} x {int(n) if n == n else 0}" for v, n in row.items() if n != 1)
+        raise SensitivityDataError(
+            f"{len(bad)} ablation bogies lack a variant or have one twice, e.g. base_id {base_id} under {protocol}:"
+            f" {wrong}; every bogie needs each of {', '.join(VARIANTS)} once"
+        )
+    frame = runs.reset_index(drop=True)
+    ok = frame["status"] == "ok"
+    values = ["max_deviation", "p1", "outside_5pct", "outside_10pct"]
+    flags = inequality_columns(frame[ok])[["outside_5pct", "outside_10pct"]].astype(float)
+    frame = frame.assign(outside_5pct=np.nan, outside_10pct=np.nan)
+    frame.loc[ok, ["outside_5pct", "outside_10pct"]] = flags.to_numpy()
+    frame.loc[~ok, ["max_deviation", "p1"]] = np.nan
+    keys = ["protocol", "base_id"]
+    base = frame.loc[frame["variant"] == "baseline", [*keys, *values]]
+    pairs = frame[[*keys, "group", "variant", *values]].merge(base, on=keys, suffixes=("", "_baseline"))
+    pairs["ok"] = pairs[values[0]].notna() & pairs[f"{values[0]}_baseline"].notna()
+    pairs["variant"] = pd.Categorical(pairs["variant"], categories=list(VARIANTS))
+    return pairs.sort_values(["protocol", "variant", "base_id"]).reset_index(drop=True)
+
+
+def _percentile_interval(samples: np.ndarray, conf_level: float) -> tuple[float, float]:
+    tail = 50.0 * (1.0 - conf_level)
+    low, high = np.percentile(samples, [tail, 100.0 - tail])
+    return float(low), float(high)
+
+
+def ablation_effects(pairs: pd.DataFrame, num_resamples: int, conf_level: float, seed: int) -> pd.DataFrame:
+    """Fleet mean inequality of each ablation variant and its paired difference from the baseline.
+
+    For each protocol, group (``all`` and each axle group), variant and statistic of :data:`ABLATION_STATISTICS`,
+    over the bogies whose variant and baseline both succeeded: the baseline and variant means, the mean paired
+    difference (variant minus baseline) with a percentile bootstrap interval over bogies, the reduction (minus the
+    difference, what removing the inhibitor buys) and the relative reduction (over the baseline mean, its interval
+    from the same resamples: a ratio of resampled means).
+
+    Parameters
+    ----------
+    pairs
+        :func:`ablation_pairs`.
+    num_resamples
+        Bootstrap resamples [-].
+    conf_level
+        Confidence level of the intervals [-].
+    seed
+        Seed of the bootstrap.
+    """
+    rng = np.random.default_rng(seed)
+    rows = []
+    scopes = [("all", pairs)] + [(g, sub) for g, sub in pairs.groupby("group", observed=True)]
+    for group, scope in scopes:
+        for (protocol, variant), sub in scope.groupby(["protocol", "variant"], observed=True):
+            good = sub[sub["ok"]]
+            n = len(good)
+            draw = rng.integers(0, n, size=(num_resamples, n)) if n else None
+            for statistic, column in ABLATION_STATISTICS.items():
+                row = {"protocol": protocol, "group": group, "variant": variant, "statistic": statistic}
+                row.update(n_pairs=n, n_failed=len(sub) - n)
+                value, baseline = good[column].to_numpy(float), good[f"{column}_baseline"].to_numpy(float)
+                row.update(_paired_effect(value, baseline, draw, conf_level))
+                rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _paired_effect(value: np.ndarray, baseline: np.ndarray, draw: np.ndarray | None, conf_level: float) -> dict:
+    if draw is None:
+        return dict.fromkeys(EFFECT_COLUMNS, np.nan)
+    diff_low, diff_high = _percentile_interval((value - baseline)[draw].mean(axis=1), conf_level)
+    base_mean = baseline.mean()
+    with np.errstate(divide="ignore", invalid="ignore"):
+        # a baseline with no inequality (e.g. no group outside 10 %) has no relative reduction: NaN
+        relative = 1.0 - value[draw].mean(axis=1) / baseline[draw].mean(axis=1)
+        point = 1.0 - value.mean() / base_mean if base_mean != 0 else np.nan
+    rel_low, rel_high = _percentile_interval(relative, conf_level) if np.all(np.isfinite(relative)) else (np.nan,) * 2
+    difference = float(np.mean(value - baseline))
+    return {
+        "baseline": float(base_mean), "value": float(value.mean()), "difference": difference,
+        "difference_low": diff_low, "difference_high": diff_high, "reduction": 0.0 - difference,
+        "reduction_low": 0.0 - diff_high, "reduction_high": 0.0 - diff_low, "relative_reduction": float(point),
+        "relative_reduction_low": rel_low, "relative_reduction_high": rel_high,
+    }  # fmt: skip
+
+
+# ---- the stage -----------------------------------------------------------------------------------------------------
+def sensitivity_metrics(
+    indices: pd.DataFrame, design: SaltelliOutputs, effects: pd.DataFrame, config: Config
+) -> dict[str, Any]:
+    """The small dict of metrics/sensitivity.json (see ``docs/outputs.md``), rounded for ``dvc metrics show``."""
+    sens = config.sensitivity
+    main_indices = indices[indices["measure"] == RANKING_MEASURE]
+    ranking = rank_inhibitors(main_indices)
+    metrics: dict[str, Any] = {
+        "ranking": ranking["factor"].tolist(),
+        "rank": {row.factor: int(row.rank) for row in ranking.itertuples()},
+        "ranking_measure": f"total Sobol index ST of {RANKING_MEASURE} ({sens.protocol}, {sens.group})",
+        "reference_check": {
+            "claim": "friction_coefficient below bush_stiffness and contact_roll_radius",
+            **reference_check(ranking),
+        },
+        "sobol": {
+            "measure": RANKING_MEASURE,
+            "protocol": sens.protocol,
+            "group": sens.group,
+            "base_size": sens.base_size,
+            "n_blocks": design.n_blocks,
+            "n_failed": len(design.excluded),
+            "confidence_level": sens.confidence_level,
+            "bootstrap_resamples": sens.bootstrap_resamples,
+            "indices": {
+                row.factor: {k: rounded(getattr(row, k), 4) for k in ("ST", "ST_conf", "S1", "S1_conf")}
+                for row in main_indices.itertuples()
+            },
+        },  # fmt: skip
+        "ranking_other_measures": {
+            m: rank_inhibitors(indices[indices["measure"] == m])["factor"].tolist()
+            for m in indices["measure"].unique()
+            if m != RANKING_MEASURE
+        },
+    }
+    metrics["ablation"] = _ablation_metrics(effects)
+    return metrics
+
+
+def _ablation_metrics(effects: pd.DataFrame) -> dict[str, Any]:
+    fleet = effects[effects["group"] == "all"].set_index(["protocol", "variant", "statistic"]).sort_index()
+    summary: dict[str, Any] = {}
+    for protocol in fleet.index.unique("protocol"):
+        entry: dict[str, Any] = {}
+        base = fleet.loc[(protocol, "baseline")]
+        entry["baseline"] = {s: rounded(base.loc[s, "value"], 4) for s in ABLATION_STATISTICS}
+        entry["baseline"]["n_bogies"] = int(base["n_pairs"].iloc[0])
+        for variant in VARIANTS[1:]:
+            dev, out5 = (
+                fleet.loc[(protocol, variant, "mean_max_deviation")],
+                fleet.loc[(protocol, variant, "share_outside_5pct")],
+            )
+            entry[variant] = {
+                "mean_max_deviation": rounded(dev["value"], 4), "reduction": rounded(dev["reduction"], 4),
+                "reduction_low": rounded(dev["reduction_low"], 4), "reduction_high": rounded(dev["reduction_high"], 4),
+                "relative_reduction": rounded(dev["relative_reduction"], 3),
+                "share_outside_5pct": rounded(out5["value"], 4), "n_failed": int(dev["n_failed"]),
+            }  # fmt: skip
+        singles = {v: entry[v]["reduction"] for v in INHIBITOR_NAMES if entry[v]["reduction"] is not None}
+        entry["largest_single_gain"] = max(singles, key=singles.get) if singles else None
+        summary[protocol] = entry
+    return summary
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage: read the sensitivity and ablation runs, analyse, write data/sensitivity/ and the metrics."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.sensitivity", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
+    parser.add_argument("--out", default="data/sensitivity", help="output directory (default: data/sensitivity)")
+    parser.add_argument(
+        "--metrics", default="metrics/sensitivity.json", help="metrics file (default: metrics/sensitivity.json)"
+    )
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+        sens = config.sensitivity
+        problem = sensitivity_problem(config)
+        base = ["sample_id", "base_id", "protocol", "status", "message"]
+        runs = read_runs(args.runs, "sensitivity", [*base, *problem["names"], *SOBOL_MEASURES])
+        loads = ["n_axles", "chassis_tilt", *TYRE_WEAR_COLUMNS, *AXLE_LOAD_COLUMNS, "max_deviation", "p1"]
+        ablation = read_runs(args.runs, "ablation", [*base, "group", "variant", *loads])
+        design = saltelli_outputs(protocol_runs(runs, sens.protocol), problem, sens.base_size)
+        seed = bootstrap_seed(config.seed, "sensitivity_bootstrap")
+        indices = sobol_table(design, problem, sens.bootstrap_resamples, sens.confidence_level, seed)
+        pairs = ablation_pairs(ablation)
+    except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
+        print(f"sensitivity: {exc}", file=sys.stderr)
+        return 2
+    seed = bootstrap_seed(config.seed, "ablation_bootstrap")
+    effects = ablation_effects(pairs, sens.bootstrap_resamples, sens.confidence_level, seed)
+    metrics = sensitivity_metrics(indices, design, effects, config)
+    tables = {
+        "sobol_indices.csv": indices,
+        "sobol_excluded.csv": design.excluded,
+        "ablation.csv": effects,
+        "ablation_pairs.parquet": pairs,
+    }
+    write_outputs(tables, args.out, metrics, args.metrics)
+    print(f"sensitivity: ranking by {metrics['ranking_measure']}: {' > '.join(metrics['ranking'])}; wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

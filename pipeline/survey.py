@@ -1,0 +1,490 @@
+"""DVC stage ``survey``: roadside-survey statistics of the fleet study -> data/survey/ and metrics/survey.json.
+
+``python -m pipeline.survey`` reads the fleet study's runs (``data/runs/study=fleet``) and tabulates, per protocol
+(static weighbridge, weigh-in-motion) and axle group (tandem, tri-axle), what a road authority's survey of that
+fleet would find: the distribution of each axle position's load share, the heaviest-minus-lightest spread, the
+share of groups outside the 5 % and 10 % tolerances, which axle is overloaded against chassis tilt, inequality
+against tilt and tyre-wear bands, the static weighbridge against WIM, the road-wear factor and the groups with an
+axle over the legal limit while the group is legal. Every statistic is a plain function of a runs DataFrame;
+``main`` only reads, calls and writes. Definitions, units and file layout: ``docs/outputs.md``.
+
+Failed runs (``status == "failed"``, zeros in their numbers) are excluded from every statistic and counted in
+``counts.csv`` and ``failures.csv``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import math
+import os
+import shutil
+import sys
+import tempfile
+from collections.abc import Mapping, Sequence
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from pipeline.config import GROUP_AXLES, ConfigError, load_config
+from pipeline.protocol import MAX_AXLES
+from pipeline.sample import TYRE_WEAR_COLUMNS
+
+#: the study a roadside survey samples
+SURVEY_STUDY = "fleet"
+AXLE_LOAD_COLUMNS: tuple[str, ...] = tuple(f"axle_load_{i}" for i in range(MAX_AXLES))
+LOAD_SHARE_COLUMNS: tuple[str, ...] = tuple(f"load_share_{i}" for i in range(MAX_AXLES))
+#: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
+PAIR_TOLERANCE = 0.05
+#: load-sharing suspension rule: no axle more than 10 % over its equal share, max LSC <= 1.10 [-]
+SHARE_TOLERANCE = 0.10
+TILT_BIN_DEG = 0.5
+WEAR_BAND_MM = 2.0
+#: "nose up" for the rear-overload headline: tilt above this [degree]
+NOSE_UP_DEG = 0.5
+PERCENTILES: tuple[int, ...] = (5, 25, 50, 75, 95)
+HISTOGRAM_BINS = 30
+#: quantities whose distribution and histogram are tabulated (load shares only for axles the group has)
+DISTRIBUTED: tuple[str, ...] = (*LOAD_SHARE_COLUMNS, "spread_pct", "spread_kg", "max_deviation", "road_wear_factor")
+#: the columns a runs table must have for the survey
+REQUIRED_COLUMNS: tuple[str, ...] = (
+    "sample_id", "group", "n_axles", "protocol", "status", "message", "chassis_tilt", *TYRE_WEAR_COLUMNS,
+    *AXLE_LOAD_COLUMNS, *LOAD_SHARE_COLUMNS, "group_load", "max_deviation", "spread_kg", "road_wear_factor",
+)  # fmt: skip
+KEYS = ["protocol", "group"]
+
+
+class RunsError(ValueError):
+    """The runs dataset is missing, incomplete or not in the expected form."""
+
+
+# ---- reading -----------------------------------------------------------------------------------------------------
+def read_runs(runs_dir: str | Path, study: str, columns: Sequence[str] = REQUIRED_COLUMNS) -> pd.DataFrame:
+    """The runs of one study from the hive-partitioned dataset ``runs_dir/study=<study>/part-*.parquet``.
+
+    Raises
+    ------
+    RunsError
+        If the study has no part file, or a required column is absent or has missing values.
+    """
+    runs_dir = Path(runs_dir)
+    partition = runs_dir / f"study={study}"
+    if not any(partition.glob("*.parquet")):
+        raise RunsError(f"no runs of study {study!r}: {partition}/ holds no Parquet file; run the simulate stage first")
+    frame = pd.read_parquet(runs_dir, filters=[("study", "==", study)])
+    missing = [c for c in columns if c not in frame.columns]
+    if missing:
+        raise RunsError(f"runs of study {study!r} in {runs_dir} lack the columns {', '.join(missing)}")
+    # a part file written with fewer columns than the others comes back as nulls: refuse, never average over them
+    nulls = frame[list(columns)].isna().sum()
+    if nulls.any():
+        counts = ", ".join(f"{c} ({n} rows)" for c, n in nulls[nulls > 0].items())
+        raise RunsError(f"runs of study {study!r} in {runs_dir} have missing values in {counts}")
+    frame["study"] = frame["study"].astype(str)
+    return frame
+
+
+def split_failed(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The succeeded rows and the failed rows (``status != "ok"``), each with a fresh index."""
+    ok = runs["status"] == "ok"
+    return runs[ok].reset_index(drop=True), runs[~ok].reset_index(drop=True)
+
+
+# ---- per-row quantities --------------------------------------------------------------------------------------------
+def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
+    """Per-row inequality quantities of succeeded runs, derived from the axle loads.
+
+    Parameters
+    ----------
+    runs
+        Succeeded runs with ``n_axles``, ``axle_load_0..2`` [N] (0 for a missing axle), ``chassis_tilt`` [rad] and
+        ``tyre_wear_0..2`` [m].
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``runs`` with added columns: ``spread_pct`` (heaviest minus lightest axle over the mean axle load [%]),
+        ``pair_difference`` ((max - min) / max [-]), ``max_load_share`` (largest LSC [-]), ``outside_5pct``
+        (pair_difference > 0.05), ``outside_10pct`` (max_load_share > 1.10), ``heaviest_axle`` (0 = front; a tie
+        goes to the front-most), ``rear_heaviest``, ``tilt_deg`` [degree, nose up +] and ``wear_diff_mm`` (most
+        minus least worn tyre of the group [mm]).
+    """
+    n = runs["n_axles"].to_numpy(dtype=np.int64)
+    loads = runs[list(AXLE_LOAD_COLUMNS)].to_numpy(dtype=float)
+    present = np.arange(MAX_AXLES) < n[:, None]
+    heaviest = np.where(present, loads, -np.inf).max(axis=1)
+    lightest = np.where(present, loads, np.inf).min(axis=1)
+    mean = np.where(present, loads, 0.0).sum(axis=1) / n
+    wear = runs[list(TYRE_WEAR_COLUMNS)].to_numpy(dtype=float)
+    wear_max = np.where(present, wear, -np.inf).max(axis=1)
+    wear_min = np.where(present, wear, np.inf).min(axis=1)
+    out = runs.copy()
+    out["spread_pct"] = 100.0 * (heaviest - lightest) / mean
+    out["pair_difference"] = (heaviest - lightest) / heaviest
+    out["max_load_share"] = heaviest / mean
+    out["outside_5pct"] = out["pair_difference"] > PAIR_TOLERANCE
+    out["outside_10pct"] = out["max_load_share"] > 1.0 + SHARE_TOLERANCE
+    out["heaviest_axle"] = np.argmax(np.where(present, loads, -np.inf), axis=1)
+    out["rear_heaviest"] = out["heaviest_axle"].to_numpy() == n - 1
+    out["tilt_deg"] = np.degrees(runs["chassis_tilt"].to_numpy(dtype=float))
+    out["wear_diff_mm"] = 1000.0 * (wear_max - wear_min)
+    return out
+
+
+def band(values: pd.Series | np.ndarray, width: float) -> tuple[np.ndarray, np.ndarray]:
+    """Left-closed bands ``[low, low + width)`` of ``values``: returns (low, high) per value.
+
+    Values are rounded to 1e-9 band widths first, so a tilt of exactly 0.5 degree that went through radians and
+    back (0.49999999999999994) lands in the band that starts at 0.5, as a reader of the label expects.
+    """
+    k = np.floor(np.round(np.asarray(values, dtype=float) / width, 9))
+    return k * width, (k + 1) * width
+
+
+# ---- statistics ---------------------------------------------------------------------------------------------------
+def run_counts(runs: pd.DataFrame) -> pd.DataFrame:
+    """Runs, succeeded and failed per protocol and group (columns n_runs, n_ok, n_failed)."""
+    failed = runs["status"] != "ok"
+    table = (
+        runs.assign(failed=failed, ok=~failed).groupby(KEYS, observed=True).agg(n_runs=("status", "size"),
+        n_ok=("ok", "sum"), n_failed=("failed", "sum"))
+    )  # fmt: skip
+    return table.astype("int64").reset_index()
+
+
+def failure_table(runs: pd.DataFrame, examples: int = 5) -> pd.DataFrame:
+    """Failed runs per protocol, group and message: their number and the first few sample ids."""
+    failed = runs[runs["status"] != "ok"]
+    columns = [*KEYS, "message", "n_failed", "example_sample_ids"]
+    if failed.empty:
+        return pd.DataFrame(columns=columns)
+    table = failed.groupby([*KEYS, "message"], observed=True)["sample_id"].agg(
+        n_failed="size", example_sample_ids=lambda s: " ".join(str(i) for i in sorted(s)[:examples])
+    )
+    return table.reset_index()[columns].sort_values(["n_failed", *KEYS], ascending=[False, True, True])
+
+
+def _present(frame: pd.DataFrame, quantity: str) -> pd.DataFrame:
+    """Rows where ``quantity`` exists: a load share only for groups that have that axle."""
+    if quantity.startswith("load_share_"):
+        return frame[frame["n_axles"] > int(quantity.rsplit("_", 1)[1])]
+    return frame
+
+
+def distribution_stats(ok: pd.DataFrame, quantities: Sequence[str] = DISTRIBUTED) -> pd.DataFrame:
+    """Mean, SD and percentiles of each quantity per protocol and group (long table, one row per quantity)."""
+    rows = []
+    for quantity in quantities:
+        for (protocol, group), sub in _present(ok, quantity).groupby(KEYS, observed=True):
+            x = sub[quantity].to_numpy(dtype=float)
+            row = {"quantity": quantity, "protocol": protocol, "group": group, "n": len(x)}
+            row.update(mean=float(np.mean(x)), sd=float(np.std(x, ddof=1)) if len(x) > 1 else math.nan)
+            row.update({f"p{q:02d}": float(v) for q, v in zip(PERCENTILES, np.percentile(x, PERCENTILES))})
+            rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def histograms(ok: pd.DataFrame, quantities: Sequence[str] = DISTRIBUTED, bins: int = HISTOGRAM_BINS) -> pd.DataFrame:
+    """Histogram counts of each quantity per protocol and group, on edges shared by all protocols and groups.
+
+    Shared edges (over every succeeded row of the quantity) let a plot overlay static and WIM, tandem and tri-axle.
+    Bins are left-closed except the last, as in :func:`numpy.histogram`.
+    """
+    rows = []
+    for quantity in quantities:
+        present = _present(ok, quantity)
+        if present.empty:
+            continue
+        edges = np.histogram_bin_edges(present[quantity].to_numpy(dtype=float), bins=bins)
+        for (protocol, group), sub in present.groupby(KEYS, observed=True):
+            counts, _ = np.histogram(sub[quantity].to_numpy(dtype=float), bins=edges)
+            for lo, hi, c in zip(edges[:-1], edges[1:], counts):
+                rows.append(
+                    {"quantity": quantity, "protocol": protocol, "group": group, "bin_low": lo, "bin_high": hi,
+                     "count": int(c)}
+                )  # fmt: skip
+    return pd.DataFrame(rows)
+
+
+def legal_limits(ok: pd.DataFrame, legal_axle_load: float, legal_group_load: Mapping[str, float]) -> pd.DataFrame:
+    """Groups over the legal limits per protocol and group.
+
+    Parameters
+    ----------
+    ok
+        Succeeded runs.
+    legal_axle_load
+        Legal single-axle load, both sides [N]; an axle is over when its load is strictly greater.
+    legal_group_load
+        Legal group load of each axle group, both sides [N]; a group is within when its load is at most this.
+
+    Returns
+    -------
+    pandas.DataFrame
+        n, n_group_over, n_axle_over, n_axle_over_group_legal and frac_axle_over_group_legal (over all n) [-].
+    """
+    axle_over = ok[list(AXLE_LOAD_COLUMNS)].max(axis=1) > legal_axle_load
+    group_legal = ok["group_load"] <= ok["group"].map(dict(legal_group_load)).astype(float)
+    flags = ok[KEYS].assign(n=1, group_over=~group_legal, axle_over=axle_over, both=axle_over & group_legal)
+    table = flags.groupby(KEYS, observed=True).agg(
+        n=("n", "sum"), n_group_over=("group_over", "sum"), n_axle_over=("axle_over", "sum"),
+        n_axle_over_group_legal=("both", "sum"),
+    ).reset_index()  # fmt: skip
+    table["frac_axle_over_group_legal"] = table["n_axle_over_group_legal"] / table["n"]
+    return table
+
+
+def _banded(ok: pd.DataFrame, column: str, width: float, prefix: str, extra: dict[str, Any]) -> pd.DataFrame:
+    low, high = band(ok[column], width)
+    frame = ok.assign(**{f"{prefix}_low": low, f"{prefix}_high": high})
+    keys = [*KEYS, f"{prefix}_low", f"{prefix}_high"]
+    table = frame.groupby(keys, observed=True).agg(
+        n=("max_deviation", "size"), mean_max_deviation=("max_deviation", "mean"),
+        share_outside_5pct=("outside_5pct", "mean"), share_outside_10pct=("outside_10pct", "mean"), **extra,
+    ).reset_index()  # fmt: skip
+    table.insert(len(keys), f"{prefix}_bin", [f"[{a:g}, {b:g})" for a, b in zip(table[keys[2]], table[keys[3]])])
+    return table
+
+
+def tilt_table(ok: pd.DataFrame, width_deg: float = TILT_BIN_DEG) -> pd.DataFrame:
+    """Which axle is overloaded against chassis tilt, and how unequal the group is, per tilt bin.
+
+    Parameters
+    ----------
+    ok
+        Succeeded runs with the columns of :func:`inequality_columns`.
+    width_deg
+        Bin width [degree]; bins ``[k w, (k + 1) w)``, nose up positive.
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per protocol, group and bin (``tilt_deg_low``, ``tilt_deg_high``, label ``tilt_deg_bin``): n, the mean
+        load share of each axle position (NaN for an axle the group lacks), ``rear_heaviest_share`` (bogies whose
+        heaviest axle is the rear one), mean max_deviation and the shares outside 5 % and 10 %.
+    """
+    shares = {f"mean_{c}": (c, "mean") for c in LOAD_SHARE_COLUMNS}
+    table = _banded(ok, "tilt_deg", width_deg, "tilt_deg", {**shares, "rear_heaviest_share": ("rear_heaviest", "mean")})
+    for i, c in enumerate(LOAD_SHARE_COLUMNS):
+        # a tandem's third share is 0 in the runs, not a measurement
+        table.loc[table["group"].map(GROUP_AXLES) <= i, f"mean_{c}"] = np.nan
+    return table
+
+
+def wear_table(ok: pd.DataFrame, width_mm: float = WEAR_BAND_MM) -> pd.DataFrame:
+    """Inequality per band of tyre-wear difference (most minus least worn tyre of the group, [mm] bands)."""
+    return _banded(ok, "wear_diff_mm", width_mm, "wear_diff_mm", {})
+
+
+def static_vs_wim(ok: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """The static weighbridge against WIM, bogie by bogie (paired by ``sample_id``).
+
+    Returns
+    -------
+    pairs : pandas.DataFrame
+        One row per bogie that succeeded in both protocols: ``max_deviation_static``, ``max_deviation_wim``,
+        ``dynamic_excess`` (WIM minus static max_deviation [-]) and for each axle ``load_share_<i>_static``,
+        ``load_share_<i>_wim``, ``load_share_<i>_diff`` (WIM minus static [-], 0 for a missing axle).
+    summary : pandas.DataFrame
+        Per group: n_pairs, the mean max_deviation of each protocol, ``mean_dynamic_excess`` and its SD,
+        ``share_wim_worse``, ``corr_max_deviation`` (Pearson, over bogies), ``corr_load_share_<i>`` and
+        ``mean_abs_load_share_diff`` (over bogies and the axles they have). Empty if a protocol is absent.
+    """
+    columns = ["sample_id", "group", "n_axles", "chassis_tilt", "max_deviation", *LOAD_SHARE_COLUMNS]
+    static = ok.loc[ok["protocol"] == "static", columns]
+    wim = ok.loc[ok["protocol"] == "wim", ["sample_id", "max_deviation", *LOAD_SHARE_COLUMNS]]
+    pairs = static.merge(wim, on="sample_id", suffixes=("_static", "_wim"), validate="one_to_one")
+    pairs["dynamic_excess"] = pairs["max_deviation_wim"] - pairs["max_deviation_static"]
+    for c in LOAD_SHARE_COLUMNS:
+        pairs[f"{c}_diff"] = pairs[f"{c}_wim"] - pairs[f"{c}_static"]
+    pairs = pairs.sort_values("sample_id").reset_index(drop=True)
+    rows = []
+    for group, sub in pairs.groupby("group", observed=True):
+        n_axles = GROUP_AXLES[group]
+        diffs = sub[[f"{c}_diff" for c in LOAD_SHARE_COLUMNS[:n_axles]]].to_numpy()
+        row = {
+            "group": group, "n_pairs": len(sub),
+            "mean_max_deviation_static": sub["max_deviation_static"].mean(),
+            "mean_max_deviation_wim": sub["max_deviation_wim"].mean(),
+            "mean_dynamic_excess": sub["dynamic_excess"].mean(), "sd_dynamic_excess": sub["dynamic_excess"].std(),
+            "share_wim_worse": (sub["dynamic_excess"] > 0).mean(),
+            "corr_max_deviation": _corr(sub["max_deviation_static"], sub["max_deviation_wim"]),
+        }  # fmt: skip
+        for i, c in enumerate(LOAD_SHARE_COLUMNS):
+            row[f"corr_{c}"] = _corr(sub[f"{c}_static"], sub[f"{c}_wim"]) if i < n_axles else math.nan
+        row["mean_abs_load_share_diff"] = float(np.mean(np.abs(diffs)))
+        rows.append(row)
+    return pairs, pd.DataFrame(rows)
+
+
+def _corr(a: pd.Series, b: pd.Series) -> float:
+    # a constant series (e.g. two identical bogies) has no correlation: NaN, not a numpy warning
+    if len(a) < 2 or a.std() == 0 or b.std() == 0:
+        return math.nan
+    return float(np.corrcoef(a, b)[0, 1])
+
+
+def summary_table(ok: pd.DataFrame, runs: pd.DataFrame, legal: pd.DataFrame) -> pd.DataFrame:
+    """The headline numbers per protocol and group (the rows of metrics/survey.json)."""
+    nose_up = ok.assign(rear_nose_up=ok["rear_heaviest"].astype(float).where(ok["tilt_deg"] > NOSE_UP_DEG))
+    table = nose_up.groupby(KEYS, observed=True).agg(
+        share_outside_5pct=("outside_5pct", "mean"), share_outside_10pct=("outside_10pct", "mean"),
+        mean_max_deviation=("max_deviation", "mean"), mean_spread_pct=("spread_pct", "mean"),
+        mean_spread_kg=("spread_kg", "mean"), mean_road_wear_factor=("road_wear_factor", "mean"),
+        rear_overload_share_nose_up=("rear_nose_up", "mean"), n_nose_up=("rear_nose_up", "count"),
+    ).reset_index()  # fmt: skip
+    table = table.merge(legal[[*KEYS, "frac_axle_over_group_legal"]], on=KEYS, how="left")
+    # (protocol, group) pairs where every run failed still get a row, with counts and NaN statistics
+    return run_counts(runs).merge(table, on=KEYS, how="left")
+
+
+# ---- the whole survey ----------------------------------------------------------------------------------------------
+def survey(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: Mapping[str, float]) -> dict[str, Any]:
+    """Every survey table of one study's runs.
+
+    Parameters
+    ----------
+    runs
+        The runs of the study, failed rows included (they are counted, not used).
+    legal_axle_load
+        Legal single-axle load, both sides [N].
+    legal_group_load
+        Legal load of each axle group, both sides [N].
+
+    Returns
+    -------
+    dict
+        Output file name -> DataFrame (see ``docs/outputs.md``).
+    """
+    ok, _ = split_failed(runs)
+    ok = inequality_columns(ok)
+    legal = legal_limits(ok, legal_axle_load, legal_group_load)
+    pairs, pair_summary = static_vs_wim(ok)
+    return {
+        "summary.csv": summary_table(ok, runs, legal),
+        "counts.csv": run_counts(runs),
+        "failures.csv": failure_table(runs),
+        "distributions.csv": distribution_stats(ok),
+        "histograms.csv": histograms(ok),
+        "tilt.csv": tilt_table(ok),
+        "tyre_wear.csv": wear_table(ok),
+        "static_vs_wim.csv": pair_summary,
+        "static_vs_wim_pairs.parquet": pairs,
+        "legal.csv": legal,
+    }
+
+
+def rounded(x: Any, digits: int) -> float | None:
+    """``x`` rounded for JSON; None for NaN or a missing value (JSON has no NaN)."""
+    if x is None or pd.isna(x):
+        return None
+    return round(float(x), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
+
+
+#: headline column -> decimals in metrics/survey.json
+_HEADLINE_DIGITS = {
+    "share_outside_5pct": 4, "share_outside_10pct": 4, "mean_max_deviation": 4, "mean_spread_pct": 2,
+    "mean_spread_kg": 1, "mean_road_wear_factor": 4, "rear_overload_share_nose_up": 4,
+    "frac_axle_over_group_legal": 4,
+}  # fmt: skip
+
+
+def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
+    """The small dict of metrics/survey.json: totals, then protocol -> group -> headline numbers, rounded."""
+    summary = tables["summary.csv"]
+    metrics: dict[str, Any] = {
+        "n_runs": int(summary["n_runs"].sum()),
+        "n_ok": int(summary["n_ok"].sum()),
+        "n_failed": int(summary["n_failed"].sum()),
+    }
+    for row in summary.itertuples(index=False):
+        entry = {key: rounded(getattr(row, key), digits) for key, digits in _HEADLINE_DIGITS.items()}
+        entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed))
+        metrics.setdefault(row.protocol, {})[row.group] = entry
+    pairs = tables["static_vs_wim.csv"]
+    if not pairs.empty:
+        metrics["static_vs_wim"] = {
+            row.group: {
+                "mean_dynamic_excess": rounded(row.mean_dynamic_excess, 4),
+                "corr_max_deviation": rounded(row.corr_max_deviation, 3),
+                "n_pairs": int(row.n_pairs),
+            }
+            for row in pairs.itertuples(index=False)
+        }
+    return metrics
+
+
+# ---- output --------------------------------------------------------------------------------------------------------
+def _write_table(frame: pd.DataFrame, path: Path) -> None:
+    if path.suffix == ".parquet":
+        frame.to_parquet(path, index=False)
+    else:
+        frame.to_csv(path, index=False, float_format="%.6g")
+
+
+def write_outputs(
+    tables: Mapping[str, pd.DataFrame], out_dir: str | Path, metrics: Mapping[str, Any], metrics_path: str | Path
+) -> None:
+    """Write the tables into ``out_dir`` and the metrics JSON, all or nothing.
+
+    The tables go to a temporary sibling directory that replaces ``out_dir`` by renames, and the JSON to a
+    temporary file renamed last: a reader sees the old outputs or the new ones, never a mix or half a file, and an
+    error while writing leaves the old outputs in place. Parent directories are created.
+    """
+    out_dir, metrics_path = Path(out_dir), Path(metrics_path)
+    out_dir.parent.mkdir(parents=True, exist_ok=True)
+    metrics_path.parent.mkdir(parents=True, exist_ok=True)
+    tmp_dir = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=out_dir.parent))
+    fd, tmp_json = tempfile.mkstemp(prefix=f".{metrics_path.name}.", suffix=".tmp", dir=metrics_path.parent)
+    old_dir = tmp_dir.with_name(tmp_dir.name.removesuffix(".tmp") + ".old")
+    try:
+        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+            json.dump(metrics, fh, indent=2, allow_nan=False)
+            fh.write("\n")
+        os.chmod(tmp_json, 0o644)
+        for name, frame in tables.items():
+            _write_table(frame, tmp_dir / name)
+        os.chmod(tmp_dir, 0o755)  # mkdtemp makes it private
+        if out_dir.exists():
+            os.replace(out_dir, old_dir)
+        try:
+            os.replace(tmp_dir, out_dir)
+        except BaseException:
+            if old_dir.exists():
+                os.replace(old_dir, out_dir)
+            raise
+        os.replace(tmp_json, metrics_path)
+    except BaseException:
+        shutil.rmtree(tmp_dir, ignore_errors=True)
+        Path(tmp_json).unlink(missing_ok=True)
+        raise
+    shutil.rmtree(old_dir, ignore_errors=True)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage: read the fleet runs, compute the survey, write data/survey/ and metrics/survey.json."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.survey", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
+    parser.add_argument("--out", default="data/survey", help="output directory (default: data/survey)")
+    parser.add_argument("--metrics", default="metrics/survey.json", help="metrics file (default: metrics/survey.json)")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+        runs = read_runs(args.runs, SURVEY_STUDY)
+    except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
+        print(f"survey: {exc}", file=sys.stderr)
+        return 2
+    tables = survey(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
+    metrics = headline_metrics(tables)
+    write_outputs(tables, args.out, metrics, args.metrics)
+    n_ok, n_runs, n_failed = metrics["n_ok"], metrics["n_runs"], metrics["n_failed"]
+    print(f"survey: {n_ok} of {n_runs} runs succeeded ({n_failed} failed); wrote {args.out} and {args.metrics}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,365 @@
+"""The ``survey`` stage: roadside-survey statistics of the fleet runs (pipeline.survey), on fabricated runs."""
+
+import copy
+import json
+import math
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from bogie.params import GRAVITY
+from pipeline.config import load_params, parse_config
+from pipeline.protocol import RESULT_COLUMNS, result_row
+from pipeline.sample import sample_studies
+from pipeline.survey import (
+    RunsError,
+    band,
+    distribution_stats,
+    failure_table,
+    headline_metrics,
+    histograms,
+    inequality_columns,
+    legal_limits,
+    main,
+    read_runs,
+    run_counts,
+    split_failed,
+    static_vs_wim,
+    survey,
+    tilt_table,
+    wear_table,
+    write_outputs,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+TONNE = 1000.0 * GRAVITY  # [N]
+LEGAL_GROUP = {"tandem": 18.0 * TONNE, "triaxle": 24.0 * TONNE}
+
+
+def run(sample_id, loads, protocol="static", tilt_deg=0.0, wear_mm=(0.0, 0.0, 0.0), status="ok", message="ok"):
+    """One fabricated run row: axle loads [N] through the protocol's own result_row, plus the sample columns."""
+    n = len(loads)
+    wheel = None if status != "ok" else np.asarray(loads, dtype=float) / 2.0
+    row = result_row(protocol, n, wheel, 0.0)
+    row.update(status=status, message=message, wall_time=0.03)
+    row.update(
+        sample_id=sample_id,
+        base_id=sample_id,
+        group="tandem" if n == 2 else "triaxle",
+        chassis_tilt=math.radians(tilt_deg),
+        **{f"tyre_wear_{i}": w / 1000.0 for i, w in enumerate(wear_mm)},
+    )
+    return row
+
+
+def frame(rows):
+    return pd.DataFrame(rows)
+
+
+def derived(rows):
+    ok, _ = split_failed(frame(rows))
+    return inequality_columns(ok)
+
+
+# ---- tolerances, spread ------------------------------------------------------------------------------------------
+def tolerance_fleet():
+    """10 tri-axles: 1 outside both tolerances, 2 outside 5 % only, 7 inside both."""
+    rows = [run(0, [100e3, 80e3, 60e3])]  # (max-min)/max = 0.4, max LSC = 1.25
+    rows += [run(i, [80e3, 80e3, 73.6e3]) for i in (1, 2)]  # (max-min)/max = 0.08, max LSC = 1.027
+    rows += [run(i, [80e3, 79e3, 80e3]) for i in range(3, 10)]  # 0.0125
+    return rows
+
+
+def test_shares_outside_the_5_and_10_percent_tolerances_count_exactly_those_groups():
+    ok = derived(tolerance_fleet())
+    assert ok["outside_5pct"].tolist() == [True, True, True] + [False] * 7
+    assert ok["outside_10pct"].tolist() == [True] + [False] * 9
+    tables = survey(frame(tolerance_fleet()), 10 * TONNE, LEGAL_GROUP)
+    summary = tables["summary.csv"].iloc[0]
+    assert summary["share_outside_5pct"] == pytest.approx(0.3)
+    assert summary["share_outside_10pct"] == pytest.approx(0.1)
+
+
+def test_spread_in_percent_of_the_mean_and_in_kg():
+    ok = derived([run(0, [100e3, 80e3, 60e3]), run(1, [50e3, 40e3])])
+    assert ok["spread_pct"].tolist() == pytest.approx([50.0, 100.0 * 10e3 / 45e3])
+    assert ok["spread_kg"].tolist() == pytest.approx([40e3 / GRAVITY, 10e3 / GRAVITY])
+    assert ok["pair_difference"].tolist() == pytest.approx([0.4, 0.2])
+    assert ok["max_load_share"].tolist() == pytest.approx([1.25, 50 / 45])
+
+
+def test_distribution_stats_match_numpy_and_skip_the_missing_third_axle_of_tandems():
+    rng = np.random.default_rng(1)
+    rows = [run(i, 80e3 * (1 + 0.1 * rng.standard_normal(3))) for i in range(40)]
+    rows += [run(100 + i, 80e3 * (1 + 0.1 * rng.standard_normal(2))) for i in range(30)]
+    ok = derived(rows)
+    stats = distribution_stats(ok).set_index(["quantity", "group"])
+    tri = ok[ok["group"] == "triaxle"]
+    row = stats.loc[("load_share_1", "triaxle")]
+    assert row["n"] == 40
+    assert row["mean"] == pytest.approx(tri["load_share_1"].mean())
+    assert row["sd"] == pytest.approx(tri["load_share_1"].std())
+    assert row[["p05", "p25", "p50", "p75", "p95"]].tolist() == pytest.approx(
+        np.percentile(tri["load_share_1"], [5, 25, 50, 75, 95])
+    )
+    assert ("load_share_2", "tandem") not in stats.index
+    assert ("road_wear_factor", "tandem") in stats.index
+    # load shares of each group average to 1 (LSC sums to n)
+    shares = stats.xs("triaxle", level="group").loc[["load_share_0", "load_share_1", "load_share_2"], "mean"]
+    assert shares.sum() == pytest.approx(3.0)
+
+
+def test_histograms_share_edges_across_groups_and_count_every_row():
+    rng = np.random.default_rng(2)
+    rows = [run(i, 80e3 * (1 + 0.1 * rng.standard_normal(3))) for i in range(25)]
+    rows += [run(100 + i, 80e3 * (1 + 0.1 * rng.standard_normal(2)), "wim") for i in range(15)]
+    hist = histograms(derived(rows), bins=7)
+    spread = hist[hist["quantity"] == "spread_pct"]
+    per = spread.groupby(["protocol", "group"])
+    assert per["count"].sum().to_dict() == {("static", "triaxle"): 25, ("wim", "tandem"): 15}
+    edges = [tuple(sub["bin_low"]) for _, sub in per]
+    assert edges[0] == edges[1] and len(edges[0]) == 7
+
+
+# ---- tilt and tyre wear -------------------------------------------------------------------------------------------
+def test_band_is_left_closed_and_puts_an_edge_that_went_through_radians_in_the_upper_band():
+    tilt = np.degrees(np.radians([0.5, -0.5, 0.0, 0.49, -0.01, 1.99, -2.0]))
+    low, high = band(tilt, 0.5)
+    assert low.tolist() == [0.5, -0.5, 0.0, 0.0, -0.5, 1.5, -2.0]
+    assert (high - low).tolist() == pytest.approx([0.5] * 7)
+
+
+def test_tilt_table_assigns_rows_to_bins_and_finds_the_rear_overload_nose_up():
+    rows = [
+        run(0, [70e3, 80e3, 90e3], tilt_deg=0.75),  # rear heaviest
+        run(1, [75e3, 80e3, 85e3], tilt_deg=0.5),  # rear heaviest, on the 0.5 edge
+        run(2, [85e3, 80e3, 75e3], tilt_deg=0.99),  # front heaviest
+        run(3, [90e3, 80e3, 70e3], tilt_deg=-0.75),  # nose down: front heaviest
+        run(4, [80e3, 80e3, 80e3], tilt_deg=0.1),  # level: tie goes to the front
+    ]
+    table = tilt_table(derived(rows)).set_index("tilt_deg_bin")
+    assert table["n"].to_dict() == {"[-1, -0.5)": 1, "[0, 0.5)": 1, "[0.5, 1)": 3}
+    assert table.loc["[0.5, 1)", "rear_heaviest_share"] == pytest.approx(2 / 3)
+    assert table.loc["[-1, -0.5)", "rear_heaviest_share"] == 0.0
+    assert table.loc["[0.5, 1)", "mean_load_share_2"] == pytest.approx(np.mean([90 / 80, 85 / 80, 75 / 80]))
+    assert table.loc["[0.5, 1)", "tilt_deg_low"] == 0.5
+    summary = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary.csv"].iloc[0]
+    # nose up beyond 0.5 degree: rows 0 and 2 (row 1 sits on 0.5, not above)
+    assert summary["rear_overload_share_nose_up"] == pytest.approx(0.5)
+    assert summary["n_nose_up"] == 2
+
+
+def test_tilt_table_leaves_the_tandems_third_axle_empty():
+    table = tilt_table(derived([run(0, [40e3, 50e3], tilt_deg=1.2)]))
+    assert math.isnan(table["mean_load_share_2"].iloc[0])
+    assert table["rear_heaviest_share"].iloc[0] == 1.0
+
+
+def test_wear_bands_use_the_difference_between_the_groups_own_tyres():
+    rows = [
+        run(0, [80e3, 80e3, 70e3], wear_mm=(0.0, 3.0, 1.0)),  # 3 mm -> [2, 4), outside 5 %
+        run(1, [80e3, 80e3, 80e3], wear_mm=(5.0, 5.5, 5.0)),  # 0.5 mm -> [0, 2)
+        run(2, [40e3, 40e3], wear_mm=(1.0, 1.0, 10.0)),  # the tandem has no third tyre: 0 mm
+    ]
+    ok = derived(rows)
+    assert ok["wear_diff_mm"].tolist() == pytest.approx([3.0, 0.5, 0.0])
+    table = wear_table(ok).set_index(["group", "wear_diff_mm_bin"])
+    assert table.loc[("triaxle", "[2, 4)"), "share_outside_5pct"] == 1.0
+    assert table.loc[("triaxle", "[0, 2)"), "mean_max_deviation"] == 0.0
+    assert table.loc[("tandem", "[0, 2)"), "n"] == 1
+
+
+# ---- static against WIM ------------------------------------------------------------------------------------------
+def test_static_and_wim_are_paired_by_sample_id_whatever_the_row_order():
+    static = [run(i, [80e3 - 1e3 * i, 80e3, 80e3 + 1e3 * i]) for i in range(6)]
+    wim = [run(i, [80e3 - 3e3 * i, 80e3, 80e3 + 3e3 * i], "wim") for i in range(6)]
+    wim[4] = run(4, [0, 0, 0], "wim", status="failed", message="Newton failed")
+    rows = wim[::-1] + static[::2] + static[1::2]
+    pairs, summary = static_vs_wim(derived(rows))
+    assert pairs["sample_id"].tolist() == [0, 1, 2, 3, 5]
+    # max deviation i 1e3 / 80e3 static, three times that by WIM
+    expected = np.array([0, 1, 2, 3, 5]) * 2e3 / 80e3
+    assert pairs["dynamic_excess"].to_numpy() == pytest.approx(expected)
+    assert pairs["load_share_2_diff"].to_numpy() == pytest.approx(expected)
+    row = summary.iloc[0]
+    assert row["n_pairs"] == 5
+    assert row["mean_dynamic_excess"] == pytest.approx(expected.mean())
+    assert row["corr_max_deviation"] == pytest.approx(1.0)
+    assert row["share_wim_worse"] == pytest.approx(4 / 5)
+
+
+def test_static_vs_wim_is_empty_with_one_protocol():
+    pairs, summary = static_vs_wim(derived([run(0, [40e3, 50e3])]))
+    assert pairs.empty and summary.empty
+
+
+# ---- legal limits, failures, counts -----------------------------------------------------------------------------
+def test_axle_over_its_limit_while_the_group_is_legal():
+    rows = [
+        run(0, [10.5 * TONNE, 7.0 * TONNE]),  # group 17.5 t legal, axle over: counted
+        run(1, [10.5 * TONNE, 8.0 * TONNE]),  # group 18.5 t over: not counted
+        run(2, [9.0 * TONNE, 9.0 * TONNE]),  # both legal
+        run(3, [10.0 * TONNE, 8.0 * TONNE]),  # exactly at both limits: legal
+    ]
+    table = legal_limits(derived(rows), 10 * TONNE, LEGAL_GROUP).iloc[0]
+    assert (table["n"], table["n_axle_over"], table["n_group_over"], table["n_axle_over_group_legal"]) == (4, 2, 1, 1)
+    assert table["frac_axle_over_group_legal"] == pytest.approx(0.25)
+
+
+def test_failed_rows_are_excluded_from_statistics_but_counted_with_their_messages():
+    good = tolerance_fleet()
+    failed = [
+        run(20, [0, 0, 0], status="failed", message="Newton failed at t = 1.2 s"),
+        run(21, [0, 0, 0], status="failed", message="Newton failed at t = 1.2 s"),
+        run(22, [0, 0, 0], status="failed", message="wheel off the ground"),
+    ]
+    clean = survey(frame(good), 10 * TONNE, LEGAL_GROUP)
+    mixed = survey(frame(good + failed), 10 * TONNE, LEGAL_GROUP)
+    pd.testing.assert_frame_equal(mixed["distributions.csv"], clean["distributions.csv"])
+    pd.testing.assert_frame_equal(mixed["tilt.csv"], clean["tilt.csv"])
+    counts = run_counts(frame(good + failed)).iloc[0]
+    assert (counts["n_runs"], counts["n_ok"], counts["n_failed"]) == (13, 10, 3)
+    summary = mixed["summary.csv"].iloc[0]
+    assert summary["n_failed"] == 3 and summary["share_outside_5pct"] == pytest.approx(0.3)
+    fails = failure_table(frame(good + failed))
+    assert fails[["message", "n_failed", "example_sample_ids"]].values.tolist() == [
+        ["Newton failed at t = 1.2 s", 2, "20 21"],
+        ["wheel off the ground", 1, "22"],
+    ]
+
+
+def test_a_protocol_and_group_where_every_run_failed_still_has_its_counts():
+    rows = tolerance_fleet() + [run(50, [0, 0], "wim", status="failed", message="diverged")]
+    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    metrics = headline_metrics(tables)
+    assert metrics["wim"]["tandem"]["n_failed"] == 1 and metrics["wim"]["tandem"]["n_ok"] == 0
+    assert metrics["wim"]["tandem"]["share_outside_5pct"] is None
+    json.dumps(metrics, allow_nan=False)
+
+
+# ---- JSON ------------------------------------------------------------------------------------------------------------
+def test_headline_metrics_keys_and_rounding():
+    rng = np.random.default_rng(3)
+    rows = []
+    for i in range(30):
+        tilt = rng.uniform(-2, 2)
+        shares = 1 + 0.04 * tilt * np.array([-1.0, 0.0, 1.0]) + 0.01 * rng.standard_normal(3)
+        rows += [run(i, 80e3 * shares, tilt_deg=tilt), run(i, 80e3 * shares * (1 + 0.02 * rng.random(3)), "wim")]
+    metrics = headline_metrics(survey(frame(rows), 10 * TONNE, LEGAL_GROUP))
+    assert set(metrics) == {"n_runs", "n_ok", "n_failed", "static", "wim", "static_vs_wim"}
+    entry = metrics["static"]["triaxle"]
+    assert set(entry) == {
+        "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
+        "mean_road_wear_factor", "rear_overload_share_nose_up", "frac_axle_over_group_legal", "n_ok", "n_failed",
+    }  # fmt: skip
+    assert entry["rear_overload_share_nose_up"] == 1.0  # the fabricated shares rise towards the rear when nose up
+    assert round(entry["mean_spread_kg"], 1) == entry["mean_spread_kg"]
+    assert round(entry["mean_spread_pct"], 2) == entry["mean_spread_pct"]
+    assert round(entry["mean_road_wear_factor"], 4) == entry["mean_road_wear_factor"]
+    assert set(metrics["static_vs_wim"]["triaxle"]) == {"mean_dynamic_excess", "corr_max_deviation", "n_pairs"}
+    assert (metrics["n_runs"], metrics["n_ok"]) == (60, 60)
+    assert len(json.dumps(metrics)) < 2000
+
+
+# ---- the stage ------------------------------------------------------------------------------------------------------
+def small_raw():
+    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
+    raw["fleet"]["size"] = 40
+    raw["sensitivity"]["base_size"] = 2
+    raw["ablation"]["size"] = 4
+    return raw
+
+
+def fabricated_runs(samples: pd.DataFrame) -> pd.DataFrame:
+    """Runs of a sample table without the solver: loads rise towards the rear with nose-up tilt (as measured)."""
+    rows = []
+    for sample in samples.to_dict("records"):
+        n = sample["n_axles"]
+        slope = 2.0 * sample["chassis_tilt"] * (np.arange(n) - (n - 1) / 2)  # [-], 0.07 per degree
+        wheel = sample["payload_fraction"] * sample["legal_group_load"] / (2 * n) * (1 + slope)
+        for protocol in ("static", "wim"):
+            failed = protocol == "wim" and sample["sample_id"] == 3
+            row = result_row(protocol, n, None if failed else wheel * (1.03 if protocol == "wim" else 1.0), 0.0)
+            row.update(status="failed" if failed else "ok", message="diverged" if failed else "ok", wall_time=0.03)
+            rows.append({**sample, **row})
+    frame = pd.DataFrame(rows).drop(columns="study")
+    return frame[list(dict.fromkeys([c for c in samples.columns if c != "study"] + list(RESULT_COLUMNS)))]
+
+
+@pytest.fixture()
+def stage_dir(tmp_path):
+    raw = small_raw()
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw))
+    fleet = sample_studies(parse_config(raw))["fleet"]
+    part = tmp_path / "data" / "runs" / "study=fleet"
+    part.mkdir(parents=True)
+    runs = fabricated_runs(fleet)
+    runs.iloc[:50].to_parquet(part / "part-000000.parquet", index=False)
+    runs.iloc[50:].to_parquet(part / "part-000001.parquet", index=False)
+    return tmp_path
+
+
+def stage_args(root):
+    return [
+        "--params", str(root / "params.yaml"), "--runs", str(root / "data" / "runs"),
+        "--out", str(root / "data" / "survey"), "--metrics", str(root / "metrics" / "survey.json"),
+    ]  # fmt: skip
+
+
+def test_stage_writes_every_table_and_the_metrics(stage_dir):
+    assert main(stage_args(stage_dir)) == 0
+    out = stage_dir / "data" / "survey"
+    assert sorted(p.name for p in out.iterdir()) == sorted(
+        ["summary.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv", "tilt.csv",
+         "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv"]
+    )  # fmt: skip
+    metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())
+    assert (metrics["n_runs"], metrics["n_failed"]) == (80, 1)
+    runs = read_runs(stage_dir / "data" / "runs", "fleet")
+    group = runs.loc[runs["sample_id"] == 3, "group"].iloc[0]
+    assert metrics["wim"][group]["n_failed"] == 1
+    counts = pd.read_csv(out / "counts.csv")
+    assert counts["n_runs"].sum() == 80
+    # nothing temporary left behind
+    assert sorted(p.name for p in (stage_dir / "data").iterdir()) == ["runs", "survey"]
+    assert [p.name for p in (stage_dir / "metrics").iterdir()] == ["survey.json"]
+
+
+def test_stage_with_no_fleet_runs_fails_clearly_and_leaves_old_outputs(stage_dir, capsys):
+    assert main(stage_args(stage_dir)) == 0
+    before = (stage_dir / "metrics" / "survey.json").read_text()
+    for part in (stage_dir / "data" / "runs" / "study=fleet").iterdir():
+        part.rename(stage_dir / part.name)
+    assert main(stage_args(stage_dir)) == 2
+    assert "no runs of study 'fleet'" in capsys.readouterr().err
+    assert (stage_dir / "metrics" / "survey.json").read_text() == before
+    assert (stage_dir / "data" / "survey" / "summary.csv").exists()
+
+
+def test_read_runs_names_missing_columns_and_values(stage_dir):
+    first, second = sorted((stage_dir / "data" / "runs" / "study=fleet").iterdir())
+    pd.read_parquet(second).drop(columns="max_deviation").to_parquet(second)
+    with pytest.raises(RunsError, match=r"missing values in max_deviation \(30 rows\)"):
+        read_runs(stage_dir / "data" / "runs", "fleet")
+    pd.read_parquet(first).drop(columns="max_deviation").to_parquet(first)
+    with pytest.raises(RunsError, match="lack the columns max_deviation"):
+        read_runs(stage_dir / "data" / "runs", "fleet")
+
+
+def test_an_error_while_writing_leaves_the_old_outputs_and_no_temporary_files(tmp_path):
+    good = {"a.csv": pd.DataFrame({"x": [1.0]})}
+    write_outputs(good, tmp_path / "out", {"v": 1}, tmp_path / "m" / "metrics.json")
+    bad = {"a.csv": pd.DataFrame({"x": [2.0]}), "b.parquet": pd.DataFrame({"x": [1, "mixed"]})}
+    with pytest.raises(Exception, match="(?i)conversion|convert|type"):
+        write_outputs(bad, tmp_path / "out", {"v": 2}, tmp_path / "m" / "metrics.json")
+    assert pd.read_csv(tmp_path / "out" / "a.csv")["x"].tolist() == [1.0]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["a.csv"]
+    assert json.loads((tmp_path / "m" / "metrics.json").read_text()) == {"v": 1}
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["m", "out"]
+    assert [p.name for p in (tmp_path / "m").iterdir()] == ["metrics.json"]
+    with pytest.raises(ValueError):  # NaN is not JSON: refused before anything is replaced
+        write_outputs(good, tmp_path / "out", {"v": math.nan}, tmp_path / "m" / "metrics.json")
+    assert json.loads((tmp_path / "m" / "metrics.json").read_text()) == {"v": 1}
