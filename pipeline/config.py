@@ -133,6 +133,8 @@ QUANTITIES: dict[str, Quantity] = {
         _bogie_quantity("contact_roll_radius_mm", "contact_roll_radius", "mm", _mm_to_m, _m_to_mm),
         _bogie_quantity("tyre_wear_mm", "tyre_wear", "mm", _mm_to_m, _m_to_mm),
         _bogie_quantity("chassis_tilt_deg", "chassis_tilt", "degree", math.radians, math.degrees),
+        # every equaliser arm of a bogie, the axle spacing kept (params.with_equaliser_arms)
+        Quantity("equaliser_arm_mm", "equaliser_arm", "m", "mm", 0.05, 0.5, True, _mm_to_m, _m_to_mm),
         # up to half as much again as the legal load: overloaded trailers are part of what a survey finds
         Quantity("payload_fraction", "payload_fraction", "-", "-", 0.0, 1.5, False),
         Quantity("road_class", "road_class", "-", "ISO 8608 class", 0.0, 0.0, True, labels=ROAD_CLASSES),

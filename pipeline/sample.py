@@ -27,7 +27,7 @@ import yaml
 from SALib.sample import sobol
 from scipy.stats import qmc
 
-from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset
+from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, with_equaliser_arms
 from pipeline.config import GROUP_AXLES, Config, ConfigError, load_config
 from pipeline.distributions import Choice
 
@@ -50,6 +50,7 @@ _SCALARS: tuple[str, ...] = (
     "contact_roll_radius",
     "chassis_tilt",
     "payload_fraction",
+    "equaliser_arm",
 )
 
 #: dimensions of the fleet design, in order; the order is part of the design (changing it changes the draws)
@@ -71,6 +72,7 @@ COLUMNS: dict[str, str] = {
     **{c: "float64" for c in TYRE_WEAR_COLUMNS},  # [m], 0 for an axle the group does not have
     "chassis_tilt": "float64",  # nose up positive [rad]
     "payload_fraction": "float64",  # of the legal group load [-]
+    "equaliser_arm": "float64",  # length of every equaliser arm, axle spacing kept [m]
     "road_class": "str",  # ISO 8608 class
     "road_seed": "int64",  # seed of the approach road's random profile [-]
     "legal_group_load": "float64",  # both sides [N]
@@ -166,7 +168,7 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
         The validated bogie. ``payload_fraction`` is not applied: the protocol applies it as a load factor.
     """
     n_axles = int(row["n_axles"])
-    return preset(
+    bogie = preset(
         str(row["preset"]),
         bush_stiffness=float(row["bush_stiffness"]),
         bush_damping=float(row["bush_damping"]),
@@ -177,6 +179,8 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
         payload_mass=float(row["payload_mass"]),
         chassis_pitch_inertia=float(row["chassis_pitch_inertia"]),
     )
+    # a longer arm on the same axle layout shortens the springs beside it; the design loads stay equal
+    return with_equaliser_arms(bogie, float(row["equaliser_arm"]))
 
 
 # ---- studies ---------------------------------------------------------------------------------------------------
