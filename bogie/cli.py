@@ -31,7 +31,9 @@ def _cmd_case(args: argparse.Namespace) -> int:
     ref = ", ".join(f"{k} {v}" for k, v in case.reference.items())
     print(f"{case.name}: {case.description}")
     print(f"status {result.status}: {result.message}")
-    print(f"peak p {result.peak_p:.3f}, peak P1 {result.peak_p1:.3f} (reference: {ref})")
+    ours = ", ".join(f"{k} {v:.4g}" for k, v in cases.summary(case.name, result).items())
+    print(f"ours: {ours}")
+    print(f"reference: {ref or 'no figure printed'}")
     if args.csv:
         out = Path(args.csv)
         out.parent.mkdir(parents=True, exist_ok=True)
