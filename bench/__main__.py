@@ -6,7 +6,7 @@ import importlib
 import time
 
 #: benchmark modules, each with a ``main()`` that prints its table
-BENCHMARKS = ("bench.bench_linear",)
+BENCHMARKS = ("bench.bench_linear", "bench.bench_nonlinear", "bench.bench_pipeline")
 
 
 def main() -> None:

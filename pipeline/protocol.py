@@ -161,8 +161,9 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
         if run.success and np.all(np.isfinite(run.extras["reading"])):
             reading = run.extras["reading"]
             pitch = float(run.extras["chassis_pitch"][-1])
-            if np.any(reading <= 0.0):
-                status, message = "failed", "an axle carries no load at the reading (wheel off the ground)"
+            # a wheel in the air as it crosses a WIM sensor is a real reading (zero load), not a failure
+            if np.sum(reading) <= 0.0:
+                status, message = "failed", "the group carries no load at the reading"
                 reading = None
         else:
             status, message = "failed", run.message

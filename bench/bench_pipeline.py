@@ -1,0 +1,143 @@
+"""The ``simulate`` stage: runs per second with 1 and 2 workers, growth with fleet size, default-run estimate.
+
+Fleets sampled from the default params.yaml (default protocols and time steps), only the ``size`` changed, run by
+:func:`pipeline.simulate.simulate_samples` into a temporary directory (planning, hashing and writing included, as in
+the stage) with the static and WIM protocols. Chunks of :data:`CHUNK_SIZE` bogies give each worker several chunks,
+as the default studies do (143 chunks of 64). The loky workers are started and the numba kernels loaded before any
+timing; that start-up is reported on its own. ``n_jobs = 1`` runs in the main process (joblib's sequential backend),
+the true one-worker baseline. See ``bench/README.md``.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import os
+import platform
+import tempfile
+import time
+from pathlib import Path
+
+import numba
+import numpy as np
+import pandas as pd
+
+from pipeline.config import Config, load_config
+from pipeline.sample import sample_fleet, sample_studies
+from pipeline.simulate import simulate_samples, study_protocols
+
+ROOT = Path(__file__).resolve().parent.parent
+#: bogies per chunk in every timed run [-]
+CHUNK_SIZE = 8
+#: fleet size of the 1- against 2-worker comparison [-]
+SPEEDUP_FLEET = 256
+#: fleet sizes of the growth series, 2 workers [-]
+GROWTH_FLEETS = (128, 256, 512)
+#: timed repeats of each setting; the best is kept (the machine is shared)
+REPEATS = 2
+
+
+def _config(size: int, n_jobs: int) -> Config:
+    config = load_config(ROOT / "params.yaml")
+    fleet = dataclasses.replace(config.fleet, size=size)
+    execution = dataclasses.replace(config.execution, backend="loky", n_jobs=n_jobs, chunk_size=CHUNK_SIZE)
+    return dataclasses.replace(config, fleet=fleet, execution=execution)
+
+
+def run_fleet(size: int, n_jobs: int) -> tuple[float, pd.DataFrame]:
+    """Simulate a fleet of ``size`` bogies (static and WIM); returns the wall time [s] and the runs."""
+    config = _config(size, n_jobs)
+    samples = {"fleet": sample_fleet(config)}
+    with tempfile.TemporaryDirectory() as tmp:
+        out = Path(tmp) / "runs"
+        summary = simulate_samples(
+            samples, {"fleet": study_protocols(config, "fleet")}, config.execution, out, log=lambda line: None
+        )
+        return summary.wall_time, pd.read_parquet(out)
+
+
+def best_of(size: int, n_jobs: int) -> tuple[float, pd.DataFrame]:
+    results = [run_fleet(size, n_jobs) for _ in range(REPEATS)]
+    return min(results, key=lambda r: r[0])
+
+
+def default_estimate(runs: pd.DataFrame, parallelism: float) -> tuple[int, float]:
+    """Runs and estimated wall time [s] of the default simulate stage (every study, 2 workers).
+
+    Every default run is costed at the mean time of its (group, protocol) in ``runs``, and the total divided by the
+    parallelism measured with 2 workers (summed run time over wall time).
+    """
+    config = load_config(ROOT / "params.yaml")
+    cost = runs.groupby(["group", "protocol"], observed=True)["wall_time"].mean()
+    total, n_runs = 0.0, 0
+    for study, table in sample_studies(config).items():
+        counts = table["group"].value_counts()
+        for protocol, _ in study_protocols(config, study):
+            total += sum(n * cost[(group, protocol)] for group, n in counts.items())
+            n_runs += int(counts.sum())
+    return n_runs, total / parallelism
+
+
+def machine() -> str:
+    model = "unknown CPU"
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                model = line.split(":", 1)[1].strip()
+                break
+    except OSError:
+        pass
+    return (
+        f"{os.cpu_count()} cores ({model}), Python {platform.python_version()}, numpy {np.__version__}, "
+        f"numba {numba.__version__}"
+    )
+
+
+def main() -> None:
+    print(machine())
+    start = time.perf_counter()
+    run_fleet(4, 2)  # starts the loky workers and loads the compiled kernels in them
+    startup = time.perf_counter() - start
+    run_fleet(4, 1)  # loads the kernels in this process
+
+    serial, serial_runs = best_of(SPEEDUP_FLEET, 1)
+    parallel, runs = best_of(SPEEDUP_FLEET, 2)
+    n = 2 * SPEEDUP_FLEET
+    print(f"\nfleet of {SPEEDUP_FLEET} bogies, static + wim ({n} runs), chunks of {CHUNK_SIZE}, best of {REPEATS}:")
+    print("| n_jobs | wall time [s] | runs/s |")
+    print("|---|---|---|")
+    print(f"| 1 | {serial:.2f} | {n / serial:.1f} |")
+    print(f"| 2 | {parallel:.2f} | {n / parallel:.1f} |")
+    print(f"speed-up 1 -> 2 workers: {serial / parallel:.2f} x (target >= 1.8 x)")
+    # where the time goes: slower runs (two processes sharing the machine) or idle workers (scheduling, the tail)
+    slowdown = runs["wall_time"].sum() / serial_runs["wall_time"].sum()
+    busy = runs["wall_time"].sum() / (2 * parallel)
+    print(
+        f"summed run time with 2 workers / with 1: {slowdown:.3f}; "
+        f"the workers weigh {100 * busy:.0f} % of the wall time"
+    )
+    print(f"worker start-up (2 loky workers: imports and compiled-kernel load), paid once per stage: {startup:.1f} s")
+    mean_time = runs.groupby(["group", "protocol"], observed=True)["wall_time"].mean() * 1000.0
+    print("mean time of one run [ms]: " + ", ".join(f"{g} {p} {t:.1f}" for (g, p), t in mean_time.items()))
+
+    print(f"\ngrowth with fleet size, 2 workers, best of {REPEATS}:")
+    print("| bogies | runs | wall time [s] | ms per run | time / time of the smallest | size / smallest |")
+    print("|---|---|---|---|---|---|")
+    first = None
+    for size in GROWTH_FLEETS:
+        elapsed = parallel if size == SPEEDUP_FLEET else best_of(size, 2)[0]
+        first = first or elapsed
+        print(
+            f"| {size} | {2 * size} | {elapsed:.2f} | {1000 * elapsed / (2 * size):.1f} | {elapsed / first:.2f} | "
+            f"{size / GROWTH_FLEETS[0]:.0f} |"
+        )
+
+    parallelism = runs["wall_time"].sum() / parallel
+    n_default, estimate = default_estimate(runs, parallelism)
+    print(
+        f"\ndefault `make repro` simulate stage: {n_default} runs, estimated {estimate / 60:.1f} min on 2 workers "
+        f"(+ {startup:.0f} s start-up; mean run times above, parallelism {parallelism:.2f})"
+    )
+
+
+if __name__ == "__main__":
+    main()

@@ -1,0 +1,495 @@
+"""DVC stage ``simulate``: every sampled bogie through the survey protocols -> data/runs/.
+
+``python -m pipeline.simulate`` reads params.yaml and the study tables of data/samples/, splits each study into
+chunks of ``execution.chunk_size`` consecutive samples, weighs every sample of a chunk by each of its study's
+protocols (fleet and ablation: every protocol of ``protocol.run``; sensitivity: ``sensitivity.protocol`` only) and
+writes one Parquet file per chunk, ``data/runs/study=<study>/part-<chunk:05d>.parquet``: a hive-partitioned dataset,
+so ``pd.read_parquet("data/runs", filters=[("study", "==", "fleet")])`` reads one study (pandas adds ``study`` back
+from the directory name as a categorical column; the files themselves have no ``study`` column).
+
+One row per (sample, protocol), with every column of the sample (except ``study``) followed by the protocol's
+results (:data:`RUN_COLUMNS`). A failed weighing is a row with ``status = "failed"``, the solver's message and zeros
+in its numbers; the stage never stops for one.
+
+Parallel: the chunks run with joblib (``loky`` processes, one thread each, or a dask.distributed cluster through
+joblib's ``dask`` backend); the main process writes each chunk's file as soon as the chunk completes.
+
+Resumable: each file carries in its Parquet metadata (key :data:`HASH_KEY`) a hash of everything that determines its
+content: the chunk's sample rows, the protocols and their settings, and the code (the sources of ``bogie`` and of
+the pipeline modules that turn a sample into a row, and the numerical libraries' versions). A rerun keeps the files
+whose hash matches, deletes every other file (stale chunks, leftovers of an interrupted write) and computes only the
+missing chunks. Files are written under a temporary dot-name and renamed, so a reader or a rerun never sees half a
+file. Deterministic: every run is a pure function of its sample row and protocol settings (each bogie's road has its
+own seed), so the dataset is the same whatever ``n_jobs``, chunk size or backend; only ``wall_time`` differs.
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import hashlib
+import json
+import os
+import sys
+import tempfile
+import time
+from collections.abc import Callable, Iterator, Mapping, Sequence
+from dataclasses import dataclass
+from pathlib import Path
+
+import numba
+import numpy as np
+import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
+import scipy
+import yaml
+from joblib import Parallel, delayed, parallel_config
+from tqdm import tqdm
+
+import bogie
+from pipeline import protocol as protocol_module
+from pipeline import sample as sample_module
+from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
+from pipeline.protocol import RESULT_COLUMNS, result_row, weigh
+from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
+
+Spec = StaticProtocol | WimProtocol
+#: a study's protocols in run order: (name, settings) pairs
+Protocols = tuple[tuple[str, Spec], ...]
+
+#: Parquet metadata key of a part file's content hash
+HASH_KEY = b"bogie.simulate.hash"
+
+#: sample columns of a run row: the partition directory carries ``study``
+SAMPLE_COLUMNS: tuple[str, ...] = tuple(c for c in COLUMNS if c != "study")
+
+#: result columns after the sample's (``n_axles`` is already a sample column), wall_time last
+_RESULT_ORDER: tuple[str, ...] = (
+    "protocol",
+    "status",
+    "message",
+    *(c for c in RESULT_COLUMNS if c not in ("protocol", "status", "message", "wall_time", "n_axles")),
+    "wall_time",
+)
+
+#: column -> dtype of every runs file, in order; units in the README's pipeline section
+RUN_COLUMNS: dict[str, str] = {
+    **{c: COLUMNS[c] for c in SAMPLE_COLUMNS},
+    **{c: "str" if c in ("protocol", "status", "message") else "float64" for c in _RESULT_ORDER},
+}
+
+#: the numerical result columns (zero in a failed row)
+_NUMBERS: tuple[str, ...] = tuple(c for c in _RESULT_ORDER if RUN_COLUMNS[c] == "float64" and c != "wall_time")
+
+#: a summary or progress line goes here; tests pass their own
+Log = Callable[[str], None]
+
+
+def _print(line: str) -> None:
+    print(line, flush=True)
+
+
+# ---- what determines a chunk's content -------------------------------------------------------------------------
+def code_version() -> str:
+    """A hash of the code and libraries that turn a sample row into a run row.
+
+    The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
+    (``bogie_from_sample``) and this module, plus the versions of numpy, scipy, numba, pandas and pyarrow. Any edit to
+    those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong
+    dataset.
+    """
+    digest = hashlib.sha256()
+    package = Path(bogie.__file__).parent
+    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in (protocol_module, sample_module)]
+    files.append(Path(__file__))
+    for path in files:
+        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    for module in (np, scipy, numba, pd, pa):
+        digest.update(f"{module.__name__}={module.__version__}\0".encode())
+    return digest.hexdigest()
+
+
+def _rows_digest(rows: pd.DataFrame) -> bytes:
+    """The exact content of sample rows (every bit of every float), column by column."""
+    digest = hashlib.sha256()
+    for name in COLUMNS:
+        values = rows[name].to_numpy()
+        digest.update(f"{name}:{COLUMNS[name]}:{len(values)}\0".encode())
+        if COLUMNS[name] == "str":
+            digest.update("\x1f".join(map(str, values)).encode())
+        else:
+            digest.update(np.ascontiguousarray(values, dtype=COLUMNS[name]).tobytes())
+    return digest.digest()
+
+
+def chunk_hash(study: str, rows: pd.DataFrame, protocols: Protocols, code: str) -> str:
+    """The content hash of one part file: study, sample rows, protocols with their settings, code version.
+
+    Parameters
+    ----------
+    study
+        Study name.
+    rows
+        The chunk's sample rows (columns of :data:`pipeline.sample.COLUMNS`).
+    protocols
+        The study's protocols in run order, each with its settings (SI).
+    code
+        :func:`code_version`.
+
+    Returns
+    -------
+    str
+        A hex SHA-256 digest.
+    """
+    # json writes floats with repr, which round-trips every bit
+    specs = json.dumps([[name, dataclasses.asdict(spec)] for name, spec in protocols], sort_keys=True)
+    digest = hashlib.sha256(f"{study}\0{specs}\0{code}\0".encode())
+    digest.update(_rows_digest(rows))
+    return digest.hexdigest()
+
+
+def study_protocols(config: Config, study: str) -> Protocols:
+    """The protocols a study runs: fleet and ablation every one of ``protocol.run``; sensitivity its own."""
+    names = (config.sensitivity.protocol,) if study == "sensitivity" else config.protocol.run
+    return tuple((name, getattr(config.protocol, name)) for name in names)
+
+
+# ---- one chunk: the work of one task ---------------------------------------------------------------------------
+def _failed_row(protocol: str, n_axles: int, message: str) -> dict:
+    row = result_row(protocol, n_axles, None, 0.0)
+    row.update(status="failed", message=message, wall_time=0.0)
+    return row
+
+
+def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
+    """Weigh every sample of ``rows`` by every protocol: the content of one part file.
+
+    Parameters
+    ----------
+    rows
+        Sample rows (columns of :data:`pipeline.sample.COLUMNS`), in ``sample_id`` order.
+    protocols
+        (name, settings) pairs, in the order their rows appear for each sample.
+
+    Returns
+    -------
+    pandas.DataFrame
+        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`RUN_COLUMNS`, no missing values.
+        A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
+        reason in ``message`` and zeros in the numbers.
+    """
+    out = []
+    for sample in rows.to_dict("records"):
+        try:
+            bogie_ = bogie_from_sample(sample)
+            invalid = None
+        except (ValueError, TypeError) as exc:
+            bogie_, invalid = None, f"invalid bogie: {type(exc).__name__}: {exc}"
+        for name, spec in protocols:
+            if bogie_ is None:
+                result = _failed_row(name, int(sample["n_axles"]), invalid)
+            else:
+                result = weigh(bogie_, sample, name, spec)
+            bad = [c for c in _NUMBERS if not np.isfinite(result[c])]
+            if bad:
+                # the dataset promises no NaN: a non-finite metric is a failed run, not a number
+                result = _failed_row(name, int(sample["n_axles"]), f"non-finite result in {', '.join(bad)}")
+            out.append({**{c: sample[c] for c in SAMPLE_COLUMNS}, **{c: result[c] for c in _RESULT_ORDER}})
+    return pd.DataFrame(out, columns=list(RUN_COLUMNS)).astype(RUN_COLUMNS)
+
+
+def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> tuple[str, int, pd.DataFrame]:
+    # results arrive unordered: carry the chunk's identity back with its rows
+    return study, index, run_chunk(rows, protocols)
+
+
+# ---- the plan: chunks, their files and hashes ------------------------------------------------------------------
+@dataclass(frozen=True, eq=False)
+class Chunk:
+    """One task and its part file (compared by identity: it holds a DataFrame)."""
+
+    study: str
+    index: int
+    rows: pd.DataFrame
+    protocols: Protocols
+    hash: str
+    path: Path
+
+    @property
+    def n_runs(self) -> int:
+        """Rows of its part file: samples times protocols [-]."""
+        return len(self.rows) * len(self.protocols)
+
+
+def part_name(index: int) -> str:
+    """File name of chunk ``index``: ``part-00003.parquet``."""
+    return f"part-{index:05d}.parquet"
+
+
+def plan_chunks(
+    samples: Mapping[str, pd.DataFrame], protocols: Mapping[str, Protocols], chunk_size: int, out: Path
+) -> list[Chunk]:
+    """Split each study into chunks of ``chunk_size`` consecutive samples (by ``sample_id``) and hash each."""
+    code = code_version()
+    chunks = []
+    for study, frame in samples.items():
+        frame = frame.sort_values("sample_id", kind="stable").reset_index(drop=True)
+        for index, start in enumerate(range(0, len(frame), chunk_size)):
+            rows = frame.iloc[start : start + chunk_size].reset_index(drop=True)
+            h = chunk_hash(study, rows, protocols[study], code)
+            chunks.append(Chunk(study, index, rows, protocols[study], h, out / f"study={study}" / part_name(index)))
+    return chunks
+
+
+def stored_hash(path: Path) -> str | None:
+    """The content hash in a part file's metadata, or None if the file is unreadable or has none."""
+    try:
+        metadata = pq.read_schema(path).metadata or {}
+    except (OSError, pa.ArrowException):
+        return None
+    value = metadata.get(HASH_KEY)
+    return value.decode() if value is not None else None
+
+
+def reconcile(chunks: Sequence[Chunk], out: Path) -> tuple[list[Chunk], list[Chunk], list[Path]]:
+    """Compare the plan with the files in ``out`` and delete every file that does not belong to it.
+
+    Returns
+    -------
+    pending, done, removed
+        Chunks to compute, chunks whose file is up to date, and the files deleted: parts of chunks that no longer
+        exist or whose hash differs, unreadable parts, temporary files of interrupted writes, and the parts of
+        studies that are no longer simulated.
+    """
+    pending, done, removed = [], [], []
+    for chunk in chunks:
+        if chunk.path.exists() and stored_hash(chunk.path) == chunk.hash:
+            done.append(chunk)
+        else:
+            pending.append(chunk)
+    keep = {c.path for c in done}
+    if out.is_dir():
+        for directory in sorted(d for d in out.glob("study=*") if d.is_dir()):
+            for path in sorted(directory.iterdir()):
+                ours = path.name.startswith(("part-", ".part-"))
+                if ours and path.is_file() and path not in keep:
+                    path.unlink()
+                    removed.append(path)
+            if not any(directory.iterdir()):
+                directory.rmdir()
+    return pending, done, removed
+
+
+def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
+    """Write a part file with its hash in the Parquet metadata, atomically (temporary dot-name, then rename).
+
+    Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover temporary file.
+    """
+    table = pa.Table.from_pandas(frame, preserve_index=False)
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), HASH_KEY: chunk_hash_.encode()})
+    path.parent.mkdir(parents=True, exist_ok=True)
+    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
+    os.close(fd)
+    try:
+        pq.write_table(table, tmp)
+        os.replace(tmp, path)
+    except BaseException:
+        Path(tmp).unlink(missing_ok=True)
+        raise
+
+
+# ---- running ---------------------------------------------------------------------------------------------------
+def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, pd.DataFrame]]:
+    """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols) for c in chunks)
+    # a chunk is seconds of work: joblib's automatic batching would only coarsen the progress and the resumption
+    options = {"return_as": "generator_unordered", "batch_size": 1}
+    if execution.backend == "dask":
+        from dask.distributed import Client
+
+        # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts
+        # its workers with OMP/MKL/OPENBLAS_NUM_THREADS=1
+        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+            yield from Parallel(**options)(tasks)
+    else:
+        # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers
+        with parallel_config(backend="loky", inner_max_num_threads=1):
+            yield from Parallel(n_jobs=execution.n_jobs, **options)(tasks)
+
+
+class Progress:
+    """A tqdm bar when stderr is a terminal; otherwise a log line every 10 % of the runs or every 30 s."""
+
+    def __init__(self, total: int, log: Log, interval: float = 30.0, step: float = 0.1) -> None:
+        self.total = total
+        self.log = log
+        self.interval = interval
+        self.step = step
+        self.done = 0
+        self.start = self.last_time = time.perf_counter()
+        self.last_fraction = 0.0
+        self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr) if sys.stderr.isatty() else None
+
+    def update(self, runs: int) -> None:
+        self.done += runs
+        if self.bar is not None:
+            self.bar.update(runs)
+            return
+        now = time.perf_counter()
+        fraction = self.done / self.total if self.total else 1.0
+        if fraction - self.last_fraction >= self.step or now - self.last_time >= self.interval or fraction >= 1.0:
+            elapsed = now - self.start
+            rate = self.done / elapsed if elapsed > 0 else 0.0
+            eta = (self.total - self.done) / rate if rate > 0 else 0.0
+            self.log(
+                f"simulate: {self.done}/{self.total} runs ({100 * fraction:.0f} %), {rate:.1f} runs/s, "
+                f"{elapsed:.0f} s elapsed, about {eta:.0f} s left"
+            )
+            self.last_time, self.last_fraction = now, fraction
+
+    def close(self) -> None:
+        if self.bar is not None:
+            self.bar.close()
+
+
+@dataclass(frozen=True)
+class Summary:
+    """What one invocation did: runs and failures in the dataset, runs computed now, chunks and files, time [s]."""
+
+    runs: int
+    failed: int
+    computed_runs: int
+    computed_chunks: int
+    skipped_chunks: int
+    removed_files: int
+    wall_time: float
+
+    @property
+    def runs_per_second(self) -> float:
+        """Computed runs per second of wall time [1/s] (0 if nothing was computed)."""
+        return self.computed_runs / self.wall_time if self.computed_runs and self.wall_time > 0 else 0.0
+
+    def line(self) -> str:
+        """The stage's closing log line."""
+        return (
+            f"simulate: {self.runs} runs, {self.failed} failed; computed {self.computed_runs} runs in "
+            f"{self.computed_chunks} chunks in {self.wall_time:.1f} s ({self.runs_per_second:.1f} runs/s); "
+            f"{self.skipped_chunks} chunks up to date, {self.removed_files} stale files removed"
+        )
+
+
+def simulate_samples(
+    samples: Mapping[str, pd.DataFrame],
+    protocols: Mapping[str, Protocols],
+    execution: ExecutionConfig,
+    out: str | Path,
+    log: Log = _print,
+) -> Summary:
+    """Simulate the given studies into the hive-partitioned dataset ``out``, resuming from the files already there.
+
+    Parameters
+    ----------
+    samples
+        Sample table of each study to simulate (columns of :data:`pipeline.sample.COLUMNS`). Parts of studies not
+        in this mapping are deleted from ``out``.
+    protocols
+        The protocols of each study (:func:`study_protocols`).
+    execution
+        Backend, workers, chunk size and dask scheduler.
+    out
+        The dataset directory (``data/runs``).
+    log
+        Receives the progress and summary lines.
+
+    Returns
+    -------
+    Summary
+        The counts and timing of this invocation.
+    """
+    start = time.perf_counter()
+    out = Path(out)
+    chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
+    pending, done, removed = reconcile(chunks, out)
+    total = sum(c.n_runs for c in pending)
+    log(
+        f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
+        f"{len(pending)} to run ({total} runs) on {execution.backend}"
+        + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
+    )
+    by_key = {(c.study, c.index): c for c in pending}
+    failed = 0
+    progress = Progress(total, log)
+    try:
+        for study, index, frame in _results(pending, execution) if pending else ():
+            chunk = by_key[(study, index)]
+            write_part(frame, chunk.hash, chunk.path)
+            failed += int((frame["status"] != "ok").sum())
+            progress.update(len(frame))
+    finally:
+        progress.close()
+    for chunk in done:
+        failed += _count_failed(chunk.path)
+    summary = Summary(
+        runs=sum(c.n_runs for c in chunks),
+        failed=failed,
+        computed_runs=total,
+        computed_chunks=len(pending),
+        skipped_chunks=len(done),
+        removed_files=len(removed),
+        wall_time=time.perf_counter() - start,
+    )
+    log(summary.line())
+    return summary
+
+
+def _count_failed(path: Path) -> int:
+    """Number of rows of a part file whose status is not ``ok`` (reads only that column)."""
+    status = pq.read_table(path, columns=["status"]).column("status").to_pylist()
+    return len(status) - status.count("ok")
+
+
+def read_samples(samples_dir: str | Path, studies: Sequence[str] = STUDIES) -> dict[str, pd.DataFrame]:
+    """The study tables written by the sample stage, checked for the columns the simulation needs."""
+    samples = {}
+    for study in studies:
+        path = Path(samples_dir) / f"{study}.parquet"
+        frame = pd.read_parquet(path)
+        missing = [c for c in COLUMNS if c not in frame.columns]
+        if missing:
+            raise ValueError(f"{path} lacks the columns {', '.join(missing)}: rerun the sample stage")
+        samples[study] = frame[list(COLUMNS)].astype(COLUMNS)
+    return samples
+
+
+def simulate(config: Config, samples_dir: str | Path, out: str | Path, log: Log = _print) -> Summary:
+    """Every study of ``samples_dir`` by its protocols into ``out`` (see :func:`simulate_samples`)."""
+    samples = read_samples(samples_dir)
+    protocols = {study: study_protocols(config, study) for study in samples}
+    return simulate_samples(samples, protocols, config.execution, out, log)
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage from the command line."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.simulate", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
+    parser.add_argument("--out", default="data/runs", help="runs dataset directory (default: data/runs)")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+    except (ConfigError, OSError, yaml.YAMLError) as exc:
+        print(f"simulate: {args.params}: {exc}", file=sys.stderr)
+        return 2
+    try:
+        samples = read_samples(args.samples)
+    except (OSError, ValueError) as exc:
+        print(f"simulate: {exc}", file=sys.stderr)
+        return 2
+    protocols = {study: study_protocols(config, study) for study in samples}
+    simulate_samples(samples, protocols, config.execution, args.out)
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,152 @@
+"""The whole pipeline: ``dvc repro`` in a temporary copy of the project on a tiny fleet.
+
+The copy holds the code, dvc.yaml and a params.yaml with tiny studies. The stages run the code of this checkout
+(``PYTHONSAFEPATH=1`` and ``PYTHONPATH`` = the project root) rather than the copy of it: numba keys its on-disk
+cache by the source file's path, so running the copy would recompile the kernels (about 20 s per worker); the
+copy's files are identical and are what DVC hashes as the stages' dependencies.
+"""
+
+import copy
+import json
+import os
+import shutil
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+
+from bogie.params import GRAVITY, preset
+from pipeline.config import load_params
+from pipeline.simulate import RUN_COLUMNS
+
+ROOT = Path(__file__).resolve().parents[2]
+BIN = Path(sys.executable).parent
+FLEET = 16
+BASE_SIZE = 4
+ABLATION = 2
+
+
+def tiny_params():
+    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
+    raw["fleet"]["size"] = FLEET
+    raw["sensitivity"]["base_size"] = BASE_SIZE
+    raw["sensitivity"]["bootstrap_resamples"] = 20
+    raw["ablation"]["size"] = ABLATION
+    raw["protocol"]["static"]["dt_s"] = 0.002
+    raw["protocol"]["wim"]["dt_s"] = 0.002
+    raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4})
+    return raw
+
+
+def dvc(project, *args):
+    env = {
+        **os.environ,
+        "PATH": f"{BIN}{os.pathsep}{os.environ.get('PATH', '')}",  # the stages' `python` is this environment's
+        "PYTHONSAFEPATH": "1",
+        "PYTHONPATH": str(ROOT),
+        "DVC_NO_ANALYTICS": "1",
+        "MPLBACKEND": "Agg",
+    }
+    result = subprocess.run(
+        [str(BIN / "dvc"), *args], cwd=project, env=env, capture_output=True, text=True, timeout=600
+    )
+    assert result.returncode == 0, f"dvc {' '.join(args)}:\n{result.stdout}\n{result.stderr}"
+    return result.stdout
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory):
+    """A copy of the project with tiny params.yaml after one `dvc repro`; returns (path, repro output)."""
+    path = tmp_path_factory.mktemp("project")
+    ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
+    for name in ("bogie", "pipeline"):
+        shutil.copytree(ROOT / name, path / name, ignore=ignore)
+    for name in ("dvc.yaml", ".dvcignore"):
+        shutil.copy2(ROOT / name, path / name)
+    (path / "params.yaml").write_text(yaml.safe_dump(tiny_params(), sort_keys=False))
+    dvc(path, "init", "--no-scm", "--quiet")
+    return path, dvc(path, "repro")
+
+
+@pytest.fixture(scope="module")
+def runs(project):
+    frame = pd.read_parquet(project[0] / "data" / "runs")
+    frame["study"] = frame["study"].astype(str)
+    return frame
+
+
+@pytest.mark.slow
+def test_repro_writes_every_stage_output(project):
+    path, _ = project
+    for study in ("fleet", "sensitivity", "ablation"):
+        assert (path / "data" / "samples" / f"{study}.parquet").is_file()
+        assert list((path / "data" / "runs" / f"study={study}").glob("part-*.parquet"))
+    for stage in ("survey", "sensitivity"):
+        assert any((path / "data" / stage).iterdir())
+        assert isinstance(json.loads((path / "metrics" / f"{stage}.json").read_text()), dict)
+    assert (path / "dvc.lock").is_file()
+
+
+@pytest.mark.slow
+def test_runs_have_the_schema_and_one_row_per_sample_and_protocol(project, runs):
+    assert list(runs.columns) == [*RUN_COLUMNS, "study"]
+    assert {c: str(runs[c].dtype) for c in RUN_COLUMNS} == RUN_COLUMNS
+    assert not runs.isna().any().any()
+    counts = runs.groupby(["study", "protocol"]).size().to_dict()
+    n_sensitivity = BASE_SIZE * (len(tiny_params()["sensitivity"]["factors"]) + 2)
+    assert counts == {
+        ("ablation", "static"): 6 * ABLATION,
+        ("ablation", "wim"): 6 * ABLATION,
+        ("fleet", "static"): FLEET,
+        ("fleet", "wim"): FLEET,
+        ("sensitivity", "static"): n_sensitivity,
+    }
+    assert set(runs["status"]) <= {"ok", "failed"}
+    assert (runs.loc[runs["status"] == "ok", "message"] == "ok").all()
+
+
+@pytest.mark.slow
+def test_static_readings_balance_the_load_on_the_bogie(runs):
+    ok = runs[(runs["status"] == "ok") & (runs["protocol"] == "static")]
+    assert len(ok) > 0.8 * (runs["protocol"] == "static").sum()
+    loads = ok[[f"axle_load_{i}" for i in range(3)]].to_numpy()
+    np.testing.assert_allclose(loads.sum(axis=1), ok["group_load"], rtol=1e-12)
+    np.testing.assert_allclose(ok[[f"load_share_{i}" for i in range(3)]].sum(axis=1), ok["n_axles"], rtol=1e-12)
+    # moments about the king pin, both sides: sum_i A_i x_i = 2 (f m g x_cg + m_axle g sum_i x_i), with f the
+    # payload fraction; tilt and pad contact move the forces' lines of action slightly off the axle positions
+    for row in ok.itertuples():
+        bogie = preset(row.preset)
+        x = np.asarray(bogie.axle_x)
+        moment = float(np.dot(loads[ok.index.get_loc(row.Index), : row.n_axles], x))
+        expected = (
+            2.0 * GRAVITY * (row.payload_fraction * row.payload_mass * bogie.payload_cg_x + bogie.axle_mass * x.sum())
+        )
+        assert moment == pytest.approx(expected, rel=0.02), row.sample_id
+
+
+@pytest.mark.slow
+def test_nose_up_tilt_overloads_the_rear_axle(runs):
+    fleet = runs[(runs["study"] == "fleet") & (runs["protocol"] == "static") & (runs["status"] == "ok")]
+    n = fleet["n_axles"].to_numpy()
+    shares = fleet[[f"load_share_{i}" for i in range(3)]].to_numpy()
+    rear = shares[np.arange(len(fleet)), n - 1]
+    assert np.corrcoef(fleet["chassis_tilt"], rear)[0, 1] > 0.3
+    nose_up = fleet["chassis_tilt"].to_numpy() > 0.0
+    assert rear[nose_up].mean() > shares[nose_up, 0].mean()
+
+
+@pytest.mark.slow
+def test_a_second_repro_changes_nothing(project):
+    path, _ = project
+    parts = sorted((path / "data" / "runs").glob("study=*/part-*.parquet"))
+    before = {p: p.stat().st_mtime_ns for p in parts}
+    lock = (path / "dvc.lock").read_text()
+    out = dvc(path, "repro")
+    assert "Data and pipelines are up to date" in out, out
+    assert "Running stage" not in out
+    assert {p: p.stat().st_mtime_ns for p in sorted((path / "data" / "runs").glob("study=*/part-*.parquet"))} == before
+    assert (path / "dvc.lock").read_text() == lock

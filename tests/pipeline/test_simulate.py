@@ -1,0 +1,275 @@
+"""The ``simulate`` stage: schema, determinism, resumption, failed runs and the dask backend (pipeline.simulate).
+
+Every test simulates the same tiny study set (12 fleet bogies, a Sobol' design of base size 4, 2 ablation bogies;
+time step 2 ms) in about a second of CPU; the reference dataset is computed once per module.
+"""
+
+import copy
+import dataclasses
+import os
+import re
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from pipeline.config import load_params, parse_config
+from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
+from pipeline.simulate import (
+    HASH_KEY,
+    RUN_COLUMNS,
+    SAMPLE_COLUMNS,
+    part_name,
+    simulate_samples,
+    study_protocols,
+)
+
+ROOT = Path(__file__).resolve().parents[2]
+KEYS = ["study", "sample_id", "protocol"]
+
+
+def tiny_raw(**execution):
+    """The default params with tiny studies, a 2 ms time step and the given execution settings."""
+    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
+    raw["fleet"]["size"] = 12
+    raw["sensitivity"]["base_size"] = 4
+    raw["ablation"]["size"] = 2
+    raw["protocol"]["static"]["dt_s"] = 0.002
+    raw["protocol"]["wim"]["dt_s"] = 0.002
+    raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 3, "dask_scheduler": None, **execution})
+    return raw
+
+
+@pytest.fixture(scope="module")
+def config():
+    return parse_config(tiny_raw())
+
+
+@pytest.fixture(scope="module")
+def samples(config):
+    return sample_studies(config)
+
+
+def protocols_of(config):
+    return {study: study_protocols(config, study) for study in ("fleet", "sensitivity", "ablation")}
+
+
+def run(config, samples, out, **execution):
+    """Simulate in-process with the execution settings changed; returns the summary and the log lines."""
+    lines = []
+    summary = simulate_samples(
+        samples, protocols_of(config), dataclasses.replace(config.execution, **execution), out, lines.append
+    )
+    return summary, lines
+
+
+def dataset(out):
+    """The whole runs dataset in a canonical order, without the one nondeterministic column."""
+    frame = pd.read_parquet(out)
+    frame["study"] = frame["study"].astype(str)
+    return frame.sort_values(KEYS).reset_index(drop=True).drop(columns="wall_time")
+
+
+def parts(out):
+    return sorted(Path(out).glob("study=*/*"))
+
+
+@pytest.fixture(scope="module")
+def reference(config, samples, tmp_path_factory):
+    """The dataset of a plain run: loky, 2 workers, chunks of 3 samples."""
+    out = tmp_path_factory.mktemp("reference") / "runs"
+    run(config, samples, out)
+    return dataset(out)
+
+
+# ---- schema ------------------------------------------------------------------------------------------------------
+def test_each_part_file_has_the_run_schema_and_no_missing_values(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    summary, _ = run(config, samples, out)
+    for path in parts(out):
+        frame = pd.read_parquet(path)
+        # the file has no study column: pandas takes it from the directory name when it reads the dataset
+        assert list(frame.columns) == list(RUN_COLUMNS)
+        assert {c: str(t) for c, t in frame.dtypes.items()} == RUN_COLUMNS
+        assert not frame.isna().any().any()
+        assert len(pq.read_schema(path).metadata[HASH_KEY]) == 64
+    fleet = pd.read_parquet(out, filters=[("study", "==", "fleet")])
+    assert set(fleet["study"].astype(str)) == {"fleet"}
+    assert len(fleet) == 12 * len(config.protocol.run)
+    assert summary.runs == len(reference) and summary.failed == int((reference["status"] != "ok").sum())
+
+
+def test_one_row_per_sample_and_protocol_carrying_the_sample_columns(config, samples, reference):
+    for study, table in samples.items():
+        runs = reference[reference["study"] == study]
+        protocols = [name for name, _ in study_protocols(config, study)]
+        assert sorted(set(runs["protocol"])) == sorted(protocols)
+        assert len(runs) == len(table) * len(protocols)
+        # every run row repeats its sample's parameters exactly, so a runs file answers queries on its own
+        for protocol in protocols:
+            rows = runs[runs["protocol"] == protocol].reset_index(drop=True)
+            pd.testing.assert_frame_equal(rows[list(SAMPLE_COLUMNS)], table[list(SAMPLE_COLUMNS)])
+    assert set(reference.loc[reference["study"] == "sensitivity", "protocol"]) == {config.sensitivity.protocol}
+
+
+def test_the_ablation_baseline_reproduces_its_fleet_bogie_bit_for_bit(reference):
+    # the same sample row in another study and another chunk: a run is a pure function of its row
+    results = [c for c in RUN_COLUMNS if c not in SAMPLE_COLUMNS and c != "wall_time"]
+    ablation = reference[(reference["study"] == "ablation") & (reference["variant"] == "baseline")]
+    fleet = reference[reference["study"] == "fleet"]
+    merged = ablation.merge(fleet, left_on=["base_id", "protocol"], right_on=["sample_id", "protocol"])
+    assert len(merged) == len(ablation) > 0
+    for c in results:
+        if c != "protocol":
+            assert (merged[f"{c}_x"] == merged[f"{c}_y"]).all(), c
+
+
+# ---- determinism -------------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(("n_jobs", "chunk_size"), [(1, 3), (2, 7)])
+def test_results_do_not_depend_on_workers_or_chunk_size(config, samples, reference, tmp_path, n_jobs, chunk_size):
+    out = tmp_path / "runs"
+    run(config, samples, out, n_jobs=n_jobs, chunk_size=chunk_size)
+    n_chunks = sum(-(-len(t) // chunk_size) for t in samples.values())
+    assert len(parts(out)) == n_chunks
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+# ---- resumption --------------------------------------------------------------------------------------------------
+def test_a_rerun_computes_only_the_missing_chunk(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    first, _ = run(config, samples, out)
+    files = parts(out)
+    mtimes = {p: p.stat().st_mtime_ns for p in files}
+    deleted = out / "study=fleet" / part_name(2)
+    deleted.unlink()
+    summary, lines = run(config, samples, out)
+    assert (summary.computed_chunks, summary.skipped_chunks) == (1, len(files) - 1)
+    assert summary.computed_runs == 3 * len(config.protocol.run)
+    assert f"{len(files) - 1} up to date, 1 to run" in lines[0]
+    assert parts(out) == files
+    assert all(p.stat().st_mtime_ns == mtimes[p] for p in files if p != deleted)
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+    assert summary.runs == first.runs and summary.failed == first.failed
+
+
+def test_a_rerun_replaces_stale_corrupt_and_leftover_files(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    run(config, samples, out, chunk_size=2)
+    fleet_dir = out / "study=fleet"
+    (fleet_dir / part_name(0)).write_bytes(b"not parquet")  # e.g. a disk that lost the file's content
+    leftover = fleet_dir / f".{part_name(1)}.abc123.tmp"  # what a write killed before its rename leaves
+    leftover.write_bytes(b"half a file")
+    gone = out / "study=retired"  # a study that is no longer simulated
+    gone.mkdir()
+    (gone / part_name(0)).write_bytes(b"")
+
+    summary, _ = run(config, samples, out, chunk_size=3)  # every chunk changes: its rows differ
+    expected = {f"study={s}/{part_name(i)}" for s, t in samples.items() for i in range(-(-len(t) // 3))}
+    assert {str(p.relative_to(out)) for p in parts(out)} == expected
+    assert not gone.exists()
+    assert summary.skipped_chunks == 0
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def test_a_changed_protocol_setting_reruns_only_the_chunks_that_use_it(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    faster = dataclasses.replace(config.protocol.wim, speed=config.protocol.wim.speed + 1.0)
+    changed = dataclasses.replace(config, protocol=dataclasses.replace(config.protocol, wim=faster))
+    lines = []
+    summary = simulate_samples(samples, protocols_of(changed), config.execution, out, lines.append)
+    # the sensitivity study runs only the static protocol: its chunks stay valid
+    n_sensitivity = -(-len(samples["sensitivity"]) // 3)
+    assert summary.skipped_chunks == n_sensitivity
+    assert summary.computed_chunks == -(-12 // 3) + -(-len(samples["ablation"]) // 3)
+    runs = dataset(out)
+    static, wim = runs["protocol"] == "static", runs["protocol"] == "wim"
+    pd.testing.assert_frame_equal(runs[static], reference[reference["protocol"] == "static"], check_exact=True)
+    assert not np.array_equal(
+        runs.loc[wim, "axle_load_0"], reference.loc[reference["protocol"] == "wim", "axle_load_0"]
+    )
+
+
+def test_a_killed_run_resumes_to_the_uninterrupted_dataset(config, samples, reference, tmp_path):
+    params = tmp_path / "params.yaml"
+    params.write_text(yaml.safe_dump(tiny_raw(chunk_size=1)))
+    sample_dir = tmp_path / "samples"
+    sample_dir.mkdir()
+    for study, table in samples.items():
+        write_parquet_atomic(table, sample_dir / f"{study}.parquet")
+    out = tmp_path / "runs"
+    command = [sys.executable, "-m", "pipeline.simulate", "--params", str(params), "--samples", str(sample_dir)]
+    command += ["--out", str(out)]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    n_chunks = sum(len(t) for t in samples.values())
+
+    # a session of its own, so that SIGKILL reaches the loky workers too, as when the machine kills the job
+    proc = subprocess.Popen(command, cwd=tmp_path, env=env, start_new_session=True, stdout=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(out.glob("study=*/part-*.parquet")) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.005)
+        os.killpg(proc.pid, signal.SIGKILL)
+    finally:
+        proc.wait()
+    assert proc.returncode == -signal.SIGKILL
+    finished = len(list(out.glob("study=*/part-*.parquet")))
+    assert 1 <= finished < n_chunks
+
+    result = subprocess.run(command, cwd=tmp_path, env=env, capture_output=True, text=True, timeout=300)
+    assert result.returncode == 0, result.stderr
+    # every file the killed run left is complete (written under a temporary name, then renamed) and kept
+    assert re.search(rf": {finished} up to date, {n_chunks - finished} to run", result.stdout), result.stdout
+    assert not list(out.glob("study=*/.*"))
+    assert len(parts(out)) == n_chunks
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+# ---- failures ----------------------------------------------------------------------------------------------------
+def test_a_sample_that_cannot_be_simulated_is_a_failed_row_not_a_crash(config, samples, reference, tmp_path):
+    broken = {study: table.copy() for study, table in samples.items()}
+    fleet = broken["fleet"]
+    fleet.loc[4, "payload_fraction"] = 3.0  # beyond what the load ramp accepts: the protocol's run fails
+    fleet.loc[7, "bush_stiffness"] = -1.0  # not a bogie at all: bogie validation refuses it
+    out = tmp_path / "runs"
+    summary, _ = run(config, broken, out)
+
+    runs = dataset(out)
+    fleet_runs = runs[runs["study"] == "fleet"].set_index(["sample_id", "protocol"])
+    numbers = [c for c, t in RUN_COLUMNS.items() if t == "float64" and c not in COLUMNS and c != "wall_time"]
+    for sample_id, reason in ((4, "load_factor"), (7, "invalid bogie: ValueError: bush_stiffness")):
+        rows = fleet_runs.loc[sample_id]
+        assert len(rows) == len(config.protocol.run)
+        assert (rows["status"] == "failed").all()
+        assert rows["message"].str.contains(reason).all(), rows["message"].tolist()
+        assert (rows[numbers] == 0.0).all().all()
+    assert not runs.isna().any().any()
+    assert summary.failed == int((runs["status"] != "ok").sum())
+    # the other samples are untouched
+    others = ~((runs["study"] == "fleet") & runs["sample_id"].isin([4, 7]))
+    expected = ~((reference["study"] == "fleet") & reference["sample_id"].isin([4, 7]))
+    pd.testing.assert_frame_equal(
+        runs[others].reset_index(drop=True), reference[expected].reset_index(drop=True), check_exact=True
+    )
+
+
+# ---- dask --------------------------------------------------------------------------------------------------------
+def test_a_dask_local_cluster_gives_the_loky_results(config, samples, reference, tmp_path):
+    from dask.distributed import LocalCluster
+
+    out = tmp_path / "runs"
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        summary, lines = run(config, samples, out, backend="dask", dask_scheduler=cluster.scheduler_address)
+    assert cluster.status.name == "closed"
+    assert cluster.scheduler_address in lines[0]
+    assert summary.computed_chunks == len(parts(out))
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
