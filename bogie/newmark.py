@@ -271,41 +271,56 @@ def _integrate(
     for step in range(n_steps):
         d0 = drive[step]
         d1 = drive[step + 1]
-        u_s[:] = u
-        v_s[:] = v
-        a_s[:] = a
-        f_s[:] = f_old
-        h_s[:] = hist
-        status = STATUS_NO_CONVERGENCE
-        rnorm = 0.0
-        for level in range(max_halvings + 1):
-            n_sub = 1 << level
-            h = dt / n_sub
-            u[:] = u_s
-            v[:] = v_s
-            a[:] = a_s
-            f_old[:] = f_s
-            hist[:] = h_s
-            for sub in range(n_sub):
-                status, rnorm, iters = _attempt(
-                    model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist, h,
-                    beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                    u_limit, quasi_static,
-                )  # fmt: skip
-                total_iter += iters
-                if status != STATUS_OK:
-                    jac_state[0] = 0.0
+        # _attempt writes only the *_new arrays, so a failed try leaves the step's starting state untouched
+        status, rnorm, iters = _attempt(
+            model, mass, data_f, data_i, d0, d1, 0.0, 1.0, u, v, a, f_old, hist, dt,
+            beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
+            u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
+            u_limit, quasi_static,
+        )  # fmt: skip
+        total_iter += iters
+        if status == STATUS_OK:
+            u[:] = u_new
+            v[:] = v_new
+            a[:] = a_new
+            f_old[:] = f_new
+            hist[:] = hist_new
+        else:
+            # retry as 2, 4, ... sub-steps from the saved starting state
+            jac_state[0] = 0.0
+            u_s[:] = u
+            v_s[:] = v
+            a_s[:] = a
+            f_s[:] = f_old
+            h_s[:] = hist
+            for level in range(1, max_halvings + 1):
+                n_sub = 1 << level
+                h = dt / n_sub
+                u[:] = u_s
+                v[:] = v_s
+                a[:] = a_s
+                f_old[:] = f_s
+                hist[:] = h_s
+                for sub in range(n_sub):
+                    status, rnorm, iters = _attempt(
+                        model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist,
+                        h, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
+                        u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
+                        u_limit, quasi_static,
+                    )  # fmt: skip
+                    total_iter += iters
+                    if status != STATUS_OK:
+                        jac_state[0] = 0.0
+                        break
+                    u[:] = u_new
+                    v[:] = v_new
+                    a[:] = a_new
+                    f_old[:] = f_new
+                    hist[:] = hist_new
+                if status == STATUS_OK:
                     break
-                u[:] = u_new
-                v[:] = v_new
-                a[:] = a_new
-                f_old[:] = f_new
-                hist[:] = hist_new
-            if status == STATUS_OK:
-                break
-        if status != STATUS_OK:
-            return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
+            if status != STATUS_OK:
+                return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
         # commit: the last residual evaluation recorded the model's outputs at the converged state
         uu[step + 1] = u
         vv[step + 1] = v
