@@ -22,7 +22,18 @@ $(STAMP): pyproject.toml constraints.txt
 repro: $(STAMP)
 	$(BIN)/dvc repro
 
+# The report's tests render its pages with poppler's pdftoppm: installed here when missing and we are root (Debian),
+# otherwise those checks are skipped with the reason; a failed install never fails `make test`.
 test: $(STAMP)
+	@command -v pdftoppm >/dev/null 2>&1 || { \
+	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
+	    echo "make test: installing poppler-utils (pdftoppm) for the report's rendering checks"; \
+	    { apt-get update -qq && apt-get install -y -qq poppler-utils; } \
+	      || echo "make test: could not install poppler-utils; the report's rendering checks will be skipped"; \
+	  else \
+	    echo "make test: pdftoppm not found (installing it needs root and apt-get); the report's rendering checks" \
+	      "will be skipped (install poppler-utils, e.g. sudo apt-get install poppler-utils)"; \
+	  fi; }
 	$(BIN)/python -m pytest
 
 lint: $(STAMP)

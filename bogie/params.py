@@ -343,7 +343,10 @@ def with_equaliser_arms(bogie: Bogie, front: float, rear: float | None = None) -
     """A copy with every equaliser's arms set to ``front`` and ``rear`` [m], axle positions and pivots kept.
 
     The spring halves beside each equaliser shorten (or lengthen) by the change, so the chain still closes at the
-    same axle spacing, as when a longer equaliser is fitted to the same axle layout.
+    same axle spacing, as when a longer equaliser is fitted to the same axle layout; the front and rear hangers
+    move with the outer springs' other halves, so every spring that was symmetric stays symmetric and a bogie
+    designed to share its load equally still does (the lever rule would otherwise load the middle axle of a
+    tri-axle more).
     """
     rear = front if rear is None else rear
     n = bogie.n_axles
@@ -352,6 +355,8 @@ def with_equaliser_arms(bogie: Bogie, front: float, rear: float | None = None) -
     for j in range(n - 1):
         a_r[j] -= front - bogie.equaliser_front_arm[j]
         a_f[j + 1] -= rear - bogie.equaliser_rear_arm[j]
+    a_f[0] += (a_r[0] - bogie.spring_rear_half_length[0]) * (a_f[0] / bogie.spring_rear_half_length[0])
+    a_r[-1] += (a_f[-1] - bogie.spring_front_half_length[-1]) * (a_r[-1] / bogie.spring_front_half_length[-1])
     return bogie.replace(
         equaliser_front_arm=(front,) * (n - 1),
         equaliser_rear_arm=(rear,) * (n - 1),

@@ -111,3 +111,18 @@ def test_frozen():
 
 def _fields(b):
     return {f.name: getattr(b, f.name) for f in dataclasses.fields(b)}
+
+
+@pytest.mark.parametrize("make", [tandem_trrl, triaxle_stage1])
+@pytest.mark.parametrize("arm", [0.12, 0.25, 0.28])
+def test_longer_arms_keep_the_axles_the_springs_symmetric_and_the_loads_equal(make, arm):
+    from bogie.params import with_equaliser_arms
+
+    base = make()
+    longer = with_equaliser_arms(base, arm)
+    assert longer.axle_x == base.axle_x
+    assert longer.equaliser_pivot_x == pytest.approx(base.equaliser_pivot_x)
+    assert longer.spring_front_half_length == pytest.approx(longer.spring_rear_half_length)
+    assert longer.spring_front_half_length[0] == pytest.approx(0.5 - (arm - 0.155))
+    loads = design_spring_loads(longer)
+    assert loads == pytest.approx([loads[0]] * base.n_axles, rel=1e-12)

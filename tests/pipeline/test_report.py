@@ -1,0 +1,266 @@
+"""The ``report`` stage: the PDF sensitivity report built from a tiny pipeline run (pipeline.report).
+
+One tiny run of the whole pipeline per module (10 fleet bogies, a Sobol' design of base size 4, 2 ablation bogies,
+2 ms time steps: a few seconds), then the report from it, and again after failed runs are planted in its dataset.
+Rendering checks use poppler's ``pdftotext`` and ``pdftoppm`` (``make test`` installs poppler-utils when it can); the
+checks that need them are skipped with the reason when they are missing.
+"""
+
+import copy
+import json
+import re
+import shutil
+import subprocess
+from pathlib import Path
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+import yaml
+from matplotlib.image import imread
+
+from pipeline import report, report_figures, sensitivity, survey
+from pipeline.config import load_params, parse_config
+from pipeline.sample import sample_studies, write_parquet_atomic
+from pipeline.simulate import simulate_samples, study_protocols
+
+ROOT = Path(__file__).resolve().parents[2]
+#: title, summary, sensitivity, 2 survey, Figure 2, L01-L03, step runs, design, appendices A, B, C
+PAGES = 14
+PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
+NEEDS_POPPLER = pytest.mark.skipif(
+    shutil.which("pdftotext") is None or shutil.which("pdftoppm") is None,
+    reason="poppler-utils (pdftotext, pdftoppm) not installed; `make test` installs it when run as root",
+)
+
+
+def tiny_raw():
+    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
+    raw["fleet"]["size"] = 10
+    raw["sensitivity"]["base_size"] = 4
+    raw["sensitivity"]["bootstrap_resamples"] = 20
+    raw["ablation"]["size"] = 2
+    raw["protocol"]["static"]["dt_s"] = 0.002
+    raw["protocol"]["wim"]["dt_s"] = 0.002
+    raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4, "dask_scheduler": None})
+    return raw
+
+
+def paths(project):
+    """The stage arguments of every input and output, inside ``project``."""
+    return {
+        "params": project / "params.yaml",
+        "samples": project / "data/samples",
+        "runs": project / "data/runs",
+        "survey": project / "data/survey",
+        "sensitivity": project / "data/sensitivity",
+        "metrics": project / "metrics",
+        "pdf": project / "reports/sensitivity_report.pdf",
+        "png": project / "reports/figures/report",
+        "plots": project / "reports/plots",
+    }
+
+
+def analyse(project):
+    """Run the survey and sensitivity stages on the project's runs."""
+    p = paths(project)
+    common = ["--params", str(p["params"]), "--runs", str(p["runs"])]
+    assert survey.main([*common, "--out", str(p["survey"]), "--metrics", str(p["metrics"] / "survey.json")]) == 0
+    out = ["--out", str(p["sensitivity"]), "--metrics", str(p["metrics"] / "sensitivity.json")]
+    assert sensitivity.main([*common, *out]) == 0
+
+
+def report_args(project):
+    p = paths(project)
+    return [arg for key, value in p.items() for arg in (f"--{key}", str(value))]
+
+
+@pytest.fixture(scope="module")
+def project(tmp_path_factory):
+    """A tiny pipeline run: samples, runs, survey and sensitivity outputs, as the stages write them."""
+    path = tmp_path_factory.mktemp("tiny")
+    raw = tiny_raw()
+    (path / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    config = parse_config(raw)
+    studies = sample_studies(config)
+    (path / "data/samples").mkdir(parents=True)
+    for name, frame in studies.items():
+        write_parquet_atomic(frame, path / f"data/samples/{name}.parquet")
+    protocols = {name: study_protocols(config, name) for name in studies}
+    simulate_samples(studies, protocols, config.execution, path / "data/runs", lambda line: None)
+    analyse(path)
+    return path
+
+
+@pytest.fixture(scope="module")
+def built(project):
+    """The report of the tiny run: (the numbers make_report returns, the inputs it was made from)."""
+    p = paths(project)
+    inputs = report.read_inputs(p["params"], p["samples"], p["runs"], p["survey"], p["sensitivity"], p["metrics"])
+    return report.make_report(inputs, p["pdf"], p["png"], p["plots"]), inputs
+
+
+@pytest.fixture(scope="module")
+def pages(built):
+    """The pages of the tiny run's report as Figures (section, PNG name, Figure)."""
+    with matplotlib.rc_context(report_figures.STYLE):
+        return report.build_pages(built[1], report.reference_runs())[0]
+
+
+def pdf_pages(pdf):
+    return len(re.findall(rb"/Type\s*/Page\b", Path(pdf).read_bytes()))
+
+
+def page_text(pdf, page):
+    out = subprocess.run(
+        ["pdftotext", "-layout", "-f", str(page), "-l", str(page), str(pdf), "-"],
+        capture_output=True,
+        text=True,
+        check=True,
+    ).stdout
+    return " ".join(out.split())
+
+
+def figure_text(fig):
+    """Every string drawn on a page (figure texts, axes titles, labels and table cells), whitespace collapsed."""
+    parts = [t.get_text() for t in fig.texts]
+    for ax in fig.get_axes():
+        parts += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel(), *(t.get_text() for t in ax.texts)]
+        for table in ax.tables:
+            parts += [cell.get_text().get_text() for cell in table.get_celld().values()]
+    return " ".join(" ".join(parts).split())
+
+
+# ---- the report of a run ----------------------------------------------------------------------------------------
+def test_report_has_every_page_numbered_and_every_chart_page_as_png(built, project):
+    numbers, _ = built
+    p = paths(project)
+    assert numbers["pages"] == PAGES == pdf_pages(p["pdf"])
+    pngs = sorted(f.stem for f in p["png"].glob("*.png"))
+    assert pngs == sorted(
+        [
+            "sensitivity",
+            "survey_load_share",
+            "survey_tilt",
+            "reference_figure2",
+            "reference_L01",
+            "reference_L02",
+            "reference_L03",
+            "reference_step_runs",
+            "design_guidance",
+            "parameters",
+        ]
+    )
+    for name in ("sobol.csv", "ablation.csv", "tolerance.csv", "tilt.csv"):
+        assert not pd.read_csv(p["plots"] / name).empty, name
+    # written by temporary name and rename: nothing half-written is left beside the outputs
+    assert not [f for f in p["pdf"].parent.rglob(".*") if f.name.endswith((".tmp", ".old"))]
+
+
+def test_every_page_has_content_and_no_axes_is_empty(pages):
+    assert len(pages) == PAGES
+    for section, name, fig in pages:
+        assert len(figure_text(fig)) > 60, (section, name)
+        for ax in fig.get_axes():
+            if ax.get_visible() and ax.axison:
+                # a chart with nothing drawn in it is a bug, whatever the data
+                assert ax.has_data(), (section, name, ax.get_title())
+        assert bool(name) == any(ax.has_data() for ax in fig.get_axes()), (section, name)
+
+
+def test_summary_numbers_are_those_of_the_metrics_files(built, project):
+    numbers, _ = built
+    metrics = paths(project)["metrics"]
+    sv = json.loads((metrics / "survey.json").read_text())
+    ss = json.loads((metrics / "sensitivity.json").read_text())
+    assert numbers["ranking"] == ss["ranking"]
+    assert numbers["ranking_measure"] == ss["ranking_measure"]
+    assert numbers["reference_check"] == ss["reference_check"]
+    assert numbers["sobol"]["indices"] == ss["sobol"]["indices"]
+    assert numbers["ablation"] == ss["ablation"]
+    for protocol in ("static", "wim"):
+        for group, entry in sv[protocol].items():
+            for key in ("share_outside_5pct", "share_outside_10pct", "mean_spread_kg", "rear_overload_share_nose_up"):
+                assert numbers["survey"][protocol][group][key] == entry[key], (protocol, group, key)
+
+
+def expected_phrases(sv, ss):
+    """What the summary's sentences must say, formatted from the metrics files as the report formats them."""
+    phrases = []
+    for protocol in ("static", "wim"):
+        for entry in sv[protocol].values():
+            for key in ("share_outside_5pct", "share_outside_10pct"):
+                phrases.append("n/a" if entry[key] is None else f"{100 * entry[key]:.1f} %")
+            phrases.append(f"{entry['mean_spread_kg']:.0f} kg")
+    for abl in ss["ablation"].values():
+        phrases.append(f"{100 * abl['baseline']['mean_max_deviation']:.2f} % with every inhibitor present")
+        for variant in ss["ranking"]:
+            phrases.append(f"{100 * abl[variant]['mean_max_deviation']:.2f} % without")
+    return phrases
+
+
+def test_summary_sentences_are_made_from_the_metrics(built, pages):
+    _, inputs = built
+    sv, ss = inputs.survey_metrics, inputs.sensitivity_metrics
+    text = figure_text(pages[1][2])
+    for phrase in expected_phrases(sv, ss):
+        assert phrase in text, phrase
+    labels = [report_figures.FACTOR_LABEL[f] for f in ss["ranking"]]
+    ranked = [text.index(f"{k}. {label}, ST") for k, label in enumerate(labels, start=1)]
+    assert ranked == sorted(ranked)
+    assert ss["ranking_measure"] in text
+
+
+@NEEDS_POPPLER
+def test_rendered_pages_are_not_blank_and_say_what_the_metrics_say(built, project, tmp_path):
+    p = paths(project)
+    subprocess.run(["pdftoppm", "-r", "60", "-png", str(p["pdf"]), str(tmp_path / "page")], check=True)
+    images = sorted(tmp_path.glob("page-*.png"))
+    assert len(images) == PAGES
+    for k, image in enumerate(images, start=1):
+        ink = np.mean(imread(image)[..., :3].min(axis=2) < 0.9)
+        assert ink > 0.002, f"page {k} is nearly blank ({ink:.4f} of its pixels inked)"
+        assert f"page {k} of {PAGES}" in page_text(p["pdf"], k)
+    _, inputs = built
+    summary = page_text(p["pdf"], 2)
+    for phrase in expected_phrases(inputs.survey_metrics, inputs.sensitivity_metrics):
+        assert phrase in summary, phrase
+
+
+# ---- failed runs ------------------------------------------------------------------------------------------------
+def plant_failures(runs_dir, study, count):
+    """Turn the first ``count`` succeeded runs of a study into failed rows, as simulate writes them."""
+    part = sorted((runs_dir / f"study={study}").glob("part-*.parquet"))[0]
+    frame = pd.read_parquet(part)
+    rows = frame.index[frame["status"] == "ok"][:count]
+    numbers = [c for c in frame.columns if c.startswith(("axle_load_", "load_share_"))]
+    numbers += ["group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch"]
+    frame.loc[rows, numbers] = 0.0
+    frame.loc[rows, ["status", "message"]] = ["failed", PLANTED]
+    frame.to_parquet(part, index=False)
+    return frame.loc[rows, "sample_id"].tolist()
+
+
+def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project, tmp_path):
+    copy_ = tmp_path / "failing"
+    shutil.copytree(project, copy_, ignore=shutil.ignore_patterns("reports"))
+    fleet_ids = plant_failures(copy_ / "data/runs", "fleet", 2)
+    ablation_ids = plant_failures(copy_ / "data/runs", "ablation", 1)
+    analyse(copy_)
+    assert report.main(report_args(copy_)) == 0
+    p = paths(copy_)
+    assert pdf_pages(p["pdf"]) == PAGES
+    inputs = report.read_inputs(p["params"], p["samples"], p["runs"], p["survey"], p["sensitivity"], p["metrics"])
+    failed = report.failed_runs(inputs.runs)
+    planted = failed[failed["message"] == PLANTED]
+    assert planted.groupby("study")["n"].sum().to_dict() == {"ablation": 1, "fleet": 2}
+    with matplotlib.rc_context(report_figures.STYLE):
+        pages, _ = report.build_pages(inputs, report.reference_runs())
+    appendix = figure_text(pages[-1][2])
+    assert PLANTED in appendix
+    for sample_id in [*fleet_ids, *ablation_ids]:
+        assert re.search(rf"\b{sample_id}\b", appendix)
+    counts = report.run_counts(inputs.runs).set_index("study")
+    assert counts.loc["all", "n_failed"] == int((inputs.runs["status"] != "ok").sum()) >= 3
+    assert f"{counts.loc['all', 'n_failed']:,} failed" in figure_text(pages[0][2])
