@@ -21,13 +21,14 @@ import time
 from dataclasses import dataclass
 from functools import partial
 from pathlib import Path
+from types import SimpleNamespace
 
 import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
 from bogie import cases, linear
-from bogie.newmark import MODEL_LINEAR, IntegrationResult, consistent_acceleration, integrate, massless_dofs
+from bogie.newmark import consistent_acceleration, linear_steps, massless_dofs
 from bogie.params import Bogie
 from bogie.road import RampedStep, axle_heights
 
@@ -153,7 +154,7 @@ def problem() -> Problem:
     return Problem(bogie, mats, t, loads, rates, np.linalg.solve(mats.K, loads[0]), DT, N_STEPS)
 
 
-def newmark(pb: Problem, refinement: int = 1) -> IntegrationResult:
+def newmark(pb: Problem, refinement: int = 1) -> SimpleNamespace:
     """Our kernel, called as :func:`bogie.linear.simulate` calls it, at dt / refinement on interpolated loads."""
     n_steps = pb.n_steps * refinement
     loads = pb.loads
@@ -163,12 +164,8 @@ def newmark(pb: Problem, refinement: int = 1) -> IntegrationResult:
     m = pb.mats
     n = len(pb.u0)
     a0 = consistent_acceleration(m.M, m.K @ pb.u0 - loads[0])
-    data_f = np.concatenate([m.K.ravel(), m.C.ravel()])
-    tol = np.full(n, 1e-9 * max(1.0, float(np.max(np.abs(loads)))))
-    return integrate(
-        MODEL_LINEAR, m.M, loads, data_f, np.array([n], dtype=np.int64), pb.u0, np.zeros(n), a0, np.zeros(0),
-        pb.dt / refinement, n_steps, tol, max_iter=6, max_halvings=0,
-    )  # fmt: skip
+    u, v, _ = linear_steps(m.M, m.C, m.K, loads, pb.u0, np.zeros(n), a0, pb.dt / refinement, n_steps)
+    return SimpleNamespace(u=u, v=v)
 
 
 def radau(
@@ -289,7 +286,7 @@ def main() -> None:
           f"e_p {check[1]:.1e}")  # fmt: skip
     print(f"  ours, Newmark (average acceleration) at dt = {DT:g} s: e_W {e_ours[0]:.2e}, e_p {e_ours[1]:.2e}")
     print("Time of one run (median, this process):")
-    print(f"  ours, compiled kernel (bogie.newmark.integrate)   {t_kernel * 1e3:8.3f} ms  "
+    print(f"  ours, compiled kernel (bogie.newmark.linear_steps){t_kernel * 1e3:8.3f} ms  "
           f"{t_kernel / n_steps * 1e6:.2f} us per step")  # fmt: skip
     print(f"  ours, whole cases.run({CASE!r}) incl. road, loads     {t_run * 1e3:8.3f} ms")
     print("  scipy solve_ivp(method='Radau'), exact Jacobian, atol = rtol * max|x_i|; rtol ladder per max_step:")

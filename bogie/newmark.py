@@ -329,6 +329,67 @@ def _integrate(
     return uu, vv, aa, rr, hist, STATUS_OK, n_steps, 0.0, total_iter
 
 
+@njit(cache=True)
+def _integrate_linear_kernel(mass, damping, stiffness, loads, u0, v0, a0, dt, n_steps, beta, gamma, alpha_m, alpha_f):
+    """Newmark / generalised-alpha for M a + C v + K u = R with constant matrices.
+
+    The same scheme and residual as :func:`_integrate`, but a linear residual is solved exactly by one correction
+    from the predictor with the iteration matrix factored once, so no Newton loop, convergence test or state
+    saving is needed. Returns (u, v, a, status): status is STATUS_SINGULAR if the iteration matrix is singular.
+    """
+    n = u0.shape[0]
+    uu = np.zeros((n_steps + 1, n))
+    vv = np.zeros((n_steps + 1, n))
+    aa = np.zeros((n_steps + 1, n))
+    uu[0] = u0
+    vv[0] = v0
+    aa[0] = a0
+    c_a = 1.0 / (beta * dt * dt)
+    c_v = gamma / (beta * dt)
+    jac = (1.0 - alpha_m) * c_a * mass + (1.0 - alpha_f) * (stiffness + c_v * damping)
+    piv = np.zeros(n, dtype=np.int64)
+    if not lu_factor(jac, piv):
+        return uu, vv, aa, STATUS_SINGULAR
+    u = u0.copy()
+    v = v0.copy()
+    a = a0.copy()
+    f_old = stiffness @ u + damping @ v - loads[0]
+    u_new = np.zeros(n)
+    v_new = np.zeros(n)
+    a_new = np.zeros(n)
+    res = np.zeros(n)
+    for step in range(n_steps):
+        r_new = loads[step + 1]
+        for i in range(n):
+            u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
+        for i in range(n):
+            a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
+            v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
+        for i in range(n):
+            s = alpha_f * f_old[i] - (1.0 - alpha_f) * r_new[i]
+            for j in range(n):
+                s += (1.0 - alpha_f) * (stiffness[i, j] * u_new[j] + damping[i, j] * v_new[j])
+                s += mass[i, j] * ((1.0 - alpha_m) * a_new[j] + alpha_m * a[j])
+            res[i] = -s
+        lu_solve(jac, piv, res)
+        for i in range(n):
+            u_new[i] += res[i]
+            a_new[i] += c_a * res[i]
+            v_new[i] += c_v * res[i]
+        for i in range(n):
+            s = -r_new[i]
+            for j in range(n):
+                s += stiffness[i, j] * u_new[j] + damping[i, j] * v_new[j]
+            f_old[i] = s
+        u[:] = u_new
+        v[:] = v_new
+        a[:] = a_new
+        uu[step + 1] = u
+        vv[step + 1] = v
+        aa[step + 1] = a
+    return uu, vv, aa, STATUS_OK
+
+
 # ---- Python layer ----------------------------------------------------------------------------------------------
 def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:
     """Chung-Hulbert generalised-alpha parameters (alpha_m, alpha_f, beta, gamma) for spectral radius rho_inf.
@@ -558,17 +619,37 @@ def integrate_linear(
     loads = _load_history(R, t, n)
     u_init = np.array(u0, dtype=float).reshape(n)
     v_init = np.array(v0, dtype=float).reshape(n)
-    data_f = np.concatenate([stiffness.ravel(), damping.ravel()])
     f0 = stiffness @ u_init + damping @ v_init - loads[0]
     a_init = consistent_acceleration(mass, f0)
-    scale = max(
-        1.0, float(np.max(np.abs(loads))), float(np.max(np.abs(stiffness))) * max(1e-12, np.max(np.abs(u_init)))
+    return linear_steps(mass, damping, stiffness, loads, u_init, v_init, a_init, dt, n_steps, beta, gamma, rho_inf)
+
+
+def linear_steps(
+    mass: NDArray[np.float64],
+    damping: NDArray[np.float64],
+    stiffness: NDArray[np.float64],
+    loads: NDArray[np.float64],
+    u0: NDArray[np.float64],
+    v0: NDArray[np.float64],
+    a0: NDArray[np.float64],
+    dt: float,
+    n_steps: int,
+    beta: float = 0.25,
+    gamma: float = 0.5,
+    rho_inf: float | None = None,
+) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.float64]]:
+    """The compiled linear stepping loop on checked float64 arrays (loads of shape (n_steps + 1, n_dof)).
+
+    Same scheme as the general kernel; a linear residual needs one correction per step, with the iteration matrix
+    factored once (``tests/test_newmark.py`` checks that both give the same histories).
+    """
+    alpha_m, alpha_f, beta, gamma = newmark_parameters(beta, gamma, rho_inf)
+    uu, vv, aa, status = _integrate_linear_kernel(
+        mass, damping, stiffness, loads, u0, v0, a0, float(dt), int(n_steps), beta, gamma, alpha_m, alpha_f
     )
-    tol = np.full(n, 1e-10 * scale)
-    result = integrate(
-        MODEL_LINEAR, mass, loads, data_f, np.array([n], dtype=np.int64), u_init, v_init, a_init,
-        np.zeros(0), dt, n_steps, tol, beta=beta, gamma=gamma, rho_inf=rho_inf, max_iter=6, max_halvings=0,
-    )  # fmt: skip
-    if not result.success:
-        raise RuntimeError(f"integrate_linear failed: {result.message}")
-    return result.u, result.v, result.a
+    if status != STATUS_OK:
+        raise RuntimeError(
+            f"integrate_linear failed: {_STATUS_TEXT[status]} at t = 0 s (M / (beta dt^2) + C gamma / (beta dt) + K "
+            "is singular)"
+        )
+    return uu, vv, aa
