@@ -13,7 +13,6 @@ for Table 2).
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass, field
 from typing import Any
@@ -364,8 +363,3 @@ def summary(name: str, result: DynamicResult | None = None) -> dict[str, float]:
     """The run's figures in the form of the reference's table (runs the case if no result is given)."""
     case = get(name)
     return case.summarise(run(name) if result is None else result)
-
-
-def nose_up(degrees: float) -> float:
-    """A chassis tilt of ``degrees`` nose up [rad] (helper for what-if runs)."""
-    return math.radians(degrees)

@@ -226,7 +226,7 @@ def simulate(
     wheel = wheel_loads_from_state(bogie, mats, u, v, rates)
     n = bogie.n_axles
     centre = bogie.equaliser_pivot_x[(n - 2) // 2]
-    return DynamicResult.from_loads(
+    return DynamicResult(
         t=t,
         wheel_loads=wheel,
         reference_load=float(np.mean(wheel[0])),

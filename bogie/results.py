@@ -43,11 +43,6 @@ class DynamicResult:
     message: str
     extras: Mapping[str, NDArray[Any]] = field(default_factory=dict)
 
-    @classmethod
-    def from_loads(cls, **kwargs: Any) -> DynamicResult:
-        """Build a result (same arguments as the constructor)."""
-        return cls(**kwargs)
-
     @property
     def success(self) -> bool:
         """True if the run completed."""

@@ -15,7 +15,6 @@ failed simulation: the row then has ``status = "failed"`` and the solver's messa
 
 from __future__ import annotations
 
-import math
 import time
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -172,8 +171,3 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
     row = result_row(protocol, bogie.n_axles, reading, pitch)
     row.update(status=status, message=message, wall_time=time.perf_counter() - start)
     return row
-
-
-def nose_up_degrees(pitch: float) -> float:
-    """Chassis pitch in degrees (nose up positive), for labels."""
-    return math.degrees(pitch)
