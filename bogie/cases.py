@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 
 from bogie import linear, metrics, nonlinear
-from bogie.params import Bogie, design_spring_loads, tandem_trrl, with_equaliser_arms
+from bogie.params import TARE_FRACTION, Bogie, design_spring_loads, tandem_trrl, with_equaliser_arms
 from bogie.results import DynamicResult
 from bogie.road import ISO8608Profile, RampedStep
 
@@ -32,8 +32,6 @@ LOW_SPEED, HIGH_SPEED = 0.2, 10.0
 HIGH_FRICTION, HIGH_BUSH = 0.3, 1000.0
 #: the long equaliser arm of Table 2's blocks 4 and 5 [m] (the preset's is 0.155 m)
 LONG_ARM = 0.25
-#: empty trailer: this fraction of the design payload weight [-]
-TARE_FRACTION = 0.25
 
 
 @dataclass(frozen=True)

@@ -21,6 +21,8 @@ from dataclasses import dataclass, field
 from typing import Any
 
 GRAVITY = 9.81  # [m/s^2]
+#: the empty trailer's weight as a fraction of the design payload weight, where every loading starts [-]
+TARE_FRACTION = 0.25
 
 #: allowed range and unit of every scalar field: name -> (low, high, unit, low_inclusive)
 _SCALAR_RANGES: dict[str, tuple[float, float, str, bool]] = {

@@ -19,10 +19,10 @@ from typing import Any, NoReturn
 import yaml
 
 from bogie.params import _AXLE_RANGES, _SCALAR_RANGES, GRAVITY, PRESETS, preset
+from pipeline.constants import GROUP_AXLES
 from pipeline.distributions import KINDS, Choice, Constant, Distribution, ParameterError
 
 #: axle-count groups of the fleet and their number of axles
-GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
 
 #: ISO 8608 road roughness classes, smoothest first
 ROAD_CLASSES: tuple[str, ...] = ("A", "B", "C", "D", "E", "F", "G", "H")

@@ -27,15 +27,12 @@ from bogie import metrics, nonlinear
 from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
+from pipeline.constants import MAX_AXLES, TARE_FRACTION
 
-#: the empty trailer's weight as a fraction of the design payload weight [-]
-TARE_FRACTION = 0.25
 #: the weighbridge reads the mean over this last part of the settling time [s]
 READ_TIME = 0.5
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
-#: most axles in a group (columns axle_load_0..2)
-MAX_AXLES = 3
 #: random approach roads are generated this much longer than needed [m]
 ROAD_MARGIN = 20.0
 

@@ -13,9 +13,7 @@ of row order, chunking and the number of workers.
 from __future__ import annotations
 
 import argparse
-import os
 import sys
-import tempfile
 import warnings
 from collections.abc import Mapping
 from pathlib import Path
@@ -28,7 +26,9 @@ from SALib.sample import sobol
 from scipy.stats import qmc
 
 from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, with_equaliser_arms
-from pipeline.config import GROUP_AXLES, Config, ConfigError, load_config
+from pipeline.atomic import atomic_file
+from pipeline.config import Config, ConfigError, load_config
+from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.distributions import Choice
 
 STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
@@ -39,7 +39,6 @@ VARIANTS: tuple[str, ...] = ("baseline", *INHIBITORS, "all")
 #: radius of gyration of the sprung mass about its centre of gravity in pitch [m]
 PITCH_RADIUS_OF_GYRATION = 3.5
 
-MAX_AXLES = max(GROUP_AXLES.values())
 TYRE_WEAR_COLUMNS: tuple[str, ...] = tuple(f"tyre_wear_{i}" for i in range(MAX_AXLES))
 
 #: the sampled quantities with one value per bogie, in the order of the fleet design's dimensions
@@ -363,15 +362,8 @@ def sample_studies(config: Config) -> dict[str, pd.DataFrame]:
 # ---- output ----------------------------------------------------------------------------------------------------
 def write_parquet_atomic(frame: pd.DataFrame, path: str | Path) -> None:
     """Write ``frame`` to ``path`` through a temporary file in the same directory, so no reader sees half a file."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_file(path) as tmp:
         frame.to_parquet(tmp, index=False)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 def main(argv: list[str] | None = None) -> int:

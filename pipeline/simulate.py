@@ -29,9 +29,7 @@ import argparse
 import dataclasses
 import hashlib
 import json
-import os
 import sys
-import tempfile
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -48,8 +46,10 @@ from joblib import Parallel, delayed, parallel_config
 from tqdm import tqdm
 
 import bogie
+from pipeline import constants as constants_module
 from pipeline import protocol as protocol_module
 from pipeline import sample as sample_module
+from pipeline.atomic import atomic_file
 from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
 from pipeline.protocol import RESULT_COLUMNS, result_row, weigh
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
@@ -95,13 +95,13 @@ def code_version() -> str:
     """A hash of the code and libraries that turn a sample row into a run row.
 
     The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
-    (``bogie_from_sample``) and this module, plus the versions of numpy, scipy, numba, pandas and pyarrow. Any edit to
+    (``bogie_from_sample``), :mod:`pipeline.constants` and this module, plus the versions of numpy, scipy, numba, pandas and pyarrow. Any edit to
     those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong
     dataset.
     """
     digest = hashlib.sha256()
     package = Path(bogie.__file__).parent
-    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in (protocol_module, sample_module)]
+    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in (protocol_module, sample_module, constants_module)]
     files.append(Path(__file__))
     for path in files:
         digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
@@ -288,15 +288,8 @@ def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
     """
     table = pa.Table.from_pandas(frame, preserve_index=False)
     table = table.replace_schema_metadata({**(table.schema.metadata or {}), HASH_KEY: chunk_hash_.encode()})
-    path.parent.mkdir(parents=True, exist_ok=True)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=path.parent)
-    os.close(fd)
-    try:
+    with atomic_file(path) as tmp:
         pq.write_table(table, tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        Path(tmp).unlink(missing_ok=True)
-        raise
 
 
 # ---- running ---------------------------------------------------------------------------------------------------

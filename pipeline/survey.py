@@ -17,10 +17,7 @@ from __future__ import annotations
 import argparse
 import json
 import math
-import os
-import shutil
 import sys
-import tempfile
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -29,8 +26,9 @@ import numpy as np
 import pandas as pd
 import yaml
 
-from pipeline.config import GROUP_AXLES, ConfigError, load_config
-from pipeline.protocol import MAX_AXLES
+from pipeline.atomic import atomic_outputs
+from pipeline.config import ConfigError, load_config
+from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.sample import TYRE_WEAR_COLUMNS
 
 #: the study a roadside survey samples
@@ -434,34 +432,12 @@ def write_outputs(
     temporary file renamed last: a reader sees the old outputs or the new ones, never a mix or half a file, and an
     error while writing leaves the old outputs in place. Parent directories are created.
     """
-    out_dir, metrics_path = Path(out_dir), Path(metrics_path)
-    out_dir.parent.mkdir(parents=True, exist_ok=True)
-    metrics_path.parent.mkdir(parents=True, exist_ok=True)
-    tmp_dir = Path(tempfile.mkdtemp(prefix=f".{out_dir.name}.", suffix=".tmp", dir=out_dir.parent))
-    fd, tmp_json = tempfile.mkstemp(prefix=f".{metrics_path.name}.", suffix=".tmp", dir=metrics_path.parent)
-    old_dir = tmp_dir.with_name(tmp_dir.name.removesuffix(".tmp") + ".old")
-    try:
-        with os.fdopen(fd, "w", encoding="utf-8") as fh:
+    with atomic_outputs(files=[metrics_path], dirs=[out_dir]) as ((tmp_json,), (tmp_dir,)):
+        with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
-        os.chmod(tmp_json, 0o644)
         for name, frame in tables.items():
             _write_table(frame, tmp_dir / name)
-        os.chmod(tmp_dir, 0o755)  # mkdtemp makes it private
-        if out_dir.exists():
-            os.replace(out_dir, old_dir)
-        try:
-            os.replace(tmp_dir, out_dir)
-        except BaseException:
-            if old_dir.exists():
-                os.replace(old_dir, out_dir)
-            raise
-        os.replace(tmp_json, metrics_path)
-    except BaseException:
-        shutil.rmtree(tmp_dir, ignore_errors=True)
-        Path(tmp_json).unlink(missing_ok=True)
-        raise
-    shutil.rmtree(old_dir, ignore_errors=True)
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -1,0 +1,21 @@
+"""The one home of the constants that several stages share (axle groups, the loading protocol's tare)."""
+
+from __future__ import annotations
+
+from bogie.params import TARE_FRACTION
+
+__all__ = ["GROUP_AXLES", "MAX_AXLES", "TARE_FRACTION", "n_axles"]
+
+#: axles in each axle group the fleet is made of [-]
+GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
+
+#: most axles in a group: the runs have columns axle_load_0..MAX_AXLES-1 [-]
+MAX_AXLES: int = max(GROUP_AXLES.values())
+
+
+def n_axles(group: str) -> int:
+    """The number of axles of axle group ``group`` (``tandem`` or ``triaxle``)."""
+    try:
+        return GROUP_AXLES[group]
+    except KeyError:
+        raise ValueError(f"axle group {group!r} unknown; allowed: {', '.join(GROUP_AXLES)}") from None
