@@ -95,13 +95,14 @@ def code_version() -> str:
     """A hash of the code and libraries that turn a sample row into a run row.
 
     The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
-    (``bogie_from_sample``), :mod:`pipeline.constants` and this module, plus the versions of numpy, scipy, numba, pandas and pyarrow. Any edit to
-    those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong
-    dataset.
+    (``bogie_from_sample``), :mod:`pipeline.constants` and this module, plus the versions of numpy, scipy, numba,
+    pandas and pyarrow. Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed
+    physics change would cost a wrong dataset.
     """
     digest = hashlib.sha256()
     package = Path(bogie.__file__).parent
-    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in (protocol_module, sample_module, constants_module)]
+    modules = (protocol_module, sample_module, constants_module)
+    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in modules]
     files.append(Path(__file__))
     for path in files:
         digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
