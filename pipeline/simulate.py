@@ -411,17 +411,7 @@ def simulate_samples(
         f"{len(pending)} to run ({total} runs) on {execution.backend}"
         + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
     )
-    by_key = {(c.study, c.index): c for c in pending}
-    failed = 0
-    progress = Progress(total, log)
-    try:
-        for study, index, frame in _results(pending, execution) if pending else ():
-            chunk = by_key[(study, index)]
-            write_part(frame, chunk.hash, chunk.path)
-            failed += int((frame["status"] != "ok").sum())
-            progress.update(len(frame))
-    finally:
-        progress.close()
+    failed = _run_pending(pending, execution, total, log)
     for chunk in done:
         failed += _count_failed(chunk.path)
     summary = Summary(
@@ -435,6 +425,22 @@ def simulate_samples(
     )
     log(summary.line())
     return summary
+
+
+def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: int, log: Log) -> int:
+    """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
+    by_key = {(c.study, c.index): c for c in pending}
+    failed = 0
+    progress = Progress(total, log)
+    try:
+        for study, index, frame in _results(pending, execution) if pending else ():
+            chunk = by_key[(study, index)]
+            write_part(frame, chunk.hash, chunk.path)
+            failed += int((frame["status"] != "ok").sum())
+            progress.update(len(frame))
+    finally:
+        progress.close()
+    return failed
 
 
 def _count_failed(path: Path) -> int:

@@ -1,0 +1,63 @@
+"""The all-or-nothing writer every stage uses: old outputs survive a failure, no temporaries are left behind."""
+
+from __future__ import annotations
+
+import os
+import stat
+
+import pytest
+
+from pipeline.atomic import atomic_file, atomic_outputs
+
+
+def _listing(path):
+    return sorted(p.name for p in path.iterdir())
+
+
+def test_files_and_directories_replace_their_targets(tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "old.csv").write_text("old")
+    (tmp_path / "m.json").write_text("{}")
+    with atomic_outputs(files=[tmp_path / "m.json"], dirs=[tmp_path / "out"]) as ((json_tmp,), (dir_tmp,)):
+        json_tmp.write_text('{"a": 1}')
+        (dir_tmp / "new.csv").write_text("new")
+        # nothing is visible before the block ends
+        assert (tmp_path / "m.json").read_text() == "{}"
+        assert _listing(tmp_path / "out") == ["old.csv"]
+    assert (tmp_path / "m.json").read_text() == '{"a": 1}'
+    assert _listing(tmp_path / "out") == ["new.csv"]  # the old directory is replaced, not merged
+    assert _listing(tmp_path) == ["m.json", "out"]  # no temporaries or .old directory left
+
+
+def test_an_error_leaves_the_old_outputs_and_no_temporaries(tmp_path):
+    (tmp_path / "out").mkdir()
+    (tmp_path / "out" / "old.csv").write_text("old")
+    (tmp_path / "m.json").write_text("{}")
+    with pytest.raises(RuntimeError, match="half-way"):
+        with atomic_outputs(files=[tmp_path / "m.json"], dirs=[tmp_path / "out"]) as ((json_tmp,), (dir_tmp,)):
+            json_tmp.write_text("partial")
+            (dir_tmp / "new.csv").write_text("partial")
+            raise RuntimeError("half-way")
+    assert (tmp_path / "m.json").read_text() == "{}"
+    assert _listing(tmp_path / "out") == ["old.csv"]
+    assert _listing(tmp_path) == ["m.json", "out"]
+
+
+def test_new_outputs_get_the_users_umask_not_private_modes(tmp_path):
+    old = os.umask(0o022)
+    try:
+        with atomic_outputs(files=[tmp_path / "sub" / "a.txt"], dirs=[tmp_path / "d"]) as ((f,), (d,)):
+            f.write_text("x")
+    finally:
+        os.umask(old)
+    assert stat.S_IMODE((tmp_path / "sub" / "a.txt").stat().st_mode) == 0o644  # mkstemp alone gives 0600
+    assert stat.S_IMODE((tmp_path / "d").stat().st_mode) == 0o755  # mkdtemp alone gives 0700
+
+
+def test_atomic_file_creates_parents_and_writes_once(tmp_path):
+    target = tmp_path / "a" / "b" / "c.bin"
+    with atomic_file(target) as tmp:
+        assert tmp.parent == target.parent and tmp.name.startswith(".c.bin.")
+        tmp.write_bytes(b"\x00\x01")
+    assert target.read_bytes() == b"\x00\x01"
+    assert _listing(target.parent) == ["c.bin"]
