@@ -22,6 +22,7 @@ from __future__ import annotations
 
 import argparse
 import sys
+import warnings
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -31,6 +32,7 @@ import pandas as pd
 import yaml
 from SALib.analyze import sobol
 from SALib.util import extract_group_names
+from scipy import stats
 
 from bogie.params import INHIBITORS
 from pipeline.config import Config, ConfigError, load_config
@@ -352,12 +354,6 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
     return pairs.sort_values(["protocol", "variant", "base_id"]).reset_index(drop=True)
 
 
-def _percentile_interval(samples: np.ndarray, conf_level: float) -> tuple[float, float]:
-    tail = 50.0 * (1.0 - conf_level)
-    low, high = np.percentile(samples, [tail, 100.0 - tail])
-    return float(low), float(high)
-
-
 def ablation_effects(pairs: pd.DataFrame, num_resamples: int, conf_level: float, seed: int) -> pd.DataFrame:
     """Fleet mean inequality of each ablation variant and its paired difference from the baseline.
 
@@ -377,6 +373,17 @@ def ablation_effects(pairs: pd.DataFrame, num_resamples: int, conf_level: float,
         Confidence level of the intervals [-].
     seed
         Seed of the bootstrap.
+
+    Notes
+    -----
+    Every statistic of one protocol, group and variant is resampled with the same draws of bogies (common random
+    numbers: the intervals of the four statistics describe the same resamples); the next variant draws anew from
+    the one generator seeded with ``seed``.
+
+    References
+    ----------
+    B. Efron, R. J. Tibshirani, *An Introduction to the Bootstrap*, Chapman & Hall, 1993, ch. 13 (percentile
+    intervals).
     """
     rng = np.random.default_rng(seed)
     rows = []
@@ -385,26 +392,75 @@ def ablation_effects(pairs: pd.DataFrame, num_resamples: int, conf_level: float,
         for (protocol, variant), sub in scope.groupby(["protocol", "variant"], observed=True):
             good = sub[sub["ok"]]
             n = len(good)
-            draw = rng.integers(0, n, size=(num_resamples, n)) if n else None
+            state = _PairedDraws(rng, n, num_resamples)
             for statistic, column in ABLATION_STATISTICS.items():
                 row = {"protocol": protocol, "group": group, "variant": variant, "statistic": statistic}
                 row.update(n_pairs=n, n_failed=len(sub) - n)
                 value, baseline = good[column].to_numpy(float), good[f"{column}_baseline"].to_numpy(float)
-                row.update(_paired_effect(value, baseline, draw, conf_level))
+                row.update(_paired_effect(value, baseline, state, conf_level))
                 rows.append(row)
+            state.advance()
     return pd.DataFrame(rows)
 
 
-def _paired_effect(value: np.ndarray, baseline: np.ndarray, draw: np.ndarray | None, conf_level: float) -> dict:
-    if draw is None:
-        return dict.fromkeys(EFFECT_COLUMNS, np.nan)
-    diff_low, diff_high = _percentile_interval((value - baseline)[draw].mean(axis=1), conf_level)
-    base_mean = baseline.mean()
+class _PairedDraws:
+    """One set of bootstrap draws of ``n`` bogies, replayed for every statistic by :func:`scipy.stats.bootstrap`.
+
+    scipy draws its resample indices as ``integers(0, n, (n_resamples, n))`` from the generator it is given; a
+    generator restored to the same state gives every statistic the same draws, and :meth:`advance` moves the
+    shared generator past them.
+    """
+
+    def __init__(self, rng: np.random.Generator, n: int, num_resamples: int) -> None:
+        self.rng, self.n, self.num_resamples = rng, n, num_resamples
+        self.state = rng.bit_generator.state
+
+    def generator(self) -> np.random.Generator:
+        replay = np.random.Generator(type(self.rng.bit_generator)())
+        replay.bit_generator.state = self.state
+        return replay
+
+    def advance(self) -> None:
+        if self.n:
+            self.rng.integers(0, self.n, size=(self.num_resamples, self.n))
+
+
+def _difference(value: np.ndarray, baseline: np.ndarray, axis: int = -1) -> np.ndarray:
+    return (value - baseline).mean(axis=axis)
+
+
+def _relative_reduction(value: np.ndarray, baseline: np.ndarray, axis: int = -1) -> np.ndarray:
     with np.errstate(divide="ignore", invalid="ignore"):
-        # a baseline with no inequality (e.g. no group outside 10 %) has no relative reduction: NaN
-        relative = 1.0 - value[draw].mean(axis=1) / baseline[draw].mean(axis=1)
-        point = 1.0 - value.mean() / base_mean if base_mean != 0 else np.nan
-    rel_low, rel_high = _percentile_interval(relative, conf_level) if np.all(np.isfinite(relative)) else (np.nan,) * 2
+        return 1.0 - value.mean(axis=axis) / baseline.mean(axis=axis)
+
+
+def _percentile_bootstrap(
+    statistic, value: np.ndarray, baseline: np.ndarray, draws: _PairedDraws, conf_level: float
+) -> tuple[float, float]:
+    """Paired percentile bootstrap interval of ``statistic(value, baseline)``; NaN if a resample is not finite."""
+    if len(value) < 2:  # scipy needs two observations; one pair has no sampling distribution to speak of
+        return np.nan, np.nan
+    result = stats.bootstrap(
+        (value, baseline), statistic, n_resamples=draws.num_resamples, paired=True, vectorized=True,
+        confidence_level=conf_level, method="percentile", rng=draws.generator(),
+    )  # fmt: skip
+    if not np.all(np.isfinite(result.bootstrap_distribution)):
+        return np.nan, np.nan
+    return float(result.confidence_interval.low), float(result.confidence_interval.high)
+
+
+def _paired_effect(value: np.ndarray, baseline: np.ndarray, draws: _PairedDraws, conf_level: float) -> dict:
+    if draws.n == 0:
+        return dict.fromkeys(EFFECT_COLUMNS, np.nan)
+    with warnings.catch_warnings():
+        # a statistic that is constant over the resamples (e.g. no group outside 10 % in any variant) is a
+        # degenerate, zero-width interval, which is the right answer here
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        diff_low, diff_high = _percentile_bootstrap(_difference, value, baseline, draws, conf_level)
+        rel_low, rel_high = _percentile_bootstrap(_relative_reduction, value, baseline, draws, conf_level)
+    base_mean = baseline.mean()
+    # a baseline with no inequality (e.g. no group outside 10 %) has no relative reduction: NaN
+    point = 1.0 - value.mean() / base_mean if base_mean != 0 else np.nan
     difference = float(np.mean(value - baseline))
     return {
         "baseline": float(base_mean), "value": float(value.mean()), "difference": difference,
