@@ -146,6 +146,30 @@ def check_saltelli_order(frame: pd.DataFrame, problem: Mapping[str, Any]) -> Non
         )
 
 
+def _complete_design(runs: pd.DataFrame, base_size: int, step: int) -> pd.DataFrame:
+    """The runs sorted by ``sample_id``, checked to be each of the design's N (G + 2) runs once, in their blocks."""
+    n_rows = base_size * step
+    duplicated = runs["sample_id"][runs["sample_id"].duplicated()].unique()
+    if len(duplicated):
+        raise SensitivityDataError(f"the sensitivity runs hold sample_id {_ids_text(sorted(duplicated))} twice")
+    frame = runs.sort_values("sample_id").reset_index(drop=True)
+    ids = frame["sample_id"].to_numpy()
+    missing = np.setdiff1d(np.arange(n_rows), ids)
+    if len(missing):
+        raise SensitivityDataError(
+            f"the sensitivity design has {n_rows} runs (base size {base_size} x {step}) but {len(missing)} are "
+            f"missing: sample_id {_ids_text(missing)}; rerun the simulate stage"
+        )
+    if len(ids) != n_rows:
+        raise SensitivityDataError(
+            f"the sensitivity runs have {len(ids)} rows, sample_id up to {ids.max()}, but the design has {n_rows} "
+            f"(base size {base_size} x {step}); were they made from this params.yaml?"
+        )
+    if not np.array_equal(frame["base_id"].to_numpy(), ids // step):
+        raise SensitivityDataError(f"the sensitivity runs' base_id is not sample_id // {step} (G + 2 = {step})")
+    return frame
+
+
 def saltelli_outputs(
     runs: pd.DataFrame,
     problem: Mapping[str, Any],
@@ -177,24 +201,7 @@ def saltelli_outputs(
     _, n_groups = extract_group_names(problem)
     step = n_groups + 2
     n_rows = base_size * step
-    duplicated = runs["sample_id"][runs["sample_id"].duplicated()].unique()
-    if len(duplicated):
-        raise SensitivityDataError(f"the sensitivity runs hold sample_id {_ids_text(sorted(duplicated))} twice")
-    frame = runs.sort_values("sample_id").reset_index(drop=True)
-    ids = frame["sample_id"].to_numpy()
-    missing = np.setdiff1d(np.arange(n_rows), ids)
-    if len(missing):
-        raise SensitivityDataError(
-            f"the sensitivity design has {n_rows} runs (base size {base_size} x {step}) but {len(missing)} are "
-            f"missing: sample_id {_ids_text(missing)}; rerun the simulate stage"
-        )
-    if len(ids) != n_rows:
-        raise SensitivityDataError(
-            f"the sensitivity runs have {len(ids)} rows, sample_id up to {ids.max()}, but the design has {n_rows} "
-            f"(base size {base_size} x {step}); were they made from this params.yaml?"
-        )
-    if not np.array_equal(frame["base_id"].to_numpy(), ids // step):
-        raise SensitivityDataError(f"the sensitivity runs' base_id is not sample_id // {step} (G + 2 = {step})")
+    frame = _complete_design(runs, base_size, step)
     check_saltelli_order(frame, problem)
     failed = frame[frame["status"] != "ok"]
     dropped = np.unique(failed["base_id"].to_numpy())
@@ -241,6 +248,19 @@ def sobol_indices(
     ------
     SensitivityDataError
         If an output is not finite or the outputs do not vary (the indices are then undefined).
+
+    Notes
+    -----
+    SALib's estimators without second order: the first-order index by Saltelli et al. (2010, Table 2 (b)), the
+    total index by Jansen (1999) as given there (Table 2 (f)), each over the N blocks of G + 2 runs.
+
+    References
+    ----------
+    A. Saltelli, P. Annoni, I. Azzini, F. Campolongo, M. Ratto, S. Tarantola, "Variance based sensitivity analysis
+    of model output. Design and estimator for the total sensitivity index", Computer Physics Communications 181(2),
+    259-270, 2010.
+    M. J. W. Jansen, "Analysis of variance designs for model output", Computer Physics Communications 117(1-2),
+    35-43, 1999.
     """
     if seed <= 0:
         raise ValueError(f"seed = {seed}: must be a positive integer (SALib ignores a seed of 0)")
