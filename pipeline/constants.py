@@ -4,13 +4,21 @@ from __future__ import annotations
 
 from bogie.params import TARE_FRACTION
 
-__all__ = ["GROUP_AXLES", "MAX_AXLES", "TARE_FRACTION", "n_axles"]
+__all__ = ["GROUP_AXLES", "MAX_AXLES", "PROTOCOLS", "PAIR_TOLERANCE", "SHARE_TOLERANCE", "TARE_FRACTION", "n_axles"]
 
 #: axles in each axle group the fleet is made of [-]
 GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
 
 #: most axles in a group: the runs have columns axle_load_0..MAX_AXLES-1 [-]
 MAX_AXLES: int = max(GROUP_AXLES.values())
+
+#: the weighing protocols: static weighbridge, weigh-in-motion pass
+PROTOCOLS: tuple[str, ...] = ("static", "wim")
+
+#: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
+PAIR_TOLERANCE: float = 0.05
+#: load-sharing suspension rule: no axle more than 10 % over its equal share, max LSC <= 1.10 [-]
+SHARE_TOLERANCE: float = 0.10
 
 
 def n_axles(group: str) -> int:

@@ -10,12 +10,13 @@ axle's dynamic load is recorded as that axle crosses the sensor.
 
 Both run the full non-linear model (:mod:`bogie.nonlinear`). One side of the bogie is modelled; axle loads are
 twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
-failed simulation: the row then has ``status = "failed"`` and the solver's message, and its loads are 0.
+failed simulation: the row then has ``status = "failed"`` and the solver's message, and its results are null
+(:mod:`pipeline.schema`).
 """
 
 from __future__ import annotations
 
-import time
+import math
 from collections.abc import Mapping
 from dataclasses import dataclass
 from typing import Any
@@ -27,7 +28,8 @@ from bogie import metrics, nonlinear
 from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
-from pipeline.constants import MAX_AXLES, TARE_FRACTION
+from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE, TARE_FRACTION
+from pipeline.schema import RESULT_COLUMNS
 
 #: the weighbridge reads the mean over this last part of the settling time [s]
 READ_TIME = 0.5
@@ -105,38 +107,37 @@ def wim_pass(
     return run
 
 
-RESULT_COLUMNS = (
-    ["protocol", "status", "message", "wall_time", "n_axles"]
-    + [f"axle_load_{i}" for i in range(MAX_AXLES)]
-    + [f"load_share_{i}" for i in range(MAX_AXLES)]
-    + ["group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch"]
-)
-
-
 def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float) -> dict[str, Any]:
-    """The result columns for one weighing: axle loads [N] are twice the wheel loads (both sides)."""
+    """The result columns of one weighing (:data:`pipeline.schema.RESULT_COLUMNS`) with ``protocol``.
+
+    Axle loads [N] are twice the wheel loads (both sides); an axle the group does not have reads 0. With no
+    ``wheel_loads`` (a failed weighing) every result is null: NaN for the numbers, None for the two flags.
+    ``outside_5pct`` is (max W - min W) / max W > :data:`~pipeline.constants.PAIR_TOLERANCE` (VSB 11) and
+    ``over_10pct`` the largest load share n W / sum W above 1 + :data:`~pipeline.constants.SHARE_TOLERANCE`.
+    """
     row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}
+    if wheel_loads is None:
+        row.update(dict.fromkeys(RESULT_COLUMNS, math.nan))
+        row.update(outside_5pct=None, over_10pct=None)
+        return row
+    loads = 2.0 * np.asarray(wheel_loads, dtype=float)
     axle = np.zeros(MAX_AXLES)
     share = np.zeros(MAX_AXLES)
-    if wheel_loads is not None:
-        loads = 2.0 * np.asarray(wheel_loads, dtype=float)
-        axle[:n_axles] = loads
-        share[:n_axles] = metrics.lsc(loads)
-        row.update(
-            group_load=float(loads.sum()),
-            p=float(metrics.p(loads / loads.mean())),
-            p1=float(metrics.p1(loads / loads.mean())),
-            max_deviation=float(metrics.max_deviation(loads)),
-            spread=float(metrics.spread(loads)),
-            spread_kg=float(metrics.spread(loads) / GRAVITY),
-            road_wear_factor=float(metrics.road_wear_factor(loads)),
-            chassis_pitch=float(pitch),
-        )
-    else:
-        row.update(
-            group_load=0.0, p=0.0, p1=0.0, max_deviation=0.0, spread=0.0, spread_kg=0.0, road_wear_factor=0.0,
-            chassis_pitch=0.0,
-        )  # fmt: skip
+    axle[:n_axles] = loads
+    share[:n_axles] = metrics.lsc(loads)
+    heaviest, lightest = float(loads.max()), float(loads.min())
+    row.update(
+        group_load=float(loads.sum()),
+        p=float(metrics.p(loads / loads.mean())),
+        p1=float(metrics.p1(loads / loads.mean())),
+        max_deviation=float(metrics.max_deviation(loads)),
+        spread=float(metrics.spread(loads)),
+        spread_kg=float(metrics.spread(loads) / GRAVITY),
+        road_wear_factor=float(metrics.road_wear_factor(loads)),
+        chassis_pitch=float(pitch),
+        outside_5pct=bool((heaviest - lightest) / heaviest > PAIR_TOLERANCE),
+        over_10pct=bool(heaviest / (loads.sum() / n_axles) > 1.0 + SHARE_TOLERANCE),
+    )
     for i in range(MAX_AXLES):
         row[f"axle_load_{i}"] = float(axle[i])
         row[f"load_share_{i}"] = float(share[i])
@@ -145,7 +146,6 @@ def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | N
 
 def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol) -> dict:
     """Weigh one sampled bogie by ``protocol``; never raises for a failed simulation (see the module text)."""
-    start = time.perf_counter()
     status, message = "ok", "ok"
     reading = None
     pitch = 0.0
@@ -163,8 +163,9 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
                 reading = None
         else:
             status, message = "failed", run.message
-    except (RuntimeError, ValueError, FloatingPointError, np.linalg.LinAlgError) as exc:
+    except Exception as exc:  # noqa: BLE001 - any error of one bogie (MemoryError included) fails its row only
         status, message = "failed", f"{type(exc).__name__}: {exc}"
+        reading = None
     row = result_row(protocol, bogie.n_axles, reading, pitch)
-    row.update(status=status, message=message, wall_time=time.perf_counter() - start)
+    row.update(status=status, message=message)
     return row

@@ -8,8 +8,8 @@ so ``pd.read_parquet("data/runs", filters=[("study", "==", "fleet")])`` reads on
 from the directory name as a categorical column; the files themselves have no ``study`` column).
 
 One row per (sample, protocol), with every column of the sample (except ``study``) followed by the protocol's
-results (:data:`RUN_COLUMNS`). A failed weighing is a row with ``status = "failed"``, the solver's message and zeros
-in its numbers; the stage never stops for one.
+results, in the one schema of :mod:`pipeline.schema` (types and units). A failed weighing is a row with
+``status = "failed"``, the reason in ``message`` and nulls in every result column; the stage never stops for one.
 
 Parallel: the chunks run with joblib (``loky`` processes, one thread each, or a dask.distributed cluster through
 joblib's ``dask`` backend); the main process writes each chunk's file as soon as the chunk completes.
@@ -20,7 +20,9 @@ the pipeline modules that turn a sample into a row, and the numerical libraries'
 whose hash matches, deletes every other file (stale chunks, leftovers of an interrupted write) and computes only the
 missing chunks. Files are written under a temporary dot-name and renamed, so a reader or a rerun never sees half a
 file. Deterministic: every run is a pure function of its sample row and protocol settings (each bogie's road has its
-own seed), so the dataset is the same whatever ``n_jobs``, chunk size or backend; only ``wall_time`` differs.
+own seed), so the dataset is byte for byte the same whatever ``n_jobs``, chunk size or backend. (Timing is not
+stored in the dataset, which would then differ at every rebuild: the stage's summary line gives the runs per second,
+and ``bench/`` measures the cost per run.)
 """
 
 from __future__ import annotations
@@ -29,6 +31,7 @@ import argparse
 import dataclasses
 import hashlib
 import json
+import math
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
@@ -49,10 +52,11 @@ import bogie
 from pipeline import constants as constants_module
 from pipeline import protocol as protocol_module
 from pipeline import sample as sample_module
-from pipeline.atomic import atomic_file
+from pipeline import schema as schema_module
 from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
-from pipeline.protocol import RESULT_COLUMNS, result_row, weigh
+from pipeline.protocol import result_row, weigh
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame, write_runs_file
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -61,26 +65,8 @@ Protocols = tuple[tuple[str, Spec], ...]
 #: Parquet metadata key of a part file's content hash
 HASH_KEY = b"bogie.simulate.hash"
 
-#: sample columns of a run row: the partition directory carries ``study``
-SAMPLE_COLUMNS: tuple[str, ...] = tuple(c for c in COLUMNS if c != "study")
-
-#: result columns after the sample's (``n_axles`` is already a sample column), wall_time last
-_RESULT_ORDER: tuple[str, ...] = (
-    "protocol",
-    "status",
-    "message",
-    *(c for c in RESULT_COLUMNS if c not in ("protocol", "status", "message", "wall_time", "n_axles")),
-    "wall_time",
-)
-
-#: column -> dtype of every runs file, in order; units in the README's pipeline section
-RUN_COLUMNS: dict[str, str] = {
-    **{c: COLUMNS[c] for c in SAMPLE_COLUMNS},
-    **{c: "str" if c in ("protocol", "status", "message") else "float64" for c in _RESULT_ORDER},
-}
-
-#: the numerical result columns (zero in a failed row)
-_NUMBERS: tuple[str, ...] = tuple(c for c in _RESULT_ORDER if RUN_COLUMNS[c] == "float64" and c != "wall_time")
+#: the numerical result columns: a successful row with a non-finite one is a failed run
+_NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
 
 #: a summary or progress line goes here; tests pass their own
 Log = Callable[[str], None]
@@ -95,13 +81,13 @@ def code_version() -> str:
     """A hash of the code and libraries that turn a sample row into a run row.
 
     The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
-    (``bogie_from_sample``), :mod:`pipeline.constants` and this module, plus the versions of numpy, scipy, numba,
-    pandas and pyarrow. Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed
-    physics change would cost a wrong dataset.
+    (``bogie_from_sample``), :mod:`pipeline.constants`, :mod:`pipeline.schema` and this module, plus the versions
+    of numpy, scipy, numba, pandas and pyarrow. Any edit to those files invalidates every part file: a cosmetic edit
+    costs a rerun, a missed physics change would cost a wrong dataset.
     """
     digest = hashlib.sha256()
     package = Path(bogie.__file__).parent
-    modules = (protocol_module, sample_module, constants_module)
+    modules = (protocol_module, sample_module, constants_module, schema_module)
     files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in modules]
     files.append(Path(__file__))
     for path in files:
@@ -159,7 +145,7 @@ def study_protocols(config: Config, study: str) -> Protocols:
 # ---- one chunk: the work of one task ---------------------------------------------------------------------------
 def _failed_row(protocol: str, n_axles: int, message: str) -> dict:
     row = result_row(protocol, n_axles, None, 0.0)
-    row.update(status="failed", message=message, wall_time=0.0)
+    row.update(status="failed", message=message)
     return row
 
 
@@ -176,9 +162,9 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`RUN_COLUMNS`, no missing values.
+        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`pipeline.schema.RUN_COLUMNS`.
         A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
-        reason in ``message`` and zeros in the numbers.
+        reason in ``message`` and nulls in every result column.
     """
     out = []
     for sample in rows.to_dict("records"):
@@ -192,12 +178,13 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
                 result = _failed_row(name, int(sample["n_axles"]), invalid)
             else:
                 result = weigh(bogie_, sample, name, spec)
-            bad = [c for c in _NUMBERS if not np.isfinite(result[c])]
+            bad = [c for c in _NUMBERS if not np.isfinite(result[c])] if result["status"] == "ok" else []
             if bad:
-                # the dataset promises no NaN: a non-finite metric is a failed run, not a number
+                # a successful row has no null: a non-finite metric is a failed run, not a number
                 result = _failed_row(name, int(sample["n_axles"]), f"non-finite result in {', '.join(bad)}")
-            out.append({**{c: sample[c] for c in SAMPLE_COLUMNS}, **{c: result[c] for c in _RESULT_ORDER}})
-    return pd.DataFrame(out, columns=list(RUN_COLUMNS)).astype(RUN_COLUMNS)
+            tilt_deg = math.degrees(float(sample["chassis_tilt"]))
+            out.append({**{c: sample[c] for c in SAMPLE_COLUMNS}, "chassis_tilt_deg": tilt_deg, **result})
+    return runs_frame(out)
 
 
 def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> tuple[str, int, pd.DataFrame]:
@@ -283,14 +270,10 @@ def reconcile(chunks: Sequence[Chunk], out: Path) -> tuple[list[Chunk], list[Chu
 
 
 def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
-    """Write a part file with its hash in the Parquet metadata, atomically (temporary dot-name, then rename).
-
-    Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover temporary file.
+    """Write a part file in the runs schema with its hash in the Parquet metadata, atomically (temporary dot-name,
+    then rename). Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover temporary file.
     """
-    table = pa.Table.from_pandas(frame, preserve_index=False)
-    table = table.replace_schema_metadata({**(table.schema.metadata or {}), HASH_KEY: chunk_hash_.encode()})
-    with atomic_file(path) as tmp:
-        pq.write_table(table, tmp)
+    write_runs_file(frame, path, {HASH_KEY: chunk_hash_.encode()})
 
 
 # ---- running ---------------------------------------------------------------------------------------------------

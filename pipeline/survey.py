@@ -24,21 +24,19 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
+import pyarrow.parquet as pq
 import yaml
 
 from pipeline.atomic import atomic_outputs
 from pipeline.config import ConfigError, load_config
-from pipeline.constants import GROUP_AXLES, MAX_AXLES
+from pipeline.constants import GROUP_AXLES, MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE
 from pipeline.sample import TYRE_WEAR_COLUMNS
+from pipeline.schema import SchemaError, check_file_schema, check_runs
 
 #: the study a roadside survey samples
 SURVEY_STUDY = "fleet"
 AXLE_LOAD_COLUMNS: tuple[str, ...] = tuple(f"axle_load_{i}" for i in range(MAX_AXLES))
 LOAD_SHARE_COLUMNS: tuple[str, ...] = tuple(f"load_share_{i}" for i in range(MAX_AXLES))
-#: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
-PAIR_TOLERANCE = 0.05
-#: load-sharing suspension rule: no axle more than 10 % over its equal share, max LSC <= 1.10 [-]
-SHARE_TOLERANCE = 0.10
 TILT_BIN_DEG = 0.5
 WEAR_BAND_MM = 2.0
 #: "nose up" for the rear-overload headline: tilt above this [degree]
@@ -63,24 +61,29 @@ class RunsError(ValueError):
 def read_runs(runs_dir: str | Path, study: str, columns: Sequence[str] = REQUIRED_COLUMNS) -> pd.DataFrame:
     """The runs of one study from the hive-partitioned dataset ``runs_dir/study=<study>/part-*.parquet``.
 
+    Each part file is checked against the runs schema (:mod:`pipeline.schema`) and the rows against its null rule:
+    no null in a successful row, only nulls in the results of a failed one.
+
     Raises
     ------
     RunsError
-        If the study has no part file, or a required column is absent or has missing values.
+        If the study has no part file, a file is not of the runs schema, or the nulls break the rule.
     """
     runs_dir = Path(runs_dir)
     partition = runs_dir / f"study={study}"
-    if not any(partition.glob("*.parquet")):
+    files = sorted(partition.glob("*.parquet"))
+    if not files:
         raise RunsError(f"no runs of study {study!r}: {partition}/ holds no Parquet file; run the simulate stage first")
-    frame = pd.read_parquet(runs_dir, filters=[("study", "==", study)])
+    try:
+        for path in files:
+            check_file_schema(pq.read_schema(path), str(path))
+        frame = pd.read_parquet(runs_dir, filters=[("study", "==", study)])
+        check_runs(frame, f"runs of study {study!r} in {runs_dir}")
+    except SchemaError as exc:
+        raise RunsError(str(exc)) from None
     missing = [c for c in columns if c not in frame.columns]
     if missing:
         raise RunsError(f"runs of study {study!r} in {runs_dir} lack the columns {', '.join(missing)}")
-    # a part file written with fewer columns than the others comes back as nulls: refuse, never average over them
-    nulls = frame[list(columns)].isna().sum()
-    if nulls.any():
-        counts = ", ".join(f"{c} ({n} rows)" for c, n in nulls[nulls > 0].items())
-        raise RunsError(f"runs of study {study!r} in {runs_dir} have missing values in {counts}")
     frame["study"] = frame["study"].astype(str)
     return frame
 
@@ -268,7 +271,7 @@ def tilt_table(ok: pd.DataFrame, width_deg: float = TILT_BIN_DEG) -> pd.DataFram
     table = _banded(ok, "tilt_deg", width_deg, "tilt_deg", {**shares, "rear_heaviest_share": ("rear_heaviest", "mean")})
     for i, c in enumerate(LOAD_SHARE_COLUMNS):
         # a tandem's third share is 0 in the runs, not a measurement
-        table.loc[table["group"].map(GROUP_AXLES) <= i, f"mean_{c}"] = np.nan
+        table.loc[table["group"].astype(str).map(GROUP_AXLES) <= i, f"mean_{c}"] = np.nan
     return table
 
 

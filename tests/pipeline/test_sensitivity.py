@@ -13,8 +13,9 @@ from SALib.sample import sobol as sobol_sample
 from SALib.test_functions import Ishigami
 
 from pipeline.config import load_params, parse_config
-from pipeline.protocol import RESULT_COLUMNS, result_row
+from pipeline.protocol import result_row
 from pipeline.sample import VARIANTS, sample_studies, sensitivity_problem
+from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.sensitivity import (
     SensitivityDataError,
     ablation_effects,
@@ -237,7 +238,7 @@ def ablation_runs(n_bogies=60, noise=0.0, seed=0, n_axles=None):
             shape = [1 - d, 1, 1 + d] if n == 3 else [1 - d, 1 + d]
             for protocol in ("static", "wim"):
                 row = result_row(protocol, n, WHEEL_LOAD * np.array(shape), 0.0)
-                row.update(status="ok", message="ok", wall_time=0.03)
+                row.update(status="ok", message="ok")
                 group = "triaxle" if n == 3 else "tandem"
                 row.update(sample_id=6 * base_id + k, base_id=base_id, group=group, variant=variant, chassis_tilt=0.0)
                 row.update(tyre_wear_0=0.0, tyre_wear_1=0.0, tyre_wear_2=0.0)
@@ -337,7 +338,11 @@ def test_an_incomplete_ablation_is_refused():
 def write_runs(root, study, frame):
     part = root / "data" / "runs" / f"study={study}"
     part.mkdir(parents=True, exist_ok=True)
-    frame.to_parquet(part / "part-000000.parquet", index=False)
+    frame = frame.assign(chassis_tilt_deg=np.degrees(frame["chassis_tilt"]))
+    # results the stage does not read: equal axle loads, so the file is a complete row of the runs schema
+    filler = result_row("static", 3, np.full(3, 1e4), 0.0)
+    frame = frame.assign(**{c: filler[c] for c in RESULT_COLUMNS if c not in frame.columns})
+    write_runs_file(frame, part / "part-000000.parquet")
 
 
 def stage_args(root):
@@ -352,7 +357,7 @@ def ablation_study_runs(config, studies):
     ablation = studies["ablation"].drop(columns="study")
     n_axles = ablation.groupby("base_id")["n_axles"].first().to_numpy()
     fabricated = ablation_runs(n_bogies=config.ablation.size, n_axles=n_axles)
-    columns = [c for c in RESULT_COLUMNS if c != "n_axles"]
+    columns = ["protocol", "status", "message", *RESULT_COLUMNS]
     return ablation.merge(fabricated[["sample_id", *columns]], on="sample_id")
 
 

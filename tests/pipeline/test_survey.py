@@ -7,13 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.parquet as pq
 import pytest
 import yaml
 
 from bogie.params import GRAVITY
 from pipeline.config import load_params, parse_config
-from pipeline.protocol import RESULT_COLUMNS, result_row
+from pipeline.protocol import result_row
 from pipeline.sample import sample_studies
+from pipeline.schema import RUNS_SCHEMA, runs_frame, write_runs_file
 from pipeline.survey import (
     RunsError,
     band,
@@ -44,7 +47,7 @@ def run(sample_id, loads, protocol="static", tilt_deg=0.0, wear_mm=(0.0, 0.0, 0.
     n = len(loads)
     wheel = None if status != "ok" else np.asarray(loads, dtype=float) / 2.0
     row = result_row(protocol, n, wheel, 0.0)
-    row.update(status=status, message=message, wall_time=0.03)
+    row.update(status=status, message=message)
     row.update(
         sample_id=sample_id,
         base_id=sample_id,
@@ -283,10 +286,9 @@ def fabricated_runs(samples: pd.DataFrame) -> pd.DataFrame:
         for protocol in ("static", "wim"):
             failed = protocol == "wim" and sample["sample_id"] == 3
             row = result_row(protocol, n, None if failed else wheel * (1.03 if protocol == "wim" else 1.0), 0.0)
-            row.update(status="failed" if failed else "ok", message="diverged" if failed else "ok", wall_time=0.03)
-            rows.append({**sample, **row})
-    frame = pd.DataFrame(rows).drop(columns="study")
-    return frame[list(dict.fromkeys([c for c in samples.columns if c != "study"] + list(RESULT_COLUMNS)))]
+            row.update(status="failed" if failed else "ok", message="diverged" if failed else "ok")
+            rows.append({**sample, **row, "chassis_tilt_deg": math.degrees(sample["chassis_tilt"])})
+    return runs_frame(rows)
 
 
 @pytest.fixture()
@@ -297,8 +299,8 @@ def stage_dir(tmp_path):
     part = tmp_path / "data" / "runs" / "study=fleet"
     part.mkdir(parents=True)
     runs = fabricated_runs(fleet)
-    runs.iloc[:50].to_parquet(part / "part-000000.parquet", index=False)
-    runs.iloc[50:].to_parquet(part / "part-000001.parquet", index=False)
+    write_runs_file(runs.iloc[:50], part / "part-000000.parquet")
+    write_runs_file(runs.iloc[50:], part / "part-000001.parquet")
     return tmp_path
 
 
@@ -339,14 +341,27 @@ def test_stage_with_no_fleet_runs_fails_clearly_and_leaves_old_outputs(stage_dir
     assert (stage_dir / "data" / "survey" / "summary.csv").exists()
 
 
-def test_read_runs_names_missing_columns_and_values(stage_dir):
-    first, second = sorted((stage_dir / "data" / "runs" / "study=fleet").iterdir())
-    pd.read_parquet(second).drop(columns="max_deviation").to_parquet(second)
-    with pytest.raises(RunsError, match=r"missing values in max_deviation \(30 rows\)"):
-        read_runs(stage_dir / "data" / "runs", "fleet")
-    pd.read_parquet(first).drop(columns="max_deviation").to_parquet(first)
-    with pytest.raises(RunsError, match="lack the columns max_deviation"):
-        read_runs(stage_dir / "data" / "runs", "fleet")
+def test_read_runs_refuses_files_of_another_schema_and_rows_that_break_the_null_rule(stage_dir):
+    runs_dir = stage_dir / "data" / "runs"
+    first = sorted((runs_dir / "study=fleet").iterdir())[0]  # holds the failed run of sample 3
+    frame = pd.read_parquet(first)
+    frame.drop(columns="max_deviation").to_parquet(first)
+    with pytest.raises(RunsError, match=r"part-000000.parquet is not a runs file of this version: max_deviation miss"):
+        read_runs(runs_dir, "fleet")
+    # a successful row with a null result: refused, never averaged over
+    ok = frame.index[frame["status"] == "ok"][:3]
+    frame.loc[ok, "max_deviation"] = np.nan
+    pq.write_table(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False), first)
+    with pytest.raises(RunsError, match=r"max_deviation null in 3 successful rows"):
+        read_runs(runs_dir, "fleet")
+    # a failed row with a number in it: a made-up result, refused
+    frame.loc[ok, "max_deviation"] = 0.1
+    failed = frame.index[frame["status"] == "failed"]
+    assert len(failed)
+    frame.loc[failed, "spread_kg"] = 0.0
+    pq.write_table(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False), first)
+    with pytest.raises(RunsError, match=rf"spread_kg set in {len(failed)} failed rows \(must be null\)"):
+        read_runs(runs_dir, "fleet")
 
 
 def test_an_error_while_writing_leaves_the_old_outputs_and_no_temporary_files(tmp_path):
