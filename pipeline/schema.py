@@ -37,6 +37,7 @@ __all__ = [
     "conform",
     "runs_frame",
     "runs_table",
+    "verify_file",
     "write_runs_file",
 ]
 
@@ -150,7 +151,18 @@ def write_runs_file(frame: pd.DataFrame, path: str | Path, metadata: Mapping[byt
     if metadata:
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **metadata})
     with atomic_file(path) as tmp:
-        pq.write_table(table, tmp)
+        # CRC32 of every page: a changed byte in a data page is detected on read (see :func:`verify_file`)
+        pq.write_table(table, tmp, write_page_checksum=True)
+
+
+def verify_file(path: str | Path) -> str | None:
+    """Why the part file ``path`` cannot be trusted (unreadable, a page checksum or the schema wrong), or None."""
+    try:
+        table = pq.read_table(path, page_checksum_verification=True)
+        check_file_schema(table.schema, str(path))
+    except (OSError, pa.ArrowException, SchemaError) as exc:
+        return f"{type(exc).__name__}: {exc}"
+    return None
 
 
 def check_file_schema(schema: pa.Schema, where: str) -> None:

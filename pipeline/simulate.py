@@ -29,12 +29,15 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import fcntl
 import hashlib
 import json
 import math
+import os
 import sys
 import time
 from collections.abc import Callable, Iterator, Mapping, Sequence
+from contextlib import contextmanager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -56,7 +59,7 @@ from pipeline import schema as schema_module
 from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
 from pipeline.protocol import result_row, weigh
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame, write_runs_file
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame, verify_file, write_runs_file
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -240,33 +243,94 @@ def stored_hash(path: Path) -> str | None:
     return value.decode() if value is not None else None
 
 
-def reconcile(chunks: Sequence[Chunk], out: Path) -> tuple[list[Chunk], list[Chunk], list[Path]]:
-    """Compare the plan with the files in ``out`` and delete every file that does not belong to it.
+def reconcile(
+    chunks: Sequence[Chunk], out: Path, log: Log = _print
+) -> tuple[list[Chunk], list[Chunk], list[Path]]:
+    """Compare the plan with the files in ``out``; delete every part that does not belong to it.
+
+    A part is kept only if its stored hash matches its chunk's and it reads back whole: every page's CRC32 checksum
+    verified and the runs schema's fields (:func:`pipeline.schema.verify_file`); a part with a changed byte is
+    recomputed, with a log line. Any other file in ``out`` (a user's ``notes.txt``, which would stop pandas from
+    reading the dataset) is moved to ``<out parent>/.quarantine/<out name>/`` with a log line, never deleted.
 
     Returns
     -------
     pending, done, removed
         Chunks to compute, chunks whose file is up to date, and the files deleted: parts of chunks that no longer
-        exist or whose hash differs, unreadable parts, temporary files of interrupted writes, and the parts of
+        exist or whose hash differs, damaged parts, temporary files of interrupted writes, and the parts of
         studies that are no longer simulated.
     """
-    pending, done, removed = [], [], []
+    pending, done = [], []
     for chunk in chunks:
-        if chunk.path.exists() and stored_hash(chunk.path) == chunk.hash:
-            done.append(chunk)
-        else:
-            pending.append(chunk)
+        intact = chunk.path.exists() and stored_hash(chunk.path) == chunk.hash
+        problem = verify_file(chunk.path) if intact else None
+        if problem:
+            log(f"simulate: {chunk.path} is damaged ({problem}); recomputing it")
+        (done if intact and not problem else pending).append(chunk)
     keep = {c.path for c in done}
-    if out.is_dir():
-        for directory in sorted(d for d in out.glob("study=*") if d.is_dir()):
-            for path in sorted(directory.iterdir()):
-                ours = path.name.startswith(("part-", ".part-"))
-                if ours and path.is_file() and path not in keep:
-                    path.unlink()
-                    removed.append(path)
-            if not any(directory.iterdir()):
-                directory.rmdir()
+    removed = _sweep(out, keep, log) if out.is_dir() else []
     return pending, done, removed
+
+
+def _sweep(out: Path, keep: set[Path], log: Log) -> list[Path]:
+    """Delete the parts and temporaries in ``out`` not in ``keep``; quarantine every file that is not ours."""
+    removed = []
+    quarantine = out.parent / ".quarantine" / out.name
+    for path in sorted(out.rglob("*")):
+        if path.is_dir() or path in keep:
+            continue
+        relative = path.relative_to(out)
+        ours = len(relative.parts) == 2 and relative.parts[0].startswith("study=")
+        ours = ours and path.name.startswith(("part-", ".part-"))
+        if ours:
+            path.unlink()
+            removed.append(path)
+        else:
+            target = quarantine / relative
+            target.parent.mkdir(parents=True, exist_ok=True)
+            os.replace(path, target)
+            log(f"simulate: warning: {path} is not a part file of the runs dataset; moved it to {target}")
+    for directory in sorted((d for d in out.rglob("*") if d.is_dir()), reverse=True):
+        if not any(directory.iterdir()):
+            directory.rmdir()
+    return removed
+
+
+@contextmanager
+def runs_lock(out: Path) -> Iterator[None]:
+    """Hold an exclusive lock on the dataset ``out`` (file ``<out>.lock`` beside it) while the stage writes it.
+
+    Raises
+    ------
+    RunsLockedError
+        If another process holds it: two stages writing one dataset would delete each other's temporary files.
+    """
+    out.parent.mkdir(parents=True, exist_ok=True)
+    lock_path = out.parent / f".{out.name}.lock"
+    with open(lock_path, "a+", encoding="utf-8") as handle:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            handle.seek(0)
+            holder = handle.read().strip() or "unknown"
+            raise RunsLockedError(
+                f"{out} is being written by another simulate process (pid {holder}, lock {lock_path}): wait for it "
+                "to finish or stop it, then run again"
+            ) from None
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        try:
+            yield
+        finally:
+            handle.seek(0)
+            handle.truncate()
+            fcntl.flock(handle, fcntl.LOCK_UN)
+
+
+class RunsLockedError(RuntimeError):
+    """Another process is writing the runs dataset."""
 
 
 def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
@@ -387,16 +451,16 @@ def simulate_samples(
     start = time.perf_counter()
     out = Path(out)
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
-    pending, done, removed = reconcile(chunks, out)
-    total = sum(c.n_runs for c in pending)
-    log(
-        f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
-        f"{len(pending)} to run ({total} runs) on {execution.backend}"
-        + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
-    )
-    failed = _run_pending(pending, execution, total, log)
-    for chunk in done:
-        failed += _count_failed(chunk.path)
+    with runs_lock(out):
+        pending, done, removed = reconcile(chunks, out, log)
+        total = sum(c.n_runs for c in pending)
+        log(
+            f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
+            f"{len(pending)} to run ({total} runs) on {execution.backend}"
+            + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
+        )
+        failed = _run_pending(pending, execution, total, log)
+        failed += sum(_count_failed(chunk.path) for chunk in done)
     summary = Summary(
         runs=sum(c.n_runs for c in chunks),
         failed=failed,
@@ -470,7 +534,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"simulate: {exc}", file=sys.stderr)
         return 2
     protocols = {study: study_protocols(config, study) for study in samples}
-    simulate_samples(samples, protocols, config.execution, args.out)
+    try:
+        simulate_samples(samples, protocols, config.execution, args.out)
+    except (RunsLockedError, OSError) as exc:
+        print(f"simulate: {exc}", file=sys.stderr)
+        return 2
     return 0
 
 

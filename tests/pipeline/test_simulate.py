@@ -28,7 +28,9 @@ from pipeline.simulate import (
     RESULT_COLUMNS,
     RUN_COLUMNS,
     SAMPLE_COLUMNS,
+    RunsLockedError,
     part_name,
+    runs_lock,
     simulate_samples,
     study_protocols,
 )
@@ -185,6 +187,52 @@ def test_a_rerun_replaces_stale_corrupt_and_leftover_files(config, samples, refe
     assert not gone.exists()
     assert summary.skipped_chunks == 0
     pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def _data_page_offset(path):
+    """A byte inside the first column chunk's data of a Parquet file (after its page header), footer untouched."""
+    column = pq.ParquetFile(path).metadata.row_group(0).column(0)
+    start = column.dictionary_page_offset or column.data_page_offset
+    return start + column.total_compressed_size // 2
+
+
+def test_a_flipped_bit_inside_a_data_page_is_detected_and_the_part_recomputed(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    damaged = out / "study=fleet" / part_name(1)
+    content = bytearray(damaged.read_bytes())
+    content[_data_page_offset(damaged)] ^= 0x04  # one bit; the footer, schema and stored hash stay intact
+    damaged.write_bytes(bytes(content))
+    assert pq.read_schema(damaged).metadata[HASH_KEY]  # the hash alone cannot see the damage
+    summary, lines = run(config, samples, out)
+    assert (summary.computed_chunks, summary.skipped_chunks) == (1, len(parts(out)) - 1)
+    assert any(f"{damaged} is damaged" in line and "recomputing" in line for line in lines)
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def test_a_stray_file_in_the_dataset_is_quarantined_with_a_warning(config, samples, reference, tmp_path):
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    notes = out / "study=fleet" / "notes.txt"
+    notes.write_text("my notes")
+    (out / "README").write_text("top-level notes")
+    summary, lines = run(config, samples, out)
+    assert summary.computed_chunks == 0
+    quarantine = tmp_path / ".quarantine" / "runs"
+    assert (quarantine / "study=fleet" / "notes.txt").read_text() == "my notes"  # moved, never deleted
+    assert (quarantine / "README").exists() and not notes.exists()
+    assert sum("warning" in line and "notes.txt" in line for line in lines) == 1
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)  # pandas reads the dataset again
+
+
+def test_a_second_simulate_on_the_same_dataset_is_refused_while_the_first_holds_it(config, samples, tmp_path):
+    out = tmp_path / "runs"
+    with runs_lock(out):
+        with pytest.raises(RunsLockedError, match=rf"{out} is being written by another simulate process \(pid "):
+            run(config, samples, out)
+        assert not out.exists()  # the refused run wrote nothing
+    summary, _ = run(config, samples, out)  # released: the next run goes ahead
+    assert summary.computed_chunks > 0
 
 
 def test_a_changed_protocol_setting_reruns_only_the_chunks_that_use_it(config, samples, reference, tmp_path):
