@@ -88,6 +88,28 @@ def read_runs(runs_dir: str | Path, study: str, columns: Sequence[str] = REQUIRE
     return frame
 
 
+def check_complete(runs: pd.DataFrame, n_samples: int, protocols: Sequence[str], study: str = "fleet") -> None:
+    """Check that the runs hold each of ``n_samples`` samples once under each protocol (simulate has finished).
+
+    Raises
+    ------
+    RunsError
+        Naming how many runs are missing or duplicated and a few of their sample ids.
+    """
+    have = runs.groupby([runs["protocol"].astype(str), "sample_id"], observed=True).size()
+    expected = pd.MultiIndex.from_product([list(protocols), range(n_samples)], names=["protocol", "sample_id"])
+    missing = expected.difference(have.index)
+    extra = have.index.difference(expected).union(have[have > 1].index)
+    if len(missing) or len(extra):
+        shown = ", ".join(f"{p} {i}" for p, i in list(missing)[:5])
+        raise RunsError(
+            f"the {study} runs are incomplete: {len(missing)} of {len(expected)} (sample, protocol) runs missing"
+            + (f" (e.g. {shown})" if shown else "")
+            + (f", {len(extra)} unexpected or repeated" if len(extra) else "")
+            + "; run the simulate stage to completion (make repro) first"
+        )
+
+
 def split_failed(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     """The succeeded rows and the failed rows (``status != "ok"``), each with a fresh index."""
     ok = runs["status"] == "ok"
@@ -454,6 +476,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         config = load_config(args.params)
         runs = read_runs(args.runs, SURVEY_STUDY)
+        check_complete(runs, config.fleet.size, config.protocol.run, SURVEY_STUDY)
     except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
         print(f"survey: {exc}", file=sys.stderr)
         return 2

@@ -378,3 +378,13 @@ def test_an_error_while_writing_leaves_the_old_outputs_and_no_temporary_files(tm
     with pytest.raises(ValueError):  # NaN is not JSON: refused before anything is replaced
         write_outputs(good, tmp_path / "out", {"v": math.nan}, tmp_path / "m" / "metrics.json")
     assert json.loads((tmp_path / "m" / "metrics.json").read_text()) == {"v": 1}
+
+
+def test_the_stage_refuses_an_incomplete_runs_dataset(stage_dir, capsys):
+    second = sorted((stage_dir / "data" / "runs" / "study=fleet").iterdir())[1]
+    frame = pd.read_parquet(second)
+    write_runs_file(frame.iloc[:-3], second)  # an interrupted simulate: the last three runs never written
+    assert main(stage_args(stage_dir)) == 2
+    err = capsys.readouterr().err
+    assert "the fleet runs are incomplete: 3 of 80 (sample, protocol) runs missing" in err
+    assert not (stage_dir / "metrics" / "survey.json").exists()
