@@ -22,7 +22,8 @@ import numpy as np
 import pandas as pd
 
 from pipeline.config import Config, load_config
-from pipeline.sample import sample_fleet, sample_studies
+from pipeline.protocol import weigh
+from pipeline.sample import bogie_from_sample, sample_fleet, sample_studies
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -60,14 +61,35 @@ def best_of(size: int, n_jobs: int) -> tuple[float, pd.DataFrame]:
     return min(results, key=lambda r: r[0])
 
 
-def default_estimate(runs: pd.DataFrame, parallelism: float) -> tuple[int, float]:
+def run_costs(n_per_cell: int = 8) -> pd.Series:
+    """Mean time of one weighing [s] per (group, protocol), timed in this process on the first fleet samples.
+
+    The runs dataset holds no timing (it would make every rebuild's data differ), so the cost is measured here.
+    """
+    config = _config(4 * n_per_cell, 1)
+    fleet = sample_fleet(config)
+    times: dict[tuple[str, str], list[float]] = {}
+    warm = fleet.iloc[0].to_dict()
+    for protocol, spec in study_protocols(config, "fleet"):  # loads the compiled kernels before any timing
+        weigh(bogie_from_sample(warm), warm, protocol, spec)
+    for sample in fleet.to_dict("records"):
+        bogie = bogie_from_sample(sample)
+        for protocol, spec in study_protocols(config, "fleet"):
+            cell = times.setdefault((sample["group"], protocol), [])
+            if len(cell) < n_per_cell:
+                start = time.perf_counter()
+                weigh(bogie, sample, protocol, spec)
+                cell.append(time.perf_counter() - start)
+    return pd.Series({key: float(np.mean(v)) for key, v in sorted(times.items())})
+
+
+def default_estimate(cost: pd.Series, parallelism: float) -> tuple[int, float]:
     """Runs and estimated wall time [s] of the default simulate stage (every study, 2 workers).
 
-    Every default run is costed at the mean time of its (group, protocol) in ``runs``, and the total divided by the
-    parallelism measured with 2 workers (summed run time over wall time).
+    Every default run is costed at the mean time of its (group, protocol) in ``cost``, and the total divided by the
+    parallelism measured with 2 workers (the speed-up over one worker).
     """
     config = load_config(ROOT / "params.yaml")
-    cost = runs.groupby(["group", "protocol"], observed=True)["wall_time"].mean()
     total, n_runs = 0.0, 0
     for study, table in sample_studies(config).items():
         counts = table["group"].value_counts()
@@ -108,16 +130,11 @@ def main() -> None:
     print(f"| 1 | {serial:.2f} | {n / serial:.1f} |")
     print(f"| 2 | {parallel:.2f} | {n / parallel:.1f} |")
     print(f"speed-up 1 -> 2 workers: {serial / parallel:.2f} x (target >= 1.8 x)")
-    # where the time goes: slower runs (two processes sharing the machine) or idle workers (scheduling, the tail)
-    slowdown = runs["wall_time"].sum() / serial_runs["wall_time"].sum()
-    busy = runs["wall_time"].sum() / (2 * parallel)
-    print(
-        f"summed run time with 2 workers / with 1: {slowdown:.3f}; "
-        f"the workers weigh {100 * busy:.0f} % of the wall time"
-    )
+    assert serial_runs.equals(runs), "the runs differ between 1 and 2 workers"
     print(f"worker start-up (2 loky workers: imports and compiled-kernel load), paid once per stage: {startup:.1f} s")
-    mean_time = runs.groupby(["group", "protocol"], observed=True)["wall_time"].mean() * 1000.0
-    print("mean time of one run [ms]: " + ", ".join(f"{g} {p} {t:.1f}" for (g, p), t in mean_time.items()))
+    cost = run_costs()
+    shown = ", ".join(f"{g} {p} {1000 * t:.1f}" for (g, p), t in cost.items())
+    print(f"mean time of one run [ms], in-process: {shown}")
 
     print(f"\ngrowth with fleet size, 2 workers, best of {REPEATS}:")
     print("| bogies | runs | wall time [s] | ms per run | time / time of the smallest | size / smallest |")
@@ -131,8 +148,8 @@ def main() -> None:
             f"{size / GROWTH_FLEETS[0]:.0f} |"
         )
 
-    parallelism = runs["wall_time"].sum() / parallel
-    n_default, estimate = default_estimate(runs, parallelism)
+    parallelism = serial / parallel
+    n_default, estimate = default_estimate(cost, parallelism)
     print(
         f"\ndefault `make repro` simulate stage: {n_default} runs, estimated {estimate / 60:.1f} min on 2 workers "
         f"(+ {startup:.0f} s start-up; mean run times above, parallelism {parallelism:.2f})"
