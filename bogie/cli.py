@@ -22,17 +22,53 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
     return 0
 
 
+#: unit of each figure of a run's summary: Table 1's peaks are non-dimensional, Table 2's P1 and RMS in newtons
+_SUMMARY_UNITS = {"peak_p": "[-]", "peak_p1": "[-]", "peak_p1 (two peaks)": "[-]", "rms": "N"}
+
+
+def _unit(key: str) -> str:
+    return _SUMMARY_UNITS.get(key, "N" if key.startswith("p1_") else "[-]")
+
+
+def _figures(values: dict) -> str:
+    return ", ".join(f"{k} {v:.4g} {_unit(k)}" if isinstance(v, float) else f"{k} {v} {_unit(k)}"
+                     for k, v in values.items())  # fmt: skip
+
+
+def _image_suffix(parser: argparse.ArgumentParser, option: str, path: str | None) -> None:
+    """Refuse an image file whose suffix matplotlib cannot write, before any simulation runs."""
+    if path is None:
+        return
+    from matplotlib.figure import Figure
+
+    formats = Figure().canvas.get_supported_filetypes()
+    suffix = Path(path).suffix.lower().lstrip(".")
+    if suffix not in formats:
+        parser.error(f"{option} {path}: the suffix {suffix!r} is not an image format; allowed: {', '.join(formats)}")
+
+
+def _cmd_case_list() -> int:
+    from bogie import cases
+
+    for name, case in cases.CASES.items():
+        text = case.description.split(":", 1)[-1].strip()  # without the "Table 2 block 3 run N10:" prefix
+        print(f"{name}  {text if len(text) <= 110 else text[:109] + '…'}")
+    return 0
+
+
 def _cmd_case(args: argparse.Namespace) -> int:
     from bogie import cases
+
+    if args.name.lower() == "list":
+        return _cmd_case_list()
     from bogie.plotting import case_history, save_figure
 
     case = cases.get(args.name)
     result = cases.run(case.name)
-    ref = ", ".join(f"{k} {v}" for k, v in case.reference.items())
+    ref = _figures(case.reference)
     print(f"{case.name}: {case.description}")
     print(f"status {result.status}: {result.message}")
-    ours = ", ".join(f"{k} {v:.4g}" for k, v in cases.summary(case.name, result).items())
-    print(f"ours: {ours}")
+    print(f"ours: {_figures(cases.summary(case.name, result))}")
     print(f"reference: {ref or 'no figure printed'}")
     if args.csv:
         out = Path(args.csv)
@@ -48,10 +84,20 @@ def _cmd_case(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+def _version() -> str:
+    from importlib.metadata import PackageNotFoundError, version
+
+    try:
+        return version("bogie")
+    except PackageNotFoundError:
+        return "unknown (not installed)"
+
+
 def build_parser() -> argparse.ArgumentParser:
     parser = argparse.ArgumentParser(
         prog="bogie", description="Axle load equalisation in mechanically equalised trailer bogies."
     )
+    parser.add_argument("--version", action="version", version=f"bogie {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
     fig2 = sub.add_parser("figure2", help="the reference's Figure 2: p against q for chassis slopes 0-2 degrees")
     fig2.add_argument("--out", required=True, help="output file; the format follows the suffix (.png, .pdf, .svg)")
@@ -60,18 +106,24 @@ def build_parser() -> argparse.ArgumentParser:
     fig2.add_argument(
         "--fe", action="store_true", help="overlay the Stage 1 finite element points at q = 4.3 (bogie.fe)"
     )
-    fig2.set_defaults(func=_cmd_figure2)
-    case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, ...)")
-    case.add_argument("name", help="run name, e.g. L01")
+    fig2.set_defaults(func=_cmd_figure2, parser=fig2)
+    case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, N01-N29); 'list' lists them")
+    case.add_argument("name", help="run name, e.g. L01, or 'list' for every name with a one-line description")
     case.add_argument("--plot", help="write the histories (as the reference's Figures 5-12) to this image file")
     case.add_argument("--csv", help="write the histories to this CSV file")
-    case.set_defaults(func=_cmd_case)
+    case.set_defaults(func=_cmd_case, parser=case)
     return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:
     parser = build_parser()
-    args = parser.parse_args(argv)
+    args, extra = parser.parse_known_args(argv)
+    if extra:  # the subcommand's usage, not the top-level one, tells what the subcommand takes
+        args.parser.error(f"unrecognized arguments: {' '.join(extra)}")
+    if args.command == "case":
+        _image_suffix(args.parser, "--plot", args.plot)
+    else:
+        _image_suffix(args.parser, "--out", args.out)
     try:
         return args.func(args)
     except ValueError as exc:

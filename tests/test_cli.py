@@ -18,3 +18,44 @@ def test_console_script_reports_bad_value(tmp_path):
     )
     assert proc.returncode == 2
     assert "q_max" in proc.stderr
+
+
+def run_cli(*args):
+    return subprocess.run([sys.executable, "-m", "bogie.cli", *args], capture_output=True, text=True, timeout=120)
+
+
+def test_version_is_the_installed_package_version():
+    from importlib.metadata import version
+
+    proc = run_cli("--version")
+    assert proc.returncode == 0 and proc.stdout.strip() == f"bogie {version('bogie')}"
+
+
+def test_case_list_names_every_run_with_a_one_line_description(capsys):
+    from bogie import cases
+
+    assert main(["case", "list"]) == 0
+    lines = capsys.readouterr().out.splitlines()
+    assert [line.split()[0] for line in lines] == list(cases.CASES)
+    assert any(line.startswith("N10 ") and "short step" in line for line in lines)
+    assert all(len(line) <= 115 for line in lines)
+
+
+def test_a_bad_flag_prints_the_subcommands_usage():
+    proc = run_cli("case", "N10", "--bogus")
+    assert proc.returncode == 2
+    assert "usage: bogie case" in proc.stderr and "unrecognized arguments: --bogus" in proc.stderr
+
+
+def test_an_unknown_image_suffix_is_refused_before_the_simulation(tmp_path):
+    proc = run_cli("case", "N10", "--plot", str(tmp_path / "x.xyz"))  # N10 takes seconds: refused at once
+    assert proc.returncode == 2 and "the suffix 'xyz' is not an image format" in proc.stderr
+    assert "status" not in proc.stdout  # nothing ran
+    assert run_cli("figure2", "--out", str(tmp_path / "f.txt")).returncode == 2
+
+
+def test_every_printed_figure_has_its_unit(capsys):
+    assert main(["case", "L03"]) == 0
+    out = capsys.readouterr().out
+    ours = next(line for line in out.splitlines() if line.startswith("ours:"))
+    assert "peak_p " in ours and all(item.strip().endswith(("[-]", "N")) for item in ours[5:].split(","))
