@@ -234,7 +234,7 @@ def _line(schema: type[BaseModel], error: ErrorDetails) -> tuple[str, str]:
     place = locate(schema, error["loc"])
     key, name = place.key, place.key or "the top level"
     if kind == CONFIG_ERROR:
-        key = join_key([*(p for p in [place.key] if p), ctx["key"]]) if ctx["key"] else place.key
+        key = f"{place.key}.{ctx['key']}" if place.key and ctx["key"] else place.key or ctx["key"]
         return key, f"{key} = {ctx['value']!r}: {ctx['expected']}"
     if kind == "missing":
         hint = ""

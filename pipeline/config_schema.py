@@ -87,7 +87,13 @@ class Quantity:
         return f"{'[' if r.low_inclusive else '('}{self.from_si(r.low):g}, {self.from_si(r.high):g}]{unit}"
 
 
-def _bogie_quantity(key: str, name: str, yaml_unit: str | None = None, to_si=_identity, from_si=_identity) -> Quantity:
+def _bogie_quantity(
+    key: str,
+    name: str,
+    yaml_unit: str | None = None,
+    to_si: Callable[[float], float] = _identity,
+    from_si: Callable[[float], float] = _identity,
+) -> Quantity:
     field_range = {**SCALAR_RANGES, **AXLE_RANGES}[name]
     return Quantity(key, name, yaml_unit or field_range.unit, field_range, to_si, from_si)
 
