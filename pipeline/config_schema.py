@@ -192,7 +192,10 @@ def _distribution_field(q: Quantity) -> tuple[Any, Any]:
 
 #: ``distributions:``, one entry per quantity, each in the params.yaml unit of its key
 Distributions = create_model(
-    "Distributions", __base__=Strict, **{key: _distribution_field(q) for key, q in QUANTITIES.items()}
+    "Distributions",
+    __base__=Strict,
+    __doc__="``distributions:`` the distribution of every sampled quantity, in the unit of its key.",
+    **{key: _distribution_field(q) for key, q in QUANTITIES.items()},
 )
 
 
@@ -227,9 +230,9 @@ def _power_of_two(n: int) -> int:
     return n
 
 
-def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any]) -> type[Strict]:
+def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any], doc: str) -> type[Strict]:
     """A model with one field per axle group of :data:`GROUP_AXLES`, in that order."""
-    return create_model(name, __base__=base, **{group: (annotation, field()) for group in GROUP_AXLES})
+    return create_model(name, __base__=base, __doc__=doc, **{group: (annotation, field()) for group in GROUP_AXLES})
 
 
 class _Mix(Strict):
@@ -251,12 +254,27 @@ class _Presets(Strict):
         return name
 
 
-#: ``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1
-AxleMix = _group_map("AxleMix", _Mix, float, lambda: number("[-] (a fraction)", ge=0.0, le=1.0))
-#: ``fleet.presets``: the base bogie (a bogie.params preset) of each axle group
-GroupPresets = _group_map("GroupPresets", _Presets, Literal[tuple(PRESETS)], lambda: named("preset"))
-#: ``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t]
-GroupLoads = _group_map("GroupLoads", Strict, float, lambda: number("t", gt=0.0, le=200.0))
+AxleMix = _group_map(
+    "AxleMix",
+    _Mix,
+    float,
+    lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
+    "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
+)
+GroupPresets = _group_map(
+    "GroupPresets",
+    _Presets,
+    Literal[tuple(PRESETS)],
+    lambda: named("preset"),
+    "``fleet.presets``: the base bogie (a bogie.params preset with the group's number of axles) of each group.",
+)
+GroupLoads = _group_map(
+    "GroupLoads",
+    Strict,
+    float,
+    lambda: number("t", gt=0.0, le=200.0),
+    "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
+)
 
 
 # ---- sections ----------------------------------------------------------------------------------------------------

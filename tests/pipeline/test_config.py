@@ -262,6 +262,16 @@ def test_a_cross_section_rule_is_checked_once_the_sections_are_valid(raw):
     assert [key for key, _ in excinfo.value.errors] == ["fleet.size"]
 
 
+def test_the_schema_exports_its_ranges_and_units_as_json_schema():
+    from pipeline.config_schema import Params
+
+    defs = Params.model_json_schema()["$defs"]
+    speed = defs["Wim"]["properties"]["speed_m_s"]
+    assert (speed["exclusiveMinimum"], speed["maximum"], speed["unit"]) == (0.0, 50.0, "m/s")
+    assert defs["AxleMix"]["required"] == ["tandem", "triaxle"]
+    assert defs["Fleet"]["additionalProperties"] is False
+
+
 def test_config_error_is_a_value_error(raw):
     with pytest.raises(ValueError):
         parse_config(changed(raw, "execution.n_jobs", -1))
