@@ -18,46 +18,71 @@ from __future__ import annotations
 import dataclasses
 import math
 from dataclasses import dataclass, field
-from typing import Any
+from typing import Any, NamedTuple
 
 GRAVITY = 9.81  # [m/s^2]
 #: the empty trailer's weight as a fraction of the design payload weight, where every loading starts [-]
 TARE_FRACTION = 0.25
 
-#: allowed range and unit of every scalar field: name -> (low, high, unit, low_inclusive)
-_SCALAR_RANGES: dict[str, tuple[float, float, str, bool]] = {
-    "road_spring_stiffness": (0.0, 1e9, "N/m", False),
-    "tyre_stiffness": (0.0, 1e10, "N/m", False),
-    "tyre_damping": (0.0, 1e7, "N s/m", True),
-    "tyre_radius": (0.05, 2.0, "m", True),
-    "axle_mass": (0.0, 5000.0, "kg", True),
-    "equaliser_inertia": (0.0, 100.0, "kg m^2", True),
-    "payload_mass": (0.0, 1e6, "kg", False),
-    "payload_cg_x": (0.0, 50.0, "m", False),
-    "chassis_pitch_inertia": (0.0, 1e9, "kg m^2", False),
-    "pad_drop": (0.0, 3.0, "m", True),
-    "equaliser_front_tip_drop": (-0.5, 0.5, "m", True),
-    "equaliser_rear_tip_drop": (-0.5, 0.5, "m", True),
-    "spring_length_rate": (0.0, 2.0, "m/m", True),
-    "spring_end_slope_rate": (-20.0, 20.0, "rad/m", True),
-    "contact_tangential_stiffness": (0.0, 1e10, "N/m", False),
-    "chassis_tilt": (-math.radians(10.0), math.radians(10.0), "rad", True),
-    "bush_stiffness": (0.0, 1e7, "N m/rad", True),
-    "bush_damping": (0.0, 1e6, "N m s/rad", True),
-    "contact_roll_radius": (0.0, 0.5, "m", True),
-    "friction_coefficient": (0.0, 1.5, "-", True),
+
+class FieldRange(NamedTuple):
+    """The allowed range of a :class:`Bogie` field: ``low < x <= high`` (``low <= x`` if ``low_inclusive``).
+
+    Attributes
+    ----------
+    low, high
+        Limits of the range [unit].
+    unit
+        SI unit of the field (``-`` for a dimensionless one).
+    low_inclusive
+        Whether ``low`` itself is allowed; ``high`` always is.
+    """
+
+    low: float
+    high: float
+    unit: str
+    low_inclusive: bool
+
+    def contains(self, value: float) -> bool:
+        """Whether ``value`` [unit] lies in the range (NaN never does)."""
+        return (value >= self.low if self.low_inclusive else value > self.low) and value <= self.high
+
+
+#: allowed range and unit of every scalar field, by field name
+SCALAR_RANGES: dict[str, FieldRange] = {
+    "road_spring_stiffness": FieldRange(0.0, 1e9, "N/m", False),
+    "tyre_stiffness": FieldRange(0.0, 1e10, "N/m", False),
+    "tyre_damping": FieldRange(0.0, 1e7, "N s/m", True),
+    "tyre_radius": FieldRange(0.05, 2.0, "m", True),
+    "axle_mass": FieldRange(0.0, 5000.0, "kg", True),
+    "equaliser_inertia": FieldRange(0.0, 100.0, "kg m^2", True),
+    "payload_mass": FieldRange(0.0, 1e6, "kg", False),
+    "payload_cg_x": FieldRange(0.0, 50.0, "m", False),
+    "chassis_pitch_inertia": FieldRange(0.0, 1e9, "kg m^2", False),
+    "pad_drop": FieldRange(0.0, 3.0, "m", True),
+    "equaliser_front_tip_drop": FieldRange(-0.5, 0.5, "m", True),
+    "equaliser_rear_tip_drop": FieldRange(-0.5, 0.5, "m", True),
+    "spring_length_rate": FieldRange(0.0, 2.0, "m/m", True),
+    "spring_end_slope_rate": FieldRange(-20.0, 20.0, "rad/m", True),
+    "contact_tangential_stiffness": FieldRange(0.0, 1e10, "N/m", False),
+    "chassis_tilt": FieldRange(-math.radians(10.0), math.radians(10.0), "rad", True),
+    "bush_stiffness": FieldRange(0.0, 1e7, "N m/rad", True),
+    "bush_damping": FieldRange(0.0, 1e6, "N m s/rad", True),
+    "contact_roll_radius": FieldRange(0.0, 0.5, "m", True),
+    "friction_coefficient": FieldRange(0.0, 1.5, "-", True),
 }
 
-#: per-axle (length n) and per-equaliser (length n - 1) fields: name -> (low, high, unit, low_inclusive)
-_AXLE_RANGES: dict[str, tuple[float, float, str, bool]] = {
-    "axle_x": (0.0, 50.0, "m", False),
-    "spring_front_half_length": (0.05, 2.0, "m", True),
-    "spring_rear_half_length": (0.05, 2.0, "m", True),
-    "tyre_wear": (0.0, 0.05, "m", True),
+#: allowed range and unit of each value of the per-axle fields (one value per axle), by field name
+AXLE_RANGES: dict[str, FieldRange] = {
+    "axle_x": FieldRange(0.0, 50.0, "m", False),
+    "spring_front_half_length": FieldRange(0.05, 2.0, "m", True),
+    "spring_rear_half_length": FieldRange(0.05, 2.0, "m", True),
+    "tyre_wear": FieldRange(0.0, 0.05, "m", True),
 }
-_EQUALISER_RANGES: dict[str, tuple[float, float, str, bool]] = {
-    "equaliser_front_arm": (0.01, 1.0, "m", True),
-    "equaliser_rear_arm": (0.01, 1.0, "m", True),
+#: allowed range and unit of each value of the per-equaliser fields (one value per equaliser), by field name
+EQUALISER_RANGES: dict[str, FieldRange] = {
+    "equaliser_front_arm": FieldRange(0.01, 1.0, "m", True),
+    "equaliser_rear_arm": FieldRange(0.01, 1.0, "m", True),
 }
 
 #: the four inhibitors of equalisation and the value that switches each one off
@@ -200,12 +225,12 @@ class Bogie:
         n = len(tuple(axle_x))
         if self.tyre_wear == ():
             object.__setattr__(self, "tyre_wear", (0.0,) * n)
-        for name, (low, high, unit, inc) in _AXLE_RANGES.items():
+        for name, (low, high, unit, inc) in AXLE_RANGES.items():
             object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))
-        for name, (low, high, unit, inc) in _EQUALISER_RANGES.items():
+        for name, (low, high, unit, inc) in EQUALISER_RANGES.items():
             vec = _check_vector(name, getattr(self, name), n - 1, "equaliser", low, high, unit, inc)
             object.__setattr__(self, name, vec)
-        for name, (low, high, unit, inc) in _SCALAR_RANGES.items():
+        for name, (low, high, unit, inc) in SCALAR_RANGES.items():
             object.__setattr__(self, name, _check_scalar(name, getattr(self, name), low, high, unit, inc))
         self._check_chain()
         if self.payload_cg_x >= self.axle_x[-1] + self.spring_rear_half_length[-1]:

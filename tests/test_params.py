@@ -126,3 +126,40 @@ def test_longer_arms_keep_the_axles_the_springs_symmetric_and_the_loads_equal(ma
     assert longer.spring_front_half_length[0] == pytest.approx(0.5 - (arm - 0.155))
     loads = design_spring_loads(longer)
     assert loads == pytest.approx([loads[0]] * base.n_axles, rel=1e-12)
+
+
+def test_range_tables_are_public_and_drive_the_validation():
+    from bogie.params import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, FieldRange
+
+    assert SCALAR_RANGES["bush_stiffness"] == FieldRange(0.0, 1e7, "N m/rad", True)
+    assert AXLE_RANGES["tyre_wear"].high == 0.05 and EQUALISER_RANGES["equaliser_front_arm"].low == 0.01
+    b = tandem_trrl()
+    for name, r in SCALAR_RANGES.items():
+        assert r.contains(getattr(b, name)), name
+        outside = r.low if not r.low_inclusive else r.low - max(1.0, abs(r.low))
+        with pytest.raises(ValueError, match=f"{name} = .* out of range"):
+            b.replace(**{name: outside})
+        with pytest.raises(ValueError, match=f"{name} = .* out of range"):
+            b.replace(**{name: r.high * 2 + 1.0})
+
+
+def test_field_range_contains_its_limits_as_declared():
+    from bogie.params import FieldRange
+
+    open_low = FieldRange(0.0, 1.0, "m", False)
+    assert not open_low.contains(0.0) and open_low.contains(1e-300) and open_low.contains(1.0)
+    assert not open_low.contains(1.0 + 1e-12) and not open_low.contains(float("nan"))
+    assert FieldRange(0.0, 1.0, "m", True).contains(0.0)
+
+
+def test_pipeline_takes_the_bogie_ranges_from_the_public_table_only():
+    from pathlib import Path
+
+    from bogie.params import AXLE_RANGES, SCALAR_RANGES
+    from pipeline.config import QUANTITIES
+
+    assert QUANTITIES["tyre_wear_mm"].range is AXLE_RANGES["tyre_wear"]
+    assert QUANTITIES["chassis_tilt_deg"].range is SCALAR_RANGES["chassis_tilt"]
+    pipeline = Path(__file__).resolve().parents[1] / "pipeline"
+    private = [p.name for p in pipeline.glob("*.py") if "from bogie.params import _" in p.read_text(encoding="utf-8")]
+    assert private == []

@@ -172,7 +172,49 @@ BAD = [
 ]
 
 
-@pytest.mark.parametrize(("path", "value", "key", "words"), BAD, ids=[f"{b[0]}={b[1]!r}" for b in BAD])
+# more cases: a bool or a numeric text is not a number; wrong forms of sections, lists and distributions
+STRICT = [
+    ("fleet.size", True, "fleet.size", ["True", "integer"]),
+    ("seed", False, "seed", ["False", "integer"]),
+    ("distributions.bush_stiffness.high", True, "distributions.bush_stiffness.high", ["True", "number"]),
+    ("fleet.axle_mix.tandem", "0.3", "fleet.axle_mix.tandem", ["'0.3'", "text, not a number", "without quotes"]),
+    ("protocol.wim.speed_m_s", "22", "protocol.wim.speed_m_s", ["'22'", "text, not a number", "m/s"]),
+    ("distributions.tyre_wear_mm.low", "1e-3", "distributions.tyre_wear_mm.low", ["1.0e+3"]),
+    ("distributions.road_class.weights", [0.3, True, 0.2], "distributions.road_class.weights[1]", ["True"]),
+    ("fleet.legal_axle_load_t", float("nan"), "fleet.legal_axle_load_t", ["nan", "(0, 100] t"]),
+    ("execution.dask_scheduler", 8786, "execution.dask_scheduler", ["8786", "tcp://"]),
+    ("execution.dask_scheduler", "localhost", "execution.dask_scheduler", ["'localhost'", "tcp://"]),
+    ("protocol.run", [], "protocol.run", ["[]", "non-empty list of protocols"]),
+    ("protocol.run", ["static", "static"], "protocol.run", ["twice"]),
+    ("sensitivity.confidence_level", 1.0, "sensitivity.confidence_level", ["1.0", "(0, 1)"]),
+    ("fleet", None, "fleet", ["None", "mapping with the keys size"]),
+    ("distributions.bush_damping", 3.0, "distributions.bush_damping", ["3.0", "a distribution of", "{kind: uniform"]),
+    ("distributions.bush_damping.kind", _DELETE, "distributions.bush_damping.kind", ["missing key", "loguniform"]),
+    (
+        "distributions.bush_damping.hihg",
+        1.0,
+        "distributions.bush_damping.hihg",
+        ["unknown key", "did you mean high?", "distributions.bush_damping takes kind, low, high"],
+    ),
+    ("distributions.road_class.kind", "uniform", "distributions.road_class.kind", ["categorical", "choice, constant"]),
+    (
+        "distributions.payload_fraction",
+        {"kind": "constant", "value": 2.0},
+        "distributions.payload_fraction.value",
+        ["(0, 1.5]"],
+    ),
+    (
+        "distributions.tyre_wear_mm",
+        {"kind": "choice", "values": [0.0, 80.0]},
+        "distributions.tyre_wear_mm.values[1]",
+        ["80.0", "[0, 50] mm"],
+    ),
+]
+
+
+@pytest.mark.parametrize(
+    ("path", "value", "key", "words"), BAD + STRICT, ids=[f"{b[0]}={b[1]!r}" for b in BAD + STRICT]
+)
 def test_each_bad_key_is_named_with_its_value_and_the_expected_form(raw, path, value, key, words):
     with pytest.raises(ConfigError) as excinfo:
         parse_config(changed(raw, path, value))
@@ -182,6 +224,52 @@ def test_each_bad_key_is_named_with_its_value_and_the_expected_form(raw, path, v
     assert key in message
     for word in words:
         assert word in message
+
+
+def test_every_bad_key_is_reported_at_once_one_line_each(raw):
+    new = changed(raw, "fleet.size", 0)
+    new = changed(new, "fleet.sampling", "halton")
+    new = changed(new, "distributions.tyre_wear_mm.high", 60.0)
+    new = changed(new, "protocol.wim.speed_m_s", True)
+    new = changed(new, "execution.n_jobs", "2")
+    new = changed(new, "execution.chunk_size", _DELETE)
+    new = changed(new, "execution.n_job", 2)
+    with pytest.raises(ConfigError) as excinfo:
+        parse_config(new)
+    keys = [key for key, _ in excinfo.value.errors]
+    # the unknown key first (it explains a missing one), then in the order of the file's sections
+    assert keys == [
+        "execution.n_job",
+        "fleet.size",
+        "fleet.sampling",
+        "distributions.tyre_wear_mm.high",
+        "protocol.wim.speed_m_s",
+        "execution.n_jobs",
+        "execution.chunk_size",
+    ]
+    assert excinfo.value.key == "execution.n_job"
+    lines = str(excinfo.value).splitlines()
+    assert len(lines) == len(keys)
+    assert all(key in line for key, line in zip(keys, lines))
+    assert "did you mean n_jobs?" in lines[0]
+    assert "[0, 50] mm" in lines[3]
+
+
+def test_a_cross_section_rule_is_checked_once_the_sections_are_valid(raw):
+    # ablation.size > fleet.size is only meaningful for a valid fleet.size: the type error alone is reported
+    with pytest.raises(ConfigError) as excinfo:
+        parse_config(changed(changed(raw, "fleet.size", "many"), "ablation.size", 10**6))
+    assert [key for key, _ in excinfo.value.errors] == ["fleet.size"]
+
+
+def test_the_schema_exports_its_ranges_and_units_as_json_schema():
+    from pipeline.config_schema import Params
+
+    defs = Params.model_json_schema()["$defs"]
+    speed = defs["Wim"]["properties"]["speed_m_s"]
+    assert (speed["exclusiveMinimum"], speed["maximum"], speed["unit"]) == (0.0, 50.0, "m/s")
+    assert defs["AxleMix"]["required"] == ["tandem", "triaxle"]
+    assert defs["Fleet"]["additionalProperties"] is False
 
 
 def test_config_error_is_a_value_error(raw):

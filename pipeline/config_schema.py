@@ -1,0 +1,399 @@
+"""The schema of params.yaml: pydantic models of the sections the Monte Carlo pipeline reads, in params.yaml units.
+
+Types are strict (a bool or a numeric text is not a number, an integer field takes no float), unknown keys are
+refused, ranges are field constraints, maps with fixed keys (``axle_mix: {tandem, triaxle}``) are sub-models and
+the distributions are unions tagged by ``kind`` (:mod:`pipeline.config_distributions`). Rules that span fields are
+model validators raising :func:`pipeline.config_errors.config_error`. Every field's ``json_schema_extra`` gives
+its ``unit`` (as in params.yaml), and ``what`` it is or the ``expected`` form in words, for the error messages.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from typing import Annotated, Any, Literal
+
+from pydantic import (
+    AfterValidator,
+    Field,
+    ValidationInfo,
+    ValidatorFunctionWrapHandler,
+    WrapValidator,
+    create_model,
+    field_validator,
+    model_validator,
+)
+
+from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
+from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
+from pipeline.config_errors import config_error
+from pipeline.constants import GROUP_AXLES
+from pipeline.distributions import Choice, Constant, Distribution, ParameterError
+
+PROTOCOLS: tuple[str, ...] = ("static", "wim")
+SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
+BACKENDS: tuple[str, ...] = ("loky", "dask")
+
+#: top-level sections that other stages read themselves (the schema accepts them without looking inside)
+OTHER_SECTIONS: tuple[str, ...] = ("figure2",)
+
+
+# ---- the sampled quantities --------------------------------------------------------------------------------------
+def _identity(x: float) -> float:
+    return x
+
+
+def _mm_to_m(x: float) -> float:
+    # a division keeps round millimetre values bit-equal to the metre limits (50 / 1000 == 0.05)
+    return x / 1000.0
+
+
+def _m_to_mm(x: float) -> float:
+    return x * 1000.0
+
+
+@dataclass(frozen=True)
+class Quantity:
+    """One sampled quantity: its params.yaml key and unit, its SI name (Bogie field, sample column) and range.
+
+    Attributes
+    ----------
+    key, yaml_unit
+        Its key under ``distributions:`` and the unit of the values there.
+    name, unit
+        Its SI name and SI unit.
+    range
+        The values a sample may take [SI unit].
+    to_si, from_si
+        Conversion of a value from the params.yaml unit to SI, and back.
+    labels
+        The labels of a categorical quantity (its samples are labels, not numbers).
+    """
+
+    key: str
+    name: str
+    yaml_unit: str
+    range: FieldRange
+    to_si: Callable[[float], float] = _identity
+    from_si: Callable[[float], float] = _identity
+    labels: tuple[str, ...] = ()
+
+    @property
+    def range_text(self) -> str:
+        """The allowed range in params.yaml units, e.g. ``[0, 50] mm``."""
+        r = self.range
+        unit = "" if self.yaml_unit in ("-", "[-]") else f" {self.yaml_unit}"
+        return f"{'[' if r.low_inclusive else '('}{self.from_si(r.low):g}, {self.from_si(r.high):g}]{unit}"
+
+
+def _bogie_quantity(
+    key: str,
+    name: str,
+    yaml_unit: str | None = None,
+    to_si: Callable[[float], float] = _identity,
+    from_si: Callable[[float], float] = _identity,
+) -> Quantity:
+    field_range = {**SCALAR_RANGES, **AXLE_RANGES}[name]
+    return Quantity(key, name, yaml_unit or field_range.unit, field_range, to_si, from_si)
+
+
+#: every entry of ``distributions:``, by params.yaml key; Bogie quantities take their range from bogie.params
+QUANTITIES: dict[str, Quantity] = {
+    q.key: q
+    for q in (
+        _bogie_quantity("bush_stiffness", "bush_stiffness"),
+        _bogie_quantity("bush_damping", "bush_damping"),
+        _bogie_quantity("friction_coefficient", "friction_coefficient"),
+        _bogie_quantity("contact_roll_radius_mm", "contact_roll_radius", "mm", _mm_to_m, _m_to_mm),
+        _bogie_quantity("tyre_wear_mm", "tyre_wear", "mm", _mm_to_m, _m_to_mm),
+        _bogie_quantity("chassis_tilt_deg", "chassis_tilt", "degree", math.radians, math.degrees),
+        # every equaliser arm of a bogie, the axle spacing kept (params.with_equaliser_arms)
+        Quantity("equaliser_arm_mm", "equaliser_arm", "mm", FieldRange(0.05, 0.5, "m", True), _mm_to_m, _m_to_mm),
+        # up to half as much again as the legal load: overloaded trailers are part of what a survey finds
+        Quantity("payload_fraction", "payload_fraction", "-", FieldRange(0.0, 1.5, "-", False)),
+        Quantity("road_class", "road_class", "ISO 8608 class", FieldRange(0.0, 0.0, "-", True), labels=ROAD_CLASSES),
+    )
+}
+
+
+def _check_support(q: Quantity, dist: Distribution, raw: Any) -> None:
+    """Refuse a distribution (in SI) that can sample outside the physical range of its quantity."""
+    raw = raw if isinstance(raw, dict) else {}
+    where = f"outside the allowed range {q.range_text} of {q.name}"
+    if isinstance(dist, Constant):
+        if not q.range.contains(dist.value):
+            raise config_error("value", raw.get("value", dist.value), f"is {where}")
+        return
+    if isinstance(dist, Choice):
+        for i, v in enumerate(dist.values):
+            if not q.range.contains(v):
+                raise config_error(f"values[{i}]", raw["values"][i], f"is {where}")
+        return
+    lo, hi = dist.support
+    if math.isinf(lo) or math.isinf(hi):
+        bounds = "low and high" if math.isinf(lo) else "high"
+        hint = "use kind truncnormal with low and high" if dist.kind == "normal" else f"give {bounds}"
+        message = f"is unbounded but {q.name} must stay in {q.range_text}: {hint} inside that range to truncate it"
+        raise config_error("kind", raw.get("kind", dist.kind), message)
+    if not q.range.contains(lo):
+        raise config_error("low", raw.get("low", q.from_si(lo)), f"lets samples fall {where}")
+    if not q.range.contains(hi):
+        raise config_error("high", raw.get("high", q.from_si(hi)), f"lets samples fall {where}")
+
+
+def si_distribution(spec: DistributionSpec, q: Quantity, raw: Any = None) -> Distribution:
+    """The sampling distribution of quantity ``q`` in SI, checked to keep every sample inside ``q.range``.
+
+    Parameters
+    ----------
+    spec
+        Its entry of ``distributions:``, in the params.yaml unit of ``q``.
+    q
+        The quantity.
+    raw
+        The entry as written (for the values the errors quote), if at hand.
+
+    Raises
+    ------
+    pydantic_core.PydanticCustomError
+        If the parameters do not make a distribution, or it can sample outside the range.
+    """
+    try:
+        dist = spec.build()
+    except ParameterError as exc:
+        value = raw.get(exc.param, exc.value) if isinstance(raw, dict) else exc.value
+        # sigma and the weights are dimensionless whatever the quantity
+        dimensionless = exc.param.split("[")[0] in ("sigma", "weights") or q.yaml_unit in ("-", "[-]")
+        raise config_error(exc.param, value, exc.expected + ("" if dimensionless else f", in {q.yaml_unit}")) from None
+    if q.labels:
+        return dist
+    si = dist.scaled(q.to_si)
+    _check_support(q, si, raw)
+    return si
+
+
+def _checked(q: Quantity) -> WrapValidator:
+    def check(raw: Any, handler: ValidatorFunctionWrapHandler) -> DistributionSpec:
+        spec = handler(raw)
+        si_distribution(spec, q, raw)
+        return spec
+
+    return WrapValidator(check)
+
+
+def _distribution_field(q: Quantity) -> tuple[Any, Any]:
+    what = f"distribution kind for the categorical {q.name}" if q.labels else "distribution kind"
+    expected = f"a distribution of {q.name} in {q.yaml_unit}, e.g. {{kind: uniform, ...}}"
+    extra = {"unit": q.yaml_unit, "what": what, "expected": expected}
+    spec = LabelSpec if q.labels else NumericSpec
+    return Annotated[spec, _checked(q)], Field(json_schema_extra=extra)
+
+
+#: ``distributions:``, one entry per quantity, each in the params.yaml unit of its key
+Distributions = create_model(
+    "Distributions",
+    __base__=Strict,
+    __doc__="``distributions:`` the distribution of every sampled quantity, in the unit of its key.",
+    **{key: _distribution_field(q) for key, q in QUANTITIES.items()},
+)
+
+
+# ---- field helpers -----------------------------------------------------------------------------------------------
+def number(unit: str, **bounds: float) -> Any:
+    """A required number in ``unit`` within ``bounds`` (any of ``ge``, ``gt``, ``le``, ``lt``)."""
+    return Field(json_schema_extra={"unit": unit}, **bounds)
+
+
+def integer(low: int, high: int | None = None) -> Any:
+    """A required integer in [low, high] [-]."""
+    return Field(ge=low, le=high)
+
+
+def named(what: str, **constraints: Any) -> Any:
+    """A required name (or list of names) from a fixed set; ``what`` names one in the messages (``preset``)."""
+    return Field(json_schema_extra={"what": what}, **constraints)
+
+
+def _distinct(what: str) -> AfterValidator:
+    def check(names: list[str]) -> list[str]:
+        if len(set(names)) != len(names):
+            raise config_error("", names, f"lists a {what} twice")
+        return names
+
+    return AfterValidator(check)
+
+
+def _power_of_two(n: int) -> int:
+    if n & (n - 1):
+        raise config_error("", n, "must be a power of 2 (Sobol' sequences balance only then), e.g. 512")
+    return n
+
+
+def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any], doc: str) -> type[Strict]:
+    """A model with one field per axle group of :data:`GROUP_AXLES`, in that order."""
+    return create_model(name, __base__=base, __doc__=doc, **{group: (annotation, field()) for group in GROUP_AXLES})
+
+
+class _Mix(Strict):
+    @model_validator(mode="after")
+    def _sums_to_one(self) -> _Mix:
+        fractions = self.model_dump()
+        if abs(sum(fractions.values()) - 1.0) > 1e-9:
+            raise config_error("", fractions, f"the fractions must sum to 1, they sum to {sum(fractions.values()):g}")
+        return self
+
+
+class _Presets(Strict):
+    @field_validator("*")
+    @classmethod
+    def _axles_match(cls, name: str, info: ValidationInfo) -> str:
+        group, n_axles = info.field_name, GROUP_AXLES[info.field_name]
+        if preset(name).n_axles != n_axles:
+            raise config_error("", name, f"has {preset(name).n_axles} axles but a {group} has {n_axles}")
+        return name
+
+
+AxleMix = _group_map(
+    "AxleMix",
+    _Mix,
+    float,
+    lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
+    "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
+)
+GroupPresets = _group_map(
+    "GroupPresets",
+    _Presets,
+    Literal[tuple(PRESETS)],
+    lambda: named("preset"),
+    "``fleet.presets``: the base bogie (a bogie.params preset with the group's number of axles) of each group.",
+)
+GroupLoads = _group_map(
+    "GroupLoads",
+    Strict,
+    float,
+    lambda: number("t", gt=0.0, le=200.0),
+    "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
+)
+
+
+# ---- sections ----------------------------------------------------------------------------------------------------
+class Fleet(Strict):
+    """``fleet:`` the fleet study (see :class:`pipeline.config.FleetConfig`)."""
+
+    size: int = integer(1, 10_000_000)
+    sampling: Literal[SAMPLINGS] = named("sampling method")  # type: ignore[valid-type]
+    axle_mix: AxleMix  # type: ignore[valid-type]
+    presets: GroupPresets  # type: ignore[valid-type]
+    legal_group_load_t: GroupLoads  # type: ignore[valid-type]
+    legal_axle_load_t: float = number("t", gt=0.0, le=100.0)
+
+    @model_validator(mode="after")
+    def _payload_is_positive(self) -> Fleet:
+        # the design bogie needs a positive payload: the legal load must exceed the group's own unsprung mass
+        for group, n_axles in GROUP_AXLES.items():
+            name, tonnes = getattr(self.presets, group), getattr(self.legal_group_load_t, group)
+            unsprung = 2 * n_axles * preset(name).axle_mass / 1000.0
+            if tonnes <= unsprung:
+                expected = f"must exceed the unsprung mass of the {name} axles, {unsprung:g} t"
+                raise config_error(f"legal_group_load_t.{group}", tonnes, expected)
+        return self
+
+
+class Static(Strict):
+    """``protocol.static:`` the static weighbridge (see :class:`pipeline.config.StaticProtocol`)."""
+
+    load_time_s: float = number("s", gt=0.0, le=600.0)
+    approach_length_m: float = number("m", gt=0.0, le=1000.0)
+    # walking pace or a little faster; more is not a static weighing
+    crawl_speed_m_s: float = number("m/s", gt=0.0, le=5.0)
+    settle_time_s: float = number("s", ge=0.0, le=600.0)
+    dt_s: float = number("s", gt=0.0, le=0.01)
+
+
+class Wim(Strict):
+    """``protocol.wim:`` the weigh-in-motion pass (see :class:`pipeline.config.WimProtocol`)."""
+
+    # 50 m/s = 180 km/h: above it the value was most likely given in km/h
+    speed_m_s: float = number("m/s", gt=0.0, le=50.0)
+    approach_length_m: float = number("m", gt=0.0, le=10_000.0)
+    dt_s: float = number("s", gt=0.0, le=0.01)
+
+
+Protocol = Literal[PROTOCOLS]  # type: ignore[valid-type]
+
+
+class Protocols(Strict):
+    """``protocol:`` which protocols run, and the settings of each."""
+
+    run: Annotated[list[Protocol], _distinct("protocol")] = named("protocol", min_length=1)
+    static: Static
+    wim: Wim
+
+
+class Sensitivity(Strict):
+    """``sensitivity:`` the Sobol' design (see :class:`pipeline.config.SensitivityConfig`)."""
+
+    group: Literal[tuple(GROUP_AXLES)] = named("axle group")  # type: ignore[valid-type]
+    base_size: Annotated[int, AfterValidator(_power_of_two)] = integer(2, 2**20)
+    # the factors are keys of distributions:
+    factors: Annotated[list[Literal[tuple(QUANTITIES)]], _distinct("factor")] = named("factor", min_length=1)  # type: ignore[valid-type]
+    bootstrap_resamples: int = integer(1, 100_000)
+    confidence_level: float = number("[-]", gt=0.0, lt=1.0)
+    protocol: Protocol = named("protocol")
+
+
+class Ablation(Strict):
+    """``ablation:`` the switch-off ablation of the first ``size`` fleet bogies."""
+
+    size: int = integer(1)
+
+
+_ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
+
+
+def _address(value: str | None) -> str | None:
+    if value is not None and "://" not in value:
+        raise config_error("", value, f"must be null or {_ADDRESS}")
+    return value
+
+
+class Execution(Strict):
+    """``execution:`` how the simulation runs (see :class:`pipeline.config.ExecutionConfig`)."""
+
+    backend: Literal[BACKENDS] = named("backend")  # type: ignore[valid-type]
+    n_jobs: int = integer(1, 4096)
+    chunk_size: int = integer(1, 10_000_000)
+    dask_scheduler: Annotated[str | None, AfterValidator(_address)] = Field(
+        json_schema_extra={"expected": f"null or {_ADDRESS}"}
+    )
+
+    @model_validator(mode="after")
+    def _dask_has_a_scheduler(self) -> Execution:
+        if self.backend == "dask" and self.dask_scheduler is None:
+            raise config_error("dask_scheduler", None, f"backend dask needs the scheduler's address: {_ADDRESS}")
+        return self
+
+
+class Params(Strict):
+    """params.yaml: the sections of the Monte Carlo pipeline, and those other stages read themselves."""
+
+    seed: int = integer(0, 2**63 - 1)
+    fleet: Fleet
+    distributions: Distributions  # type: ignore[valid-type]
+    protocol: Protocols
+    sensitivity: Sensitivity
+    ablation: Ablation
+    execution: Execution
+    figure2: Any = None
+
+    @model_validator(mode="after")
+    def _sections_agree(self) -> Params:
+        run = self.protocol.run
+        if self.sensitivity.protocol not in run:
+            expected = f"is not run: protocol.run lists only {', '.join(run)}"
+            raise config_error("sensitivity.protocol", self.sensitivity.protocol, expected)
+        if self.ablation.size > self.fleet.size:
+            expected = f"must not exceed fleet.size = {self.fleet.size}: the ablation reuses fleet bogies"
+            raise config_error("ablation.size", self.ablation.size, expected)
+        return self
