@@ -1,6 +1,6 @@
 """The ``simulate`` stage: runs per second with 1 and 2 workers, growth with fleet size, default-run estimate.
 
-Fleets sampled from the default params.yaml (default protocols and time steps), only the ``size`` changed, run by
+Fleets sampled from the default params.yaml (default protocols and time steps), only ``fleet.n_bogies`` changed, run by
 :func:`pipeline.simulate.simulate_samples` into a temporary directory (planning, hashing and writing included, as in
 the stage) with the static and WIM protocols. Chunks of :data:`CHUNK_SIZE` bogies give each worker several chunks,
 as the default studies do (143 chunks of 64). The loky workers are started and the numba kernels loaded before any
@@ -39,7 +39,7 @@ REPEATS = 2
 
 def _config(size: int, n_jobs: int) -> Config:
     config = load_config(ROOT / "params.yaml")
-    fleet = dataclasses.replace(config.fleet, size=size)
+    fleet = dataclasses.replace(config.fleet, n_bogies=size)
     execution = dataclasses.replace(config.execution, backend="loky", n_jobs=n_jobs, chunk_size=CHUNK_SIZE)
     return dataclasses.replace(config, fleet=fleet, execution=execution)
 

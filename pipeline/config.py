@@ -114,7 +114,7 @@ class FleetConfig:
 
     Attributes
     ----------
-    size
+    n_bogies
         Number of bogies [-].
     sampling
         ``lhs`` (Latin hypercube) or ``sobol`` (scrambled Sobol'), both from scipy.stats.qmc.
@@ -128,7 +128,7 @@ class FleetConfig:
         Legal load of a single axle, both sides together [N].
     """
 
-    size: int
+    n_bogies: int
     sampling: str
     axle_mix: FrozenMap
     presets: FrozenMap
@@ -200,9 +200,9 @@ class SensitivityConfig:
 
 @dataclass(frozen=True)
 class AblationConfig:
-    """The switch-off ablation: the first ``size`` fleet bogies, each with the inhibitors removed in turn."""
+    """The switch-off ablation: the first ``n_bogies`` fleet bogies, each with the inhibitors removed in turn."""
 
-    size: int
+    n_bogies: int
 
 
 @dataclass(frozen=True)
@@ -237,7 +237,7 @@ class Config:
 def _fleet(fleet: Any) -> FleetConfig:
     tonnes = fleet.legal_group_load_t
     return FleetConfig(
-        size=fleet.size,
+        n_bogies=fleet.n_bogies,
         sampling=fleet.sampling,
         axle_mix=FrozenMap({g: getattr(fleet.axle_mix, g) for g in GROUP_AXLES}),
         presets=FrozenMap({g: getattr(fleet.presets, g) for g in GROUP_AXLES}),
@@ -290,7 +290,7 @@ def to_config(params: Params) -> Config:
         distributions=FrozenMap(distributions),
         protocol=_protocol(params.protocol),
         sensitivity=_sensitivity(params.sensitivity),
-        ablation=AblationConfig(size=params.ablation.size),
+        ablation=AblationConfig(n_bogies=params.ablation.n_bogies),
         execution=_execution(params.execution),
     )
 

@@ -54,7 +54,7 @@ def config_error(key: str, value: Any, expected: str) -> PydanticCustomError:
     Parameters
     ----------
     key
-        Key path below the validator's location (``"high"``, ``"values[2]"``, ``"ablation.size"``), or ``""`` for
+        Key path below the validator's location (``"high"``, ``"values[2]"``, ``"ablation.n_bogies"``), or ``""`` for
         the location itself.
     value
         The offending value, as written in params.yaml.

@@ -281,7 +281,7 @@ GroupLoads = _group_map(
 class Fleet(Strict):
     """``fleet:`` the fleet study (see :class:`pipeline.config.FleetConfig`)."""
 
-    size: int = integer(1, 10_000_000)
+    n_bogies: int = integer(1, 10_000_000)
     sampling: Literal[SAMPLINGS] = named("sampling method")  # type: ignore[valid-type]
     axle_mix: AxleMix  # type: ignore[valid-type]
     presets: GroupPresets  # type: ignore[valid-type]
@@ -344,9 +344,9 @@ class Sensitivity(Strict):
 
 
 class Ablation(Strict):
-    """``ablation:`` the switch-off ablation of the first ``size`` fleet bogies."""
+    """``ablation:`` the switch-off ablation of the first ``n_bogies`` fleet bogies."""
 
-    size: int = integer(1)
+    n_bogies: int = integer(1)
 
 
 _ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
@@ -393,7 +393,7 @@ class Params(Strict):
         if self.sensitivity.protocol not in run:
             expected = f"is not run: protocol.run lists only {', '.join(run)}"
             raise config_error("sensitivity.protocol", self.sensitivity.protocol, expected)
-        if self.ablation.size > self.fleet.size:
-            expected = f"must not exceed fleet.size = {self.fleet.size}: the ablation reuses fleet bogies"
-            raise config_error("ablation.size", self.ablation.size, expected)
+        if self.ablation.n_bogies > self.fleet.n_bogies:
+            expected = f"must not exceed fleet.n_bogies = {self.fleet.n_bogies}: the ablation reuses fleet bogies"
+            raise config_error("ablation.n_bogies", self.ablation.n_bogies, expected)
         return self

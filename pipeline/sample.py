@@ -223,7 +223,7 @@ def _frame(
 
 
 def sample_fleet(config: Config) -> pd.DataFrame:
-    """The fleet study: ``fleet.size`` bogies from one Latin hypercube or scrambled Sobol' design.
+    """The fleet study: ``fleet.n_bogies`` bogies from one Latin hypercube or scrambled Sobol' design.
 
     Every dimension of the design, including the axle group (a choice weighted by ``fleet.axle_mix``) and each
     axle's tyre wear, is mapped through its distribution's inverse CDF, so the stratification of the design carries
@@ -239,7 +239,7 @@ def sample_fleet(config: Config) -> pd.DataFrame:
     pandas.DataFrame
         One row per bogie with the columns of :data:`COLUMNS`, SI.
     """
-    n = config.fleet.size
+    n = config.fleet.n_bogies
     u = _unit_design(n, len(_FLEET_DIMENSIONS), config.fleet.sampling, design_seed(config.seed, "fleet"))
     mix = config.fleet.axle_mix
     values: dict[str, np.ndarray] = {}
@@ -325,7 +325,7 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
 
 
 def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
-    """The switch-off ablation: the first ``ablation.size`` fleet bogies, each as the variants of :data:`VARIANTS`.
+    """The switch-off ablation: the first ``ablation.n_bogies`` fleet bogies, each as the variants of :data:`VARIANTS`.
 
     A variant differs from its baseline only in the inhibitor(s) set to the ideal value of
     :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed, so the baseline rows equal the fleet rows.
@@ -342,7 +342,7 @@ def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         ``len(VARIANTS)`` consecutive rows per fleet bogie, ``base_id`` its fleet ``sample_id``.
     """
-    base = fleet.iloc[: config.ablation.size]
+    base = fleet.iloc[: config.ablation.n_bogies]
     frame = base.loc[base.index.repeat(len(VARIANTS))].reset_index(drop=True)
     variant = np.tile(np.array(VARIANTS, dtype=object), len(base))
     for name, ideal in INHIBITORS.items():

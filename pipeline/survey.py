@@ -476,7 +476,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         config = load_config(args.params)
         runs = read_runs(args.runs, SURVEY_STUDY)
-        check_complete(runs, config.fleet.size, config.protocol.run, SURVEY_STUDY)
+        check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
     except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
         print(f"survey: {exc}", file=sys.stderr)
         return 2

@@ -91,10 +91,10 @@ def test_bounded_and_truncated_kinds_are_accepted_on_bounded_quantities(raw):
 # ---- one clear error per bad key ---------------------------------------------------------------------------------
 BAD = [
     # (key path changed, new value, key named by the error, words the message must contain)
-    ("fleet.size", _DELETE, "fleet.size", ["missing key", "integer"]),
+    ("fleet.n_bogies", _DELETE, "fleet.n_bogies", ["missing key", "integer"]),
     ("distributions", _DELETE, "distributions", ["missing key"]),
     ("distributions.tyre_wear_mm.high", _DELETE, "distributions.tyre_wear_mm.high", ["missing key", "mm"]),
-    ("fleet.sise", 100, "fleet.sise", ["unknown key", "did you mean size"]),
+    ("fleet.n_bogie", 100, "fleet.n_bogie", ["unknown key", "did you mean n_bogies"]),
     ("bush_stiffness", {}, "bush_stiffness", ["unknown key", "top level"]),
     (
         "distributions.bush_stifness",
@@ -103,8 +103,8 @@ BAD = [
         ["unknown key", "did you mean bush_stiffness"],
     ),
     ("distributions.bush_stiffness.kind", "gamma", "distributions.bush_stiffness.kind", ["unknown distribution kind"]),
-    ("fleet.size", "2000", "fleet.size", ["'2000'", "integer"]),
-    ("fleet.size", 2000.5, "fleet.size", ["2000.5", "integer"]),
+    ("fleet.n_bogies", "2000", "fleet.n_bogies", ["'2000'", "integer"]),
+    ("fleet.n_bogies", 2000.5, "fleet.n_bogies", ["2000.5", "integer"]),
     ("distributions.bush_stiffness.high", "1e7", "distributions.bush_stiffness.high", ["text, not a number", "1.0e3"]),
     (
         "distributions.bush_stiffness",
@@ -167,14 +167,14 @@ BAD = [
     ("execution.backend", "dask", "execution.dask_scheduler", ["None", "tcp://"]),
     ("execution.n_jobs", 0, "execution.n_jobs", ["= 0", "integer"]),
     ("execution.chunk_size", 0, "execution.chunk_size", ["= 0", "integer"]),
-    ("ablation.size", 5000, "ablation.size", ["5000", "fleet.size"]),
+    ("ablation.n_bogies", 5000, "ablation.n_bogies", ["5000", "fleet.n_bogies"]),
     ("seed", -1, "seed", ["-1", "integer"]),
 ]
 
 
 # more cases: a bool or a numeric text is not a number; wrong forms of sections, lists and distributions
 STRICT = [
-    ("fleet.size", True, "fleet.size", ["True", "integer"]),
+    ("fleet.n_bogies", True, "fleet.n_bogies", ["True", "integer"]),
     ("seed", False, "seed", ["False", "integer"]),
     ("distributions.bush_stiffness.high", True, "distributions.bush_stiffness.high", ["True", "number"]),
     ("fleet.axle_mix.tandem", "0.3", "fleet.axle_mix.tandem", ["'0.3'", "text, not a number", "without quotes"]),
@@ -187,7 +187,7 @@ STRICT = [
     ("protocol.run", [], "protocol.run", ["[]", "non-empty list of protocols"]),
     ("protocol.run", ["static", "static"], "protocol.run", ["twice"]),
     ("sensitivity.confidence_level", 1.0, "sensitivity.confidence_level", ["1.0", "(0, 1)"]),
-    ("fleet", None, "fleet", ["None", "mapping with the keys size"]),
+    ("fleet", None, "fleet", ["None", "mapping with the keys n_bogies"]),
     ("distributions.bush_damping", 3.0, "distributions.bush_damping", ["3.0", "a distribution of", "{kind: uniform"]),
     ("distributions.bush_damping.kind", _DELETE, "distributions.bush_damping.kind", ["missing key", "loguniform"]),
     (
@@ -227,7 +227,7 @@ def test_each_bad_key_is_named_with_its_value_and_the_expected_form(raw, path, v
 
 
 def test_every_bad_key_is_reported_at_once_one_line_each(raw):
-    new = changed(raw, "fleet.size", 0)
+    new = changed(raw, "fleet.n_bogies", 0)
     new = changed(new, "fleet.sampling", "halton")
     new = changed(new, "distributions.tyre_wear_mm.high", 60.0)
     new = changed(new, "protocol.wim.speed_m_s", True)
@@ -240,7 +240,7 @@ def test_every_bad_key_is_reported_at_once_one_line_each(raw):
     # the unknown key first (it explains a missing one), then in the order of the file's sections
     assert keys == [
         "execution.n_job",
-        "fleet.size",
+        "fleet.n_bogies",
         "fleet.sampling",
         "distributions.tyre_wear_mm.high",
         "protocol.wim.speed_m_s",
@@ -256,10 +256,10 @@ def test_every_bad_key_is_reported_at_once_one_line_each(raw):
 
 
 def test_a_cross_section_rule_is_checked_once_the_sections_are_valid(raw):
-    # ablation.size > fleet.size is only meaningful for a valid fleet.size: the type error alone is reported
+    # ablation.n_bogies > fleet.n_bogies is only meaningful for a valid fleet.n_bogies: the type error alone is reported
     with pytest.raises(ConfigError) as excinfo:
-        parse_config(changed(changed(raw, "fleet.size", "many"), "ablation.size", 10**6))
-    assert [key for key, _ in excinfo.value.errors] == ["fleet.size"]
+        parse_config(changed(changed(raw, "fleet.n_bogies", "many"), "ablation.n_bogies", 10**6))
+    assert [key for key, _ in excinfo.value.errors] == ["fleet.n_bogies"]
 
 
 def test_the_schema_exports_its_ranges_and_units_as_json_schema():

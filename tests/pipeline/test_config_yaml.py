@@ -40,19 +40,19 @@ def test_nested_duplicates_are_all_reported_with_their_key_paths():
 
 def test_load_params_and_load_config_refuse_a_duplicated_key(tmp_path):
     text = PARAMS.read_text(encoding="utf-8")
-    # a second fleet.size, below the first: YAML alone would silently keep the second value
+    # a second fleet.n_bogies, below the first: YAML alone would silently keep the second value
     bad = tmp_path / "params.yaml"
-    bad.write_text(text.replace("  size: 2000 ", "  size: 2000\n  size: 5 ", 1), encoding="utf-8")
-    line = text.splitlines().index(next(s for s in text.splitlines() if s.startswith("  size: 2000"))) + 1
+    bad.write_text(text.replace("  n_bogies: 2000 ", "  n_bogies: 2000\n  n_bogies: 5 ", 1), encoding="utf-8")
+    line = text.splitlines().index(next(s for s in text.splitlines() if s.startswith("  n_bogies: 2000"))) + 1
     for load in (load_params, load_config):
         with pytest.raises(ConfigError) as excinfo:
             load(bad)
-        assert excinfo.value.key == "fleet.size"
-        assert f"duplicated key fleet.size at line {line + 1} (first at line {line})" in str(excinfo.value)
+        assert excinfo.value.key == "fleet.n_bogies"
+        assert f"duplicated key fleet.n_bogies at line {line + 1} (first at line {line})" in str(excinfo.value)
 
 
 def test_a_duplicated_top_level_section_is_refused(tmp_path):
     bad = tmp_path / "params.yaml"
-    bad.write_text(PARAMS.read_text(encoding="utf-8") + "\nablation:\n  size: 10\n", encoding="utf-8")
+    bad.write_text(PARAMS.read_text(encoding="utf-8") + "\nablation:\n  n_bogies: 10\n", encoding="utf-8")
     with pytest.raises(ConfigError, match="duplicated key ablation at line"):
         load_config(bad)

@@ -32,10 +32,10 @@ ABLATION = 2
 
 def tiny_params():
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = FLEET
+    raw["fleet"]["n_bogies"] = FLEET
     raw["sensitivity"]["base_size"] = BASE_SIZE
     raw["sensitivity"]["bootstrap_resamples"] = 20
-    raw["ablation"]["size"] = ABLATION
+    raw["ablation"]["n_bogies"] = ABLATION
     raw["protocol"]["static"]["dt_s"] = 0.002
     raw["protocol"]["wim"]["dt_s"] = 0.002
     raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4})

@@ -37,10 +37,10 @@ NEEDS_POPPLER = pytest.mark.skipif(
 
 def tiny_raw():
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = 10
+    raw["fleet"]["n_bogies"] = 10
     raw["sensitivity"]["base_size"] = 4
     raw["sensitivity"]["bootstrap_resamples"] = 20
-    raw["ablation"]["size"] = 2
+    raw["ablation"]["n_bogies"] = 2
     raw["protocol"]["static"]["dt_s"] = 0.002
     raw["protocol"]["wim"]["dt_s"] = 0.002
     raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4, "dask_scheduler": None})

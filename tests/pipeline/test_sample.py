@@ -37,9 +37,9 @@ SCALARS = ("bush_stiffness", "bush_damping", "friction_coefficient", "contact_ro
 def small_raw(**changes):
     """The default params with a small fleet, design and ablation; ``changes`` maps dotted paths to values."""
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = 300
+    raw["fleet"]["n_bogies"] = 300
     raw["sensitivity"]["base_size"] = 16
-    raw["ablation"]["size"] = 20
+    raw["ablation"]["n_bogies"] = 20
     for path, value in changes.items():
         *parents, last = path.split("__")
         node = raw
@@ -95,7 +95,7 @@ def test_axles_a_group_does_not_have_wear_nothing(studies):
 
 # ---- the fleet design --------------------------------------------------------------------------------------------
 def test_latin_hypercube_puts_one_bogie_in_every_stratum_of_every_marginal():
-    config = parse_config(small_raw(fleet__size=500))
+    config = parse_config(small_raw(fleet__n_bogies=500))
     fleet = sample_fleet(config)
     n = len(fleet)
     edges_u = np.arange(n + 1) / n
@@ -112,14 +112,14 @@ def test_latin_hypercube_puts_one_bogie_in_every_stratum_of_every_marginal():
 
 
 def test_tyre_wear_is_independent_per_axle(config):
-    fleet = sample_fleet(parse_config(small_raw(fleet__size=1000)))
+    fleet = sample_fleet(parse_config(small_raw(fleet__n_bogies=1000)))
     tri = fleet[fleet["group"] == "triaxle"]
     corr = np.corrcoef(tri[list(TYRE_WEAR_COLUMNS)].to_numpy().T)
     assert np.abs(corr[np.triu_indices(3, 1)]).max() < 0.1
 
 
 def test_sobol_fleet_marginals_match_the_distributions():
-    config = parse_config(small_raw(fleet__size=1024, fleet__sampling="sobol"))
+    config = parse_config(small_raw(fleet__n_bogies=1024, fleet__sampling="sobol"))
     fleet = sample_fleet(config)
     q = np.array([0.1, 0.25, 0.5, 0.75, 0.9])
     for name in (*SCALARS, "payload_fraction"):
@@ -141,7 +141,7 @@ def test_same_params_give_identical_tables_and_another_seed_different_ones(confi
 
 def test_road_seeds_depend_only_on_seed_study_and_sample_id(config, studies):
     fleet = studies["fleet"]
-    bigger = sample_fleet(parse_config(small_raw(fleet__size=600)))
+    bigger = sample_fleet(parse_config(small_raw(fleet__n_bogies=600)))
     assert bigger["road_seed"].iloc[: len(fleet)].tolist() == fleet["road_seed"].tolist()
     assert fleet["road_seed"].iloc[7] == road_seed(config.seed, "fleet", 7)
     assert fleet["road_seed"].is_unique
@@ -152,8 +152,8 @@ def test_road_seeds_depend_only_on_seed_study_and_sample_id(config, studies):
 # ---- the ablation ------------------------------------------------------------------------------------------------
 def test_ablation_variants_differ_from_their_baseline_only_in_the_switched_off_inhibitors(config, studies):
     fleet, ablation = studies["fleet"], studies["ablation"]
-    assert len(ablation) == config.ablation.size * len(VARIANTS)
-    assert ablation["variant"].tolist() == list(VARIANTS) * config.ablation.size
+    assert len(ablation) == config.ablation.n_bogies * len(VARIANTS)
+    assert ablation["variant"].tolist() == list(VARIANTS) * config.ablation.n_bogies
     physical = [c for c in COLUMNS if c not in ("sample_id", "study", "variant")]
     for base_id, rows in ablation.groupby("base_id"):
         rows = rows.set_index("variant")[physical]
@@ -169,7 +169,7 @@ def test_ablation_variants_differ_from_their_baseline_only_in_the_switched_off_i
 
 
 def test_ablation_takes_the_first_fleet_bogies(config, studies):
-    assert sorted(set(studies["ablation"]["base_id"])) == list(range(config.ablation.size))
+    assert sorted(set(studies["ablation"]["base_id"])) == list(range(config.ablation.n_bogies))
     assert sample_ablation(config, studies["fleet"]).equals(studies["ablation"])
 
 

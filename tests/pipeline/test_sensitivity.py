@@ -45,10 +45,10 @@ LOG_FACTORS = ("bush_stiffness", "bush_damping")  # log-uniform: additive in the
 
 def small_raw():
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = 12
+    raw["fleet"]["n_bogies"] = 12
     raw["sensitivity"]["base_size"] = BASE_SIZE
     raw["sensitivity"]["bootstrap_resamples"] = 200
-    raw["ablation"]["size"] = 12
+    raw["ablation"]["n_bogies"] = 12
     return raw
 
 
@@ -356,7 +356,7 @@ def ablation_study_runs(config, studies):
     """The ablation sample table with fabricated results of the known effects (EFFECT) attached."""
     ablation = studies["ablation"].drop(columns="study")
     n_axles = ablation.groupby("base_id")["n_axles"].first().to_numpy()
-    fabricated = ablation_runs(n_bogies=config.ablation.size, n_axles=n_axles)
+    fabricated = ablation_runs(n_bogies=config.ablation.n_bogies, n_axles=n_axles)
     columns = ["protocol", "status", "message", *RESULT_COLUMNS]
     return ablation.merge(fabricated[["sample_id", *columns]], on="sample_id")
 
@@ -377,7 +377,7 @@ def test_stage_writes_indices_ablation_and_a_ranking_json(tmp_path, config, stud
     static = metrics["ablation"]["static"]
     assert static["largest_single_gain"] == "bush_stiffness"
     assert static["all"]["reduction"] == pytest.approx(0.04, abs=1e-4)
-    assert static["baseline"]["n_bogies"] == config.ablation.size
+    assert static["baseline"]["n_bogies"] == config.ablation.n_bogies
     out = tmp_path / "data" / "sensitivity"
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["sobol_indices.csv", "sobol_excluded.csv", "ablation.csv", "ablation_pairs.parquet"]

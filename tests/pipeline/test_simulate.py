@@ -42,9 +42,9 @@ KEYS = ["study", "sample_id", "protocol"]
 def tiny_raw(**execution):
     """The default params with tiny studies, a 2 ms time step and the given execution settings."""
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = 12
+    raw["fleet"]["n_bogies"] = 12
     raw["sensitivity"]["base_size"] = 4
-    raw["ablation"]["size"] = 2
+    raw["ablation"]["n_bogies"] = 2
     raw["protocol"]["static"]["dt_s"] = 0.002
     raw["protocol"]["wim"]["dt_s"] = 0.002
     raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 3, "dask_scheduler": None, **execution})

@@ -270,9 +270,9 @@ def test_headline_metrics_keys_and_rounding():
 # ---- the stage ------------------------------------------------------------------------------------------------------
 def small_raw():
     raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["size"] = 40
+    raw["fleet"]["n_bogies"] = 40
     raw["sensitivity"]["base_size"] = 2
-    raw["ablation"]["size"] = 4
+    raw["ablation"]["n_bogies"] = 4
     return raw
 
 
