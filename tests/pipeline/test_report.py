@@ -20,8 +20,9 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import report, report_figures, sensitivity, survey
+from pipeline import report, sensitivity, survey
 from pipeline.config import load_params, parse_config
+from pipeline.report import style
 from pipeline.sample import sample_studies, write_parquet_atomic
 from pipeline.simulate import simulate_samples, study_protocols
 
@@ -104,7 +105,7 @@ def built(project):
 @pytest.fixture(scope="module")
 def pages(built):
     """The pages of the tiny run's report as Figures (section, PNG name, Figure)."""
-    with matplotlib.rc_context(report_figures.STYLE):
+    with matplotlib.rc_context(style.STYLE):
         return report.build_pages(built[1], report.reference_runs())[0]
 
 
@@ -206,7 +207,7 @@ def test_summary_sentences_are_made_from_the_metrics(built, pages):
     text = figure_text(pages[1][2])
     for phrase in expected_phrases(sv, ss):
         assert phrase in text, phrase
-    labels = [report_figures.FACTOR_LABEL[f] for f in ss["ranking"]]
+    labels = [style.FACTOR_LABEL[f] for f in ss["ranking"]]
     ranked = [text.index(f"{k}. {label}, ST") for k, label in enumerate(labels, start=1)]
     assert ranked == sorted(ranked)
     assert ss["ranking_measure"] in text
@@ -255,7 +256,7 @@ def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project
     failed = report.failed_runs(inputs.runs)
     planted = failed[failed["message"] == PLANTED]
     assert planted.groupby("study")["n"].sum().to_dict() == {"ablation": 1, "fleet": 2}
-    with matplotlib.rc_context(report_figures.STYLE):
+    with matplotlib.rc_context(style.STYLE):
         pages, _ = report.build_pages(inputs, report.reference_runs())
     appendix = figure_text(pages[-1][2])
     assert PLANTED in appendix
