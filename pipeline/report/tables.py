@@ -17,7 +17,7 @@ import pandas as pd
 from pipeline.config import Config
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.sample import STUDIES, TYRE_WEAR_COLUMNS
-from pipeline.survey import DESIGN_BINS
+from pipeline.survey_design import DESIGN_BINS
 
 __all__ = [
     "DESIGN_NAMES",

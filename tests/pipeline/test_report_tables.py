@@ -1,5 +1,5 @@
 """The report's derived tables (pipeline.report.tables, the summary and Appendix C rows) and the survey's design
-guidance table they draw from (pipeline.survey.design_table), on small hand-computed inputs."""
+guidance table they draw from (pipeline.survey_design.design_table), on small hand-computed inputs."""
 
 import math
 
@@ -10,7 +10,7 @@ import pytest
 from pipeline.report import tables
 from pipeline.report.pages.appendix import failures_table
 from pipeline.report.pages.front import summary_table
-from pipeline.survey import design_table, wilson_interval
+from pipeline.survey_design import design_table, wilson_interval
 
 
 # ---- runs ----------------------------------------------------------------------------------------------------------
