@@ -4,8 +4,9 @@
 (static weighbridge, weigh-in-motion) and axle group (tandem, tri-axle), what a road authority's survey of that
 fleet would find: the distribution of each axle position's load share, the heaviest-minus-lightest spread, the
 share of groups outside the 5 % and 10 % tolerances, which axle is overloaded against chassis tilt, inequality
-against tilt and tyre-wear bands, the static weighbridge against WIM, the road-wear factor and the groups with an
-axle over the legal limit while the group is legal. Every statistic is a plain function of a runs DataFrame;
+against tilt and tyre-wear bands, the static weighbridge against WIM, the road-wear factor, the groups with an
+axle over the legal limit while the group is legal, and the design guidance (the share within 5 % binned by the
+design parameters, with Wilson intervals; the report draws it). Every statistic is a plain function of a runs DataFrame;
 ``main`` only reads, calls and writes. Definitions, units and file layout: ``docs/outputs.md``.
 
 Failed runs (``status == "failed"``, zeros in their numbers) are excluded from every statistic and counted in
@@ -32,6 +33,7 @@ from pipeline.config import ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE
 from pipeline.sample import TYRE_WEAR_COLUMNS
 from pipeline.schema import SchemaError, check_file_schema, check_runs
+from pipeline.survey_design import DESIGN_COLUMNS, design_table
 
 #: the study a roadside survey samples
 SURVEY_STUDY = "fleet"
@@ -475,13 +477,14 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         config = load_config(args.params)
-        runs = read_runs(args.runs, SURVEY_STUDY)
+        runs = read_runs(args.runs, SURVEY_STUDY, (*REQUIRED_COLUMNS, *DESIGN_COLUMNS))
         check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
     except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
         print(f"survey: {exc}", file=sys.stderr)
         return 2
     tables = survey(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
+    tables["design_guidance.csv"] = design_table(inequality_columns(split_failed(runs)[0]))
     write_outputs(tables, args.out, metrics, args.metrics)
     n_ok, n_runs, n_failed = metrics["n_ok"], metrics["n_runs"], metrics["n_failed"]
     print(f"survey: {n_ok} of {n_runs} runs succeeded ({n_failed} failed); wrote {args.out} and {args.metrics}")

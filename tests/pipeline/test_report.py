@@ -20,9 +20,11 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import report, report_figures, sensitivity, survey
+from pipeline import report, sensitivity, survey
 from pipeline.config import load_params, parse_config
+from pipeline.report import style
 from pipeline.sample import sample_studies, write_parquet_atomic
+from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -104,7 +106,7 @@ def built(project):
 @pytest.fixture(scope="module")
 def pages(built):
     """The pages of the tiny run's report as Figures (section, PNG name, Figure)."""
-    with matplotlib.rc_context(report_figures.STYLE):
+    with matplotlib.rc_context(style.STYLE):
         return report.build_pages(built[1], report.reference_runs())[0]
 
 
@@ -206,7 +208,7 @@ def test_summary_sentences_are_made_from_the_metrics(built, pages):
     text = figure_text(pages[1][2])
     for phrase in expected_phrases(sv, ss):
         assert phrase in text, phrase
-    labels = [report_figures.FACTOR_LABEL[f] for f in ss["ranking"]]
+    labels = [style.FACTOR_LABEL[f] for f in ss["ranking"]]
     ranked = [text.index(f"{k}. {label}, ST") for k, label in enumerate(labels, start=1)]
     assert ranked == sorted(ranked)
     assert ss["ranking_measure"] in text
@@ -234,11 +236,9 @@ def plant_failures(runs_dir, study, count):
     part = sorted((runs_dir / f"study={study}").glob("part-*.parquet"))[0]
     frame = pd.read_parquet(part)
     rows = frame.index[frame["status"] == "ok"][:count]
-    numbers = [c for c in frame.columns if c.startswith(("axle_load_", "load_share_"))]
-    numbers += ["group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch"]
-    frame.loc[rows, numbers] = 0.0
+    frame.loc[rows, list(RESULT_COLUMNS)] = None  # a failed row's results are null
     frame.loc[rows, ["status", "message"]] = ["failed", PLANTED]
-    frame.to_parquet(part, index=False)
+    write_runs_file(frame, part)
     return frame.loc[rows, "sample_id"].tolist()
 
 
@@ -255,7 +255,7 @@ def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project
     failed = report.failed_runs(inputs.runs)
     planted = failed[failed["message"] == PLANTED]
     assert planted.groupby("study")["n"].sum().to_dict() == {"ablation": 1, "fleet": 2}
-    with matplotlib.rc_context(report_figures.STYLE):
+    with matplotlib.rc_context(style.STYLE):
         pages, _ = report.build_pages(inputs, report.reference_runs())
     appendix = figure_text(pages[-1][2])
     assert PLANTED in appendix

@@ -316,7 +316,7 @@ def test_stage_writes_every_table_and_the_metrics(stage_dir):
     out = stage_dir / "data" / "survey"
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["summary.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv", "tilt.csv",
-         "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv"]
+         "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv", "design_guidance.csv"]
     )  # fmt: skip
     metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())
     assert (metrics["n_runs"], metrics["n_failed"]) == (80, 1)

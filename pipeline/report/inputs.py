@@ -1,0 +1,136 @@
+"""The report's inputs: everything the earlier stages wrote, read and checked once into :class:`ReportInputs`."""
+
+from __future__ import annotations
+
+import datetime as dt
+import hashlib
+import json
+import os
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+import bogie
+import pipeline
+from pipeline.config import Config, load_config, load_params
+from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, split_failed
+
+__all__ = ["ReportInputs", "build_date", "code_digest", "read_inputs", "read_tables"]
+
+#: the columns of every study's runs the report reads (status, not results)
+STATUS_COLUMNS = ["study", "sample_id", "group", "variant", "protocol", "status", "message"]
+#: tables the report needs from each stage's output directory
+SURVEY_TABLES = ("tilt.csv", "static_vs_wim_pairs.parquet", "design_guidance.csv")
+SENSITIVITY_TABLES = ("sobol_indices.csv", "ablation.csv")
+
+
+@dataclass(frozen=True)
+class ReportInputs:
+    """Everything the report is made from.
+
+    Attributes
+    ----------
+    raw_params, config
+        params.yaml as read and as validated (SI).
+    facts
+        Provenance: ``date`` (None unless ``SOURCE_DATE_EPOCH`` is set), ``code_sha256`` (:func:`code_digest`),
+        ``params_sha256``.
+    fleet
+        The fleet study's samples (data/samples/fleet.parquet), SI.
+    runs
+        Every study's runs, status columns only (``study``, ``sample_id``, ``group``, ``variant``, ``protocol``,
+        ``status``, ``message``).
+    ok
+        The fleet's succeeded runs with the survey's inequality columns.
+    survey, sensitivity
+        The tables of data/survey and data/sensitivity, by file name.
+    survey_metrics, sensitivity_metrics
+        metrics/survey.json and metrics/sensitivity.json.
+    """
+
+    raw_params: dict[str, Any]
+    config: Config
+    facts: dict[str, str]
+    fleet: pd.DataFrame
+    runs: pd.DataFrame
+    ok: pd.DataFrame
+    survey: dict[str, pd.DataFrame]
+    sensitivity: dict[str, pd.DataFrame]
+    survey_metrics: dict[str, Any]
+    sensitivity_metrics: dict[str, Any]
+
+
+def code_digest() -> str:
+    """The sha256 of the code that made the report: every source and template of ``bogie`` and ``pipeline``.
+
+    The report names its code by content, not by git revision or date: committing the ``dvc.lock`` of a build
+    changes the revision, so a report that printed it could never match the lock it is recorded in, and a date
+    changes every day. The same code and parameters give the same report, byte for byte.
+    """
+    digest = hashlib.sha256()
+    for package in (bogie, pipeline):
+        root = Path(package.__file__).parent
+        for path in sorted(p for p in root.rglob("*") if p.suffix in (".py", ".j2") and p.is_file()):
+            digest.update(path.relative_to(root.parent).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    return digest.hexdigest()
+
+
+def build_date() -> str | None:
+    """The date of ``SOURCE_DATE_EPOCH`` as YYYY-MM-DD when it is set (for a dated, still reproducible build)."""
+    epoch = os.environ.get("SOURCE_DATE_EPOCH")
+    return dt.datetime.fromtimestamp(int(epoch), dt.UTC).date().isoformat() if epoch else None
+
+
+def read_tables(directory: str | Path, required: Sequence[str]) -> dict[str, pd.DataFrame]:
+    """The tables of a stage's output directory by file name; a clear error if one the report needs is missing."""
+    directory = Path(directory)
+    missing = [name for name in required if not (directory / name).is_file()]
+    if missing:
+        raise RunsError(f"{directory}/ lacks {', '.join(missing)}: run the stage that writes it first")
+    read = {".csv": pd.read_csv, ".parquet": pd.read_parquet}
+    return {f.name: read[f.suffix](f) for f in sorted(directory.iterdir()) if f.suffix in read}
+
+
+def read_inputs(
+    params: str | Path,
+    samples: str | Path,
+    runs: str | Path,
+    survey_dir: str | Path,
+    sensitivity_dir: str | Path,
+    metrics_dir: str | Path,
+) -> ReportInputs:
+    """Read and check every input of the report (see :class:`ReportInputs`).
+
+    Raises
+    ------
+    ConfigError, RunsError, OSError
+        For bad parameters, a missing or incomplete runs dataset, or a missing table or metrics file.
+    """
+    params = Path(params)
+    config = load_config(params)
+    facts = {
+        "date": build_date(),
+        "code_sha256": code_digest(),
+        "params_sha256": hashlib.sha256(params.read_bytes()).hexdigest(),
+    }
+    if not any(Path(runs).glob("study=*/*.parquet")):
+        raise RunsError(f"{runs}/ holds no runs; run the simulate stage first")
+    every = pd.read_parquet(runs, columns=STATUS_COLUMNS)
+    every["study"] = every["study"].astype(str)
+    ok = inequality_columns(split_failed(read_runs(runs, "fleet", REQUIRED_COLUMNS))[0])
+    metrics_dir = Path(metrics_dir)
+    return ReportInputs(
+        raw_params=load_params(params),
+        config=config,
+        facts=facts,
+        fleet=pd.read_parquet(Path(samples) / "fleet.parquet"),
+        runs=every,
+        ok=ok,
+        survey=read_tables(survey_dir, SURVEY_TABLES),
+        sensitivity=read_tables(sensitivity_dir, SENSITIVITY_TABLES),
+        survey_metrics=json.loads((metrics_dir / "survey.json").read_text()),
+        sensitivity_metrics=json.loads((metrics_dir / "sensitivity.json").read_text()),
+    )

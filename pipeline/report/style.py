@@ -1,0 +1,61 @@
+"""The report's look and its words for the pipeline's names: the matplotlib style, labels and colours."""
+
+from __future__ import annotations
+
+__all__ = [
+    "AXLE_COLOR",
+    "FACTOR_LABEL",
+    "GROUP_COLOR",
+    "GROUP_LABEL",
+    "MEASURE_LABEL",
+    "PROTOCOL_LABEL",
+    "PROTOCOL_LINE",
+    "STYLE",
+    "axle_name",
+    "factor_label",
+]
+
+#: matplotlib rc settings of every page: build the pages inside ``matplotlib.rc_context(STYLE)``
+STYLE = {
+    "font.family": "DejaVu Sans",
+    "font.size": 9.0,
+    "axes.titlesize": 9.5,
+    "axes.labelsize": 9.0,
+    "xtick.labelsize": 8.0,
+    "ytick.labelsize": 8.0,
+    "legend.fontsize": 7.5,
+    "legend.title_fontsize": 7.5,
+    "axes.grid": True,
+    "grid.linewidth": 0.4,
+    "grid.alpha": 0.5,
+    "axes.spines.top": False,
+    "axes.spines.right": False,
+    "pdf.fonttype": 42,
+    "image.cmap": "RdYlGn",
+}
+GROUP_LABEL = {"tandem": "tandem", "triaxle": "tri-axle"}
+GROUP_COLOR = {"tandem": "C0", "triaxle": "C1"}
+PROTOCOL_LABEL = {"static": "static weighbridge", "wim": "weigh-in-motion"}
+PROTOCOL_LINE = {"static": "-", "wim": "--"}
+AXLE_COLOR = {"front": "C2", "middle": "C4", "rear": "C3"}
+FACTOR_LABEL = {
+    "bush_stiffness": "bush stiffness",
+    "bush_damping": "bush damping",
+    "contact_roll_radius": "contact movement",
+    "friction_coefficient": "spring-end friction",
+    "chassis_tilt": "chassis tilt",
+    "tyre_wear": "tyre wear",
+    "baseline": "none removed",
+    "all": "all four removed",
+}
+MEASURE_LABEL = {"max_deviation": "max. deviation", "p1": "P1", "road_wear_factor": "road-wear factor"}
+
+
+def factor_label(name: str) -> str:
+    """The report's name of a factor or ablation variant (the name itself when it has none)."""
+    return FACTOR_LABEL.get(name, name)
+
+
+def axle_name(i: int, n_axles: int) -> str:
+    """front, middle or rear for axle position ``i`` (0 = front) of an ``n_axles`` group."""
+    return "front" if i == 0 else "rear" if i == n_axles - 1 else "middle"

@@ -1,0 +1,114 @@
+"""The report's page mechanics (pipeline.report.layout): wrapping, text blocks, tables, pagination, numbering."""
+
+import matplotlib
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+from matplotlib.figure import Figure
+
+from pipeline.report import layout
+from pipeline.report.style import STYLE
+
+LONG = (
+    "The heaviest axle carries on average 312 kg (4.57 % of the mean axle load) more than the lightest on tandem "
+    "groups and 455 kg (5.12 % of the mean axle load) more than the lightest on tri-axle groups, "
+) * 3
+
+
+def drawn_boxes(fig):
+    """The window extent of every text drawn on ``fig``, in pixels, after a draw."""
+    canvas = FigureCanvasAgg(fig)
+    canvas.draw()
+    renderer = canvas.get_renderer()
+    return [t.get_window_extent(renderer) for t in fig.texts], fig.bbox
+
+
+@pytest.mark.parametrize("size", [7.5, 8.2, 9.0])
+def test_wrapped_lines_fit_the_measure_and_keep_numbers_with_their_per_cent(size):
+    chars = layout.chars_per_line(size)
+    blocks = layout.wrap_paragraphs([LONG, "## A heading", "- " + LONG], size)
+    assert [b.bold for b in blocks] == [False, True, False]
+    assert blocks[1].lines == ("A heading",)
+    for block in blocks:
+        assert all(len(line) <= chars for line in block.lines)
+        assert not any(line.startswith("%") for line in block.lines)
+    assert len(blocks[0].lines) > 1
+    assert "4.57\u00a0%" in " ".join(blocks[0].lines)
+    # a bullet's further lines are indented under its text
+    assert blocks[2].lines[0].startswith("- ") and all(line.startswith("  ") for line in blocks[2].lines[1:])
+
+
+def test_smaller_type_fits_more_characters():
+    assert layout.chars_per_line(7.5) > layout.chars_per_line(9.0) > layout.chars_per_line(9.0, x=0.3)
+
+
+def test_text_block_stays_inside_the_page_margins_and_moves_down():
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=layout.A4)
+        bottom = layout.text_block(fig, 0.9, [LONG, "## Heading", LONG], size=9.0)
+        boxes, page = drawn_boxes(fig)
+    assert len(boxes) == 3
+    left, right = layout.LEFT * page.width, layout.RIGHT * page.width
+    for box in boxes:
+        assert box.x0 >= left - 1 and box.x1 <= right + 1, (box.x0, box.x1, left, right)
+    tops = [box.y1 for box in boxes]
+    assert tops == sorted(tops, reverse=True)
+    # the returned height is below the last paragraph's last line
+    assert bottom * page.height <= boxes[-1].y0 + 1
+    assert 0.0 < bottom < 0.9
+
+
+def test_number_pages_writes_page_n_of_n_and_the_footer():
+    pages = [Figure(figsize=layout.A4) for _ in range(3)]
+    layout.number_pages(pages, "footer text")
+    for n, fig in enumerate(pages, start=1):
+        texts = [t.get_text() for t in fig.texts]
+        assert texts == ["footer text", f"page {n} of 3"]
+
+
+def test_contents_lists_each_section_at_its_first_page():
+    sections = ["Summary", "Survey", "Survey", "Appendix C", "", ""]
+    assert layout.contents(sections, first=2) == [("Summary", 2), ("Survey", 3), ("Appendix C", 5)]
+    assert layout.contents([]) == []
+
+
+def test_paginate_fills_pages_and_gives_every_page_a_row():
+    assert layout.paginate([0.2, 0.2, 0.2, 0.2], first=0.45, rest=0.65) == [[0, 1], [2, 3]]
+    assert layout.paginate([0.2] * 5, first=0.1, rest=0.5) == [[0], [1, 2], [3, 4]]
+    # a row taller than a page gets a page of its own rather than none
+    assert layout.paginate([0.3, 2.0, 0.1], first=1.0, rest=1.0) == [[0], [1], [2]]
+    assert layout.paginate([], first=1.0, rest=1.0) == [[]]
+
+
+def test_table_pages_continue_a_long_table_with_numbered_titles():
+    rows = [[str(k), "a\nb"] for k in range(120)]
+    with matplotlib.rc_context(STYLE):
+        pages = layout.table_pages("Appendix C: failed runs", ["n", "text"], rows, ["intro"], [0.5, 0.5])
+    assert len(pages) > 1
+    titles = [pages[k].texts[0].get_text() for k in range(len(pages))]
+    assert titles[0] == "Appendix C: failed runs"
+    assert titles[1:] == [f"Appendix C: failed runs (continued, page {k})" for k in range(2, len(pages) + 1)]
+    cells = [
+        cell.get_text().get_text()
+        for fig in pages
+        for ax in fig.get_axes()
+        for (r, c), cell in sorted(ax.tables[0].get_celld().items())
+        if r > 0 and c == 0
+    ]
+    assert cells == [str(k) for k in range(120)]  # every row once, in order
+    for fig in pages:
+        [ax] = fig.get_axes()
+        assert ax.get_position().y0 >= 0.07 - 1e-9  # above the footer
+
+
+def test_table_pages_without_rows_is_one_page_of_intro():
+    pages = layout.table_pages("T", ["a"], [], ["No run failed."], [1.0])
+    assert len(pages) == 1 and not pages[0].get_axes()
+    assert [t.get_text() for t in pages[0].texts] == ["T", "No run failed."]
+
+
+def test_table_axes_returns_its_bottom_and_sizes_rows_by_their_lines():
+    fig = Figure(figsize=layout.A4)
+    bottom = layout.table_axes(fig, 0.8, ["h"], [["one"], ["two\nlines"]], [1.0], size=7.5)
+    line = 7.5 * 1.3 / 72.0 / layout.A4[1]
+    assert bottom == pytest.approx(0.8 - (1.8 * line + 1.8 * line + 2.8 * line))
+    assert bottom == pytest.approx(0.8 - sum(layout.row_height(r, 7.5) for r in (["h"], ["one"], ["two\nlines"])))

@@ -1,0 +1,320 @@
+"""The report's words (pipeline.report.text): the number filters and every template, from small hand-made dicts."""
+
+import math
+from pathlib import Path
+
+import jinja2
+import pytest
+
+from pipeline.config import load_params, parse_config
+from pipeline.report import text
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+# ---- filters -------------------------------------------------------------------------------------------------------
+def test_span_without_an_interval_says_so_instead_of_crashing():
+    assert text.span(0.0123, 0.005, 0.02) == "1.23 (0.50 to 2.00)"
+    assert text.span(0.0123, None, None) == "1.23 (no interval)"
+    assert text.span(0.0123, float("nan"), 0.02) == "1.23 (no interval)"
+
+
+@pytest.mark.parametrize(
+    ("args", "expected"),
+    [
+        ((0.1234,), "12.3 %"),
+        ((0.1234, 2), "12.34 %"),
+        ((0.95, 0), "95 %"),
+        ((0.0, 1), "0.0 %"),
+        ((0.1234, 2, False), "12.34"),
+        ((None,), "n/a"),
+        ((math.nan,), "n/a"),
+        ((None, 2, False), "n/a"),
+    ],
+)
+def test_pct_formats_a_fraction_as_per_cent(args, expected):
+    assert text.pct(*args) == expected
+
+
+def test_num_rounds_to_two_decimals_without_negative_zero():
+    assert text.num(0.2449) == "0.24"
+    assert text.num(0.246) == "0.25"
+    assert text.num(-0.004) == "0.00"
+    assert text.num(-0.006) == "-0.01"
+    assert text.num(-1.5) == "-1.50"
+    assert text.num(3.14159, 3) == "3.142"
+
+
+def test_interval_is_the_estimate_then_its_ends():
+    assert text.interval(0.24, 0.05) == "0.24 (0.19 to 0.29)"
+    # a small negative estimate whose interval straddles zero: no "-0.00"
+    assert text.interval(-0.001, 0.02) == "0.00 (-0.02 to 0.02)"
+
+
+def test_points_and_span_are_percentage_points():
+    assert text.points(0.01234) == "1.23"
+    assert text.span(0.01234, -0.005, 0.0301) == "1.23 (-0.50 to 3.01)"
+    assert text.fixed(2.345, 1) == "2.3"
+    assert text.fixed(57.0) == "57"
+
+
+def test_groups_names_each_group_present():
+    assert text.groups({"tandem": "1 %", "triaxle": "2 %"}) == "1 % of tandem and 2 % of tri-axle groups"
+    assert text.groups({"triaxle": "2 %"}, "bogies") == "2 % of tri-axle bogies"
+    assert text.groups({}) == "no groups"
+
+
+@pytest.mark.parametrize(
+    ("seconds", "expected"),
+    [(45.61, "45.6 s"), (59.9, "59.9 s"), (60.0, "1.0 min"), (740.0, "12.3 min"), (4500.0, "1.25 h")],
+)
+def test_duration_picks_its_unit(seconds, expected):
+    assert text.duration(seconds) == expected
+
+
+def test_paragraphs_split_at_blank_lines_and_join_lines_with_one_space():
+    assert text.paragraphs("a b\n  c\n\n\n d\n \ne  \n") == ["a b c", "d", "e"]
+    assert text.paragraphs("\n\n") == []
+
+
+def test_templates_are_strict_about_missing_values():
+    env = text.environment(jinja2.DictLoader({"t.j2": "{{ x.y | pct }}"}))
+    assert text.render("t.j2", env=env, x={"y": 0.5}) == ["50.0 %"]
+    with pytest.raises(jinja2.UndefinedError):
+        text.render("t.j2", env=env, x={})
+
+
+# ---- the templates -------------------------------------------------------------------------------------------------
+def ablation_entry(mean, reduction=None, share=0.5):
+    entry = {"mean_max_deviation": mean, "share_outside_5pct": share, "reduction": reduction}
+    if reduction is not None:
+        entry.update(reduction_low=reduction - 0.001, reduction_high=reduction + 0.001)
+    return entry
+
+
+def numbers(agrees=True, resolved=True, survey=True):
+    """A hand-made summary_numbers(): two inhibitors ranked, one external factor, one protocol."""
+    indices = {
+        "contact_roll_radius": {"ST": 0.2449, "ST_conf": 0.05, "S1": 0.2, "S1_conf": 0.04},
+        "bush_stiffness": {"ST": 0.031, "ST_conf": 0.012, "S1": 0.02, "S1_conf": 0.01},
+        "chassis_tilt": {"ST": 0.781, "ST_conf": 0.1, "S1": 0.7, "S1_conf": 0.1},
+    }
+    sobol = {
+        "indices": indices,
+        "confidence_level": 0.95,
+        "base_size": 64,
+        "protocol": "static",
+        "group": "triaxle",
+        "measure": "max_deviation",
+        "n_blocks": 63,
+        "n_failed": 2,
+        "bootstrap_resamples": 200,
+    }
+    static = {
+        "baseline": {"n_bogies": 40, **ablation_entry(0.0321, share=0.625)},
+        "contact_roll_radius": ablation_entry(0.0150, 0.0171, share=0.25),
+        "bush_stiffness": ablation_entry(0.0300, 0.0021),
+        "all": ablation_entry(0.0012, 0.0309, share=0.0),
+        "largest_single_gain": "contact_roll_radius",
+    }
+    headline = {
+        "share_outside_5pct": 0.1234,
+        "share_outside_10pct": 0.05,
+        "mean_spread_kg": 312.4,
+        "mean_spread_pct": 4.567,
+        "rear_overload_share_nose_up": 0.9,
+    }
+    return {
+        "ranking": ["contact_roll_radius", "bush_stiffness"],
+        "ranking_measure": "total Sobol index ST of max_deviation",
+        "reference_check": {"agrees": agrees, "resolved": resolved},
+        "ranking_other_measures": {"p1": ["bush_stiffness", "contact_roll_radius"]},
+        "sobol": sobol,
+        "ablation": {"static": static},
+        "survey": {"static": {"tandem": headline, "triaxle": {**headline, "share_outside_5pct": None}}}
+        if survey
+        else {},
+    }
+
+
+def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
+    paras = text.render("summary.j2", numbers=numbers(), nose_up_deg=0.5)
+    assert paras[0] == "## Which inhibitor matters"
+    assert paras[1].startswith("By the total Sobol index ST of max_deviation, with 95 % intervals, the four inhibitors")
+    assert "rank: 1. contact movement, ST 0.24 (0.19 to 0.29); 2. bush stiffness, ST 0.03 (0.02 to 0.04). " in paras[1]
+    assert "external causes in the same design: chassis tilt 0.78. As the reference concluded" in paras[1]
+    assert paras[1].endswith("contact movement, and the intervals separate them.")
+    assert paras[2] == "## What a roadside survey of the fleet finds"
+    assert paras[3].startswith("Static weighbridge: 12.3 % of tandem and n/a of tri-axle groups are outside 5 %")
+    assert "312 kg (4.57 % of the mean axle load) more than the lightest on tandem groups and 312 kg" in paras[3]
+    assert paras[4] == (
+        "Tilted nose up by more than 0.5°, the rear axle is the heaviest in 90.0 % of tandem and 90.0 % of tri-axle "
+        "groups (static weighbridge): the rear overload the laboratory tilt tests found."
+    )
+    assert paras[5] == "## What removing each inhibitor buys"
+    assert paras[6] == (
+        "Static weighbridge, 40 fleet bogies: the fleet mean of the maximum deviation from the mean axle load, 3.21 % "
+        "with every inhibitor present, becomes 1.50 % without contact movement (reduction 1.71 points, 1.61 to 1.81), "
+        "3.00 % without bush stiffness (reduction 0.21 points, 0.11 to 0.31); and 0.12 % with all four removed. "
+        "The largest single gain is from removing contact movement: the share outside 5 % goes from 62.5 % to 25.0 %."
+    )
+    assert len(paras) == 7
+
+
+@pytest.mark.parametrize(
+    ("agrees", "resolved", "verdict"),
+    [
+        (True, False, "; but the intervals overlap, so at base size 64 the ordering is not resolved."),
+        (False, False, "Unlike the reference's conclusion, spring-end friction does not rank below both"),
+        (None, None, "The reference's claim could not be checked (an index is missing)."),
+    ],
+)
+def test_summary_verdict_follows_the_reference_check(agrees, resolved, verdict):
+    paras = text.render("summary.j2", numbers=numbers(agrees, resolved, survey=False), nose_up_deg=0.5)
+    assert verdict in paras[1]
+    assert "roadside survey" not in " ".join(paras)
+
+
+def test_summary_notes_and_sensitivity_caption():
+    n = numbers()
+    notes = text.render("summary_notes.j2", s=n["sobol"], n=40)
+    assert len(notes) == 1
+    assert "of max_deviation (static, triaxle) from 63 of 64 Saltelli blocks (2 failed runs" in notes[0]
+    assert "(200 resamples, 95 %). Ablation (static, 40 fleet bogies)" in notes[0]
+    caption = text.render("sensitivity.j2", numbers=n)
+    assert (
+        "of the tri-axle bogie's axle loads at the static weighbridge (63 Saltelli blocks, base size 64)" in caption[0]
+    )
+    assert caption[0].endswith("the inhibitors rank by P1: bush stiffness > contact movement.")
+    assert caption[1].startswith("Bottom: the ablation, 40 fleet bogies (static), each with one inhibitor")
+
+
+def survey_metrics(pairs=True):
+    entry = {"share_outside_5pct": 0.4567, "rear_overload_share_nose_up": 0.8}
+    metrics = {
+        "n_ok": 1990,
+        "n_failed": 10,
+        "static": {"tandem": entry},
+        "wim": {"tandem": {**entry, "share_outside_5pct": 0.9}},
+    }
+    if pairs:
+        metrics["static_vs_wim"] = {
+            "tandem": {"mean_dynamic_excess": 0.04567, "n_pairs": 990, "corr_max_deviation": 0.321}
+        }
+    return metrics
+
+
+def test_load_share_caption_quotes_every_protocol_at_5_percent():
+    [caption] = text.render("load_share.j2", survey=survey_metrics(), groups=["tandem"], protocols=["static", "wim"])
+    assert "over the fleet study's 1990 succeeded weighings (10 failed, listed in Appendix C)" in caption
+    assert caption.endswith(
+        "at t = 5 %: static weighbridge: 45.7 % of tandem groups; weigh-in-motion: 90.0 % of tandem groups."
+    )
+
+
+def test_tilt_caption_with_and_without_pairs():
+    args = {"groups": ["tandem"], "main": "static", "nose_up_deg": 0.5}
+    paras = text.render("tilt.j2", survey=survey_metrics(), protocols=["static", "wim"], **args)
+    assert paras[0].endswith(
+        "tilted nose up by more than 0.5°, the rear axle is the heaviest in 80.0 % of tandem groups."
+    )
+    assert "averages 4.57 points on 990 tandem groups (correlation 0.321). WIM adds" in paras[1]
+    paras = text.render("tilt.j2", survey=survey_metrics(pairs=False), protocols=["static"], **args)
+    assert paras[1] == "Bottom: empty, since only static ran; static against WIM needs both protocols."
+
+
+def test_reference_captions():
+    paras = text.render("figure2.j2", alpha=0.057, q=4.3, slopes=[0.0, 0.5], fe_p=[0.01234, 0.5], algebra=[0.0, 0.4999])
+    assert paras[0].startswith('What the reference reported: the curves of Equations 1 and 2 show "that')
+    assert "with α = 57 mm (bogie.static)" in paras[1]
+    assert "at q = 4.3: p = 0.012, 0.500 for slopes 0, 0.5° against 0.000, 0.500 from Equation 1." in paras[1]
+    paras = text.render(
+        "linear.j2",
+        name="L01",
+        figures="Figures 5-8",
+        words="quoted words",
+        ours={"peak_p": 0.1234, "peak_p1": 0.05},
+        reference={"peak_p": 0.25, "peak_p1": 0.1},
+    )
+    assert paras[0] == "What the reference reported (Table 1, Figures 5-8): peak p = 0.25, P1 = 0.1; quoted words"
+    assert 'Ours (bogie.cases.run("L01"): the Stage 3' in paras[1]
+    assert "peak p = 0.123, P1 = 0.050, 0.49 times the reference's p." in paras[1]
+    refs = {"N10": (1200.4, 800.0), "N19": (300.0, 250.0), "N20": (1000.0, 900.0), "N21": (500.0, 400.0)}
+    paras = text.render("step_runs.j2", refs=refs, front={"N19": 250.0, "N20": 1000.0, "N21": 333.0}, l03_mean=123.4)
+    assert "amounting to 1200N with the front wheel on the step, and 800N when" in paras[0]
+    assert "(N19, 300 / 250 N)" in paras[0] and "N20 gave 1000 / 900 N and the long arm of N21 500 / 400 N" in paras[0]
+    assert "leave 25 % of N20's front figure; the long arm 33 %. L03 (grey) averages 123 N over its run." in paras[1]
+
+
+def design_cell(share, n, x=(10.0, 30.0), y=(150.0, 200.0)):
+    return {"share": share, "n": n, "x_low": x[0], "x_high": x[1], "y_low": y[0], "y_high": y[1]}
+
+
+def test_design_caption_names_the_cells_that_reach_the_target_or_the_best():
+    groups = {
+        "tandem": {"quoted": 3, "good": [design_cell(0.96, 25), design_cell(1.0, 12)], "best": design_cell(1.0, 12)},
+        "triaxle": {"quoted": 2, "good": [], "best": design_cell(0.876, 40, (1.0, 3.0), (249.6, 300.4))},
+    }
+    trends = {"bush stiffness": {"tandem": (0.9, 0.2), "triaxle": (0.8, 0.1)}, "equaliser arm": {"tandem": (0.5, 0.6)}}
+    paras = text.render("design.j2", protocol="static", target=0.95, min_cell=10, groups=groups, trends=trends)
+    assert paras[0].startswith("Target: 95 % of bogies within 5 % at the static weighbridge. Maps:")
+    assert paras[0].endswith("Quoted below: cells and bins of at least 10 bogies.")
+    assert paras[1] == (
+        "Tandem: 2 of 3 cells reach the target, e.g. 96 % within 5 % (n = 25) at bush stiffness 10-30 N m/rad and "
+        "arms 150-200 mm."
+    )
+    assert paras[2] == (
+        "Tri-axle: no cell of 2 reaches the target; the best is 88 % within 5 % (n = 40) at bush stiffness 1-3 "
+        "N m/rad and arms 250-300 mm."
+    )
+    assert paras[3] == (
+        "From the lowest to the highest bin, the share within 5 % goes: bush stiffness (tandem 90 % to 20 %, "
+        "tri-axle 80 % to 10 %); equaliser arm (tandem 50 % to 60 %)."
+    )
+    assert paras[4].startswith("Caveat: these are the fleet's runs as sampled")
+    paras = text.render("design.j2", protocol="wim", target=0.95, min_cell=10, groups={"tandem": None}, trends={})
+    assert paras[1] == "Tandem: no cell holds 10 bogies; too few runs for guidance."
+    assert paras[2].startswith("Caveat")
+
+
+def test_appendix_texts():
+    [caption] = text.render("parameters.j2", n=4000, sampling="lhs", seed=42)
+    assert caption.startswith("The 4000 bogies of the fleet study as sampled (lhs: Latin hypercube, seed 42), in")
+    [caption] = text.render("parameters.j2", n=10, sampling="sobol", seed=1)
+    assert "(sobol: scrambled Sobol, seed 1)" in caption
+    assert text.render("failures.j2", n=0) == [
+        "No run failed: every sample of every study gave a reading under every protocol it ran."
+    ]
+    assert text.render("failures.j2", n=1)[0].startswith("1 run failed, grouped below by study")
+    assert text.render("failures.j2", n=25)[0].startswith("25 runs failed, grouped below")
+
+
+def test_definitions_take_the_protocols_from_params():
+    config = parse_config(load_params(ROOT / "params.yaml"))
+    paras = text.render(
+        "definitions.j2",
+        config=config,
+        tare=0.25,
+        read_time=0.5,
+        pair_tolerance=0.05,
+        share_tolerance=0.1,
+        nose_up_deg=0.5,
+    )
+    headings = [p for p in paras if p.startswith("## ")]
+    assert headings == [
+        "## Survey protocols (params.yaml, protocol:)",
+        "## Definitions (docs/outputs.md)",
+        "## Studies",
+        "## The model in short (docs/models.md)",
+    ]
+    assert all(p.startswith(("## ", "- ")) for p in paras)
+    static, wim = config.protocol.static, config.protocol.wim
+    assert "the empty trailer (25 % of the design payload weight)" in paras[1]
+    assert f"crawls at {static.crawl_speed:g} m/s" in paras[1]
+    assert f"mean load over the last 0.5 s. Time step {1e3 * static.dt:g} ms." in paras[1]
+    assert f"passes at {wim.speed:g} m/s ({3.6 * wim.speed:.0f} km/h)" in paras[2]
+    assert "(max W - min W) / max W > 0.05. Outside 10 %: the largest load share > 1.1. Nose up" in " ".join(paras)
+    assert (
+        f"- Fleet: {config.fleet.n_bogies} bogies ({config.fleet.sampling}, seed {config.seed}), axle mix tandem"
+        in " ".join(paras)
+    )
