@@ -28,7 +28,7 @@ from pydantic import (
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config_errors import config_error
-from pipeline.constants import GROUP_AXLES
+from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, READ_TIME, ROUTE_MARGIN
 from pipeline.distributions import Choice, Constant, Distribution, ParameterError
 
 PROTOCOLS: tuple[str, ...] = ("static", "wim")
@@ -300,24 +300,52 @@ class Fleet(Strict):
         return self
 
 
+def _check_steps(key: str, value: float, duration: float, dt: float) -> None:
+    """Refuse a protocol phase of more than MAX_PHASE_STEPS time steps (its histories would not fit in memory)."""
+    steps = duration / dt
+    if steps > MAX_PHASE_STEPS:
+        expected = (
+            f"makes a phase of {duration:.4g} s, {steps:,.0f} steps of {dt:g} s, more than {MAX_PHASE_STEPS:,} "
+            "(about 250 bytes a step per worker): shorten it or raise dt_s"
+        )
+        raise config_error(key, value, expected)
+
+
 class Static(Strict):
     """``protocol.static:`` the static weighbridge (see :class:`pipeline.config.StaticProtocol`)."""
 
     load_time_s: float = number("s", gt=0.0, le=600.0)
     approach_length_m: float = number("m", gt=0.0, le=1000.0)
     # walking pace or a little faster; more is not a static weighing
-    crawl_speed_m_s: float = number("m/s", gt=0.0, le=5.0)
-    settle_time_s: float = number("s", ge=0.0, le=600.0)
+    # a crawl slower than 0.1 m/s is no longer a drive onto a weighbridge (and a slower one is millions of steps)
+    crawl_speed_m_s: float = number("m/s", ge=0.1, le=5.0)
+    # the reading is the mean over the last READ_TIME of the settle: a shorter settle has nothing to read
+    settle_time_s: float = number("s", ge=READ_TIME, le=600.0)
     dt_s: float = number("s", gt=0.0, le=0.01)
+
+    @model_validator(mode="after")
+    def _phases_fit(self) -> Static:
+        route = (self.approach_length_m + ROUTE_MARGIN) / self.crawl_speed_m_s
+        for key, duration in (("load_time_s", self.load_time_s), ("crawl_speed_m_s", route),
+                              ("settle_time_s", self.settle_time_s)):  # fmt: skip
+            _check_steps(key, getattr(self, key), duration, self.dt_s)
+        return self
 
 
 class Wim(Strict):
     """``protocol.wim:`` the weigh-in-motion pass (see :class:`pipeline.config.WimProtocol`)."""
 
     # 50 m/s = 180 km/h: above it the value was most likely given in km/h
-    speed_m_s: float = number("m/s", gt=0.0, le=50.0)
+    # 1 m/s: the slowest a low-speed WIM site weighs at (they run at 5-15 km/h); slower is a static weighing
+    speed_m_s: float = number("m/s", ge=1.0, le=50.0)
     approach_length_m: float = number("m", gt=0.0, le=10_000.0)
     dt_s: float = number("s", gt=0.0, le=0.01)
+
+    @model_validator(mode="after")
+    def _pass_fits(self) -> Wim:
+        route = (self.approach_length_m + ROUTE_MARGIN) / self.speed_m_s
+        _check_steps("approach_length_m", self.approach_length_m, route, self.dt_s)
+        return self
 
 
 Protocol = Literal[PROTOCOLS]  # type: ignore[valid-type]

@@ -4,13 +4,25 @@ from __future__ import annotations
 
 from bogie.params import TARE_FRACTION
 
-__all__ = ["GROUP_AXLES", "MAX_AXLES", "PROTOCOLS", "PAIR_TOLERANCE", "SHARE_TOLERANCE", "TARE_FRACTION", "n_axles"]
+__all__ = [
+    "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN",
+    "SHARE_TOLERANCE", "TARE_FRACTION", "n_axles",
+]  # fmt: skip
 
 #: axles in each axle group the fleet is made of [-]
 GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
 
 #: most axles in a group: the runs have columns axle_load_0..MAX_AXLES-1 [-]
 MAX_AXLES: int = max(GROUP_AXLES.values())
+
+#: the weighbridge reads the mean over this last part of the settling time [s]
+READ_TIME: float = 0.5
+#: most time steps of one phase of a weighing (load ramp, crawl, settle, WIM pass): a phase's histories take about
+#: 250 bytes a step, so this keeps one run of one worker near 250 MB [-]
+MAX_PHASE_STEPS: int = 1_000_000
+#: what a route adds to its approach length: the lead before the road, the group's own length (at most 3 m for the
+#: presets) and the run-out past the sensor or onto the weighbridge [m]
+ROUTE_MARGIN: float = 4.0
 
 #: the weighing protocols: static weighbridge, weigh-in-motion pass
 PROTOCOLS: tuple[str, ...] = ("static", "wim")

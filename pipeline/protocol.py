@@ -28,11 +28,9 @@ from bogie import metrics, nonlinear
 from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
-from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE, TARE_FRACTION
+from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
 from pipeline.schema import RESULT_COLUMNS
 
-#: the weighbridge reads the mean over this last part of the settling time [s]
-READ_TIME = 0.5
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
 #: random approach roads are generated this much longer than needed [m]

@@ -30,6 +30,7 @@ from pipeline.atomic import atomic_file
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.distributions import Choice
+from pipeline.resources import available_memory
 
 STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
 
@@ -366,6 +367,38 @@ def write_parquet_atomic(frame: pd.DataFrame, path: str | Path) -> None:
         frame.to_parquet(tmp, index=False)
 
 
+#: memory one sampled bogie costs at the pipeline's peak: its sample row and design point (about 0.6 KiB with
+#: pandas' overheads) and, in the survey, its runs under every protocol with their derived columns (about 1 KiB
+#: each) [bytes]
+BYTES_PER_BOGIE = 3 * 1024
+
+
+def memory_needed(config: Config) -> int:
+    """The memory [bytes] the studies of ``config`` need at the pipeline's peak (:data:`BYTES_PER_BOGIE`)."""
+    sensitivity = config.sensitivity.base_size * (len(config.sensitivity.factors) + 2)
+    rows = config.fleet.n_bogies + sensitivity + len(VARIANTS) * config.ablation.n_bogies
+    return rows * BYTES_PER_BOGIE
+
+
+def check_memory(config: Config, available: int | None) -> None:
+    """Refuse studies that would not fit in ``available`` memory [bytes] (None: unknown, no check).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``fleet.n_bogies``, the memory the studies need and what is available.
+    """
+    need = memory_needed(config)
+    if available is not None and need > available:
+        raise ConfigError(
+            "fleet.n_bogies",
+            f"fleet.n_bogies = {config.fleet.n_bogies}: the studies ({config.fleet.n_bogies:,} fleet, "
+            f"{config.ablation.n_bogies:,} x {len(VARIANTS)} ablation and the Sobol' design) need about "
+            f"{need / 2**30:,.1f} GiB at the pipeline's peak, more than the {available / 2**30:,.1f} GiB available "
+            "on this machine: lower fleet.n_bogies, or run on a larger machine",
+        )
+
+
 def main(argv: list[str] | None = None) -> int:
     """Run the stage: validate params.yaml, sample every study, then write them all."""
     parser = argparse.ArgumentParser(prog="python -m pipeline.sample", description=__doc__.splitlines()[0])
@@ -374,6 +407,7 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         config = load_config(args.params)
+        check_memory(config, available_memory())
     except (ConfigError, OSError, yaml.YAMLError) as exc:
         print(f"sample: {args.params}: {exc}", file=sys.stderr)
         return 2

@@ -58,6 +58,7 @@ from pipeline import sample as sample_module
 from pipeline import schema as schema_module
 from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
 from pipeline.protocol import result_row, weigh
+from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
 from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame, verify_file, write_runs_file
 
@@ -341,6 +342,33 @@ def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
+#: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
+WORKER_MEMORY = 300 * 2**20  # [bytes]
+
+
+def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | None = None) -> int:
+    """``n_jobs`` capped at the cores and at what the available memory holds (:data:`WORKER_MEMORY` a worker).
+
+    A cap is logged as a warning; results do not depend on the number of workers, only the time does.
+    """
+    if cores is None:
+        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
+    memory = available_memory() if memory is None else memory
+    limits = {"the cores": cores}
+    if memory is not None:
+        limits["the available memory"] = max(1, memory // WORKER_MEMORY)
+    limit = min(limits.values())
+    if n_jobs <= limit:
+        return n_jobs
+    reason = min(limits, key=limits.get)
+    mib = "" if memory is None else f", {memory / 2**20:,.0f} MiB free, about {WORKER_MEMORY // 2**20} MiB a worker"
+    log(
+        f"simulate: warning: execution.n_jobs = {n_jobs} is more than {reason} can hold ({cores} cores{mib}); "
+        f"running {limit} workers"
+    )
+    return limit
+
+
 def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, pd.DataFrame]]:
     """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
     tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols) for c in chunks)
@@ -459,6 +487,8 @@ def simulate_samples(
             f"{len(pending)} to run ({total} runs) on {execution.backend}"
             + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
         )
+        if execution.backend == "loky" and pending:
+            execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log))
         failed = _run_pending(pending, execution, total, log)
         failed += sum(_count_failed(chunk.path) for chunk in done)
     summary = Summary(

@@ -162,7 +162,12 @@ BAD = [
     ("sensitivity.protocol", "dynamic", "sensitivity.protocol", ["'dynamic'", "static, wim"]),
     ("protocol.run", ["static", "dynamic"], "protocol.run[1]", ["'dynamic'", "unknown protocol"]),
     ("protocol.run", ["wim"], "sensitivity.protocol", ["'static'", "not run"]),
-    ("protocol.wim.speed_m_s", 80.0, "protocol.wim.speed_m_s", ["80.0", "(0, 50] m/s"]),
+    ("protocol.wim.speed_m_s", 80.0, "protocol.wim.speed_m_s", ["80.0", "[1, 50] m/s"]),
+    # accepted before: a WIM pass at 1e-7 m/s asked for a 4.6 TiB history, a 0 s settle failed every static run
+    ("protocol.wim.speed_m_s", 1e-7, "protocol.wim.speed_m_s", ["1e-07", "[1, 50] m/s"]),
+    ("protocol.static.settle_time_s", 0.0, "protocol.static.settle_time_s", ["0.0", "[0.5, 600] s"]),
+    ("protocol.static.crawl_speed_m_s", 0.01, "protocol.static.crawl_speed_m_s", ["0.01", "[0.1, 5] m/s"]),
+    ("protocol.static.dt_s", 1e-6, "protocol.static.load_time_s", ["2,000,000 steps", "more than 1,000,000"]),
     ("execution.backend", "threads", "execution.backend", ["'threads'", "loky, dask"]),
     ("execution.backend", "dask", "execution.dask_scheduler", ["None", "tcp://"]),
     ("execution.n_jobs", 0, "execution.n_jobs", ["= 0", "integer"]),
@@ -267,7 +272,7 @@ def test_the_schema_exports_its_ranges_and_units_as_json_schema():
 
     defs = Params.model_json_schema()["$defs"]
     speed = defs["Wim"]["properties"]["speed_m_s"]
-    assert (speed["exclusiveMinimum"], speed["maximum"], speed["unit"]) == (0.0, 50.0, "m/s")
+    assert (speed["minimum"], speed["maximum"], speed["unit"]) == (1.0, 50.0, "m/s")
     assert defs["AxleMix"]["required"] == ["tandem", "triaxle"]
     assert defs["Fleet"]["additionalProperties"] is False
 

@@ -15,12 +15,14 @@ import yaml
 from SALib.analyze import sobol as sobol_analyze
 
 from bogie.params import GRAVITY, INHIBITORS, design_spring_loads
-from pipeline.config import load_params, parse_config
+from pipeline.config import ConfigError, load_params, parse_config
 from pipeline.sample import (
     COLUMNS,
     TYRE_WEAR_COLUMNS,
     VARIANTS,
     bogie_from_sample,
+    check_memory,
+    memory_needed,
     road_seed,
     sample_ablation,
     sample_fleet,
@@ -292,3 +294,14 @@ def test_default_studies_sample_in_well_under_a_few_seconds():
     elapsed = time.perf_counter() - start
     assert [len(f) for f in studies.values()] == [2000, 512 * 8, 500 * 6]
     assert elapsed < 3.0
+
+
+def test_studies_that_would_not_fit_in_memory_are_refused_before_sampling():
+    config = parse_config(small_raw(fleet__n_bogies=10_000_000))
+    need = memory_needed(config)
+    assert need > 10_000_000 * 3 * 1024  # the fleet alone at 3 KiB a bogie
+    check_memory(config, available=need)  # just fits
+    check_memory(config, available=None)  # unknown memory: no check
+    with pytest.raises(ConfigError, match=r"fleet.n_bogies = 10000000: .* more than the 8.0 GiB available") as err:
+        check_memory(config, available=8 * 2**30)
+    assert err.value.key == "fleet.n_bogies"

@@ -33,6 +33,7 @@ from pipeline.simulate import (
     runs_lock,
     simulate_samples,
     study_protocols,
+    worker_count,
 )
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -334,3 +335,13 @@ def test_a_dask_local_cluster_gives_the_loky_results(config, samples, reference,
     assert cluster.scheduler_address in lines[0]
     assert summary.computed_chunks == len(parts(out))
     pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def test_n_jobs_beyond_the_cores_or_the_memory_is_capped_with_a_warning():
+    lines = []
+    assert worker_count(2, lines.append, cores=2, memory=8 * 2**30) == 2 and lines == []
+    assert worker_count(64, lines.append, cores=2, memory=8 * 2**30) == 2
+    assert "execution.n_jobs = 64 is more than the cores can hold (2 cores" in lines[-1]
+    assert worker_count(16, lines.append, cores=32, memory=1 * 2**30) == 3  # 1 GiB / 300 MiB
+    assert "more than the available memory can hold" in lines[-1] and "running 3 workers" in lines[-1]
+    assert worker_count(4, lines.append, cores=8, memory=10 * 2**20) == 1  # never fewer than one

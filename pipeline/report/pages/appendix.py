@@ -10,8 +10,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from pipeline.constants import TARE_FRACTION
-from pipeline.protocol import READ_TIME
+from pipeline.constants import READ_TIME, TARE_FRACTION
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, table_pages, text_block, text_page
