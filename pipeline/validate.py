@@ -1,0 +1,63 @@
+"""DVC stage ``validate``: params.yaml checked as a whole before any stage that writes results runs.
+
+``python -m pipeline.validate`` reads params.yaml through the schema (:mod:`pipeline.config`: every bad key,
+every rule between keys) and checks that the studies fit in this machine's memory, then writes the validated
+configuration in SI units to ``data/config.json``. Every other stage depends on that file, so a bad value stops the
+pipeline here, and DVC, which deletes a stage's outputs before running it, deletes only this small file: a failed
+``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the runs and the report in place (see the README for what
+DVC itself does to params.yaml and how to recover).
+"""
+
+from __future__ import annotations
+
+import argparse
+import dataclasses
+import json
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import yaml
+
+from pipeline.atomic import atomic_file
+from pipeline.config import ConfigError, load_config
+from pipeline.resources import available_memory
+from pipeline.sample import check_memory
+
+__all__ = ["as_json", "main"]
+
+
+def as_json(value: Any) -> Any:
+    """A validated configuration (dataclasses, maps, tuples) as plain JSON values; a distribution gets its ``kind``."""
+    if dataclasses.is_dataclass(value) and not isinstance(value, type):
+        fields = {f.name: as_json(getattr(value, f.name)) for f in dataclasses.fields(value)}
+        section = type(value).__module__ == "pipeline.config"  # a section of the configuration, not a distribution
+        return fields if section else {"kind": type(value).__name__.lower(), **fields}
+    if isinstance(value, Mapping):
+        return {str(k): as_json(v) for k, v in value.items()}
+    if isinstance(value, list | tuple):
+        return [as_json(v) for v in value]
+    return value
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage: validate params.yaml and write data/config.json; exit 2 with one line per bad key."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.validate", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--out", default="data/config.json", help="validated configuration (default: data/config.json)")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+        check_memory(config, available_memory())
+    except (ConfigError, OSError, yaml.YAMLError) as exc:
+        print(f"validate: {args.params}: {exc}", file=sys.stderr)
+        return 2
+    with atomic_file(Path(args.out)) as tmp:
+        tmp.write_text(json.dumps(as_json(config), indent=1) + "\n", encoding="utf-8")
+    print(f"validate: {args.params} is valid; wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
