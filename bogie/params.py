@@ -20,6 +20,8 @@ import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
 
+import numpy as np
+
 GRAVITY = 9.81  # [m/s^2]
 #: the empty trailer's weight as a fraction of the design payload weight, where every loading starts [-]
 TARE_FRACTION = 0.25
@@ -105,13 +107,20 @@ def _range_text(low: float, high: float, unit: str, low_inclusive: bool) -> str:
     return f"{bracket}{low:g}, {high:g}] {unit}"
 
 
+def _show(value: Any) -> str:
+    """A value as the user wrote it: ``0.001``, not numpy's ``np.float64(0.001)``."""
+    return repr(value.item()) if isinstance(value, np.generic) else repr(value)
+
+
 def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
+    # a real number: Python's or numpy's (a 0-d array too); not a bool (True is not 1 N m/rad) nor a numeric text
+    arr = None if isinstance(value, str | bytes) else np.asarray(value)
+    if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
+        kind = "text" if isinstance(value, str | bytes) else type(value).__name__
         raise ValueError(
-            f"{name} = {value!r} is not a number: must be in {_range_text(low, high, unit, low_inclusive)}"
-        ) from None
+            f"{name} = {_show(value)} is not a number ({kind}): must be in {_range_text(low, high, unit, low_inclusive)}"
+        )
+    v = float(arr)
     ok_low = v >= low if low_inclusive else v > low
     if not math.isfinite(v) or not ok_low or v > high:
         raise ValueError(f"{name} = {v!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}")
@@ -121,8 +130,8 @@ def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low
 def _check_vector(
     name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
 ) -> tuple[float, ...]:
-    if isinstance(value, (int, float)):
-        raise ValueError(f"{name} = {value!r} must be a sequence of {length} values (one per {what}) in {unit}")
+    if isinstance(value, str | bytes) or np.ndim(value) == 0:
+        raise ValueError(f"{name} = {_show(value)} must be a sequence of {length} values (one per {what}) in {unit}")
     values = tuple(value)
     if len(values) != length:
         raise ValueError(
@@ -220,10 +229,10 @@ class Bogie:
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
-        if isinstance(axle_x, (int, float)) or len(tuple(axle_x)) < 2:
+        if isinstance(axle_x, str | bytes) or np.ndim(axle_x) != 1 or len(tuple(axle_x)) < 2:
             raise ValueError(f"axle_x = {axle_x!r} must list at least 2 axle positions in m (n >= 2)")
         n = len(tuple(axle_x))
-        if self.tyre_wear == ():
+        if isinstance(self.tyre_wear, tuple) and not self.tyre_wear:
             object.__setattr__(self, "tyre_wear", (0.0,) * n)
         for name, (low, high, unit, inc) in AXLE_RANGES.items():
             object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))

@@ -1,6 +1,7 @@
 import dataclasses
 import math
 
+import numpy as np
 import pytest
 
 from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, tandem_trrl, triaxle_stage1
@@ -163,3 +164,23 @@ def test_pipeline_takes_the_bogie_ranges_from_the_public_table_only():
     pipeline = Path(__file__).resolve().parents[1] / "pipeline"
     private = [p.name for p in pipeline.glob("*.py") if "from bogie.params import _" in p.read_text(encoding="utf-8")]
     assert private == []
+
+
+def test_numpy_numbers_are_accepted_where_python_numbers_are():
+    base = triaxle_stage1()
+    wear = np.array([0.001, 0.0, 0.002])
+    b = base.replace(tyre_wear=wear, bush_stiffness=np.float64(500.0), bush_damping=np.int64(3))
+    assert b.tyre_wear == (0.001, 0.0, 0.002) and b.bush_stiffness == 500.0 and b.bush_damping == 3.0
+    assert all(type(v) is float for v in (*b.tyre_wear, b.bush_stiffness, b.bush_damping))
+    assert base.replace(chassis_tilt=np.array(0.01)).chassis_tilt == 0.01  # a 0-d array is a number
+    # a scalar where one value per axle is needed: the field's own message, not numpy's "truth value" error
+    with pytest.raises(ValueError, match=r"tyre_wear = 0.001 must be a sequence of 3 values \(one per axle\) in m"):
+        base.replace(tyre_wear=np.float64(0.001))
+
+
+@pytest.mark.parametrize(("value", "kind"), [(True, "bool"), (np.bool_(False), "bool"), ("1000", "text")])
+def test_booleans_and_numeric_text_are_not_numbers(value, kind):
+    with pytest.raises(ValueError, match=rf"bush_stiffness = .* is not a number \({kind}\): must be in \[0, "):
+        triaxle_stage1().replace(bush_stiffness=value)
+    with pytest.raises(ValueError, match=r"tyre_wear\[1\] = .* is not a number"):
+        triaxle_stage1().replace(tyre_wear=(0.0, value, 0.0))
