@@ -1,0 +1,75 @@
+"""DVC stage ``headline``: the ten or so figures a reader wants first -> metrics/headline.json.
+
+``dvc metrics show`` prints every metric of every file on one line; ``metrics/survey.json`` and
+``metrics/sensitivity.json`` hold over two hundred. ``python -m pipeline.headline`` reads them (and the status
+column of every run) and writes the headline: the inhibitors' ranking with their total Sobol' indices and chassis
+tilt's, the share of groups outside the 5 % tolerance and the mean heaviest-minus-lightest spread [kg] for each
+axle group and protocol, and the runs and failures of all studies. ``dvc metrics show metrics/headline.json`` reads
+it in one screen; the README shows a ``dvc exp show`` that compares experiments on it.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from pipeline.atomic import atomic_file
+from pipeline.constants import GROUP_AXLES, PROTOCOLS
+
+__all__ = ["headline", "main"]
+
+
+def headline(survey: Mapping[str, Any], sensitivity: Mapping[str, Any], status: pd.Series) -> dict[str, Any]:
+    """The headline figures from the two metrics files and the ``status`` of every run (all studies).
+
+    Keys: ``ranking`` (the inhibitors, most influential first, as one string), ``ST_<factor>`` (total Sobol' index
+    of the ranking measure for the four inhibitors and chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
+    groups whose lightest axle is more than 5 % below the heaviest [-]), ``spread_kg_<protocol>_<group>`` (mean
+    heaviest minus lightest axle load [kg]), ``runs`` and ``failed`` [-]. A figure the metrics lack is left out.
+    """
+    out: dict[str, Any] = {"ranking": " > ".join(sensitivity["ranking"])}
+    indices = sensitivity["sobol"]["indices"]
+    for factor in (*sensitivity["ranking"], "chassis_tilt"):
+        if factor in indices:
+            out[f"ST_{factor}"] = indices[factor]["ST"]
+    for key, name in (("share_outside_5pct", "outside_5pct"), ("mean_spread_kg", "spread_kg")):
+        for protocol in PROTOCOLS:
+            for group in GROUP_AXLES:
+                value = survey.get(protocol, {}).get(group, {}).get(key)
+                if value is not None:
+                    out[f"{name}_{protocol}_{group}"] = value
+    out["runs"] = int(len(status))
+    out["failed"] = int((status != "ok").sum())
+    return out
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage: read the metrics and the runs' status, write metrics/headline.json."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.headline", description=__doc__.splitlines()[0])
+    parser.add_argument("--metrics", default="metrics", help="directory of survey.json, sensitivity.json")
+    parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
+    parser.add_argument("--out", default="metrics/headline.json", help="default: metrics/headline.json")
+    args = parser.parse_args(argv)
+    metrics = Path(args.metrics)
+    try:
+        survey = json.loads((metrics / "survey.json").read_text(encoding="utf-8"))
+        sensitivity = json.loads((metrics / "sensitivity.json").read_text(encoding="utf-8"))
+        status = pd.read_parquet(args.runs, columns=["status"])["status"].astype(str)
+    except (OSError, ValueError, KeyError) as exc:
+        print(f"headline: {exc}", file=sys.stderr)
+        return 2
+    figures = headline(survey, sensitivity, status)
+    with atomic_file(Path(args.out)) as tmp:
+        tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
+    print(f"headline: {figures['ranking']}; {figures['runs']} runs, {figures['failed']} failed; wrote {args.out}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
