@@ -14,10 +14,15 @@ export MPLBACKEND := Agg
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python >= 3.11 needed, found " + sys.version' 
-	test -x $(BIN)/python || $(PYTHON) -m venv $(VENV)
-	$(BIN)/python -m pip install --quiet --upgrade "pip>=24"
-	$(BIN)/python -m pip install --quiet -c constraints.txt -e ".[test]"
-	touch $(STAMP)
+	@test -x $(BIN)/python || { echo "make: creating the virtual environment $(VENV)"; $(PYTHON) -m venv $(VENV); }
+	@echo "make: upgrading pip"
+	@$(BIN)/python -m pip install --quiet --upgrade "pip>=24"
+	@echo "make: installing bogie with the pipeline and test dependencies, pinned by constraints.txt (a few minutes" \
+	  "on a new machine; pip lists each package as it goes)"
+	@{ $(BIN)/python -m pip install --progress-bar off -c constraints.txt -e ".[pipeline,test]" 2>&1; \
+	   echo $$? > $(VENV)/.pip-status; } | tee $(VENV)/pip.log | grep --line-buffered -E '^(Collecting|Successfully|ERROR)' ; \
+	  status=$$(cat $(VENV)/.pip-status); [ "$$status" = 0 ] || { echo "make: pip failed ($$status); its log: $(VENV)/pip.log"; exit 1; }
+	@touch $(STAMP)
 
 repro: $(STAMP)
 	$(BIN)/dvc repro
