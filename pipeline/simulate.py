@@ -29,115 +29,41 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
-import fcntl
-import hashlib
-import json
 import math
 import os
 import sys
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
 
-import numba
 import numpy as np
 import pandas as pd
-import pyarrow as pa
 import pyarrow.parquet as pq
-import scipy
 import yaml
 from joblib import Parallel, delayed, parallel_config
 from tqdm import tqdm
 
-import bogie
-from pipeline import constants as constants_module
-from pipeline import protocol as protocol_module
-from pipeline import sample as sample_module
-from pipeline import schema as schema_module
-from pipeline.config import Config, ConfigError, ExecutionConfig, StaticProtocol, WimProtocol, load_config
+from pipeline.chunks import (
+    Chunk,
+    Log,
+    Protocols,
+    RunsLockedError,
+    _print,
+    plan_chunks,
+    reconcile,
+    runs_lock,
+    write_part,
+)
+from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.protocol import result_row, weigh
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame, verify_file, write_runs_file
-
-Spec = StaticProtocol | WimProtocol
-#: a study's protocols in run order: (name, settings) pairs
-Protocols = tuple[tuple[str, Spec], ...]
-
-#: Parquet metadata key of a part file's content hash
-HASH_KEY = b"bogie.simulate.hash"
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame
 
 #: the numerical result columns: a successful row with a non-finite one is a failed run
 _NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
 
-#: a summary or progress line goes here; tests pass their own
-Log = Callable[[str], None]
-
-
-def _print(line: str) -> None:
-    print(line, flush=True)
-
-
-# ---- what determines a chunk's content -------------------------------------------------------------------------
-def code_version() -> str:
-    """A hash of the code and libraries that turn a sample row into a run row.
-
-    The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
-    (``bogie_from_sample``), :mod:`pipeline.constants`, :mod:`pipeline.schema` and this module, plus the versions
-    of numpy, scipy, numba, pandas and pyarrow. Any edit to those files invalidates every part file: a cosmetic edit
-    costs a rerun, a missed physics change would cost a wrong dataset.
-    """
-    digest = hashlib.sha256()
-    package = Path(bogie.__file__).parent
-    modules = (protocol_module, sample_module, constants_module, schema_module)
-    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in modules]
-    files.append(Path(__file__))
-    for path in files:
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
-    for module in (np, scipy, numba, pd, pa):
-        digest.update(f"{module.__name__}={module.__version__}\0".encode())
-    return digest.hexdigest()
-
-
-def _rows_digest(rows: pd.DataFrame) -> bytes:
-    """The exact content of sample rows (every bit of every float), column by column."""
-    digest = hashlib.sha256()
-    for name in COLUMNS:
-        values = rows[name].to_numpy()
-        digest.update(f"{name}:{COLUMNS[name]}:{len(values)}\0".encode())
-        if COLUMNS[name] == "str":
-            digest.update("\x1f".join(map(str, values)).encode())
-        else:
-            digest.update(np.ascontiguousarray(values, dtype=COLUMNS[name]).tobytes())
-    return digest.digest()
-
-
-def chunk_hash(study: str, rows: pd.DataFrame, protocols: Protocols, code: str) -> str:
-    """The content hash of one part file: study, sample rows, protocols with their settings, code version.
-
-    Parameters
-    ----------
-    study
-        Study name.
-    rows
-        The chunk's sample rows (columns of :data:`pipeline.sample.COLUMNS`).
-    protocols
-        The study's protocols in run order, each with its settings (SI).
-    code
-        :func:`code_version`.
-
-    Returns
-    -------
-    str
-        A hex SHA-256 digest.
-    """
-    # json writes floats with repr, which round-trips every bit
-    specs = json.dumps([[name, dataclasses.asdict(spec)] for name, spec in protocols], sort_keys=True)
-    digest = hashlib.sha256(f"{study}\0{specs}\0{code}\0".encode())
-    digest.update(_rows_digest(rows))
-    return digest.hexdigest()
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -194,151 +120,6 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
 def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> tuple[str, int, pd.DataFrame]:
     # results arrive unordered: carry the chunk's identity back with its rows
     return study, index, run_chunk(rows, protocols)
-
-
-# ---- the plan: chunks, their files and hashes ------------------------------------------------------------------
-@dataclass(frozen=True, eq=False)
-class Chunk:
-    """One task and its part file (compared by identity: it holds a DataFrame)."""
-
-    study: str
-    index: int
-    rows: pd.DataFrame
-    protocols: Protocols
-    hash: str
-    path: Path
-
-    @property
-    def n_runs(self) -> int:
-        """Rows of its part file: samples times protocols [-]."""
-        return len(self.rows) * len(self.protocols)
-
-
-def part_name(index: int) -> str:
-    """File name of chunk ``index``: ``part-00003.parquet``."""
-    return f"part-{index:05d}.parquet"
-
-
-def plan_chunks(
-    samples: Mapping[str, pd.DataFrame], protocols: Mapping[str, Protocols], chunk_size: int, out: Path
-) -> list[Chunk]:
-    """Split each study into chunks of ``chunk_size`` consecutive samples (by ``sample_id``) and hash each."""
-    code = code_version()
-    chunks = []
-    for study, frame in samples.items():
-        frame = frame.sort_values("sample_id", kind="stable").reset_index(drop=True)
-        for index, start in enumerate(range(0, len(frame), chunk_size)):
-            rows = frame.iloc[start : start + chunk_size].reset_index(drop=True)
-            h = chunk_hash(study, rows, protocols[study], code)
-            chunks.append(Chunk(study, index, rows, protocols[study], h, out / f"study={study}" / part_name(index)))
-    return chunks
-
-
-def stored_hash(path: Path) -> str | None:
-    """The content hash in a part file's metadata, or None if the file is unreadable or has none."""
-    try:
-        metadata = pq.read_schema(path).metadata or {}
-    except (OSError, pa.ArrowException):
-        return None
-    value = metadata.get(HASH_KEY)
-    return value.decode() if value is not None else None
-
-
-def reconcile(
-    chunks: Sequence[Chunk], out: Path, log: Log = _print
-) -> tuple[list[Chunk], list[Chunk], list[Path]]:
-    """Compare the plan with the files in ``out``; delete every part that does not belong to it.
-
-    A part is kept only if its stored hash matches its chunk's and it reads back whole: every page's CRC32 checksum
-    verified and the runs schema's fields (:func:`pipeline.schema.verify_file`); a part with a changed byte is
-    recomputed, with a log line. Any other file in ``out`` (a user's ``notes.txt``, which would stop pandas from
-    reading the dataset) is moved to ``<out parent>/.quarantine/<out name>/`` with a log line, never deleted.
-
-    Returns
-    -------
-    pending, done, removed
-        Chunks to compute, chunks whose file is up to date, and the files deleted: parts of chunks that no longer
-        exist or whose hash differs, damaged parts, temporary files of interrupted writes, and the parts of
-        studies that are no longer simulated.
-    """
-    pending, done = [], []
-    for chunk in chunks:
-        intact = chunk.path.exists() and stored_hash(chunk.path) == chunk.hash
-        problem = verify_file(chunk.path) if intact else None
-        if problem:
-            log(f"simulate: {chunk.path} is damaged ({problem}); recomputing it")
-        (done if intact and not problem else pending).append(chunk)
-    keep = {c.path for c in done}
-    removed = _sweep(out, keep, log) if out.is_dir() else []
-    return pending, done, removed
-
-
-def _sweep(out: Path, keep: set[Path], log: Log) -> list[Path]:
-    """Delete the parts and temporaries in ``out`` not in ``keep``; quarantine every file that is not ours."""
-    removed = []
-    quarantine = out.parent / ".quarantine" / out.name
-    for path in sorted(out.rglob("*")):
-        if path.is_dir() or path in keep:
-            continue
-        relative = path.relative_to(out)
-        ours = len(relative.parts) == 2 and relative.parts[0].startswith("study=")
-        ours = ours and path.name.startswith(("part-", ".part-"))
-        if ours:
-            path.unlink()
-            removed.append(path)
-        else:
-            target = quarantine / relative
-            target.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(path, target)
-            log(f"simulate: warning: {path} is not a part file of the runs dataset; moved it to {target}")
-    for directory in sorted((d for d in out.rglob("*") if d.is_dir()), reverse=True):
-        if not any(directory.iterdir()):
-            directory.rmdir()
-    return removed
-
-
-@contextmanager
-def runs_lock(out: Path) -> Iterator[None]:
-    """Hold an exclusive lock on the dataset ``out`` (file ``<out>.lock`` beside it) while the stage writes it.
-
-    Raises
-    ------
-    RunsLockedError
-        If another process holds it: two stages writing one dataset would delete each other's temporary files.
-    """
-    out.parent.mkdir(parents=True, exist_ok=True)
-    lock_path = out.parent / f".{out.name}.lock"
-    with open(lock_path, "a+", encoding="utf-8") as handle:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            handle.seek(0)
-            holder = handle.read().strip() or "unknown"
-            raise RunsLockedError(
-                f"{out} is being written by another simulate process (pid {holder}, lock {lock_path}): wait for it "
-                "to finish or stop it, then run again"
-            ) from None
-        handle.seek(0)
-        handle.truncate()
-        handle.write(f"{os.getpid()}\n")
-        handle.flush()
-        try:
-            yield
-        finally:
-            handle.seek(0)
-            handle.truncate()
-            fcntl.flock(handle, fcntl.LOCK_UN)
-
-
-class RunsLockedError(RuntimeError):
-    """Another process is writing the runs dataset."""
-
-
-def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
-    """Write a part file in the runs schema with its hash in the Parquet metadata, atomically (temporary dot-name,
-    then rename). Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover temporary file.
-    """
-    write_runs_file(frame, path, {HASH_KEY: chunk_hash_.encode()})
 
 
 # ---- running ---------------------------------------------------------------------------------------------------

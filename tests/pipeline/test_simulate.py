@@ -20,21 +20,11 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
+from pipeline.chunks import HASH_KEY, RunsLockedError, part_name, runs_lock
 from pipeline.config import load_params, parse_config
 from pipeline.sample import sample_studies, write_parquet_atomic
-from pipeline.schema import CATEGORICAL
-from pipeline.simulate import (
-    HASH_KEY,
-    RESULT_COLUMNS,
-    RUN_COLUMNS,
-    SAMPLE_COLUMNS,
-    RunsLockedError,
-    part_name,
-    runs_lock,
-    simulate_samples,
-    study_protocols,
-    worker_count,
-)
+from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS
+from pipeline.simulate import simulate_samples, study_protocols, worker_count
 
 ROOT = Path(__file__).resolve().parents[2]
 KEYS = ["study", "sample_id", "protocol"]
