@@ -20,7 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import _nonlinear_core as core
-from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate, lu_factor, lu_solve
+from bogie._lu import lu_factor, lu_solve
+from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
 from bogie.road import axle_heights
