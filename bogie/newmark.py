@@ -81,6 +81,11 @@ def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:
 
     rho_inf = 1 gives average-acceleration Newmark (no numerical damping); smaller values damp the highest
     frequencies to rho_inf per step while keeping second-order accuracy.
+
+    References
+    ----------
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise ValueError(f"rho_inf = {rho_inf!r} is out of range: must be in [0, 1] (spectral radius, dimensionless)")
@@ -237,6 +242,13 @@ def _square(name: str, m: ArrayLike, n: int | None) -> NDArray[np.float64]:
     return arr
 
 
+def _system(M: ArrayLike, C: ArrayLike, K: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    """Mass, damping and stiffness as checked float64 matrices of one order."""
+    mass = _square("M", M, None)
+    n = mass.shape[0]
+    return mass, _square("C", C, n), _square("K", K, n)
+
+
 def massless_dofs(mass: NDArray[np.float64]) -> NDArray[np.bool_]:
     """Freedoms whose row and column of the mass matrix are zero."""
     return np.all(mass == 0.0, axis=0) & np.all(mass == 0.0, axis=1)
@@ -297,11 +309,16 @@ def integrate_linear(
     ------
     RuntimeError
         If a step cannot be solved (a singular iteration matrix: K + C/dt + M/dt^2 is singular).
+
+    References
+    ----------
+    N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+    Division, ASCE, 85(EM3), 1959.
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
-    mass = _square("M", M, None)
+    mass, damping, stiffness = _system(M, C, K)
     n = mass.shape[0]
-    damping = _square("C", C, n)
-    stiffness = _square("K", K, n)
     _check_positive("dt", dt, "s")
     t = np.arange(int(n_steps) + 1) * float(dt)
     loads = _load_history(R, t, n)

@@ -417,6 +417,13 @@ def simulate(
     NonlinearResult
         Wheel loads [N] and the model's histories; ``status`` "failed" with the solver's message if a step could
         not be solved (the history up to there is kept), never NaN.
+
+    References
+    ----------
+    N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+    Division, ASCE, 85(EM3), 1959.
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
     mass, data_f, data_i = pack(bogie)
     drive = inputs.drive(bogie)
