@@ -318,3 +318,16 @@ def test_cli_figure2_with_fe_overlay(tmp_path):
     out = tmp_path / "fig2.png"
     assert main(["figure2", "--out", str(out), "--fe"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_ties_chain_into_one_global_dof_numbered_by_its_lowest_member():
+    m = FrameModel()
+    a, b, c = m.add_node(0.0, 0.0), m.add_node(0.0, 0.0), m.add_node(0.0, 0.0)
+    m.tie(c, b, ("w",))
+    m.tie(b, a, ("w",))
+    numbering, n_glob = m._global_map()
+    assert n_glob == 9 - 2
+    assert numbering[3 * a + 1] == numbering[3 * b + 1] == numbering[3 * c + 1] == 1
+    # global DOFs are numbered in the order of their lowest member
+    first = [int(g) for k, g in enumerate(numbering) if g not in numbering[:k]]
+    assert first == list(range(n_glob))
