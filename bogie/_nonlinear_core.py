@@ -196,6 +196,16 @@ def _work_views(work, n):
 
 # ---- geometry --------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
+def _chassis_point(bx, bz, dh, cc, sc):
+    """World position (x, z) [m] of the chassis point at (bx, bz) from the king pin, raised by dh, pitched (cc, sc).
+
+    The same as :func:`_body_point` with origin (0, dh) but without adding the 0 to x, which could turn a -0.0 into
+    +0.0 and so differ in the last bit from the single routine this was split from.
+    """
+    return bx * cc + bz * sc, dh - bx * sc + bz * cc
+
+
+@njit(cache=True, inline="always")
 def _body_point(ox, oz, c, s, dx, dz):
     """World position (x, z) [m] of the point at (dx, dz) in a body's frame, origin (ox, oz), rotation (c, s)."""
     return ox + dx * c + dz * s, oz - dx * s + dz * c
@@ -344,7 +354,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     for j in range(n - 1):
         eq_c[j] = math.cos(u[1 + j])
         eq_s[j] = math.sin(u[1 + j])
-        piv_x[j], piv_z[j] = _body_point(0.0, dh, cc, sc, data_f[o_vx + j], data_f[o_vz + j])
+        piv_x[j], piv_z[j] = _chassis_point(data_f[o_vx + j], data_f[o_vz + j], dh, cc, sc)
     # material design contact points M_e carried with their bodies, and each pad's rotation
     for e in range(2 * n):
         body = data_i[1 + e]
