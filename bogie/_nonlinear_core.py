@@ -160,38 +160,69 @@ def record_slices(n: int) -> dict[str, slice]:
     }
 
 
+#: scratch arrays of :func:`_internal` in the work buffer, in order: (name, length per axle, extra length)
+WORK = (
+    ("pivot_x", 1, -1),
+    ("pivot_z", 1, -1),
+    ("material_x", 2, 0),
+    ("material_z", 2, 0),
+    ("pad_sin", 2, 0),
+    ("pad_cos", 2, 0),
+    ("contact_x", 2, 0),
+    ("contact_z", 2, 0),
+    ("friction_force", 2, 0),
+    ("stick", 2, 0),
+    ("normal_load", 2, 0),
+    ("spring_load", 1, 0),
+    ("equaliser_cos", 1, -1),
+    ("equaliser_sin", 1, -1),
+)
+_WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
+_WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
+
+
+@njit(cache=True, inline="always")
+def _work_start(k, n):
+    """Index in the work buffer of scratch array k (an index into :data:`WORK`); k = len(WORK) gives the total."""
+    return _WORK_START_PER_AXLE[k] * n + _WORK_START_EXTRA[k]
+
+
 @njit(cache=True, inline="always")
 def scratch_size(n):
-    """Length of the work array :func:`force` needs for n axles."""
-    return 4 * (n - 1) + 9 * 2 * n + n
+    """Length of the work array :func:`_internal` needs for n axles (:data:`WORK`)."""
+    return _work_start(len(WORK), n)
 
 
 def work_size(n: int) -> int:
-    """Length of the work array :func:`force` needs for n axles, tangent included."""
+    """Length of the work array :func:`force` needs for n axles: :func:`scratch_size` plus 4n for the tangent."""
     return int(scratch_size(n)) + 4 * n
+
+
+@njit(cache=True, inline="always")
+def _work_view(work, k, n):
+    """Scratch array k of :data:`WORK` as a view into the work buffer."""
+    return work[_work_start(k, n) : _work_start(k + 1, n)]
 
 
 @njit(cache=True, inline="always")
 def _work_views(work, n):
     """The scratch arrays of :func:`_internal` as views into one buffer: no allocation in the stepping loop."""
-    ne = n - 1
-    m2 = 2 * n
-    piv_x = work[0:ne]
-    piv_z = work[ne : 2 * ne]
-    w0 = 2 * ne
-    m_x = work[w0 : w0 + m2]
-    m_z = work[w0 + m2 : w0 + 2 * m2]
-    pad_s = work[w0 + 2 * m2 : w0 + 3 * m2]
-    pad_c = work[w0 + 3 * m2 : w0 + 4 * m2]
-    p_x = work[w0 + 4 * m2 : w0 + 5 * m2]
-    p_z = work[w0 + 5 * m2 : w0 + 6 * m2]
-    t_fric = work[w0 + 6 * m2 : w0 + 7 * m2]
-    stick = work[w0 + 7 * m2 : w0 + 8 * m2]
-    n_load = work[w0 + 8 * m2 : w0 + 9 * m2]
-    f_spring = work[w0 + 9 * m2 : w0 + 9 * m2 + n]
-    eq_c = work[w0 + 9 * m2 + n : w0 + 9 * m2 + n + ne]
-    eq_s = work[w0 + 9 * m2 + n + ne : w0 + 9 * m2 + n + 2 * ne]
-    return piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s
+    return (
+        _work_view(work, 0, n),
+        _work_view(work, 1, n),
+        _work_view(work, 2, n),
+        _work_view(work, 3, n),
+        _work_view(work, 4, n),
+        _work_view(work, 5, n),
+        _work_view(work, 6, n),
+        _work_view(work, 7, n),
+        _work_view(work, 8, n),
+        _work_view(work, 9, n),
+        _work_view(work, 10, n),
+        _work_view(work, 11, n),
+        _work_view(work, 12, n),
+        _work_view(work, 13, n),
+    )
 
 
 # ---- geometry --------------------------------------------------------------------------------------------------
