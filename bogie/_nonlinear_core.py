@@ -8,15 +8,24 @@ equations of motion are M a + f = 0. Its tangent K_T = df/du is formed by forwar
 algorithmic force (the friction return map included), which is the consistent tangent of the discrete problem;
 C_T = df/dv is exact.
 
-Packed parameters (built by :func:`bogie.nonlinear.pack`):
+Packed parameters (built by :func:`bogie.nonlinear.pack`); this module is the one definition of their layout:
 
 * ``data_i = [n, pad_body_0 .. pad_body_{2n-1}]``: the body carrying contact e (-1 chassis, j equaliser j);
   contact 2i is spring i's front end, 2i + 1 its rear end.
-* ``data_f``: the scalars of :data:`SCALARS` then the arrays of :data:`ARRAYS`, in that order.
+* ``data_f``: the scalars of :data:`SCALARS` then the arrays of :data:`ARRAYS`, in that order; array k starts at
+  :func:`array_start` (k, n) and has :func:`array_length` (k, n) entries.
 * drive row: ``[road height 0..n-1, road rate 0..n-1, load factor, king pin rise]``.
 * history: the plastic slip s_e of each contact (2n).
-* record: ``[tyre load (n), spring load (n), friction force (2n), stick flag (2n), contact shift (2n),
-  plastic slip (2n)]``.
+* record: the entries of :data:`RECORD`, each a multiple of n long, in that order: ``[tyre load (n), spring load
+  (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n)]``.
+
+The force is split by physics into small compiled helpers (body points, rolling contact points, the springs with
+their end friction's return map, pad moments, tyre loads, bushes, the record), each keeping the arithmetic of the
+former single routine in the same order, so results are bit-identical to it. The helpers are inlined into
+:func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
+evaluation. An array passed to an inlined helper still costs reference counting at each call, so the helpers
+used inside loops take and return scalars, and the short loops over pivots, contacts and tyres stay in
+:func:`_internal` (a force evaluation costs about 7 % more than the single routine did).
 """
 
 from __future__ import annotations
@@ -55,158 +64,235 @@ SCALARS = (
 ) = range(len(SCALARS))
 NS = len(SCALARS)
 
-#: packed arrays: name -> length as a multiple of n (axles), 2n (contacts) or n - 1 (equalisers)
+#: packed arrays after the scalars: (name, length per axle, extra length); length = per_axle * n + extra, so
+#: (1, 0) is one per axle, (2, 0) one per contact and (1, -1) one per equaliser
 ARRAYS = (
-    ("axle_x", "n"),
-    ("elongation_front", "n"),
-    ("elongation_rear", "n"),
-    ("design_spring_load", "n"),
-    ("design_tyre_compression", "n"),
-    ("tyre_wear", "n"),
-    ("design_chord_height", "n"),
-    ("design_chord_angle", "n"),
-    ("pad_x", "2n"),
-    ("pad_z", "2n"),
-    ("design_contact_x", "2n"),
-    ("pivot_x", "n-1"),
-    ("pivot_z", "n-1"),
+    ("axle_x", 1, 0),
+    ("elongation_front", 1, 0),
+    ("elongation_rear", 1, 0),
+    ("design_spring_load", 1, 0),
+    ("design_tyre_compression", 1, 0),
+    ("tyre_wear", 1, 0),
+    ("design_chord_height", 1, 0),
+    ("design_chord_angle", 1, 0),
+    ("pad_x", 2, 0),
+    ("pad_z", 2, 0),
+    ("design_contact_x", 2, 0),
+    ("pivot_x", 1, -1),
+    ("pivot_z", 1, -1),
 )
+(
+    _XA,
+    _LF,
+    _LR,
+    _WD,
+    _C0,
+    _WEAR,
+    _H0,
+    _B0,
+    _PX,
+    _PZ,
+    _MX0,
+    _VX,
+    _VZ,
+) = range(len(ARRAYS))
+_ARRAY_PER_AXLE = tuple(a[1] for a in ARRAYS)
+_ARRAY_EXTRA = tuple(a[2] for a in ARRAYS)
+# start of array k = NS + _START_PER_AXLE[k] n + _START_EXTRA[k]: prefix sums of the table, so that the compiled
+# code finds an offset without a loop (k is a compile-time constant there)
+_START_PER_AXLE = tuple(sum(_ARRAY_PER_AXLE[:k]) for k in range(len(ARRAYS) + 1))
+_START_EXTRA = tuple(sum(_ARRAY_EXTRA[:k]) for k in range(len(ARRAYS) + 1))
+
+#: recorded outputs: (name, entries per axle), in record order
+RECORD = (
+    ("tyre_load", 1),
+    ("spring_load", 1),
+    ("friction_force", 2),
+    ("stick", 2),
+    ("contact_shift", 2),
+    ("plastic_slip", 2),
+)
+_REC_TYRE, _REC_SPRING, _REC_FRICTION, _REC_STICK, _REC_SHIFT, _REC_SLIP = range(len(RECORD))
+_RECORD_START = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
+#: record entries per axle
+RECORD_PER_AXLE = _RECORD_START[-1]
 
 FD_STEP = 1e-7  # [m] or [rad]: forward-difference step of the tangent
 
 
+# ---- layout ----------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def array_length(k, n):
+    """Number of entries of packed array k (an index into :data:`ARRAYS`) for n axles."""
+    return _ARRAY_PER_AXLE[k] * n + _ARRAY_EXTRA[k]
+
+
+@njit(cache=True, inline="always")
+def array_start(k, n):
+    """Index in ``data_f`` of the first entry of packed array k (an index into :data:`ARRAYS`) for n axles.
+
+    k = len(ARRAYS) gives the length of ``data_f``.
+    """
+    return NS + _START_PER_AXLE[k] * n + _START_EXTRA[k]
+
+
 def array_offsets(n: int) -> dict[str, tuple[int, int]]:
-    """Start and length of each packed array in ``data_f`` for n axles."""
-    out = {}
-    pos = NS
-    for name, size in ARRAYS:
-        length = {"n": n, "2n": 2 * n, "n-1": n - 1}[size]
-        out[name] = (pos, length)
-        pos += length
-    return out
+    """Start and length of each packed array in ``data_f`` for n axles, by name."""
+    return {name: (int(array_start(k, n)), int(array_length(k, n))) for k, (name, _, _) in enumerate(ARRAYS)}
 
 
-#: record entries per axle
-RECORD_PER_AXLE = 10
+def data_length(n: int) -> int:
+    """Length of ``data_f`` for n axles."""
+    return int(array_start(len(ARRAYS), n))
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
+def record_start(k, n):
+    """Index in the record of the first entry of output k (an index into :data:`RECORD`) for n axles."""
+    return _RECORD_START[k] * n
+
+
+def record_slices(n: int) -> dict[str, slice]:
+    """Where each recorded output sits in the record of n axles, by name."""
+    return {
+        name: slice(int(record_start(k, n)), int(record_start(k, n)) + per_axle * n)
+        for k, (name, per_axle) in enumerate(RECORD)
+    }
+
+
+#: scratch arrays of :func:`_internal` in the work buffer, in order: (name, length per axle, extra length)
+WORK = (
+    ("pivot_x", 1, -1),
+    ("pivot_z", 1, -1),
+    ("material_x", 2, 0),
+    ("material_z", 2, 0),
+    ("pad_sin", 2, 0),
+    ("pad_cos", 2, 0),
+    ("contact_x", 2, 0),
+    ("contact_z", 2, 0),
+    ("friction_force", 2, 0),
+    ("stick", 2, 0),
+    ("normal_load", 2, 0),
+    ("spring_load", 1, 0),
+    ("equaliser_cos", 1, -1),
+    ("equaliser_sin", 1, -1),
+)
+_WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
+_WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
+
+
+@njit(cache=True, inline="always")
+def _work_start(k, n):
+    """Index in the work buffer of scratch array k (an index into :data:`WORK`); k = len(WORK) gives the total."""
+    return _WORK_START_PER_AXLE[k] * n + _WORK_START_EXTRA[k]
+
+
+@njit(cache=True, inline="always")
 def scratch_size(n):
-    """Length of the work array :func:`force` needs for n axles."""
-    return 4 * (n - 1) + 9 * 2 * n + n
+    """Length of the work array :func:`_internal` needs for n axles (:data:`WORK`)."""
+    return _work_start(len(WORK), n)
 
 
-@njit(cache=True)
-def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work):
-    n = data_i[0]
-    ne = n - 1
-    # offsets, in the order of ARRAYS
-    o_xa = NS
-    o_lf = o_xa + n
-    o_lr = o_lf + n
-    o_wd = o_lr + n
-    o_c0 = o_wd + n
-    o_wear = o_c0 + n
-    o_h0 = o_wear + n
-    o_b0 = o_h0 + n
-    o_px = o_b0 + n
-    o_pz = o_px + 2 * n
-    o_mx0 = o_pz + 2 * n
-    o_vx = o_mx0 + 2 * n
-    o_vz = o_vx + ne
+def work_size(n: int) -> int:
+    """Length of the work array :func:`force` needs for n axles: :func:`scratch_size` plus 4n for the tangent."""
+    return int(scratch_size(n)) + 4 * n
 
-    k_r = data_f[_KR]
-    k_t = data_f[_KT]
-    c_t = data_f[_CT]
-    k_b = data_f[_KB]
-    c_b = data_f[_CB]
-    rho = data_f[_RHO]
-    mu = data_f[_MU]
-    k_tan = data_f[_KTAN]
-    kappa = data_f[_KAPPA]
 
-    load_factor = drv[2 * n]
-    dh = drv[2 * n + 1]
-    th_c = u[0]
-    cc = math.cos(th_c)
-    sc = math.sin(th_c)
+@njit(cache=True, inline="always")
+def _work_view(work, k, n):
+    """Scratch array k of :data:`WORK` as a view into the work buffer."""
+    return work[_work_start(k, n) : _work_start(k + 1, n)]
 
-    for k in range(2 * n):
-        f[k] = 0.0
 
-    # work arrays are views into one buffer: no allocation in the stepping loop
-    m2 = 2 * n
-    piv_x = work[0:ne]
-    piv_z = work[ne : 2 * ne]
-    w0 = 2 * ne
-    m_x = work[w0 : w0 + m2]
-    m_z = work[w0 + m2 : w0 + 2 * m2]
-    pad_s = work[w0 + 2 * m2 : w0 + 3 * m2]
-    pad_c = work[w0 + 3 * m2 : w0 + 4 * m2]
-    p_x = work[w0 + 4 * m2 : w0 + 5 * m2]
-    p_z = work[w0 + 5 * m2 : w0 + 6 * m2]
-    t_fric = work[w0 + 6 * m2 : w0 + 7 * m2]
-    stick = work[w0 + 7 * m2 : w0 + 8 * m2]
-    n_load = work[w0 + 8 * m2 : w0 + 9 * m2]
-    f_spring = work[w0 + 9 * m2 : w0 + 9 * m2 + n]
-    eq_c = work[w0 + 9 * m2 + n : w0 + 9 * m2 + n + ne]
-    eq_s = work[w0 + 9 * m2 + n + ne : w0 + 9 * m2 + n + 2 * ne]
+@njit(cache=True, inline="always")
+def _work_views(work, n):
+    """The scratch arrays of :func:`_internal` as views into one buffer: no allocation in the stepping loop."""
+    return (
+        _work_view(work, 0, n),
+        _work_view(work, 1, n),
+        _work_view(work, 2, n),
+        _work_view(work, 3, n),
+        _work_view(work, 4, n),
+        _work_view(work, 5, n),
+        _work_view(work, 6, n),
+        _work_view(work, 7, n),
+        _work_view(work, 8, n),
+        _work_view(work, 9, n),
+        _work_view(work, 10, n),
+        _work_view(work, 11, n),
+        _work_view(work, 12, n),
+        _work_view(work, 13, n),
+    )
 
-    # pivots (chassis points) in the world, and each equaliser's rotation
-    for j in range(ne):
-        eq_c[j] = math.cos(u[1 + j])
-        eq_s[j] = math.sin(u[1 + j])
-        bx = data_f[o_vx + j]
-        bz = data_f[o_vz + j]
-        piv_x[j] = bx * cc + bz * sc
-        piv_z[j] = dh - bx * sc + bz * cc
 
-    # material design contact points M_e and the pad rotation
-    for e in range(2 * n):
-        body = data_i[1 + e]
-        dx = data_f[o_px + e]
-        dz = data_f[o_pz + e]
-        if body < 0:
-            ox = 0.0
-            oz = dh
-            c = cc
-            s = sc
-        else:
-            ox = piv_x[body]
-            oz = piv_z[body]
-            c = eq_c[body]
-            s = eq_s[body]
-        m_x[e] = ox + dx * c + dz * s
-        m_z[e] = oz - dx * s + dz * c
-        pad_s[e] = s
-        pad_c[e] = c
+# ---- geometry --------------------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _chassis_point(bx, bz, dh, cc, sc):
+    """World position (x, z) [m] of the chassis point at (bx, bz) from the king pin, raised by dh, pitched (cc, sc).
 
-    # springs: contact points (rolling), deflection, friction, loads
+    The same as :func:`_body_point` with origin (0, dh) but without adding the 0 to x, which could turn a -0.0 into
+    +0.0 and so differ in the last bit from the single routine this was split from.
+    """
+    return bx * cc + bz * sc, dh - bx * sc + bz * cc
+
+
+@njit(cache=True, inline="always")
+def _body_point(ox, oz, c, s, dx, dz):
+    """World position (x, z) [m] of the point at (dx, dz) in a body's frame, origin (ox, oz), rotation (c, s)."""
+    return ox + dx * c + dz * s, oz - dx * s + dz * c
+
+
+@njit(cache=True, inline="always")
+def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0, beta0, kappa, rho):
+    """Contact points P (x, z) of a spring's front and rear ends, from their material points M (x, z) [m].
+
+    The chord angle and a first deflection from the material points fix the leaf end angles; a leaf end on a
+    convex pad of radius rho touches it where their tangents agree, so the contact point moves along the pad by
+    rho x (pad rotation - leaf end rotation). Returns (x_front, z_front, x_rear, z_rear).
+    """
+    span = xr - xf
+    wf = (xr - xa) / span
+    d_tilde = za - (wf * zf + (1.0 - wf) * zr - h0)
+    beta = math.atan2(-(zr - zf), span) - beta0
+    g_front = beta - kappa * d_tilde
+    g_rear = beta + kappa * d_tilde
+    if rho > 0.0:
+        return (
+            xf + rho * (pad_sf - math.sin(g_front)),
+            zf + rho * (pad_cf - math.cos(g_front)),
+            xr + rho * (pad_sr - math.sin(g_rear)),
+            zr + rho * (pad_cr - math.cos(g_rear)),
+        )
+    return xf, zf, xr, zr
+
+
+# ---- springs and friction --------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _return_map(g, slip_old, limit, k_tan):
+    """Elastic-plastic return map of a leaf end's slip g over its pad [m]: (friction force [N], new slip, stick)."""
+    trial = k_tan * (g - slip_old)
+    if abs(trial) <= limit:
+        return trial, slip_old, 1.0
+    t = limit if trial > 0.0 else -limit
+    return t, g - t / k_tan, 0.0
+
+
+@njit(cache=True, inline="always")
+def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring):
+    """Every spring: contact points (rolling), deflection, end friction, seat load and end loads."""
+    o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
+    o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
+    k_r, mu, k_tan = data_f[_KR], data_f[_MU], data_f[_KTAN]
     for i in range(n):
         ef = 2 * i
         er = 2 * i + 1
         xa = data_f[o_xa + i]
         za = u[n + i]
         h0 = data_f[o_h0 + i]
-        # chord angle and a first deflection from the material points fix the leaf end angles
-        span = m_x[er] - m_x[ef]
-        wf = (m_x[er] - xa) / span
-        d_tilde = za - (wf * m_z[ef] + (1.0 - wf) * m_z[er] - h0)
-        beta = math.atan2(-(m_z[er] - m_z[ef]), span) - data_f[o_b0 + i]
-        g_front = beta - kappa * d_tilde
-        g_rear = beta + kappa * d_tilde
-        # a leaf end on a convex pad of radius rho touches it where their tangents agree: the contact point
-        # moves along the pad by rho x (pad rotation - leaf end rotation)
-        if rho > 0.0:
-            p_x[ef] = m_x[ef] + rho * (pad_s[ef] - math.sin(g_front))
-            p_z[ef] = m_z[ef] + rho * (pad_c[ef] - math.cos(g_front))
-            p_x[er] = m_x[er] + rho * (pad_s[er] - math.sin(g_rear))
-            p_z[er] = m_z[er] + rho * (pad_c[er] - math.cos(g_rear))
-        else:
-            p_x[ef] = m_x[ef]
-            p_z[ef] = m_z[ef]
-            p_x[er] = m_x[er]
-            p_z[er] = m_z[er]
+        p_x[ef], p_z[ef], p_x[er], p_z[er] = _rolled_contacts(
+            m_x[ef], m_z[ef], m_x[er], m_z[er], pad_s[ef], pad_c[ef], pad_s[er], pad_c[er],
+            xa, za, h0, data_f[o_b0 + i], data_f[_KAPPA], data_f[_RHO],
+        )  # fmt: skip
         span = p_x[er] - p_x[ef]
         wf = (p_x[er] - xa) / span
         wr = 1.0 - wf
@@ -214,35 +300,25 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
         f_elastic = data_f[o_wd + i] + k_r * delta
         n_el = max(f_elastic, 0.0)
         # friction: elastic-plastic return map on the slip of each leaf end over its pad
-        for side in range(2):
-            e = ef + side
-            if side == 0:
-                g = -data_f[o_lf + i] * delta - (m_x[e] - data_f[o_mx0 + e])
-                limit = mu * wf * n_el
-            else:
-                g = data_f[o_lr + i] * delta - (m_x[e] - data_f[o_mx0 + e])
-                limit = mu * wr * n_el
-            trial = k_tan * (g - hist_old[e])
-            if abs(trial) <= limit:
-                t_fric[e] = trial
-                hist_new[e] = hist_old[e]
-                stick[e] = 1.0
-            else:
-                t = limit if trial > 0.0 else -limit
-                t_fric[e] = t
-                hist_new[e] = g - t / k_tan
-                stick[e] = 0.0
+        lam_f = data_f[o_lf + i]
+        lam_r = data_f[o_lr + i]
+        g = -lam_f * delta - (m_x[ef] - data_f[o_mx0 + ef])
+        t_fric[ef], hist_new[ef], stick[ef] = _return_map(g, hist_old[ef], mu * wf * n_el, k_tan)
+        g = lam_r * delta - (m_x[er] - data_f[o_mx0 + er])
+        t_fric[er], hist_new[er], stick[er] = _return_map(g, hist_old[er], mu * wr * n_el, k_tan)
         # friction resists the ends' sliding, so it stiffens the spring (arch thrust)
-        fs = f_elastic - data_f[o_lf + i] * t_fric[ef] + data_f[o_lr + i] * t_fric[er]
+        fs = f_elastic - lam_f * t_fric[ef] + lam_r * t_fric[er]
         if fs < 0.0:
             fs = 0.0
         f_spring[i] = fs
         n_load[ef] = wf * fs
         n_load[er] = wr * fs
-        # the spring pushes its axle down: f = -Q
-        f[n + i] += fs
 
-    # contact forces on the pads: (T, N) at P_e; moments about each body's centre of rotation
+
+# ---- forces on the bodies --------------------------------------------------------------------------------------
+@njit(cache=True, inline="always")
+def _pad_moments(data_i, n, dh, piv_x, piv_z, p_x, p_z, t_fric, n_load, f):
+    """Contact forces (T, N) at P_e on the pads: moments about each body's centre of rotation (f = -Q)."""
     for e in range(2 * n):
         body = data_i[1 + e]
         t = t_fric[e]
@@ -253,43 +329,127 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
             f[1 + body] -= t * (p_z[e] - piv_z[body]) - nn * (p_x[e] - piv_x[body])
             f[0] -= t * (piv_z[body] - dh) - nn * piv_x[body]
 
-    # tyres: unilateral, with wear lowering the wheel's reach
+
+@njit(cache=True, inline="always")
+def _tyre_load(c_0, road, wear, z, k_t, c_t, road_rate, axle_rate):
+    """Compression of a tyre [m] and its spring and damper force [N], before the unilateral cut-off.
+
+    The compression is the design compression ``c_0`` plus the road height less the wear and the axle's rise.
+    """
+    comp = c_0 + road - wear - z
+    return comp, k_t * comp + c_t * (road_rate - axle_rate)
+
+
+@njit(cache=True, inline="always")
+def _bushes(u, v, data_f, n, f):
+    """Bush moments between each equaliser and the chassis."""
+    k_b = data_f[_KB]
+    c_b = data_f[_CB]
+    th_c = u[0]
+    for j in range(n - 1):
+        m_b = k_b * (u[1 + j] - th_c) + c_b * (v[1 + j] - v[0])
+        f[1 + j] += m_b
+        f[0] -= m_b
+
+
+@njit(cache=True, inline="always")
+def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, rec):
+    """Spring loads, friction forces, stick flags, contact shifts and plastic slips into the record."""
+    o_spring = record_start(_REC_SPRING, n)
+    o_fric = record_start(_REC_FRICTION, n)
+    o_stick = record_start(_REC_STICK, n)
+    o_shift = record_start(_REC_SHIFT, n)
+    o_slip = record_start(_REC_SLIP, n)
     for i in range(n):
-        comp = data_f[o_c0 + i] + drv[i] - data_f[o_wear + i] - u[n + i]
+        rec[o_spring + i] = f_spring[i]
+    for e in range(2 * n):
+        rec[o_fric + e] = t_fric[e]
+        rec[o_stick + e] = stick[e]
+        rec[o_shift + e] = p_x[e] - m_x[e]
+        rec[o_slip + e] = hist_new[e]
+
+
+@njit(cache=True)
+def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work):
+    """Internal force f = -Q at (u, v) for the drive row ``drv``; writes the new slips and, if asked, the record."""
+    n = data_i[0]
+    load_factor = drv[2 * n]
+    dh = drv[2 * n + 1]
+    cc = math.cos(u[0])
+    sc = math.sin(u[0])
+    for k in range(2 * n):
+        f[k] = 0.0
+    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s = _work_views(work, n)
+    o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
+    # pivots (chassis points) in the world, and each equaliser's rotation
+    for j in range(n - 1):
+        eq_c[j] = math.cos(u[1 + j])
+        eq_s[j] = math.sin(u[1 + j])
+        piv_x[j], piv_z[j] = _chassis_point(data_f[o_vx + j], data_f[o_vz + j], dh, cc, sc)
+    # material design contact points M_e carried with their bodies, and each pad's rotation
+    for e in range(2 * n):
+        body = data_i[1 + e]
+        if body < 0:
+            ox, oz, c, s = 0.0, dh, cc, sc
+        else:
+            ox, oz, c, s = piv_x[body], piv_z[body], eq_c[body], eq_s[body]
+        m_x[e], m_z[e] = _body_point(ox, oz, c, s, data_f[o_px + e], data_f[o_pz + e])
+        pad_s[e] = s
+        pad_c[e] = c
+    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring)
+    for i in range(n):
+        # the spring pushes its axle down: f = -Q
+        f[n + i] += f_spring[i]
+    _pad_moments(data_i, n, dh, piv_x, piv_z, p_x, p_z, t_fric, n_load, f)
+    # tyres: unilateral, with wear lowering the wheel's reach; the axle weights
+    o_c0, o_wear, k_t, c_t = array_start(_C0, n), array_start(_WEAR, n), data_f[_KT], data_f[_CT]
+    for i in range(n):
+        comp, push = _tyre_load(data_f[o_c0 + i], drv[i], data_f[o_wear + i], u[n + i], k_t, c_t, drv[n + i], v[n + i])
         ft = 0.0
         if comp > 0.0:
-            ft = k_t * comp + c_t * (drv[n + i] - v[n + i])
+            ft = push
             if ft < 0.0:
                 ft = 0.0
         f[n + i] -= ft
         f[n + i] += data_f[_WAXLE]
         if record:
             rec[i] = ft
-
-    # bushes between each equaliser and the chassis
-    for j in range(ne):
-        m_b = k_b * (u[1 + j] - th_c) + c_b * (v[1 + j] - v[0])
-        f[1 + j] += m_b
-        f[0] -= m_b
-
+    _bushes(u, v, data_f, n, f)
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
-
     if record:
-        for i in range(n):
-            rec[n + i] = f_spring[i]
-        for e in range(2 * n):
-            rec[2 * n + e] = t_fric[e]
-            rec[4 * n + e] = stick[e]
-            rec[6 * n + e] = p_x[e] - m_x[e]
-            rec[8 * n + e] = hist_new[e]
+        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, rec)
+
+
+@njit(cache=True, inline="always")
+def _damping_tangent(u, v, drv, data_f, n, ct):
+    """The exact C_T = df/dv: bush dampers, and tyre dampers while the tyre is in contact and pushing."""
+    ndof = 2 * n
+    for i in range(ndof):
+        for j in range(ndof):
+            ct[i, j] = 0.0
+    c_b = data_f[_CB]
+    for j in range(n - 1):
+        ct[1 + j, 1 + j] += c_b
+        ct[1 + j, 0] -= c_b
+        ct[0, 1 + j] -= c_b
+        ct[0, 0] += c_b
+    o_c0 = array_start(_C0, n)
+    o_wear = array_start(_WEAR, n)
+    c_t = data_f[_CT]
+    for i in range(n):
+        comp, push = _tyre_load(
+            data_f[o_c0 + i], drv[i], data_f[o_wear + i], u[n + i], data_f[_KT], c_t, drv[n + i], v[n + i]
+        )
+        if comp > 0.0 and push > 0.0:
+            ct[n + i, n + i] += c_t
 
 
 @njit(cache=True)
 def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     """Internal force f(u, v) and, if ``want_tangent``, K_T by forward differences and the exact C_T.
 
-    ``work`` is a scratch buffer of :func:`scratch_size` plus 4n entries.
+    ``work`` is a scratch buffer of :func:`work_size` (n) entries: :func:`scratch_size` plus 4n.
     """
     n = data_i[0]
     ndof = 2 * n
@@ -305,26 +465,9 @@ def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record,
             for i in range(ndof):
                 kt[i, j] = fp[i]
             up[j] = u[j]
-        for i in range(ndof):
-            for j in range(ndof):
-                ct[i, j] = 0.0
-        c_b = data_f[_CB]
-        for j in range(n - 1):
-            ct[1 + j, 1 + j] += c_b
-            ct[1 + j, 0] -= c_b
-            ct[0, 1 + j] -= c_b
-            ct[0, 0] += c_b
     _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work)
     if want_tangent:
         for j in range(ndof):
             for i in range(ndof):
                 kt[i, j] = (kt[i, j] - f[i]) / FD_STEP
-        # tyre damping acts only while the tyre is in contact and pushing
-        o_c0 = NS + 4 * n
-        o_wear = o_c0 + n
-        c_t = data_f[_CT]
-        k_t = data_f[_KT]
-        for i in range(n):
-            comp = data_f[o_c0 + i] + drv[i] - data_f[o_wear + i] - u[n + i]
-            if comp > 0.0 and k_t * comp + c_t * (drv[n + i] - v[n + i]) > 0.0:
-                ct[n + i, n + i] += c_t
+        _damping_tangent(u, v, drv, data_f, n, ct)

@@ -128,7 +128,8 @@ def _phase_windows(speed: float) -> tuple[tuple[float, float], tuple[float, floa
     axle has left the step while the rear is still on the plateau. Positions are the front axle's along the road.
     """
     step = RampedStep()
-    spacing = 1.31
+    axle_x = tandem_trrl().axle_x
+    spacing = axle_x[1] - axle_x[0]
     plateau_end = step.start + step.ramp_length + step.plateau_length
     front = (step.start + step.ramp_length, step.start + spacing)
     rear = (step.end, plateau_end + spacing)
@@ -178,24 +179,190 @@ def _rms_summary(r: DynamicResult) -> dict[str, float]:
     return {"rms": float(metrics.rms(r.wheel_loads[r.t >= 1.0]))}
 
 
+# ---- the reference's tables ----------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Table1Row:
+    """One run of the reference's Table 1 (Stage 3, linear model, on the ramped step) and what it reports."""
+
+    name: str
+    bush_stiffness: float  # [N m/rad]
+    bush_damping: float  # [N m s/rad]
+    axle_mass: float  # [kg]
+    n_steps: int
+    dt: float  # time step [s]
+    speed: float  # [m/s]
+    peak_p: float  # the reference's peak p (Equation 2) [-]
+    peak_p1: float  # the reference's peak P1 (Equation 4) [-]
+
+
+#: the reference's Table 1, row by row
+TABLE1 = (
+    Table1Row("L01", bush_stiffness=1000.0, bush_damping=0.0, axle_mass=0.0, n_steps=400, dt=0.0625, speed=0.2,
+              peak_p=0.2, peak_p1=0.11),
+    Table1Row("L02", bush_stiffness=1000.0, bush_damping=0.0, axle_mass=0.0, n_steps=400, dt=0.0025, speed=10.0,
+              peak_p=0.95, peak_p1=0.46),
+    Table1Row("L03", bush_stiffness=10.0, bush_damping=0.0, axle_mass=0.0, n_steps=200, dt=0.125, speed=0.2,
+              peak_p=0.14, peak_p1=0.08),
+    Table1Row("L04", bush_stiffness=10.0, bush_damping=0.0, axle_mass=0.0, n_steps=200, dt=0.005, speed=10.0,
+              peak_p=1.05, peak_p1=0.50),
+    Table1Row("L05", bush_stiffness=1000.0, bush_damping=2000.0, axle_mass=0.0, n_steps=400, dt=0.0025, speed=10.0,
+              peak_p=1.55, peak_p1=0.75),
+    Table1Row("L06", bush_stiffness=1000.0, bush_damping=2000.0, axle_mass=0.0, n_steps=400, dt=0.0625, speed=0.2,
+              peak_p=1.8, peak_p1=0.89),
+    Table1Row("L07", bush_stiffness=1000.0, bush_damping=2000.0, axle_mass=200.0, n_steps=400, dt=0.0625, speed=0.2,
+              peak_p=1.7, peak_p1=0.85),
+)  # fmt: skip
+
+
+@dataclass(frozen=True)
+class Table2Row:
+    """One run of the reference's Table 2 (Stage 4, non-linear model) and what it reports.
+
+    ``friction`` and ``bush`` are the table's "High" or "Zero" (:data:`HIGH_FRICTION`, :data:`HIGH_BUSH`, 0);
+    ``kind`` is the loading: "static" (load application and removal), "sine" (then sinusoidal load), "step" (the
+    ramped step at ``speed`` [m/s]) or "road" (a random road at ``speed``). ``reference`` holds the reported
+    figures under the keys of the run's summary (P1 in newtons, or the RMS of Equation 5). ``long_arm`` fits the
+    :data:`LONG_ARM` equaliser arms, ``friction_value`` overrides the friction coefficient [-] and ``changes``
+    are further :class:`~bogie.params.Bogie` fields.
+    """
+
+    name: str
+    block: str
+    friction: str
+    bush: str
+    kind: str
+    what: str
+    reference: dict[str, Any]
+    speed: float | None = None
+    long_arm: bool = False
+    friction_value: float | None = None
+    changes: dict[str, Any] = field(default_factory=dict)
+
+
+_WHAT_STATIC = "static load application and removal"
+_WHAT_SINE = "static load application and sinusoidal variation"
+_WHAT_STEP = "short step in the road profile (payload 6500 kg, ramp 0.025 m)"
+_WHAT_ROAD = "true road profile, long equaliser arm (low speed taken as 1 m/s, high as 20 m/s)"
+_ANGLED = 0.55 * 0.155  # tip drop of an arm angled at 0.55 of the preset's 0.155 m arm [m]
+
+
+def _on_step(front: float, rear: float) -> dict[str, Any]:
+    """The reference's P1 [N] with the front and with the rear wheel on the step (low speed)."""
+    return {"p1_front_on_step": front, "p1_rear_on_step": rear}
+
+
+def _two_peaks(first: float, second: float) -> dict[str, Any]:
+    """The reference's two peaks of P1 [N] over the step at high speed, as printed."""
+    return {"peak_p1 (two peaks)": f"{first}/{second}"}
+
+
+#: the reference's Table 2, block by block
+TABLE2 = (
+    # block 1: load application and removal
+    Table2Row("N01", block="1", friction="High", bush="High", kind="static",
+              what=_WHAT_STATIC, reference={"p1_full_load": 800}),
+    Table2Row("N02", block="1", friction="High", bush="Zero", kind="static",
+              what=_WHAT_STATIC, reference={"p1_full_load": 720}),
+    Table2Row("N03", block="1", friction="Zero", bush="High", kind="static",
+              what=_WHAT_STATIC, reference={"p1_full_load": 790}),
+    Table2Row("N04", block="1", friction="Zero", bush="Zero", kind="static",
+              what=_WHAT_STATIC, reference={"p1_full_load": 680}),
+    # block 2: load application and sinusoidal variation
+    Table2Row("N05", block="2", friction="High", bush="High", kind="sine",
+              what=_WHAT_SINE, reference={"p1_max_load": 1060, "p1_min_load": 380}),
+    Table2Row("N06", block="2", friction="Zero", bush="Zero", kind="sine",
+              what=_WHAT_SINE, reference={"p1_max_load": 1200, "p1_min_load": 220}),
+    # block 3: the short step at low and high speed
+    Table2Row("N07", block="3", friction="High", bush="High", kind="step",
+              what=_WHAT_STEP, reference=_on_step(2800, 3500), speed=LOW_SPEED),
+    Table2Row("N08", block="3", friction="High", bush="Zero", kind="step",
+              what=_WHAT_STEP, reference=_on_step(2500, 3100), speed=LOW_SPEED),
+    Table2Row("N09", block="3", friction="Zero", bush="High", kind="step",
+              what=_WHAT_STEP, reference=_on_step(3100, 3600), speed=LOW_SPEED),
+    Table2Row("N10", block="3", friction="Zero", bush="Zero", kind="step",
+              what=_WHAT_STEP, reference=_on_step(2700, 3200), speed=LOW_SPEED),
+    Table2Row("N11", block="3", friction="High", bush="High", kind="step",
+              what=_WHAT_STEP, reference=_two_peaks(5700, 7400), speed=HIGH_SPEED),
+    Table2Row("N12", block="3", friction="High", bush="Zero", kind="step",
+              what=_WHAT_STEP, reference=_two_peaks(5700, 7400), speed=HIGH_SPEED),
+    Table2Row("N13", block="3", friction="Zero", bush="High", kind="step",
+              what=_WHAT_STEP, reference=_two_peaks(6000, 7400), speed=HIGH_SPEED),
+    Table2Row("N14", block="3", friction="Zero", bush="Zero", kind="step",
+              what=_WHAT_STEP, reference=_two_peaks(6000, 7400), speed=HIGH_SPEED),
+    # block 4: a road profile, long equaliser arm
+    Table2Row("N15", block="4", friction="High", bush="High", kind="road",
+              what=_WHAT_ROAD, reference={"rms": 0.00389}, speed=1.0, long_arm=True),
+    Table2Row("N16", block="4", friction="Zero", bush="Zero", kind="road",
+              what=_WHAT_ROAD, reference={"rms": 0.00321}, speed=1.0, long_arm=True),
+    Table2Row("N17", block="4", friction="High", bush="High", kind="road",
+              what=_WHAT_ROAD, reference={"rms": 0.00350}, speed=20.0, long_arm=True),
+    Table2Row("N18", block="4", friction="Zero", bush="Zero", kind="road",
+              what=_WHAT_ROAD, reference={"rms": 0.00342}, speed=20.0, long_arm=True),
+    # block 5: constraints and geometry, on the step at low speed
+    Table2Row("N19", block="5", friction="Zero", bush="Zero", kind="step",
+              what="linear constraints: contact points fixed (contact_roll_radius = 0) and level arms",
+              reference=_on_step(200, 200),
+              speed=LOW_SPEED,
+              changes={"contact_roll_radius": 0.0, "equaliser_front_tip_drop": 0.0, "equaliser_rear_tip_drop": 0.0}),
+    Table2Row("N20", block="5", friction="Zero", bush="Zero", kind="step",
+              what="non-linear constraints (the preset's rolling contact; as N10)",
+              reference=_on_step(1500, 1800), speed=LOW_SPEED),
+    Table2Row("N21", block="5", friction="Zero", bush="Zero", kind="step",
+              what=f"long equaliser arm ({LONG_ARM:g} m)",
+              reference=_on_step(700, 950),
+              speed=LOW_SPEED, long_arm=True),
+    Table2Row("N22", block="5", friction="High", bush="High", kind="step",
+              what=f"long equaliser arm ({LONG_ARM:g} m)",
+              reference=_on_step(700, 900),
+              speed=LOW_SPEED, long_arm=True),
+    Table2Row("N23", block="5", friction="Zero", bush="Zero", kind="step",
+              what="contact points as the TRRL vehicle (stand-in: long arm, contact_roll_radius 0.04 m)",
+              reference={},
+              speed=LOW_SPEED, long_arm=True, changes={"contact_roll_radius": 0.04}),
+    Table2Row("N24", block="5", friction="High", bush="High", kind="step",
+              what="contact points as the TRRL vehicle (stand-in)",
+              reference={},
+              speed=LOW_SPEED, long_arm=True, changes={"contact_roll_radius": 0.04}),
+    Table2Row("N25", block="5", friction="Zero", bush="Zero", kind="step",
+              what="front arm angled, xi = 0.55 (read as the slope of the front arm: tip 0.55 x arm below the pivot)",
+              reference={},
+              speed=LOW_SPEED, changes={"equaliser_front_tip_drop": _ANGLED}),
+    Table2Row("N26", block="5", friction="High", bush="High", kind="step",
+              what="rear arm angled, eta = 0.55",
+              reference={},
+              speed=LOW_SPEED, changes={"equaliser_rear_tip_drop": _ANGLED}),
+    Table2Row("N27", block="5", friction="Zero", bush="Zero", kind="step",
+              what="both arms angled, zeta = 0.55",
+              reference={},
+              speed=LOW_SPEED, changes={"equaliser_front_tip_drop": _ANGLED, "equaliser_rear_tip_drop": _ANGLED}),
+    Table2Row("N28", block="5", friction="High", bush="High", kind="step",
+              what="rear arm angled up, eta = -0.55",
+              reference={},
+              speed=LOW_SPEED, changes={"equaliser_rear_tip_drop": -_ANGLED}),
+    Table2Row("N29", block="5", friction="High", bush="High", kind="step",
+              what="friction coefficient 0.6, contact points as the TRRL vehicle (stand-in)",
+              reference={},
+              speed=LOW_SPEED, long_arm=True, friction_value=0.6, changes={"contact_roll_radius": 0.04}),
+)  # fmt: skip
+
+
 # ---- the cases -------------------------------------------------------------------------------------------------
-def _linear_case(
-    name: str, k_b: float, d_b: float, m_a: float, n_steps: int, dt: float, speed: float, p: float, p1: float
-) -> Case:
-    regime = "low speed" if speed < 1.0 else "high speed"
+def _linear_case(row: Table1Row) -> Case:
+    regime = "low speed" if row.speed < 1.0 else "high speed"
+    k_b, d_b, m_a = row.bush_stiffness, row.bush_damping, row.axle_mass
     return Case(
-        name=name,
+        name=row.name,
         description=(
-            f"Table 1 run {name} ({regime}): bush stiffness {k_b:g} N m/rad, bush damping {d_b:g} N m s/rad, axle mass "
-            f"{m_a:g} kg, {n_steps} steps of {dt:g} s at {speed:g} m/s over the 25 mm ramped step; tandem_trrl() "
-            "(its tyre damping of 2 kN s/m stands in for the damping the reference's plots show), average-acceleration "
-            "Newmark"
+            f"Table 1 run {row.name} ({regime}): bush stiffness {k_b:g} N m/rad, bush damping {d_b:g} N m s/rad, "
+            f"axle mass {m_a:g} kg, {row.n_steps} steps of {row.dt:g} s at {row.speed:g} m/s over the 25 mm ramped "
+            "step; tandem_trrl() (its tyre damping of 2 kN s/m stands in for the damping the reference's plots "
+            "show), average-acceleration Newmark"
         ),
         model="linear",
         bogie=lambda: tandem_trrl(bush_stiffness=k_b, bush_damping=d_b, axle_mass=m_a),
-        runner=_linear_step(n_steps, dt, speed),
+        runner=_linear_step(row.n_steps, row.dt, row.speed),
         summarise=_linear_summary,
-        reference={"peak_p": p, "peak_p1": p1},
+        reference={"peak_p": row.peak_p, "peak_p1": row.peak_p1},
     )
 
 
@@ -207,9 +374,7 @@ def _bush(stiffness: str) -> float:
     return {"High": HIGH_BUSH, "Zero": 0.0}[stiffness]
 
 
-def _nl_bogie(friction: float, bush: float, **changes: Any) -> Callable[[], Bogie]:
-    long_arm = changes.pop("long_arm", False)
-
+def _nl_bogie(friction: float, bush: float, long_arm: bool, changes: dict[str, Any]) -> Callable[[], Bogie]:
     def make() -> Bogie:
         b = tandem_trrl(friction_coefficient=friction, bush_stiffness=bush, **changes)
         return with_equaliser_arms(b, LONG_ARM) if long_arm else b
@@ -217,127 +382,47 @@ def _nl_bogie(friction: float, bush: float, **changes: Any) -> Callable[[], Bogi
     return make
 
 
-def _nl_case(name: str, block: str, friction: str, bush: str, what: str, reference: dict[str, Any], **kw: Any) -> Case:
-    speed = kw.pop("speed", None)
-    kind = kw.pop("kind")
-    fr = kw.pop("friction_value", _level(friction))
-    if kind == "step":
-        runner = _nonlinear_step(speed)
-        summarise = _step_summary_low if speed < 1.0 else _step_summary_high
+def _nl_loading(row: Table2Row) -> tuple[Callable[[Bogie], DynamicResult], Callable[[DynamicResult], dict], str]:
+    """Runner, summary and a description of the loading of a Table 2 run."""
+    speed = row.speed
+    if row.kind == "step":
         timing = "25 s at 10 ms steps" if speed < 1.0 else "1 s at 0.5 ms steps"
-        setting = f"the 25 mm ramped step at {speed:g} m/s ({timing}), 0.5 m lead"
-    elif kind == "static":
-        runner, summarise = _static_history(_APPLY), _static_summary
+        summarise = _step_summary_low if speed < 1.0 else _step_summary_high
+        return _nonlinear_step(speed), summarise, f"the 25 mm ramped step at {speed:g} m/s ({timing}), 0.5 m lead"
+    if row.kind == "static":
         setting = (
             f"quasi-static load application from the empty trailer ({TARE_FRACTION:g} of the payload) to full load "
             "and back, on a trailer whose king pin height makes it level when empty"
         )
-    elif kind == "sine":
-        runner, summarise = _static_history(_SINE), _sine_summary
+        return _static_history(_APPLY), _static_summary, setting
+    if row.kind == "sine":
         setting = "quasi-static load application, then two cycles of load between 0.6 and 1.0 of the payload"
-    else:
-        runner, summarise = _road_run(speed), _rms_summary
-        setting = (
-            "100 m of ISO 8608 class B road (seed 1987, standing in for the lost TRRL Track 1 profile) "
-            f"at {speed:g} m/s"
-        )
+        return _static_history(_SINE), _sine_summary, setting
+    setting = (
+        f"100 m of ISO 8608 class B road (seed 1987, standing in for the lost TRRL Track 1 profile) at {speed:g} m/s"
+    )
+    return _road_run(speed), _rms_summary, setting
+
+
+def _nl_case(row: Table2Row) -> Case:
+    runner, summarise, setting = _nl_loading(row)
+    fr = _level(row.friction) if row.friction_value is None else row.friction_value
     description = (
-        f"Table 2 block {block} run {name}: {what}; spring-end friction {friction} ({fr:g}), bush stiffness {bush} "
-        f"({_bush(bush):g} N m/rad); {setting}; tandem_trrl() otherwise"
+        f"Table 2 block {row.block} run {row.name}: {row.what}; spring-end friction {row.friction} ({fr:g}), bush "
+        f"stiffness {row.bush} ({_bush(row.bush):g} N m/rad); {setting}; tandem_trrl() otherwise"
     )
     return Case(
-        name=name,
+        name=row.name,
         description=description,
         model="nonlinear",
-        bogie=_nl_bogie(fr, _bush(bush), **kw),
+        bogie=_nl_bogie(fr, _bush(row.bush), row.long_arm, row.changes),
         runner=runner,
         summarise=summarise,
-        reference=reference,
+        reference=dict(row.reference),
     )
 
 
-_TRRL_CONTACT = {"long_arm": True, "contact_roll_radius": 0.04}
-
-
-def _table2() -> list[Case]:
-    low, high = LOW_SPEED, HIGH_SPEED
-    c: list[Case] = []
-    for name, fr, bu, ref in (
-        ("N01", "High", "High", 800),
-        ("N02", "High", "Zero", 720),
-        ("N03", "Zero", "High", 790),
-        ("N04", "Zero", "Zero", 680),
-    ):
-        c.append(
-            _nl_case(name, "1", fr, bu, "static load application and removal", {"p1_full_load": ref}, kind="static")
-        )
-    for name, fr, bu, ref in (("N05", "High", "High", (1060, 380)), ("N06", "Zero", "Zero", (1200, 220))):
-        what = "static load application and sinusoidal variation"
-        ref_d = {"p1_max_load": ref[0], "p1_min_load": ref[1]}
-        c.append(_nl_case(name, "2", fr, bu, what, ref_d, kind="sine"))
-    for name, fr, bu, speed, ref in (
-        ("N07", "High", "High", low, (2800, 3500)),
-        ("N08", "High", "Zero", low, (2500, 3100)),
-        ("N09", "Zero", "High", low, (3100, 3600)),
-        ("N10", "Zero", "Zero", low, (2700, 3200)),
-        ("N11", "High", "High", high, (5700, 7400)),
-        ("N12", "High", "Zero", high, (5700, 7400)),
-        ("N13", "Zero", "High", high, (6000, 7400)),
-        ("N14", "Zero", "Zero", high, (6000, 7400)),
-    ):
-        what = "short step in the road profile (payload 6500 kg, ramp 0.025 m)"
-        ref_d = (
-            {"p1_front_on_step": ref[0], "p1_rear_on_step": ref[1]}
-            if speed < 1.0
-            else {"peak_p1 (two peaks)": f"{ref[0]}/{ref[1]}"}
-        )
-        c.append(_nl_case(name, "3", fr, bu, what, ref_d, kind="step", speed=speed))
-    for name, fr, bu, speed, ref in (
-        ("N15", "High", "High", 1.0, 0.00389),
-        ("N16", "Zero", "Zero", 1.0, 0.00321),
-        ("N17", "High", "High", 20.0, 0.00350),
-        ("N18", "Zero", "Zero", 20.0, 0.00342),
-    ):
-        what = "true road profile, long equaliser arm (low speed taken as 1 m/s, high as 20 m/s)"
-        c.append(_nl_case(name, "4", fr, bu, what, {"rms": ref}, kind="road", speed=speed, long_arm=True))
-    block5 = (
-        ("N19", "Zero", "Zero", {"contact_roll_radius": 0.0, "equaliser_front_tip_drop": 0.0,
-                                 "equaliser_rear_tip_drop": 0.0},
-         "linear constraints: contact points fixed (contact_roll_radius = 0) and level arms", (200, 200)),
-        ("N20", "Zero", "Zero", {}, "non-linear constraints (the preset's rolling contact; as N10)", (1500, 1800)),
-        ("N21", "Zero", "Zero", {"long_arm": True}, f"long equaliser arm ({LONG_ARM:g} m)", (700, 950)),
-        ("N22", "High", "High", {"long_arm": True}, f"long equaliser arm ({LONG_ARM:g} m)", (700, 900)),
-        ("N23", "Zero", "Zero", dict(_TRRL_CONTACT), "contact points as the TRRL vehicle (stand-in: long arm, "
-         "contact_roll_radius 0.04 m)", None),
-        ("N24", "High", "High", dict(_TRRL_CONTACT), "contact points as the TRRL vehicle (stand-in)", None),
-        ("N25", "Zero", "Zero", {"equaliser_front_tip_drop": 0.55 * 0.155}, "front arm angled, xi = 0.55 "
-         "(read as the slope of the front arm: tip 0.55 x arm below the pivot)", None),
-        ("N26", "High", "High", {"equaliser_rear_tip_drop": 0.55 * 0.155}, "rear arm angled, eta = 0.55", None),
-        ("N27", "Zero", "Zero", {"equaliser_front_tip_drop": 0.55 * 0.155, "equaliser_rear_tip_drop": 0.55 * 0.155},
-         "both arms angled, zeta = 0.55", None),
-        ("N28", "High", "High", {"equaliser_rear_tip_drop": -0.55 * 0.155}, "rear arm angled up, eta = -0.55", None),
-        ("N29", "High", "High", {**_TRRL_CONTACT, "friction_value": 0.6},
-         "friction coefficient 0.6, contact points as the TRRL vehicle (stand-in)", None),
-    )  # fmt: skip
-    for name, fr, bu, changes, what, ref in block5:
-        ref_d = {"p1_front_on_step": ref[0], "p1_rear_on_step": ref[1]} if ref else {}
-        c.append(_nl_case(name, "5", fr, bu, what, ref_d, kind="step", speed=low, **changes))
-    return c
-
-
-CASES: dict[str, Case] = {
-    c.name: c
-    for c in (
-        _linear_case("L01", 1000.0, 0.0, 0.0, 400, 0.0625, 0.2, 0.2, 0.11),
-        _linear_case("L02", 1000.0, 0.0, 0.0, 400, 0.0025, 10.0, 0.95, 0.46),
-        _linear_case("L03", 10.0, 0.0, 0.0, 200, 0.125, 0.2, 0.14, 0.08),
-        _linear_case("L04", 10.0, 0.0, 0.0, 200, 0.005, 10.0, 1.05, 0.50),
-        _linear_case("L05", 1000.0, 2000.0, 0.0, 400, 0.0025, 10.0, 1.55, 0.75),
-        _linear_case("L06", 1000.0, 2000.0, 0.0, 400, 0.0625, 0.2, 1.8, 0.89),
-        _linear_case("L07", 1000.0, 2000.0, 200.0, 400, 0.0625, 0.2, 1.7, 0.85),
-        *_table2(),
-    )
-}
+CASES: dict[str, Case] = {c.name: c for c in (*map(_linear_case, TABLE1), *map(_nl_case, TABLE2))}
 
 
 def get(name: str) -> Case:

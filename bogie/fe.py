@@ -1,414 +1,41 @@
-"""Stage 1: a small 2-D linear frame finite element solver and the tri-axle suspension mesh built on it.
-
-The solver (:class:`FrameModel`) works in the vertical plane of one side of the trailer: ``x`` rearward, ``z``
-upward, three degrees of freedom per node: ``u`` (along x) [m], ``w`` (along z) [m] and ``theta``, the rotation
-from x towards z (counter-clockwise in a drawing with the rear on the right, so a positive ``theta`` raises the
-rear) [rad]. It offers Euler-Bernoulli beam elements of any orientation with optional pin releases at either end
-(the released rotation is condensed out), axial springs along a given direction, rotational springs, equal-DOF
-ties (pin joints between coincident nodes), prescribed displacements and nodal loads.
+"""Stage 1: the finite element mesh of one side of a multi-axle bogie, on the frame solver of :mod:`bogie.frame`.
 
 :func:`build_mesh` turns a :class:`~bogie.params.Bogie` into the reference's Stage 1 model: hangers and equaliser
 brackets clamped to the bed, equalisers pinned to their brackets with the bush as a rotational spring, leaf springs
 as beams resting on vertical slipper contacts, axles and wheels, tyre springs to the ground and optional drag links.
 The bed is given a rigid translation ``alpha`` and pitch ``psi`` as prescribed displacements. Derivations, the mesh
 drawing and the comparison with the static model are in ``docs/fe-model.md``.
+
+The frame solver's names (:class:`~bogie.frame.FrameModel`, :class:`~bogie.frame.FrameSolution`,
+:func:`~bogie.frame.beam_local_stiffness`, :data:`~bogie.frame.DOF_NAMES`) are re-exported here, where they lived
+before :mod:`bogie.frame` existed.
 """
 
 from __future__ import annotations
 
 import math
-from collections.abc import Iterable, Sequence
+from collections.abc import Sequence
 from dataclasses import dataclass, field
 
 import numpy as np
-import scipy.sparse as sp
-import scipy.sparse.linalg as spla
 from numpy.typing import ArrayLike, NDArray
 
+from bogie.frame import DOF_NAMES, FrameModel, FrameSolution, _positive, beam_local_stiffness
 from bogie.metrics import p as deviation_p
 from bogie.params import STAGE1_CHASSIS_DEFLECTION, Bogie, triaxle_stage1
 
-DOF_NAMES = ("u", "w", "theta")
-#: smallest pivot of the Jacobi-scaled stiffness (unit diagonal) accepted as non-singular [-]
-_PIVOT_TOL = 1e-11
-
-
-def _dof_index(dof: str | int) -> int:
-    if isinstance(dof, str) and dof in DOF_NAMES:
-        return DOF_NAMES.index(dof)
-    if isinstance(dof, int) and 0 <= dof < 3:
-        return dof
-    raise ValueError(f"dof = {dof!r} is not a degree of freedom: must be one of {', '.join(DOF_NAMES)} (or 0, 1, 2)")
-
-
-def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> float:
-    v = float(value)
-    ok = v >= 0.0 if allow_zero else v > 0.0
-    if not (math.isfinite(v) and ok):
-        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
-    return v
-
-
-def beam_local_stiffness(
-    ea: float, ei: float, length: float, release_i: bool = False, release_j: bool = False
-) -> NDArray[np.float64]:
-    """Stiffness of a 2-D Euler-Bernoulli beam in its local axes, DOFs (u', w', theta) at end i then end j.
-
-    ``x'`` runs from node i to node j, ``z'`` is ``x'`` turned 90 degrees towards ``z``. A released end carries no
-    moment: its rotation is condensed out, K_c = K_cc - K_cr K_rr^-1 K_rc, and its row and column are zero.
-
-    Parameters
-    ----------
-    ea
-        Axial rigidity E A [N].
-    ei
-        Bending rigidity E I [N m^2]; may be 0 when both ends are released (a two-force member).
-    length
-        Element length [m].
-    release_i, release_j
-        Pin release (hinge) at end i, end j.
-    """
-    _positive("ea", ea, "N")
-    _positive("ei", ei, "N m^2", allow_zero=release_i and release_j)
-    L = _positive("length", length, "m")
-    a = ea / L
-    k = np.zeros((6, 6))
-    k[np.ix_([0, 3], [0, 3])] = a * np.array([[1.0, -1.0], [-1.0, 1.0]])
-    if release_i and release_j:
-        return k
-    b = ei / L**3
-    bend = b * np.array(
-        [
-            [12.0, 6.0 * L, -12.0, 6.0 * L],
-            [6.0 * L, 4.0 * L * L, -6.0 * L, 2.0 * L * L],
-            [-12.0, -6.0 * L, 12.0, -6.0 * L],
-            [6.0 * L, 2.0 * L * L, -6.0 * L, 4.0 * L * L],
-        ]
-    )
-    k[np.ix_([1, 2, 4, 5], [1, 2, 4, 5])] = bend
-    released = [r for r, flag in ((2, release_i), (5, release_j)) if flag]
-    if released:
-        kept = [c for c in range(6) if c not in released]
-        k_rr = k[np.ix_(released, released)]
-        k_kr = k[np.ix_(kept, released)]
-        condensed = k[np.ix_(kept, kept)] - k_kr @ np.linalg.solve(k_rr, k_kr.T)
-        k = np.zeros((6, 6))
-        k[np.ix_(kept, kept)] = condensed
-    return k
-
-
-def _rotation(c: float, s: float) -> NDArray[np.float64]:
-    r = np.array([[c, s, 0.0], [-s, c, 0.0], [0.0, 0.0, 1.0]])
-    t = np.zeros((6, 6))
-    t[:3, :3] = r
-    t[3:, 3:] = r
-    return t
-
-
-@dataclass(frozen=True)
-class _Element:
-    kind: str  # "beam", "spring", "rotational_spring"
-    nodes: tuple[int, int]
-    stiffness: NDArray[np.float64]  # in the 6 global DOFs of its two nodes
-    recover: NDArray[np.float64]  # maps those 6 displacements to the element's reported forces
-
-
-@dataclass(frozen=True)
-class FrameSolution:
-    """Result of :meth:`FrameModel.solve`.
-
-    Attributes
-    ----------
-    displacements
-        Nodal displacements, shape (n_nodes, 3): u [m], w [m], theta [rad].
-    reactions
-        Force each node receives from its supports and ties, shape (n_nodes, 3): forces [N] and moment [N m];
-        ``K u - F`` node by node, so zero (to round-off) at free, untied degrees of freedom.
-    forces
-        Element forces by element name. Beam: ``[N_i, V_i, M_i, N_j, V_j, M_j]`` in local axes, the forces and
-        moments the nodes exert on the element [N, N m] (a tension member has ``N_j > 0``). Axial spring:
-        ``[T]``, its tension [N]. Rotational spring: ``[M]``, moment ``k (theta_j - theta_i)`` [N m].
-    node_names
-        Names of the nodes, in index order.
-    """
-
-    displacements: NDArray[np.float64]
-    reactions: NDArray[np.float64]
-    forces: dict[str, NDArray[np.float64]]
-    node_names: tuple[str, ...]
-
-    def node(self, name: str) -> NDArray[np.float64]:
-        """Displacements (u [m], w [m], theta [rad]) of the node called ``name``."""
-        return self.displacements[self.node_names.index(name)]
-
-
-@dataclass
-class FrameModel:
-    """A 2-D linear frame model: add nodes and elements, constrain and load them, then :meth:`solve`.
-
-    Elements and nodes are identified by index and by a unique name. Every method validates its input and raises
-    ``ValueError`` naming the bad argument.
-    """
-
-    coords: list[tuple[float, float]] = field(default_factory=list)
-    node_names: list[str] = field(default_factory=list)
-    elements: dict[str, _Element] = field(default_factory=dict)
-    prescribed: dict[int, float] = field(default_factory=dict)
-    loads: dict[int, float] = field(default_factory=dict)
-    ties: list[tuple[int, int]] = field(default_factory=list)
-
-    # ---- building ----------------------------------------------------------------------------------------
-    def add_node(self, x: float, z: float, name: str | None = None) -> int:
-        """Add a node at (x [m], z [m]) and return its index."""
-        if not (math.isfinite(x) and math.isfinite(z)):
-            raise ValueError(f"node coordinates ({x!r}, {z!r}) must be finite (m)")
-        name = f"n{len(self.coords)}" if name is None else name
-        if name in self.node_names:
-            raise ValueError(f"node name {name!r} is already used")
-        self.coords.append((float(x), float(z)))
-        self.node_names.append(name)
-        return len(self.coords) - 1
-
-    def node(self, name: str) -> int:
-        """Index of the node called ``name``."""
-        try:
-            return self.node_names.index(name)
-        except ValueError:
-            raise ValueError(f"no node called {name!r}") from None
-
-    def _check_node(self, i: int) -> int:
-        if not (isinstance(i, (int, np.integer)) and 0 <= i < len(self.coords)):
-            raise ValueError(f"node = {i!r} is not a node index: must be in [0, {len(self.coords) - 1}]")
-        return int(i)
-
-    def _add(self, name: str | None, element: _Element) -> str:
-        name = f"e{len(self.elements)}" if name is None else name
-        if name in self.elements:
-            raise ValueError(f"element name {name!r} is already used")
-        self.elements[name] = element
-        return name
-
-    def add_beam(
-        self,
-        i: int,
-        j: int,
-        ea: float,
-        ei: float,
-        release_i: bool = False,
-        release_j: bool = False,
-        name: str | None = None,
-    ) -> str:
-        """Add an Euler-Bernoulli beam from node i to node j; length and orientation follow the coordinates.
-
-        Parameters
-        ----------
-        i, j
-            End nodes.
-        ea
-            Axial rigidity [N].
-        ei
-            Bending rigidity [N m^2].
-        release_i, release_j
-            Pin release at end i, end j: that end transmits no moment.
-        name
-            Element name (default ``e<k>``).
-        """
-        i, j = self._check_node(i), self._check_node(j)
-        (xi, zi), (xj, zj) = self.coords[i], self.coords[j]
-        length = math.hypot(xj - xi, zj - zi)
-        if length == 0.0:
-            raise ValueError(f"beam from node {self.node_names[i]!r} to {self.node_names[j]!r} has zero length (m)")
-        k_local = beam_local_stiffness(ea, ei, length, release_i, release_j)
-        t = _rotation((xj - xi) / length, (zj - zi) / length)
-        recover = k_local @ t
-        return self._add(name, _Element("beam", (i, j), t.T @ recover, recover))
-
-    def add_spring(
-        self, i: int, j: int, stiffness: float, direction: Sequence[float] | None = None, name: str | None = None
-    ) -> str:
-        """Add an axial spring between nodes i and j acting along ``direction`` (default: from i towards j).
-
-        Parameters
-        ----------
-        stiffness
-            Spring rate [N/m].
-        direction
-            Line of action (x, z) [-]; needed when the nodes coincide. Tension is positive along it from i to j.
-        """
-        i, j = self._check_node(i), self._check_node(j)
-        k = _positive("stiffness", stiffness, "N/m")
-        if direction is None:
-            (xi, zi), (xj, zj) = self.coords[i], self.coords[j]
-            direction = (xj - xi, zj - zi)
-        n = np.asarray(direction, dtype=float)
-        norm = float(np.hypot(*n)) if n.shape == (2,) else 0.0
-        if not (math.isfinite(norm) and norm > 0.0):
-            raise ValueError(f"direction = {direction!r} must be a non-zero (x, z) vector (coincident nodes need one)")
-        n = n / norm
-        b = np.array([-n[0], -n[1], 0.0, n[0], n[1], 0.0])
-        return self._add(name, _Element("spring", (i, j), k * np.outer(b, b), k * b[None, :]))
-
-    def add_rotational_spring(self, i: int, j: int, stiffness: float, name: str | None = None) -> str:
-        """Add a rotational spring between the rotations of nodes i and j, moment k (theta_j - theta_i).
-
-        Parameters
-        ----------
-        stiffness
-            Rotational rate [N m/rad].
-        """
-        i, j = self._check_node(i), self._check_node(j)
-        k = _positive("stiffness", stiffness, "N m/rad")
-        b = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 1.0])
-        return self._add(name, _Element("rotational_spring", (i, j), k * np.outer(b, b), k * b[None, :]))
-
-    def tie(self, i: int, j: int, dofs: Iterable[str | int] = ("u", "w")) -> None:
-        """Make the listed degrees of freedom of nodes i and j equal; ``("u", "w")`` is a pin joint."""
-        i, j = self._check_node(i), self._check_node(j)
-        for d in dofs:
-            k = _dof_index(d)
-            self.ties.append((3 * i + k, 3 * j + k))
-
-    def prescribe(self, node: int, dof: str | int, value: float = 0.0) -> None:
-        """Prescribe one degree of freedom of ``node`` (a support when ``value`` is 0) [m] or [rad]."""
-        node = self._check_node(node)
-        if not math.isfinite(value):
-            raise ValueError(f"prescribed value = {value!r} must be finite (m or rad)")
-        self.prescribed[3 * node + _dof_index(dof)] = float(value)
-
-    def fix(self, node: int, dofs: Iterable[str | int] = DOF_NAMES) -> None:
-        """Support the listed degrees of freedom of ``node`` (zero displacement)."""
-        for d in dofs:
-            self.prescribe(node, d, 0.0)
-
-    def add_load(self, node: int, dof: str | int, value: float) -> None:
-        """Add a nodal force [N] (``u``, ``w``) or moment [N m] (``theta``) to ``node``."""
-        node = self._check_node(node)
-        if not math.isfinite(value):
-            raise ValueError(f"load = {value!r} must be finite (N or N m)")
-        key = 3 * node + _dof_index(dof)
-        self.loads[key] = self.loads.get(key, 0.0) + float(value)
-
-    # ---- solving -----------------------------------------------------------------------------------------
-    def _dof_label(self, k: int) -> str:
-        return f"{self.node_names[k // 3]!r} {DOF_NAMES[k % 3]}"
-
-    def _global_map(self) -> tuple[NDArray[np.int64], int]:
-        parent = list(range(3 * len(self.coords)))
-
-        def root(a: int) -> int:
-            while parent[a] != a:
-                parent[a] = parent[parent[a]]
-                a = parent[a]
-            return a
-
-        for a, b in self.ties:
-            ra, rb = root(a), root(b)
-            if ra != rb:
-                parent[max(ra, rb)] = min(ra, rb)
-        roots = np.array([root(a) for a in range(len(parent))])
-        _, numbering = np.unique(roots, return_inverse=True)
-        return numbering.astype(np.int64), int(numbering.max()) + 1
-
-    def solve(self) -> FrameSolution:
-        """Assemble (scipy.sparse), solve K u = F for the free DOFs, recover reactions and element forces.
-
-        Raises
-        ------
-        ValueError
-            If the model has no nodes, conflicting prescribed values on tied DOFs, or is a mechanism (singular
-            stiffness); the message names the nodes and DOFs that move in the free mode.
-        """
-        n_exp = 3 * len(self.coords)
-        if n_exp == 0:
-            raise ValueError("the model has no nodes")
-        rows, cols, vals = [], [], []
-        for el in self.elements.values():
-            idx = np.concatenate([np.arange(3 * n, 3 * n + 3) for n in el.nodes])
-            rows.append(np.repeat(idx, 6))
-            cols.append(np.tile(idx, 6))
-            vals.append(el.stiffness.ravel())
-        empty = [np.zeros(0, dtype=np.int64)]
-        k_exp = sp.coo_matrix(
-            (np.concatenate(vals or [np.zeros(0)]), (np.concatenate(rows or empty), np.concatenate(cols or empty))),
-            shape=(n_exp, n_exp),
-        ).tocsr()
-        numbering, n_glob = self._global_map()
-        tie_map = sp.csr_matrix((np.ones(n_exp), (np.arange(n_exp), numbering)), shape=(n_exp, n_glob))
-        k_glob = (tie_map.T @ k_exp @ tie_map).tocsr()
-        f_exp = np.zeros(n_exp)
-        for key, value in self.loads.items():
-            f_exp[key] = value
-        f_glob = tie_map.T @ f_exp
-        u_glob = np.zeros(n_glob)
-        is_prescribed = np.zeros(n_glob, dtype=bool)
-        for key, value in self.prescribed.items():
-            g = numbering[key]
-            if is_prescribed[g] and abs(u_glob[g] - value) > 1e-12 * max(1.0, abs(value)):
-                raise ValueError(
-                    f"tied DOF {self._dof_label(key)} is prescribed {value!r} but a DOF tied to it is prescribed "
-                    f"{u_glob[g]!r}: tied DOFs must share one value"
-                )
-            u_glob[g], is_prescribed[g] = value, True
-        free = np.flatnonzero(~is_prescribed)
-        if free.size:
-            k_ff = k_glob[free][:, free]
-            rhs = f_glob[free] - k_glob[free][:, is_prescribed] @ u_glob[is_prescribed]
-            u_glob[free] = self._solve_free(k_ff.tocsc(), rhs, free, numbering)
-        u_exp = u_glob[numbering]
-        reactions = k_exp @ u_exp - f_exp
-        forces = {}
-        for name, el in self.elements.items():
-            idx = np.concatenate([np.arange(3 * n, 3 * n + 3) for n in el.nodes])
-            forces[name] = el.recover @ u_exp[idx]
-        return FrameSolution(
-            displacements=u_exp.reshape(-1, 3),
-            reactions=reactions.reshape(-1, 3),
-            forces=forces,
-            node_names=tuple(self.node_names),
-        )
-
-    def _solve_free(
-        self, k_ff: sp.csc_matrix, rhs: NDArray[np.float64], free: NDArray[np.int64], numbering: NDArray[np.int64]
-    ) -> NDArray[np.float64]:
-        diag = k_ff.diagonal()
-        if np.any(diag <= 0.0):
-            self._raise_mechanism(np.flatnonzero(diag <= 0.0), free, numbering, None)
-        # Jacobi scaling puts translations and rotations on one footing for the singularity test
-        scale = 1.0 / np.sqrt(diag)
-        k_scaled = sp.diags(scale) @ k_ff @ sp.diags(scale)
-        try:
-            lu = spla.splu(sp.csc_matrix(k_scaled))
-            pivots = np.abs(lu.U.diagonal())
-            singular = bool(np.min(pivots) < _PIVOT_TOL)
-        except RuntimeError:
-            singular = True
-        if singular:
-            self._raise_mechanism(None, free, numbering, k_scaled)
-        return scale * lu.solve(scale * rhs)
-
-    def _raise_mechanism(
-        self,
-        zero_rows: NDArray[np.int64] | None,
-        free: NDArray[np.int64],
-        numbering: NDArray[np.int64],
-        k_scaled: sp.spmatrix | None,
-    ) -> None:
-        if zero_rows is None:
-            # the free modes are the eigenvectors with round-off eigenvalues; a mechanism is a modelling error,
-            # reported once, so a dense eigen-solve is affordable here
-            vals, vecs = np.linalg.eigh(k_scaled.toarray())
-            null = vecs[:, vals <= max(vals[0], _PIVOT_TOL * vals[-1])]
-            mode = np.sqrt(np.sum(null * null, axis=1))  # size of each DOF over the whole null space
-            zero_rows = np.flatnonzero(mode >= 0.5 * mode.max())
-        labels = []
-        for g in free[zero_rows]:
-            members = np.flatnonzero(numbering == g)
-            labels.append(" = ".join(self._dof_label(int(m)) for m in members))
-        shown = ", ".join(labels[:8]) + (f" and {len(labels) - 8} more" if len(labels) > 8 else "")
-        raise ValueError(
-            f"the model is a mechanism (singular stiffness): its free mode moves {shown}; add a support, a spring "
-            "or a tie that restrains it"
-        )
+__all__ = [
+    "DOF_NAMES",
+    "BogieFEResult",
+    "FrameModel",
+    "FrameSolution",
+    "MeshOptions",
+    "beam_local_stiffness",
+    "build_mesh",
+    "fe_wheel_loads",
+    "figure2_points",
+    "solve_fe",
+]
 
 
 # ---- the tri-axle suspension mesh ---------------------------------------------------------------------------
@@ -524,6 +151,149 @@ def _check_loading(chassis_deflection: float, chassis_rotation: float) -> None:
         )
 
 
+@dataclass
+class _Mesh:
+    """A Stage 1 mesh being built, with what its parts share."""
+
+    m: FrameModel
+    bogie: Bogie
+    opt: MeshOptions
+    z_spring: float  # spring ends and hanger pads [m]
+    z_pivot: float  # equaliser pivots [m]
+    z_bed: float  # bed (chassis underside) [m]
+    chassis_deflection: float
+    chassis_rotation: float
+    surge_free: bool  # the bed's fore-aft displacement is an unknown
+    bed_nodes: list[int] = field(default_factory=list)
+    #: "front<i>" / "rear<i>": the pad (hanger or equaliser tip) under spring i's front / rear end
+    pads: dict[str, int] = field(default_factory=dict)
+    #: bed node ahead of each axle, where its drag link is anchored
+    brackets: list[int] = field(default_factory=list)
+
+    def section(self, area: float, second_moment: float) -> tuple[float, float]:
+        """(E A [N], E I [N m^2]) of a steel section."""
+        return self.opt.steel_modulus * area, self.opt.steel_modulus * second_moment
+
+    @property
+    def hanger(self) -> tuple[float, float]:
+        return self.section(self.opt.hanger_area, self.opt.hanger_second_moment)
+
+
+def _mesh_heights(bogie: Bogie, opt: MeshOptions) -> tuple[float, float, float]:
+    """Heights of the spring ends, the equaliser pivots and the bed above the ground [m]."""
+    drop_f, drop_r = bogie.equaliser_front_tip_drop, bogie.equaliser_rear_tip_drop
+    z_spring = bogie.tyre_radius + opt.seat_height
+    z_pivot = z_spring + 0.5 * (drop_f + drop_r)
+    z_bed = z_spring + opt.hanger_length
+    highest = max(z_spring, z_pivot, z_pivot - drop_f, z_pivot - drop_r)
+    if z_bed <= highest:
+        raise ValueError(
+            f"hanger_length = {opt.hanger_length!r} m puts the bed at or below an equaliser pivot or tip: must "
+            f"exceed {highest - z_spring:g} m"
+        )
+    return z_spring, z_pivot, z_bed
+
+
+def _tyre_longitudinal(bogie: Bogie, opt: MeshOptions) -> float:
+    """Fore-aft stiffness of the braked tyres [N/m]."""
+    return bogie.tyre_stiffness if opt.tyre_longitudinal_stiffness is None else opt.tyre_longitudinal_stiffness
+
+
+def _bed_node(mesh: _Mesh, x: float, name: str) -> int:
+    """A bed node at ``x`` [m], given the bed's rigid motion (its fore-aft motion shared or held at 0)."""
+    m = mesh.m
+    node = m.add_node(x, mesh.z_bed, name)
+    psi = mesh.chassis_rotation
+    m.prescribe(node, "w", -mesh.chassis_deflection - psi * (x - mesh.bogie.bogie_centre_x))
+    m.prescribe(node, "theta", -psi)
+    if not mesh.surge_free:
+        m.prescribe(node, "u", 0.0)
+    elif mesh.bed_nodes:
+        m.tie(mesh.bed_nodes[0], node, ("u",))
+    mesh.bed_nodes.append(node)
+    return node
+
+
+def _equaliser(mesh: _Mesh, j: int, x_p: float) -> None:
+    """Equaliser j: its bracket from the bed, pinned to it with the bush, and its two arms to the tips."""
+    m, bogie = mesh.m, mesh.bogie
+    drop_f, drop_r = bogie.equaliser_front_tip_drop, bogie.equaliser_rear_tip_drop
+    arm = mesh.section(mesh.opt.equaliser_area, mesh.opt.equaliser_second_moment)
+    top = _bed_node(mesh, x_p, f"bed_pivot{j}")
+    mesh.brackets.append(top)
+    bracket = m.add_node(x_p, mesh.z_pivot, f"bracket{j}")
+    m.add_beam(top, bracket, *mesh.hanger, name=f"bracket{j}")
+    eq = m.add_node(x_p, mesh.z_pivot, f"equaliser{j}")
+    m.tie(bracket, eq, ("u", "w"))
+    if bogie.bush_stiffness > 0.0:
+        m.add_rotational_spring(bracket, eq, bogie.bush_stiffness, name=f"bush{j}")
+    tip_f = m.add_node(x_p - bogie.equaliser_front_arm[j], mesh.z_pivot - drop_f, f"tip{j}_front")
+    tip_r = m.add_node(x_p + bogie.equaliser_rear_arm[j], mesh.z_pivot - drop_r, f"tip{j}_rear")
+    m.add_beam(eq, tip_f, *arm, name=f"arm{j}_front")
+    m.add_beam(eq, tip_r, *arm, name=f"arm{j}_rear")
+    mesh.pads[f"rear{j}"], mesh.pads[f"front{j + 1}"] = tip_f, tip_r
+
+
+def _chassis_side(mesh: _Mesh) -> None:
+    """Hangers carrying the outer spring ends, and the equalisers on their brackets, front to rear."""
+    m, bogie = mesh.m, mesh.bogie
+    n = bogie.n_axles
+    x_fh, x_rh = bogie.front_hanger_x, bogie.rear_hanger_x
+    top = _bed_node(mesh, x_fh, "bed_front_hanger")
+    mesh.pads["front0"] = m.add_node(x_fh, mesh.z_spring, "pad_front")
+    m.add_beam(top, mesh.pads["front0"], *mesh.hanger, name="hanger_front")
+    mesh.brackets.append(top)
+    for j, x_p in enumerate(bogie.equaliser_pivot_x):
+        _equaliser(mesh, j, x_p)
+    top = _bed_node(mesh, x_rh, "bed_rear_hanger")
+    mesh.pads[f"rear{n - 1}"] = m.add_node(x_rh, mesh.z_spring, "pad_rear")
+    m.add_beam(top, mesh.pads[f"rear{n - 1}"], *mesh.hanger, name="hanger_rear")
+
+
+def _leaf_spring(mesh: _Mesh, i: int) -> int:
+    """Leaf spring i on its two slipper contacts, as two beams meeting at the seat; returns the seat node."""
+    m, bogie, opt = mesh.m, mesh.bogie, mesh.opt
+    a_f, a_r = bogie.spring_front_half_length[i], bogie.spring_rear_half_length[i]
+    span = a_f + a_r
+    pad_f, pad_r = mesh.pads[f"front{i}"], mesh.pads[f"rear{i}"]
+    (x_f, z_f), (x_r, z_r) = m.coords[pad_f], m.coords[pad_r]
+    end_f = m.add_node(x_f, z_f, f"spring{i}_front")
+    end_r = m.add_node(x_r, z_r, f"spring{i}_rear")
+    seat = m.add_node(bogie.axle_x[i], z_f + (z_r - z_f) * a_f / span, f"spring{i}_seat")
+    m.add_spring(pad_f, end_f, opt.contact_stiffness, (0.0, 1.0), name=f"contact{i}_front")
+    m.add_spring(pad_r, end_r, opt.contact_stiffness, (0.0, 1.0), name=f"contact{i}_rear")
+    # simply supported beam, point load at the seat: deflection P a_f^2 a_r^2 / (3 EI L) = P / K_R
+    ei_leaf = bogie.road_spring_stiffness * a_f**2 * a_r**2 / (3.0 * span)
+    m.add_beam(end_f, seat, opt.steel_modulus * opt.spring_area, ei_leaf, name=f"leaf{i}_front")
+    m.add_beam(seat, end_r, opt.steel_modulus * opt.spring_area, ei_leaf, name=f"leaf{i}_rear")
+    return seat
+
+
+def _axle_side(mesh: _Mesh, i: int, wear: float, drag_links: bool) -> None:
+    """Axle i: leaf spring, axle, braked wheel, tyre springs to the ground (lowered by ``wear`` [m]), drag link."""
+    m, bogie, opt = mesh.m, mesh.bogie, mesh.opt
+    axle = mesh.section(opt.axle_area, opt.axle_second_moment)
+    k_x = _tyre_longitudinal(bogie, opt)
+    seat = _leaf_spring(mesh, i)
+    x_s = bogie.axle_x[i]
+    z_axle = m.coords[seat][1] - opt.seat_height
+    centre = m.add_node(x_s, z_axle, f"axle{i}")
+    patch = m.add_node(x_s, z_axle - bogie.tyre_radius, f"patch{i}")
+    ground = m.add_node(x_s, z_axle - bogie.tyre_radius, f"ground{i}")
+    m.add_beam(seat, centre, *axle, name=f"axle{i}")
+    m.add_beam(centre, patch, *axle, name=f"wheel{i}")
+    m.add_spring(ground, patch, bogie.tyre_stiffness, (0.0, 1.0), name=f"tyre{i}_vertical")
+    if k_x > 0.0:
+        m.add_spring(ground, patch, k_x, (1.0, 0.0), name=f"tyre{i}_longitudinal")
+    m.fix(ground, ("u", "theta"))
+    m.prescribe(ground, "w", -wear)
+    if drag_links:
+        x_b = m.coords[mesh.brackets[i]][0]
+        pin = m.add_node(x_b, z_axle + opt.drag_link_rise, f"link_pin{i}")
+        m.add_beam(mesh.brackets[i], pin, *mesh.hanger, name=f"link_bracket{i}")
+        m.add_beam(pin, centre, opt.steel_modulus * opt.drag_link_area, 0.0, True, True, name=f"drag_link{i}")
+
+
 def build_mesh(
     bogie: Bogie,
     chassis_deflection: float,
@@ -562,100 +332,15 @@ def build_mesh(
     wear = np.asarray(bogie.tyre_wear if tyre_wear is None else tyre_wear, dtype=float)
     if wear.shape != (n,) or not np.all(np.isfinite(wear)):
         raise ValueError(f"tyre_wear = {tyre_wear!r} must give one finite value per axle ({n}) in m")
-    drop_f, drop_r = bogie.equaliser_front_tip_drop, bogie.equaliser_rear_tip_drop
-    z_spring = bogie.tyre_radius + opt.seat_height
-    z_pivot = z_spring + 0.5 * (drop_f + drop_r)
-    z_bed = z_spring + opt.hanger_length
-    highest = max(z_spring, z_pivot, z_pivot - drop_f, z_pivot - drop_r)
-    if z_bed <= highest:
-        raise ValueError(
-            f"hanger_length = {opt.hanger_length!r} m puts the bed at or below an equaliser pivot or tip: must "
-            f"exceed {highest - z_spring:g} m"
-        )
-    steel = opt.steel_modulus
-    hanger = (steel * opt.hanger_area, steel * opt.hanger_second_moment)
-    arm = (steel * opt.equaliser_area, steel * opt.equaliser_second_moment)
-    axle = (steel * opt.axle_area, steel * opt.axle_second_moment)
-    k_x = bogie.tyre_stiffness if opt.tyre_longitudinal_stiffness is None else opt.tyre_longitudinal_stiffness
+    z_spring, z_pivot, z_bed = _mesh_heights(bogie, opt)
     # the bed's fore-aft position is an unknown only when something couples it to the ground: drag links to
     # axles that the braked tyres hold; otherwise it is set to 0, where it does not affect any force
-    surge_free = drag_links and k_x > 0.0
-    x_c = bogie.bogie_centre_x
-    psi = chassis_rotation
-
-    m = FrameModel()
-    bed_nodes: list[int] = []
-
-    def bed(x: float, name: str) -> int:
-        node = m.add_node(x, z_bed, name)
-        m.prescribe(node, "w", -chassis_deflection - psi * (x - x_c))
-        m.prescribe(node, "theta", -psi)
-        if not surge_free:
-            m.prescribe(node, "u", 0.0)
-        elif bed_nodes:
-            m.tie(bed_nodes[0], node, ("u",))
-        bed_nodes.append(node)
-        return node
-
-    # chassis side: hangers carry the outer spring ends, brackets the equalisers
-    pads = {}  # "front<i>" / "rear<i>": the pad (hanger or equaliser tip) under spring i's front / rear end
-    brackets = []  # bed node ahead of each axle, where its drag link is anchored
-    x_fh, x_rh = bogie.front_hanger_x, bogie.rear_hanger_x
-    top = bed(x_fh, "bed_front_hanger")
-    pads["front0"] = m.add_node(x_fh, z_spring, "pad_front")
-    m.add_beam(top, pads["front0"], *hanger, name="hanger_front")
-    brackets.append(top)
-    for j, x_p in enumerate(bogie.equaliser_pivot_x):
-        top = bed(x_p, f"bed_pivot{j}")
-        brackets.append(top)
-        bracket = m.add_node(x_p, z_pivot, f"bracket{j}")
-        m.add_beam(top, bracket, *hanger, name=f"bracket{j}")
-        eq = m.add_node(x_p, z_pivot, f"equaliser{j}")
-        m.tie(bracket, eq, ("u", "w"))
-        if bogie.bush_stiffness > 0.0:
-            m.add_rotational_spring(bracket, eq, bogie.bush_stiffness, name=f"bush{j}")
-        tip_f = m.add_node(x_p - bogie.equaliser_front_arm[j], z_pivot - drop_f, f"tip{j}_front")
-        tip_r = m.add_node(x_p + bogie.equaliser_rear_arm[j], z_pivot - drop_r, f"tip{j}_rear")
-        m.add_beam(eq, tip_f, *arm, name=f"arm{j}_front")
-        m.add_beam(eq, tip_r, *arm, name=f"arm{j}_rear")
-        pads[f"rear{j}"], pads[f"front{j + 1}"] = tip_f, tip_r
-    top = bed(x_rh, "bed_rear_hanger")
-    pads[f"rear{n - 1}"] = m.add_node(x_rh, z_spring, "pad_rear")
-    m.add_beam(top, pads[f"rear{n - 1}"], *hanger, name="hanger_rear")
-
-    # axle side: leaf spring on two slipper contacts, axle, braked wheel, tyre springs to the ground
+    surge_free = drag_links and _tyre_longitudinal(bogie, opt) > 0.0
+    mesh = _Mesh(FrameModel(), bogie, opt, z_spring, z_pivot, z_bed, chassis_deflection, chassis_rotation, surge_free)
+    _chassis_side(mesh)
     for i in range(n):
-        a_f, a_r = bogie.spring_front_half_length[i], bogie.spring_rear_half_length[i]
-        span = a_f + a_r
-        pad_f, pad_r = pads[f"front{i}"], pads[f"rear{i}"]
-        (x_f, z_f), (x_r, z_r) = m.coords[pad_f], m.coords[pad_r]
-        end_f = m.add_node(x_f, z_f, f"spring{i}_front")
-        end_r = m.add_node(x_r, z_r, f"spring{i}_rear")
-        x_s = bogie.axle_x[i]
-        seat = m.add_node(x_s, z_f + (z_r - z_f) * a_f / span, f"spring{i}_seat")
-        m.add_spring(pad_f, end_f, opt.contact_stiffness, (0.0, 1.0), name=f"contact{i}_front")
-        m.add_spring(pad_r, end_r, opt.contact_stiffness, (0.0, 1.0), name=f"contact{i}_rear")
-        # simply supported beam, point load at the seat: deflection P a_f^2 a_r^2 / (3 EI L) = P / K_R
-        ei_leaf = bogie.road_spring_stiffness * a_f**2 * a_r**2 / (3.0 * span)
-        m.add_beam(end_f, seat, steel * opt.spring_area, ei_leaf, name=f"leaf{i}_front")
-        m.add_beam(seat, end_r, steel * opt.spring_area, ei_leaf, name=f"leaf{i}_rear")
-        z_axle = m.coords[seat][1] - opt.seat_height
-        centre = m.add_node(x_s, z_axle, f"axle{i}")
-        patch = m.add_node(x_s, z_axle - bogie.tyre_radius, f"patch{i}")
-        ground = m.add_node(x_s, z_axle - bogie.tyre_radius, f"ground{i}")
-        m.add_beam(seat, centre, *axle, name=f"axle{i}")
-        m.add_beam(centre, patch, *axle, name=f"wheel{i}")
-        m.add_spring(ground, patch, bogie.tyre_stiffness, (0.0, 1.0), name=f"tyre{i}_vertical")
-        if k_x > 0.0:
-            m.add_spring(ground, patch, k_x, (1.0, 0.0), name=f"tyre{i}_longitudinal")
-        m.fix(ground, ("u", "theta"))
-        m.prescribe(ground, "w", -float(wear[i]))
-        if drag_links:
-            x_b = m.coords[brackets[i]][0]
-            pin = m.add_node(x_b, z_axle + opt.drag_link_rise, f"link_pin{i}")
-            m.add_beam(brackets[i], pin, *hanger, name=f"link_bracket{i}")
-            m.add_beam(pin, centre, steel * opt.drag_link_area, 0.0, True, True, name=f"drag_link{i}")
-    return m
+        _axle_side(mesh, i, float(wear[i]), drag_links)
+    return mesh.m
 
 
 def solve_fe(

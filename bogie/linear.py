@@ -208,35 +208,60 @@ def simulate(
         Integration parameters (see :func:`bogie.newmark.integrate_linear`).
     ground_stiffness_factor
         Ground springs' stiffness over the tyre stiffness [-].
+
+    References
+    ----------
+    N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+    Division, ASCE, 85(EM3), 1959.
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
     mats = matrices(bogie, ground_stiffness_factor)
     t = np.arange(int(n_steps) + 1) * float(dt)
     heights = axle_heights(profile, bogie.axle_x, speed, t, front_axle_start)
     rates = np.gradient(heights, t, axis=0) if len(t) > 1 else np.zeros_like(heights)
-    loads = (
-        (mats.kingpin * bogie.kingpin_height_offset)[None, :]
-        + heights @ mats.road_stiffness.T
-        + rates @ mats.road_damping.T
-    )
+    loads = _loads(bogie, mats, heights, rates)
     # start at rest in equilibrium with the road under the wheels at t = 0
     u0 = np.linalg.solve(mats.K, loads[0] - mats.C @ np.zeros(len(mats.dofs)))
     v0 = np.zeros_like(u0)
     a0 = consistent_acceleration(mats.M, mats.K @ u0 - loads[0])
     u, v, _ = linear_steps(mats.M, mats.C, mats.K, loads, u0, v0, a0, dt, n_steps, beta, gamma, rho_inf)
     wheel = wheel_loads_from_state(bogie, mats, u, v, rates)
-    n = bogie.n_axles
-    centre = bogie.equaliser_pivot_x[(n - 2) // 2]
     return DynamicResult(
         t=t,
         wheel_loads=wheel,
         reference_load=float(np.mean(wheel[0])),
         status="ok",
         message="ok",
-        extras={
-            "chassis_pitch": u[:, 0],
-            # from the unloaded position, as the reference's Figure 5
-            "centre_displacement": bogie.kingpin_height_offset - centre * u[:, 0] - design_deflection(bogie, mats),
-            **{f"equaliser_rotation_{j}": u[:, 1 + j] - u[:, 0] for j in range(n - 1)},
-            **{f"road_height_{i}": heights[:, i] for i in range(n)},
-        },
+        extras=_histories(bogie, mats, u, heights),
     )
+
+
+def _loads(
+    bogie: Bogie, mats: LinearMatrices, heights: NDArray[np.float64], rates: NDArray[np.float64]
+) -> NDArray[np.float64]:
+    """Load history R(t) [N, N m] of the king pin rise and the road heights [m] and rates [m/s] under the axles."""
+    return (
+        (mats.kingpin * bogie.kingpin_height_offset)[None, :]
+        + heights @ mats.road_stiffness.T
+        + rates @ mats.road_damping.T
+    )
+
+
+def _histories(
+    bogie: Bogie, mats: LinearMatrices, u: NDArray[np.float64], heights: NDArray[np.float64]
+) -> dict[str, NDArray[np.float64]]:
+    """The named histories of a linear run, for :attr:`~bogie.results.DynamicResult.extras`.
+
+    Chassis pitch [rad], bogie centre displacement from the unloaded position [m], each equaliser's rotation
+    relative to the chassis [rad] and the road height under each axle [m].
+    """
+    n = bogie.n_axles
+    centre = bogie.equaliser_pivot_x[(n - 2) // 2]
+    return {
+        "chassis_pitch": u[:, 0],
+        # from the unloaded position, as the reference's Figure 5
+        "centre_displacement": bogie.kingpin_height_offset - centre * u[:, 0] - design_deflection(bogie, mats),
+        **{f"equaliser_rotation_{j}": u[:, 1 + j] - u[:, 0] for j in range(n - 1)},
+        **{f"road_height_{i}": heights[:, i] for i in range(n)},
+    }

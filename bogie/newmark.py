@@ -1,6 +1,7 @@
 """Time integration: Newmark (beta, gamma) and generalised-alpha with Newton-Raphson iterations.
 
-One compiled kernel, :func:`_integrate`, steps every model of the project. It solves
+One compiled kernel (:func:`bogie._newmark_core._integrate`, called by :func:`integrate`) steps every model of the
+project. It solves
 
     M a + f(u, v, t, history) = 0
 
@@ -9,10 +10,17 @@ by the model named by an integer id (:data:`MODEL_LINEAR`, :data:`MODEL_NONLINEA
 K_T = df/du and C_T = df/dv. Each step is solved by Newton-Raphson on the full residual with the consistent
 tangent; a step that does not converge is retried as 2, 4, ... sub-steps; a step that still fails stops the run
 with a status, the time and the residual, never with NaN. History variables (friction slips) are committed only
-after a step has converged. Derivation and verification: ``docs/dynamics.md``.
+after a step has converged. Linear systems with constant matrices (:func:`integrate_linear`,
+:func:`linear_steps`) use a loop that needs one correction per step. This module is the Python layer (checks,
+parameters, results); the compiled loops are in :mod:`bogie._newmark_core`, the LU factors in :mod:`bogie._lu`.
+Derivation and verification: ``docs/dynamics.md``.
 
-Why a model id and not a function argument: numba cannot cache a compiled function that takes another compiled
-function (or a closure) as an argument, and a fresh worker process must start in well under a second.
+References
+----------
+.. [1] N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+   Division, ASCE, 85(EM3), 1959.
+.. [2] J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+   dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
 """
 
 from __future__ import annotations
@@ -22,19 +30,41 @@ from collections.abc import Callable
 from dataclasses import dataclass
 
 import numpy as np
-from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import _nonlinear_core as nlc
+from bogie._lu import lu_factor, lu_solve
+from bogie._newmark_core import (
+    MODEL_LINEAR,
+    MODEL_NONLINEAR,
+    STATUS_NO_CONVERGENCE,
+    STATUS_NOT_FINITE,
+    STATUS_OK,
+    STATUS_OUT_OF_RANGE,
+    STATUS_SINGULAR,
+    _integrate,
+    _integrate_linear_kernel,
+)
 
-MODEL_LINEAR = 0
-MODEL_NONLINEAR = 1
-
-STATUS_OK = 0
-STATUS_NO_CONVERGENCE = 1
-STATUS_NOT_FINITE = 2
-STATUS_SINGULAR = 3
-STATUS_OUT_OF_RANGE = 4
+#: re-exported: the compiled LU factors (now in :mod:`bogie._lu`) and the model ids and statuses of the kernel
+__all__ = [
+    "MODEL_LINEAR",
+    "MODEL_NONLINEAR",
+    "STATUS_NO_CONVERGENCE",
+    "STATUS_NOT_FINITE",
+    "STATUS_OK",
+    "STATUS_OUT_OF_RANGE",
+    "STATUS_SINGULAR",
+    "IntegrationResult",
+    "consistent_acceleration",
+    "generalized_alpha",
+    "integrate",
+    "integrate_linear",
+    "linear_steps",
+    "lu_factor",
+    "lu_solve",
+    "massless_dofs",
+    "newmark_parameters",
+]
 
 _STATUS_TEXT = {
     STATUS_OK: "ok",
@@ -45,357 +75,17 @@ _STATUS_TEXT = {
 }
 
 
-# ---- small dense linear algebra (numba) ------------------------------------------------------------------------
-@njit(cache=True)
-def lu_factor(a, piv):
-    """LU factorisation with partial pivoting, in place. Returns False if a pivot is zero."""
-    n = a.shape[0]
-    for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        piv[k] = p
-        if big == 0.0 or not math.isfinite(big):
-            return False
-        if p != k:
-            for j in range(n):
-                tmp = a[k, j]
-                a[k, j] = a[p, j]
-                a[p, j] = tmp
-        inv = 1.0 / a[k, k]
-        for i in range(k + 1, n):
-            a[i, k] *= inv
-            lik = a[i, k]
-            if lik != 0.0:
-                for j in range(k + 1, n):
-                    a[i, j] -= lik * a[k, j]
-    return True
-
-
-@njit(cache=True)
-def lu_solve(lu, piv, b):
-    """Solve with the factors of :func:`lu_factor`; ``b`` is overwritten with the solution."""
-    n = lu.shape[0]
-    for k in range(n):
-        p = piv[k]
-        if p != k:
-            tmp = b[k]
-            b[k] = b[p]
-            b[p] = tmp
-    for i in range(n):
-        s = b[i]
-        for j in range(i):
-            s -= lu[i, j] * b[j]
-        b[i] = s
-    for i in range(n - 1, -1, -1):
-        s = b[i]
-        for j in range(i + 1, n):
-            s -= lu[i, j] * b[j]
-        b[i] = s / lu[i, i]
-
-
-# ---- model forces ----------------------------------------------------------------------------------------------
-@njit(cache=True)
-def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
-    """f = C v + K u - R(t); data_f = [K.ravel(), C.ravel()], the drive row is R(t). The tangents are K and C."""
-    n = u.shape[0]
-    for i in range(n):
-        s = -drv[i]
-        for j in range(n):
-            s += data_f[i * n + j] * u[j] + data_f[n * n + i * n + j] * v[j]
-        f[i] = s
-    if want_tangent:
-        for i in range(n):
-            for j in range(n):
-                kt[i, j] = data_f[i * n + j]
-                ct[i, j] = data_f[n * n + i * n + j]
-
-
-@njit(cache=True)
-def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
-    if model == MODEL_LINEAR:
-        _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent)
-    else:
-        nlc.force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work)
-
-
-# ---- the stepping kernel ---------------------------------------------------------------------------------------
-@njit(cache=True)
-def _attempt(
-    model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
-    quasi_static,
-):  # fmt: skip
-    """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
-
-    Newton-Raphson on the full residual. The factored iteration matrix is kept from step to step
-    (``jac_state`` = [valid, dt it was formed for]) while the residual falls at least fourfold per iteration; when
-    it does not, or dt changed, the tangent is formed anew at the current iterate. Convergence is always judged
-    on the full residual, so keeping the matrix changes the cost, never the answer's accuracy. Friction makes the
-    residual piecewise smooth, and Newton can then cycle between stick and slip: when an update makes the residual
-    grow, or leaves the freedoms' limits ``u_limit`` (beyond which the model has spurious equilibria, e.g. a
-    chassis pitched 90 degrees on slack springs), it is halved (backtracking) before a new direction is taken.
-    """
-    n = u.shape[0]
-    for k in range(drv.shape[0]):
-        drv[k] = drv0[k] + frac1 * (drv1[k] - drv0[k])
-    c_a = 1.0 / (beta * dt * dt)
-    c_v = gamma / (beta * dt)
-    # predictor: constant acceleration; a quasi-static path has no rates and starts from the last equilibrium
-    for i in range(n):
-        u_new[i] = u[i] if quasi_static else u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
-    rnorm = 0.0
-    r_prev = 0.0
-    want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
-    fresh = want
-    backtracks = 0
-    for it in range(max_iter + 1):
-        for i in range(n):
-            if quasi_static:
-                a_new[i] = 0.0
-                v_new[i] = 0.0
-            else:
-                a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
-                v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
-        _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
-        rnorm = 0.0
-        finite = True
-        for i in range(n):
-            s = (1.0 - alpha_f) * f_new[i] + alpha_f * f_old[i]
-            for j in range(n):
-                s += mass[i, j] * ((1.0 - alpha_m) * a_new[j] + alpha_m * a[j])
-            res[i] = -s
-            if not math.isfinite(s):
-                finite = False
-            r = abs(s) / r_tol[i]
-            if r > rnorm:
-                rnorm = r
-        if not finite:
-            return STATUS_NOT_FINITE, rnorm, it
-        if rnorm <= 1.0 and it > 0:
-            if it > 2:
-                jac_state[0] = 0.0
-            return STATUS_OK, rnorm, it
-        if it == max_iter:
-            break
-        if it > 0 and rnorm > r_prev and backtracks < 6:
-            # the last update overshot: go back half of it and look again
-            backtracks += 1
-            for i in range(n):
-                du[i] *= 0.5
-                u_new[i] -= du[i]
-            continue
-        backtracks = 0
-        if it > 0 and not fresh and rnorm > 0.25 * r_prev:
-            # slow contraction with a stale matrix: form the tangent at this iterate and solve again
-            _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True, work)
-            want = True
-        if want:
-            for i in range(n):
-                for j in range(n):
-                    jac[i, j] = (1.0 - alpha_m) * c_a * mass[i, j] + (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
-            jac_state[0] = 0.0
-            if not lu_factor(jac, piv):
-                return STATUS_SINGULAR, rnorm, it
-            jac_state[0] = 1.0
-            jac_state[1] = dt
-            want = False
-            fresh = True
-        r_prev = rnorm
-        lu_solve(jac, piv, res)
-        for i in range(n):
-            du[i] = res[i]
-            u_new[i] += res[i]
-        for _ in range(30):
-            inside = True
-            for i in range(n):
-                if abs(u_new[i]) > u_limit[i]:
-                    inside = False
-            if inside:
-                break
-            for i in range(n):
-                du[i] *= 0.5
-                u_new[i] -= du[i]
-        else:
-            return STATUS_OUT_OF_RANGE, rnorm, it
-    return STATUS_NO_CONVERGENCE, rnorm, max_iter
-
-
-@njit(cache=True)
-def _integrate(
-    model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit, quasi_static,
-):  # fmt: skip
-    n = u0.shape[0]
-    n_hist = hist0.shape[0]
-    uu = np.zeros((n_steps + 1, n))
-    vv = np.zeros((n_steps + 1, n))
-    aa = np.zeros((n_steps + 1, n))
-    rr = np.zeros((n_steps + 1, n_rec))
-    u = u0.copy()
-    v = v0.copy()
-    a = a0.copy()
-    hist = hist0.copy()
-    f_old = np.zeros(n)
-    kt = np.zeros((n, n))
-    ct = np.zeros((n, n))
-    jac = np.zeros((n, n))
-    piv = np.zeros(n, dtype=np.int64)
-    res = np.zeros(n)
-    rec = np.zeros(n_rec)
-    hist_new = hist0.copy()
-    drv = drive[0].copy()
-    work = np.zeros(work_size)
-    jac_state = np.zeros(2)
-    du = np.zeros(n)
-    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-    uu[0] = u
-    vv[0] = v
-    aa[0] = a
-    rr[0] = rec
-    u_new = np.zeros(n)
-    v_new = np.zeros(n)
-    a_new = np.zeros(n)
-    f_new = np.zeros(n)
-    # state saved at the start of a step, to retry it in sub-steps
-    u_s = np.zeros(n)
-    v_s = np.zeros(n)
-    a_s = np.zeros(n)
-    f_s = np.zeros(n)
-    h_s = np.zeros(n_hist)
-    total_iter = 0
-    for step in range(n_steps):
-        d0 = drive[step]
-        d1 = drive[step + 1]
-        # _attempt writes only the *_new arrays, so a failed try leaves the step's starting state untouched
-        status, rnorm, iters = _attempt(
-            model, mass, data_f, data_i, d0, d1, 0.0, 1.0, u, v, a, f_old, hist, dt,
-            beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-            u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-            u_limit, quasi_static,
-        )  # fmt: skip
-        total_iter += iters
-        if status == STATUS_OK:
-            u[:] = u_new
-            v[:] = v_new
-            a[:] = a_new
-            f_old[:] = f_new
-            hist[:] = hist_new
-        else:
-            # retry as 2, 4, ... sub-steps from the saved starting state
-            jac_state[0] = 0.0
-            u_s[:] = u
-            v_s[:] = v
-            a_s[:] = a
-            f_s[:] = f_old
-            h_s[:] = hist
-            for level in range(1, max_halvings + 1):
-                n_sub = 1 << level
-                h = dt / n_sub
-                u[:] = u_s
-                v[:] = v_s
-                a[:] = a_s
-                f_old[:] = f_s
-                hist[:] = h_s
-                for sub in range(n_sub):
-                    status, rnorm, iters = _attempt(
-                        model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist,
-                        h, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                        u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                        u_limit, quasi_static,
-                    )  # fmt: skip
-                    total_iter += iters
-                    if status != STATUS_OK:
-                        jac_state[0] = 0.0
-                        break
-                    u[:] = u_new
-                    v[:] = v_new
-                    a[:] = a_new
-                    f_old[:] = f_new
-                    hist[:] = hist_new
-                if status == STATUS_OK:
-                    break
-            if status != STATUS_OK:
-                return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
-        # commit: the last residual evaluation recorded the model's outputs at the converged state
-        uu[step + 1] = u
-        vv[step + 1] = v
-        aa[step + 1] = a
-        rr[step + 1] = rec
-    return uu, vv, aa, rr, hist, STATUS_OK, n_steps, 0.0, total_iter
-
-
-@njit(cache=True)
-def _integrate_linear_kernel(mass, damping, stiffness, loads, u0, v0, a0, dt, n_steps, beta, gamma, alpha_m, alpha_f):
-    """Newmark / generalised-alpha for M a + C v + K u = R with constant matrices.
-
-    The same scheme and residual as :func:`_integrate`, but a linear residual is solved exactly by one correction
-    from the predictor with the iteration matrix factored once, so no Newton loop, convergence test or state
-    saving is needed. Returns (u, v, a, status): status is STATUS_SINGULAR if the iteration matrix is singular.
-    """
-    n = u0.shape[0]
-    uu = np.zeros((n_steps + 1, n))
-    vv = np.zeros((n_steps + 1, n))
-    aa = np.zeros((n_steps + 1, n))
-    uu[0] = u0
-    vv[0] = v0
-    aa[0] = a0
-    c_a = 1.0 / (beta * dt * dt)
-    c_v = gamma / (beta * dt)
-    jac = (1.0 - alpha_m) * c_a * mass + (1.0 - alpha_f) * (stiffness + c_v * damping)
-    piv = np.zeros(n, dtype=np.int64)
-    if not lu_factor(jac, piv):
-        return uu, vv, aa, STATUS_SINGULAR
-    u = u0.copy()
-    v = v0.copy()
-    a = a0.copy()
-    f_old = stiffness @ u + damping @ v - loads[0]
-    u_new = np.zeros(n)
-    v_new = np.zeros(n)
-    a_new = np.zeros(n)
-    res = np.zeros(n)
-    for step in range(n_steps):
-        r_new = loads[step + 1]
-        for i in range(n):
-            u_new[i] = u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
-        for i in range(n):
-            a_new[i] = c_a * (u_new[i] - u[i] - dt * v[i]) - (0.5 / beta - 1.0) * a[i]
-            v_new[i] = v[i] + dt * ((1.0 - gamma) * a[i] + gamma * a_new[i])
-        for i in range(n):
-            s = alpha_f * f_old[i] - (1.0 - alpha_f) * r_new[i]
-            for j in range(n):
-                s += (1.0 - alpha_f) * (stiffness[i, j] * u_new[j] + damping[i, j] * v_new[j])
-                s += mass[i, j] * ((1.0 - alpha_m) * a_new[j] + alpha_m * a[j])
-            res[i] = -s
-        lu_solve(jac, piv, res)
-        for i in range(n):
-            u_new[i] += res[i]
-            a_new[i] += c_a * res[i]
-            v_new[i] += c_v * res[i]
-        for i in range(n):
-            s = -r_new[i]
-            for j in range(n):
-                s += stiffness[i, j] * u_new[j] + damping[i, j] * v_new[j]
-            f_old[i] = s
-        u[:] = u_new
-        v[:] = v_new
-        a[:] = a_new
-        uu[step + 1] = u
-        vv[step + 1] = v
-        aa[step + 1] = a
-    return uu, vv, aa, STATUS_OK
-
-
 # ---- Python layer ----------------------------------------------------------------------------------------------
 def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:
     """Chung-Hulbert generalised-alpha parameters (alpha_m, alpha_f, beta, gamma) for spectral radius rho_inf.
 
     rho_inf = 1 gives average-acceleration Newmark (no numerical damping); smaller values damp the highest
     frequencies to rho_inf per step while keeping second-order accuracy.
+
+    References
+    ----------
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
     if not 0.0 <= rho_inf <= 1.0:
         raise ValueError(f"rho_inf = {rho_inf!r} is out of range: must be in [0, 1] (spectral radius, dimensionless)")
@@ -502,15 +192,7 @@ def integrate(
         int(work_size), u_limit, bool(quasi_static),
     )  # fmt: skip
     t = np.arange(n_steps + 1) * dt
-    if status == STATUS_OK:
-        message = "ok"
-        keep = n_steps + 1
-    else:
-        keep = last + 1
-        message = (
-            f"{_STATUS_TEXT[status]} at t = {t[last]:.6g} s (step {last + 1} of {n_steps}, after {max_halvings} "
-            f"halvings of dt = {dt:g} s); scaled residual {rnorm:.3g} (1 = tolerance)"
-        )
+    keep = n_steps + 1 if status == STATUS_OK else last + 1
     return IntegrationResult(
         t=t[:keep],
         u=uu[:keep],
@@ -519,8 +201,19 @@ def integrate(
         record=rr[:keep],
         history=hist,
         status=int(status),
-        message=message,
+        message=_stop_message(status, t, last, n_steps, max_halvings, dt, rnorm),
         n_iterations=int(iters),
+    )
+
+
+def _stop_message(status: int, t: NDArray[np.float64], last: int, n_steps: int, max_halvings: int, dt: float,
+                  rnorm: float) -> str:  # fmt: skip
+    """ "ok", or why and where a run stopped, with the residual."""
+    if status == STATUS_OK:
+        return "ok"
+    return (
+        f"{_STATUS_TEXT[status]} at t = {t[last]:.6g} s (step {last + 1} of {n_steps}, after {max_halvings} "
+        f"halvings of dt = {dt:g} s); scaled residual {rnorm:.3g} (1 = tolerance)"
     )
 
 
@@ -547,6 +240,13 @@ def _square(name: str, m: ArrayLike, n: int | None) -> NDArray[np.float64]:
     if not np.all(np.isfinite(arr)):
         raise ValueError(f"{name} contains NaN or infinity")
     return arr
+
+
+def _system(M: ArrayLike, C: ArrayLike, K: ArrayLike) -> tuple[NDArray[np.float64], ...]:
+    """Mass, damping and stiffness as checked float64 matrices of one order."""
+    mass = _square("M", M, None)
+    n = mass.shape[0]
+    return mass, _square("C", C, n), _square("K", K, n)
 
 
 def massless_dofs(mass: NDArray[np.float64]) -> NDArray[np.bool_]:
@@ -609,11 +309,16 @@ def integrate_linear(
     ------
     RuntimeError
         If a step cannot be solved (a singular iteration matrix: K + C/dt + M/dt^2 is singular).
+
+    References
+    ----------
+    N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+    Division, ASCE, 85(EM3), 1959.
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
-    mass = _square("M", M, None)
+    mass, damping, stiffness = _system(M, C, K)
     n = mass.shape[0]
-    damping = _square("C", C, n)
-    stiffness = _square("K", K, n)
     _check_positive("dt", dt, "s")
     t = np.arange(int(n_steps) + 1) * float(dt)
     loads = _load_history(R, t, n)

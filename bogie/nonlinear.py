@@ -20,7 +20,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import _nonlinear_core as core
-from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate, lu_factor, lu_solve
+from bogie._lu import lu_factor, lu_solve
+from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
 from bogie.road import axle_heights
@@ -195,15 +196,18 @@ def design_wheel_loads(bogie: Bogie) -> NDArray[np.float64]:
     return np.asarray(design_spring_loads(bogie)) + bogie.axle_mass * GRAVITY
 
 
-def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Mass matrix and the packed parameters (``data_f``, ``data_i``) of :mod:`bogie._nonlinear_core`."""
+def _contacts(bogie: Bogie) -> tuple[list[int], list[float], list[float], list[float], list[float], list[float]]:
+    """The spring-end contacts e (2i front and 2i + 1 rear end of spring i) and the equaliser pivots' heights.
+
+    Returns each contact's body (-1 chassis, j equaliser j), its pad point's offset (x, z) in the body's frame
+    from the body's origin (the king pin for the chassis, the pivot for an equaliser) [m], its position (x, z) in
+    the design position [m], and the pivot heights [m].
+    """
     n = bogie.n_axles
-    ne = n - 1
     pivots = bogie.equaliser_pivot_x
     z_pad = -bogie.pad_drop
     h_f, h_r = bogie.equaliser_front_tip_drop, bogie.equaliser_rear_tip_drop
-    pivot_z = [z_pad + h_f] * ne
-    # contact e: (body, offset in the body's frame from its origin: king pin for the chassis, pivot otherwise)
+    pivot_z = [z_pad + h_f] * (n - 1)
     bodies, pad_x, pad_z, world_x, world_z = [], [], [], [], []
     for i in range(n):
         if i == 0:
@@ -221,17 +225,12 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
             ox, oz = (0.0, 0.0) if body < 0 else (pivots[body], pivot_z[body])
             world_x.append(ox + dx)
             world_z.append(oz + dz)
-    a_f = np.asarray(bogie.spring_front_half_length)
-    a_r = np.asarray(bogie.spring_rear_half_length)
-    x_a = np.asarray(bogie.axle_x)
-    wx, wz = np.asarray(world_x), np.asarray(world_z)
-    xf, xr, zf, zr = wx[0::2], wx[1::2], wz[0::2], wz[1::2]
-    w_front = (xr - x_a) / (xr - xf)
-    chord_height = w_front * zf + (1.0 - w_front) * zr
-    chord_angle = np.arctan2(-(zr - zf), xr - xf)
-    loads = np.asarray(design_spring_loads(bogie))
-    tyre_loads = loads + bogie.axle_mass * GRAVITY
-    scalars = {
+    return bodies, pad_x, pad_z, world_x, world_z, pivot_z
+
+
+def _packed_scalars(bogie: Bogie) -> dict[str, float]:
+    """The scalars of ``data_f`` by name (:data:`bogie._nonlinear_core.SCALARS`), SI."""
+    return {
         "road_spring_stiffness": bogie.road_spring_stiffness,
         "tyre_stiffness": bogie.tyre_stiffness,
         "tyre_damping": bogie.tyre_damping,
@@ -245,6 +244,20 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
         "payload_cg_x": bogie.payload_cg_x,
         "axle_weight": bogie.axle_mass * GRAVITY,
     }
+
+
+def _packed_arrays(bogie: Bogie) -> tuple[dict[str, NDArray[np.float64]], list[int]]:
+    """The arrays of ``data_f`` by name (:data:`bogie._nonlinear_core.ARRAYS`), SI, and the contacts' bodies."""
+    bodies, pad_x, pad_z, world_x, world_z, pivot_z = _contacts(bogie)
+    a_f = np.asarray(bogie.spring_front_half_length)
+    a_r = np.asarray(bogie.spring_rear_half_length)
+    x_a = np.asarray(bogie.axle_x)
+    wx, wz = np.asarray(world_x), np.asarray(world_z)
+    xf, xr, zf, zr = wx[0::2], wx[1::2], wz[0::2], wz[1::2]
+    # the spring chords through the design contact points: height at the axle and angle
+    w_front = (xr - x_a) / (xr - xf)
+    loads = np.asarray(design_spring_loads(bogie))
+    tyre_loads = loads + bogie.axle_mass * GRAVITY
     arrays = {
         "axle_x": x_a,
         "elongation_front": bogie.spring_length_rate * a_f / (a_f + a_r),
@@ -252,22 +265,37 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
         "design_spring_load": loads,
         "design_tyre_compression": tyre_loads / bogie.tyre_stiffness,
         "tyre_wear": np.asarray(bogie.tyre_wear),
-        "design_chord_height": chord_height,
-        "design_chord_angle": chord_angle,
+        "design_chord_height": w_front * zf + (1.0 - w_front) * zr,
+        "design_chord_angle": np.arctan2(-(zr - zf), xr - xf),
         "pad_x": np.asarray(pad_x),
         "pad_z": np.asarray(pad_z),
         "design_contact_x": wx,
-        "pivot_x": np.asarray(pivots, dtype=float),
+        "pivot_x": np.asarray(bogie.equaliser_pivot_x, dtype=float),
         "pivot_z": np.asarray(pivot_z, dtype=float),
     }
-    data_f = np.concatenate([[scalars[k] for k in core.SCALARS]] + [arrays[name] for name, _ in core.ARRAYS])
+    return arrays, bodies
+
+
+def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """Mass matrix and the packed parameters (``data_f``, ``data_i``) of :mod:`bogie._nonlinear_core`.
+
+    The layout is the core's: its :data:`~bogie._nonlinear_core.SCALARS`, then its
+    :data:`~bogie._nonlinear_core.ARRAYS`, each as long as :func:`~bogie._nonlinear_core.array_length` says.
+    """
+    n = bogie.n_axles
+    scalars = _packed_scalars(bogie)
+    arrays, bodies = _packed_arrays(bogie)
+    for k, (name, _, _) in enumerate(core.ARRAYS):
+        if arrays[name].shape != (core.array_length(k, n),):
+            raise AssertionError(f"packed array {name} has shape {arrays[name].shape}: the core's layout differs")
+    data_f = np.concatenate([[scalars[k] for k in core.SCALARS]] + [arrays[name] for name, _, _ in core.ARRAYS])
     data_i = np.asarray([n, *bodies], dtype=np.int64)
-    mass = np.diag([bogie.chassis_pitch_inertia] + [bogie.equaliser_inertia] * ne + [bogie.axle_mass] * n)
+    mass = np.diag([bogie.chassis_pitch_inertia] + [bogie.equaliser_inertia] * (n - 1) + [bogie.axle_mass] * n)
     return mass, data_f.astype(float), data_i
 
 
 def _work_size(bogie: Bogie) -> int:
-    return int(core.scratch_size(bogie.n_axles)) + 4 * bogie.n_axles
+    return core.work_size(bogie.n_axles)
 
 
 def limits(bogie: Bogie) -> NDArray[np.float64]:
@@ -340,22 +368,19 @@ def equilibrium(
 def _result(bogie: Bogie, run, inputs: Inputs, final: State | None) -> NonlinearResult:
     n = bogie.n_axles
     rec = run.record
+    where = core.record_slices(n)
     keep = len(run.t)
     extras = {
         "chassis_pitch": run.u[:, 0],
         "equaliser_rotation": run.u[:, 1:n] - run.u[:, :1],
         "axle_displacement": run.u[:, n:],
-        "spring_load": rec[:, n : 2 * n],
-        "friction_force": rec[:, 2 * n : 4 * n],
-        "stick": rec[:, 4 * n : 6 * n],
-        "contact_shift": rec[:, 6 * n : 8 * n],
-        "plastic_slip": rec[:, 8 * n : 10 * n],
+        **{name: rec[:, where[name]] for name, _ in core.RECORD if name != "tyre_load"},
         "road_height": inputs.road_height[:keep],
         "load_factor": inputs.load_factor[:keep],
     }
     return NonlinearResult(
         t=run.t,
-        wheel_loads=rec[:, :n],
+        wheel_loads=rec[:, where["tyre_load"]],
         reference_load=float(np.mean(design_wheel_loads(bogie))),
         status="ok" if run.success else "failed",
         message=run.message,
@@ -392,6 +417,13 @@ def simulate(
     NonlinearResult
         Wheel loads [N] and the model's histories; ``status`` "failed" with the solver's message if a step could
         not be solved (the history up to there is kept), never NaN.
+
+    References
+    ----------
+    N. M. Newmark, "A method of computation for structural dynamics", Journal of the Engineering Mechanics
+    Division, ASCE, 85(EM3), 1959.
+    J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
+    dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
     mass, data_f, data_i = pack(bogie)
     drive = inputs.drive(bogie)

@@ -84,6 +84,12 @@ def figure2(
     if fe_points:
         qs, ps = zip(*fe_points.values())
         ax.plot(qs, ps, "*", color="k", ms=9, label="finite element (Stage 1)")
+    _figure2_axes(ax, q_max, chassis_deflection, spacing)
+    return fig
+
+
+def _figure2_axes(ax, q_max: float, chassis_deflection: float, spacing: float) -> None:
+    """Limits, labels, title [alpha in mm, s in m], legend and grid of Figure 2."""
     ax.set_xlim(0.0, q_max)
     ax.set_ylim(bottom=0.0)
     ax.set_xlabel(r"relative stiffness parameter $q = b^2 K_S / 4 K_B$ [-]")
@@ -94,7 +100,6 @@ def figure2(
     )
     ax.legend(title="chassis slope", fontsize=8, title_fontsize=8)
     ax.grid(True, lw=0.4, alpha=0.5)
-    return fig
 
 
 def case_history(result, title: str = "", note: str = "") -> Figure:

@@ -4,6 +4,11 @@ A profile is a frozen dataclass whose ``__call__(x)`` maps road distance ``x`` [
 height [m] (an ndarray of the same shape), vectorised. The vehicle travels in the direction of increasing road
 distance; :func:`axle_heights` delays each trailing axle by its spacing behind the front axle (the wheel-path
 delay). Formulas, chosen lengths and the verification of the ISO 8608 generator are in ``docs/road.md``.
+
+References
+----------
+ISO 8608:2016, Mechanical vibration - Road surface profiles - Reporting of measured data, International
+Organization for Standardization (road classes and displacement PSD of :class:`ISO8608Profile`).
 """
 
 from __future__ import annotations
@@ -217,6 +222,11 @@ class ISO8608Profile:
         Their amplitudes sqrt(2 G_d(n_k) dn) [m].
     phases
         Their phases phi_k [rad].
+
+    References
+    ----------
+    ISO 8608:2016, Mechanical vibration - Road surface profiles - Reporting of measured data, International
+    Organization for Standardization (the classes A to H, n0 = 0.1 cycle/m, w = 2; first edition 1995).
     """
 
     road_class: str | None = "C"

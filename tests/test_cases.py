@@ -4,6 +4,7 @@ import numpy as np
 import pytest
 
 from bogie import cases, linear
+from bogie.params import tandem_trrl
 from bogie.road import RampedStep
 
 #: Table 1's number of steps and time step
@@ -79,3 +80,25 @@ def test_unknown_case_and_frame():
     frame = cases.run("L03").to_frame()
     assert {"wheel_load_0", "wheel_load_1", "p", "p1", "centre_displacement"} <= set(frame.columns)
     assert frame.index.name == "t"
+
+
+# ---- the tables as records -------------------------------------------------------------------------------------
+def test_every_table_row_is_a_case_in_table_order():
+    names = [row.name for row in cases.TABLE1] + [row.name for row in cases.TABLE2]
+    assert names == list(cases.CASES)
+    assert names == [f"L{k:02d}" for k in range(1, 8)] + [f"N{k:02d}" for k in range(1, 30)]
+    for row in cases.TABLE1:
+        case = cases.get(row.name)
+        assert case.reference == {"peak_p": row.peak_p, "peak_p1": row.peak_p1}
+        b = case.bogie()
+        assert (b.bush_stiffness, b.bush_damping, b.axle_mass) == (row.bush_stiffness, row.bush_damping, row.axle_mass)
+    for row in cases.TABLE2:
+        assert cases.get(row.name).description.startswith(f"Table 2 block {row.block} run {row.name}: {row.what};")
+
+
+def test_step_windows_use_the_preset_axle_spacing():
+    # the phase windows were written for a 1.31 m spacing; they now follow tandem_trrl()'s geometry
+    axle_x = tandem_trrl().axle_x
+    assert axle_x[1] - axle_x[0] == pytest.approx(1.31, abs=1e-12)
+    (f0, f1), (r0, r1) = cases._phase_windows(cases.LOW_SPEED)
+    assert 0.0 < f0 < f1 < r0 < r1

@@ -305,7 +305,8 @@ def test_drag_links_on_free_rolling_wheels_carry_no_force():
 def test_figure2_points_lie_on_equation_1():
     points = figure2_points()
     assert sorted(points) == [0.0, 0.5, 1.0, 1.5, 2.0]
-    spacing = 1.31
+    axle_x = triaxle_stage1().axle_x
+    spacing = axle_x[1] - axle_x[0]
     for slope, (q, p_fe) in points.items():
         assert q == pytest.approx(4.3, rel=1e-12)
         p_eq1 = float(p(nondimensional_loads(q, math.radians(slope) * spacing / ALPHA)))
@@ -317,3 +318,16 @@ def test_cli_figure2_with_fe_overlay(tmp_path):
     out = tmp_path / "fig2.png"
     assert main(["figure2", "--out", str(out), "--fe"]) == 0
     assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_ties_chain_into_one_global_dof_numbered_by_its_lowest_member():
+    m = FrameModel()
+    a, b, c = m.add_node(0.0, 0.0), m.add_node(0.0, 0.0), m.add_node(0.0, 0.0)
+    m.tie(c, b, ("w",))
+    m.tie(b, a, ("w",))
+    numbering, n_glob = m._global_map()
+    assert n_glob == 9 - 2
+    assert numbering[3 * a + 1] == numbering[3 * b + 1] == numbering[3 * c + 1] == 1
+    # global DOFs are numbered in the order of their lowest member
+    first = [int(g) for k, g in enumerate(numbering) if g not in numbering[:k]]
+    assert first == list(range(n_glob))

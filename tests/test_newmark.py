@@ -171,3 +171,15 @@ def test_linear_loop_gives_the_general_newton_kernels_histories(rho_inf):
     assert general.success
     assert np.max(np.abs(u - general.u)) < 1e-9 * np.max(np.abs(u))
     assert np.max(np.abs(v - general.v)) < 1e-8 * np.max(np.abs(v))
+
+
+def test_compiled_lu_solves_a_pivoting_system():
+    from bogie._lu import lu_factor, lu_solve
+
+    a = np.array([[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]])
+    b = np.array([1.0, 2.0, 3.0])
+    lu, piv, x = a.copy(), np.zeros(3, dtype=np.int64), b.copy()
+    assert lu_factor(lu, piv)
+    lu_solve(lu, piv, x)
+    assert x == pytest.approx(np.linalg.solve(a, b), rel=1e-14)
+    assert not lu_factor(np.zeros((2, 2)), np.zeros(2, dtype=np.int64))

@@ -229,3 +229,39 @@ def test_inputs_are_validated():
         nl.hold(bogie, 1.0, -0.01)
     with pytest.raises(ValueError, match="inputs are for 2 axles but the bogie has 3"):
         nl.simulate(triaxle_stage1(), nl.hold(bogie, 0.1, 0.01))
+
+
+# ---- the packed layout, defined once in the core ---------------------------------------------------------------
+@pytest.mark.parametrize("make", [tandem_trrl, triaxle_stage1])
+def test_pack_follows_the_cores_one_table_of_offsets(make):
+    bogie = make(tyre_wear=(0.001,) * make().n_axles)
+    n = bogie.n_axles
+    _, data_f, data_i = nl.pack(bogie)
+    offsets = core.array_offsets(n)
+    assert data_f.shape == (core.data_length(n),)
+    assert list(offsets) == [name for name, _, _ in core.ARRAYS]
+    # contiguous, in table order, right after the scalars
+    pos = core.NS
+    for start, length in offsets.values():
+        assert start == pos
+        pos += length
+    assert pos == data_f.size
+    start, length = offsets["axle_x"]
+    assert data_f[start : start + length] == pytest.approx(bogie.axle_x)
+    start, length = offsets["tyre_wear"]
+    assert data_f[start : start + length] == pytest.approx(bogie.tyre_wear)
+    assert offsets["pivot_x"][1] == n - 1 and offsets["pad_x"][1] == 2 * n
+    assert data_f[core.SCALARS.index("tyre_stiffness")] == bogie.tyre_stiffness
+    assert data_i[0] == n and data_i.size == 1 + 2 * n
+
+
+def test_record_slices_cover_the_record_once():
+    n = 3
+    where = core.record_slices(n)
+    covered = np.zeros(core.RECORD_PER_AXLE * n, dtype=int)
+    for s in where.values():
+        covered[s] += 1
+    assert np.all(covered == 1)
+    assert where["tyre_load"] == slice(0, n) and where["plastic_slip"] == slice(8 * n, 10 * n)
+    run = nl.static_loads(tandem_trrl(), nl.hold(tandem_trrl(), 0.2, 0.1))
+    assert set(core.record_slices(2)) - {"tyre_load"} <= set(run.extras)
