@@ -64,6 +64,12 @@ class Case:
     summarise: Callable[[DynamicResult], dict[str, float]]
     reference: dict[str, Any] = field(default_factory=dict)
 
+    def unit(self, key: str) -> str:
+        """The unit of figure ``key`` of the summary and the reference: Table 1's peaks of p and P1 are
+        non-dimensional (the loads over their mean), Table 2's P1 is in newtons and its RMS (Equation 5)
+        non-dimensional."""
+        return "N" if self.model == "nonlinear" and key != "rms" else "[-]"
+
 
 # ---- runners ---------------------------------------------------------------------------------------------------
 def _linear_step(n_steps: int, dt: float, speed: float) -> Callable[[Bogie], DynamicResult]:
@@ -425,12 +431,22 @@ def _nl_case(row: Table2Row) -> Case:
 CASES: dict[str, Case] = {c.name: c for c in (*map(_linear_case, TABLE1), *map(_nl_case, TABLE2))}
 
 
+def names() -> list[str]:
+    """The names of every run, Table 1 then Table 2: ``["L01", ..., "L07", "N01", ..., "N29"]``."""
+    return list(CASES)
+
+
 def get(name: str) -> Case:
-    """The case called ``name`` (case-insensitive)."""
-    try:
-        return CASES[name.upper()]
-    except KeyError:
-        raise ValueError(f"unknown case {name!r}: must be one of {', '.join(CASES)}") from None
+    """The case called ``name`` (case-insensitive).
+
+    Raises
+    ------
+    ValueError
+        If ``name`` is not a text or no run has that name; the message lists the names.
+    """
+    if not isinstance(name, str) or name.upper() not in CASES:
+        raise ValueError(f"unknown case {name!r}: must be one of {', '.join(CASES)}")
+    return CASES[name.upper()]
 
 
 def run(name: str, **bogie_changes: Any) -> DynamicResult:

@@ -22,16 +22,9 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
     return 0
 
 
-#: unit of each figure of a run's summary: Table 1's peaks are non-dimensional, Table 2's P1 and RMS in newtons
-_SUMMARY_UNITS = {"peak_p": "[-]", "peak_p1": "[-]", "peak_p1 (two peaks)": "[-]", "rms": "N"}
-
-
-def _unit(key: str) -> str:
-    return _SUMMARY_UNITS.get(key, "N" if key.startswith("p1_") else "[-]")
-
-
-def _figures(values: dict) -> str:
-    return ", ".join(f"{k} {v:.4g} {_unit(k)}" if isinstance(v, float) else f"{k} {v} {_unit(k)}"
+def _figures(case, values: dict) -> str:
+    """A run's figures with their units (:meth:`bogie.cases.Case.unit`): ``p1_front_on_step 1592 N``."""
+    return ", ".join(f"{k} {v:.4g} {case.unit(k)}" if isinstance(v, float) else f"{k} {v} {case.unit(k)}"
                      for k, v in values.items())  # fmt: skip
 
 
@@ -50,7 +43,8 @@ def _image_suffix(parser: argparse.ArgumentParser, option: str, path: str | None
 def _cmd_case_list() -> int:
     from bogie import cases
 
-    for name, case in cases.CASES.items():
+    for name in cases.names():
+        case = cases.get(name)
         text = case.description.split(":", 1)[-1].strip()  # without the "Table 2 block 3 run N10:" prefix
         print(f"{name}  {text if len(text) <= 110 else text[:109] + '…'}")
     return 0
@@ -65,10 +59,11 @@ def _cmd_case(args: argparse.Namespace) -> int:
 
     case = cases.get(args.name)
     result = cases.run(case.name)
-    ref = _figures(case.reference)
+    ref = _figures(case, case.reference)
     print(f"{case.name}: {case.description}")
     print(f"status {result.status}: {result.message}")
-    print(f"ours: {_figures(cases.summary(case.name, result))}")
+    ours = cases.summary(case.name, result)
+    print(f"ours: {_figures(case, ours)}")
     print(f"reference: {ref or 'no figure printed'}")
     if args.csv:
         out = Path(args.csv)
@@ -78,7 +73,7 @@ def _cmd_case(args: argparse.Namespace) -> int:
         tmp.replace(out)
         print(f"wrote {args.csv}")
     if args.plot:
-        fig = case_history(result, title=f"Run {case.name}", note=f"reference: {ref}")
+        fig = case_history(result, title=f"Run {case.name}", note=f"reference: {ref}", case=case, ours=ours)
         save_figure(fig, Path(args.plot))
         print(f"wrote {args.plot}")
     return 0 if result.success else 1

@@ -117,9 +117,8 @@ def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low
     arr = None if isinstance(value, str | bytes) else np.asarray(value)
     if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
         kind = "text" if isinstance(value, str | bytes) else type(value).__name__
-        raise ValueError(
-            f"{name} = {_show(value)} is not a number ({kind}): must be in {_range_text(low, high, unit, low_inclusive)}"
-        )
+        allowed = _range_text(low, high, unit, low_inclusive)
+        raise ValueError(f"{name} = {_show(value)} is not a number ({kind}): must be in {allowed}")
     v = float(arr)
     ok_low = v >= low if low_inclusive else v > low
     if not math.isfinite(v) or not ok_low or v > high:

@@ -102,7 +102,7 @@ def _figure2_axes(ax, q_max: float, chassis_deflection: float, spacing: float) -
     ax.grid(True, lw=0.4, alpha=0.5)
 
 
-def case_history(result, title: str = "", note: str = "") -> Figure:
+def case_history(result, title: str = "", note: str = "", case=None, ours: dict | None = None) -> Figure:
     """Histories of one dynamic run, as the reference's Figures 5-12: centre displacement, p and P1, wheel loads.
 
     Parameters
@@ -113,6 +113,11 @@ def case_history(result, title: str = "", note: str = "") -> Figure:
         Figure title.
     note
         A line printed under the title (e.g. what the reference reported).
+    case
+        The :class:`bogie.cases.Case` of the run, if it is one. For a Table 2 run the P1 panel is in newtons, the
+        unit of the reference's table, with the reference's figures and ``ours`` (the run's summary) drawn on it.
+    ours
+        The run's summary (:func:`bogie.cases.summary`), drawn with the reference's for a Table 2 run.
     """
     panels = 3 if "centre_displacement" in result.extras else 2
     fig = new_figure(7.0, 2.0 + 1.9 * panels)
@@ -122,10 +127,13 @@ def case_history(result, title: str = "", note: str = "") -> Figure:
         axes[0].plot(result.t, np.asarray(result.extras["centre_displacement"]) * 1e3, color="C0", lw=1.2)
         axes[0].set_ylabel("centre displacement\n[mm]")
         k = 1
-    axes[k].plot(result.t, result.p, lw=1.2, label="p (Eq. 2)")
-    axes[k].plot(result.t, result.p1, lw=1.2, ls="--", label="P1 (Eq. 4)")
-    axes[k].set_ylabel("wheel load\nparameter [-]")
-    axes[k].legend(fontsize=8, loc="upper right")
+    if case is not None and case.unit("p1_") == "N":
+        _p1_newtons_panel(axes[k], result, case, ours or {})
+    else:
+        axes[k].plot(result.t, result.p, lw=1.2, label="p (Eq. 2)")
+        axes[k].plot(result.t, result.p1, lw=1.2, ls="--", label="P1 (Eq. 4)")
+        axes[k].set_ylabel("wheel load\nparameter [-]")
+        axes[k].legend(fontsize=8, loc="upper right")
     for i in range(result.wheel_loads.shape[1]):
         axes[k + 1].plot(result.t, result.wheel_loads[:, i] / 1e3, lw=1.2, label=f"axle {i + 1}")
     axes[k + 1].set_ylabel("wheel load\n[kN]")
@@ -136,3 +144,23 @@ def case_history(result, title: str = "", note: str = "") -> Figure:
     if title or note:
         fig.suptitle(title + (f"\n{note}" if note else ""), fontsize=10)
     return fig
+
+
+def _p1_newtons_panel(ax, result, case, ours: dict) -> None:
+    """P1 of the wheel loads in newtons, with each figure of the reference's table and ours as a level line."""
+    from bogie.metrics import p1
+
+    history = p1(result.wheel_loads)
+    ax.plot(result.t, history, lw=1.2, color="C1", label="P1 (Eq. 4), ours")
+    levels = [float(np.max(history))]
+    for j, (key, value) in enumerate(ours.items()):
+        if case.unit(key) == "N" and isinstance(value, float):
+            ax.axhline(value, color="0.2", lw=0.9, ls=(0, (4, 2 + j)), label=f"ours: {key} {value:.0f} N")
+            levels.append(value)
+    for j, (key, value) in enumerate(case.reference.items()):
+        if case.unit(key) == "N" and isinstance(value, int | float):
+            ax.axhline(value, color="C3", lw=1.1, ls=(0, (1, 1 + j)), label=f"reference: {key} {value:g} N")
+            levels.append(float(value))
+    ax.set_ylabel("P1 [N]")
+    ax.set_ylim(0.0, 1.6 * max(levels))  # room above the lines for the legend
+    ax.legend(fontsize=7, loc="upper right")

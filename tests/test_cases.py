@@ -102,3 +102,37 @@ def test_step_windows_use_the_preset_axle_spacing():
     assert axle_x[1] - axle_x[0] == pytest.approx(1.31, abs=1e-12)
     (f0, f1), (r0, r1) = cases._phase_windows(cases.LOW_SPEED)
     assert 0.0 < f0 < f1 < r0 < r1
+
+
+def test_names_lists_every_run_and_get_refuses_what_is_not_a_name():
+    assert cases.names() == [f"L0{i}" for i in range(1, 8)] + [f"N{i:02d}" for i in range(1, 30)]
+    assert cases.get("n10").name == "N10"
+    for bad in (None, 10, "N99"):
+        with pytest.raises(ValueError, match=r"unknown case .*: must be one of L01, "):
+            cases.get(bad)
+
+
+def test_each_figure_has_the_unit_of_its_table():
+    assert cases.get("L01").unit("peak_p1") == "[-]"  # Table 1: loads over their mean
+    n10 = cases.get("N10")
+    assert n10.unit("p1_front_on_step") == "N" and n10.unit("peak_p1") == "N"  # Table 2: newtons
+    assert cases.get("N15").unit("rms") == "[-]"  # Equation 5 is non-dimensional
+
+
+def test_a_table_2_history_plots_p1_in_newtons_with_the_references_figures():
+    from types import SimpleNamespace
+
+    from bogie.plotting import case_history
+
+    t = np.linspace(0.0, 1.0, 11)
+    loads = np.column_stack([np.full(11, 21e3), np.full(11, 23e3)])  # P1 = 1000 N throughout
+    result = SimpleNamespace(t=t, wheel_loads=loads, p=np.zeros(11), p1=np.zeros(11), extras={})
+    case = cases.get("N10")
+    fig = case_history(result, case=case, ours={"p1_front_on_step": 1000.0})
+    ax = fig.axes[0]
+    assert ax.get_ylabel() == "P1 [N]"
+    assert np.allclose(ax.lines[0].get_ydata(), 1000.0)
+    levels = {round(float(line.get_ydata()[0])) for line in ax.lines[1:]}
+    assert levels == {1000, 2700, 3200}  # ours, and the reference's front and rear on the step
+    linear = case_history(result)  # without a case: the non-dimensional p and P1 as before
+    assert linear.axes[0].get_ylabel() == "wheel load\nparameter [-]"
