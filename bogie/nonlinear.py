@@ -113,8 +113,9 @@ class Inputs:
 def _steps(duration: float, dt: float) -> int:
     if not (math.isfinite(duration) and duration > 0.0):
         raise ValueError(f"duration = {duration!r} is out of range: must be > 0 s")
-    if not (math.isfinite(dt) and dt > 0.0):
-        raise ValueError(f"dt = {dt!r} is out of range: must be > 0 s")
+    if not (math.isfinite(dt) and 0.0 < dt <= duration):
+        # a time step longer than the phase would silently stretch it to one step of dt
+        raise ValueError(f"dt = {dt!r} is out of range: must be in (0, duration = {duration:g}] s")
     return max(1, int(round(duration / dt)))
 
 
@@ -174,7 +175,7 @@ class State:
     slip: NDArray[np.float64]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class NonlinearResult(DynamicResult):
     """A :class:`~bogie.results.DynamicResult` with the state at its end, to continue from."""
 

@@ -6,6 +6,7 @@ import math
 from collections.abc import Sequence
 from pathlib import Path
 
+import matplotlib
 import numpy as np
 from matplotlib.figure import Figure
 
@@ -23,12 +24,22 @@ def new_figure(width: float = 6.4, height: float = 4.2) -> Figure:
     return fig
 
 
+#: metadata that would stamp the build time into a file, by format: left out so a figure is byte-reproducible
+_NO_DATE = {".pdf": {"CreationDate": None}, ".svg": {"Date": None}, ".ps": {"CreationDate": None},
+            ".eps": {"CreationDate": None}}  # fmt: skip
+
+
 def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> None:
-    """Write ``fig`` to ``path`` atomically (temporary name, then rename); the format follows the suffix."""
+    """Write ``fig`` to ``path`` atomically (temporary name, then rename); the format follows the suffix.
+
+    No creation date is written, so the same figure gives the same bytes whenever it is drawn.
+    """
     out = Path(path)
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.tmp{out.suffix}")
-    fig.savefig(tmp, dpi=dpi)
+    # SVG element ids are random unless salted
+    with matplotlib.rc_context({"svg.hashsalt": "bogie"}):
+        fig.savefig(tmp, dpi=dpi, metadata=_NO_DATE.get(out.suffix.lower()))
     tmp.replace(out)
 
 

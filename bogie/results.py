@@ -15,7 +15,7 @@ from bogie import metrics
 Profile = Callable[[ArrayLike], NDArray[np.float64]]
 
 
-@dataclass(frozen=True)
+@dataclass(frozen=True, repr=False)
 class DynamicResult:
     """Time history of one dynamic simulation.
 
@@ -47,6 +47,19 @@ class DynamicResult:
     def success(self) -> bool:
         """True if the run completed."""
         return self.status == "ok"
+
+    def __repr__(self) -> str:
+        """One line: status, size, time span, wheel-load range and the names of the extra histories."""
+        n_t, n_axles = np.shape(self.wheel_loads) if np.ndim(self.wheel_loads) == 2 else (len(self.t), 0)
+        span = f"t {self.t[0]:g} to {self.t[-1]:g} s" if len(self.t) else "no time steps"
+        loads = np.asarray(self.wheel_loads, dtype=float)
+        finite = loads.size and np.isfinite(loads).all()
+        load = f", wheel loads {loads.min():.6g} to {loads.max():.6g} N" if finite else ""
+        why = "" if self.success else f" ({self.message})"
+        extras = f", extras: {', '.join(self.extras)}" if self.extras else ""
+        return (
+            f"{type(self).__name__}(status={self.status!r}{why}, {n_axles} axles, {n_t} samples, {span}{load}{extras})"
+        )
 
     @property
     def nondimensional_loads(self) -> NDArray[np.float64]:

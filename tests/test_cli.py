@@ -59,3 +59,19 @@ def test_every_printed_figure_has_its_unit(capsys):
     out = capsys.readouterr().out
     ours = next(line for line in out.splitlines() if line.startswith("ours:"))
     assert "peak_p " in ours and all(item.strip().endswith(("[-]", "N")) for item in ours[5:].split(","))
+
+
+def test_figures_are_byte_reproducible_in_every_vector_format(tmp_path):
+    for suffix in ("pdf", "svg", "png"):
+        first, second = tmp_path / f"a.{suffix}", tmp_path / f"b.{suffix}"
+        assert main(["figure2", "--out", str(first)]) == 0
+        assert main(["figure2", "--out", str(second)]) == 0
+        assert first.read_bytes() == second.read_bytes(), suffix  # no creation date stamped into the file
+
+
+def test_result_objects_print_one_line():
+    from bogie import cases
+
+    text = repr(cases.run("L03"))
+    assert text.startswith("DynamicResult(status='ok', 2 axles, 201 samples, t 0 to 25 s, wheel loads ")
+    assert "\n" not in text and len(text) < 300

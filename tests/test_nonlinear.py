@@ -265,3 +265,15 @@ def test_record_slices_cover_the_record_once():
     assert where["tyre_load"] == slice(0, n) and where["plastic_slip"] == slice(8 * n, 10 * n)
     run = nl.static_loads(tandem_trrl(), nl.hold(tandem_trrl(), 0.2, 0.1))
     assert set(core.record_slices(2)) - {"tyre_load"} <= set(run.extras)
+
+
+def test_a_time_step_longer_than_the_phase_is_refused_not_stretched():
+    from bogie import nonlinear
+    from bogie.params import tandem_trrl
+
+    b = tandem_trrl()
+    with pytest.raises(ValueError, match=r"dt = 10 is out of range: must be in \(0, duration = 2\] s"):
+        nonlinear.load_ramp(b, 0.25, 1.0, 2.0, 10)
+    with pytest.raises(ValueError, match=r"dt = 5 is out of range"):
+        nonlinear.hold(b, 1.0, 5)
+    assert len(nonlinear.load_ramp(b, 0.25, 1.0, 2.0, 2.0).load_factor) == 2  # dt = duration: one step
