@@ -26,12 +26,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import scipy
 
-import bogie
-from pipeline import constants as constants_module
-from pipeline import protocol as protocol_module
-from pipeline import sample as sample_module
-from pipeline import schema as schema_module
 from pipeline.config import StaticProtocol, WimProtocol
+from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
 from pipeline.schema import verify_file, write_runs_file
 
@@ -54,18 +50,15 @@ def _print(line: str) -> None:
 def code_version() -> str:
     """A hash of the code and libraries that turn a sample row into a run row.
 
-    The sources of every ``bogie`` module and of :mod:`pipeline.protocol`, :mod:`pipeline.sample`
-    (``bogie_from_sample``), :mod:`pipeline.constants`, :mod:`pipeline.schema`, :mod:`pipeline.simulate` and this
-    module, plus the versions of numpy, scipy, numba, pandas and pyarrow. Any edit to those files invalidates every
-    part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong dataset.
+    The sources of every project module the simulate stage imports (:func:`pipeline.deps.project_files`, the same
+    list as the stage's code dependencies in ``dvc.yaml``), plus the versions of numpy, scipy, numba, pandas and
+    pyarrow. Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
+    change would cost a wrong dataset. An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
     """
     digest = hashlib.sha256()
-    package = Path(bogie.__file__).parent
-    modules = (protocol_module, sample_module, constants_module, schema_module)
-    files = sorted(package.rglob("*.py")) + [Path(m.__file__) for m in modules]
-    files += [Path(__file__), Path(__file__).with_name("simulate.py")]  # this module and the weighing of a chunk
-    for path in files:
-        digest.update(path.name.encode() + b"\0" + path.read_bytes() + b"\0")
+    for path in project_files("pipeline.simulate"):
+        name = path.relative_to(ROOT).as_posix()
+        digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
     for module in (np, scipy, numba, pd, pa):
         digest.update(f"{module.__name__}={module.__version__}\0".encode())
     return digest.hexdigest()

@@ -1,0 +1,45 @@
+"""dvc.yaml names, for each stage, exactly the source files the stage imports (pipeline/deps.py)."""
+
+import yaml
+
+from pipeline.deps import ROOT, project_files
+
+DVC = yaml.safe_load((ROOT / "dvc.yaml").read_text(encoding="utf-8"))
+
+
+def code_deps(stage: dict) -> set[str]:
+    deps = [next(iter(d)) if isinstance(d, dict) else d for d in stage.get("deps", [])]
+    return {d for d in deps if d.split("/")[0] in ("bogie", "pipeline")}
+
+
+def test_every_stage_lists_exactly_the_project_files_it_imports():
+    for name, stage in DVC["stages"].items():
+        module = stage["cmd"].removeprefix("python -m ")
+        imported = {p.relative_to(ROOT).as_posix() for p in project_files(module)}
+        declared = code_deps(stage)
+        if name == "report":  # it prints the hash of all the code (pipeline.report.inputs.code_digest)
+            assert declared == {"bogie", "pipeline"}
+            continue
+        missing, extra = sorted(imported - declared), sorted(declared - imported)
+        assert declared == imported, f"{name}: missing {missing}, extra {extra}"
+
+
+def test_the_simulation_does_not_depend_on_the_cli_plotting_or_report():
+    files = {p.relative_to(ROOT).as_posix() for p in project_files("pipeline.simulate")}
+    assert {"bogie/nonlinear.py", "bogie/_nonlinear_core.py", "pipeline/protocol.py", "pipeline/schema.py"} <= files
+    assert not files & {"bogie/cli.py", "bogie/plotting.py", "bogie/fe.py", "pipeline/report/__init__.py"}
+
+
+def test_the_import_graph_follows_imports_inside_functions_and_relative_ones(tmp_path):
+    (tmp_path / "pipeline").mkdir()
+    (tmp_path / "bogie").mkdir()
+    for package in ("pipeline", "bogie"):
+        (tmp_path / package / "__init__.py").write_text("")
+    (tmp_path / "pipeline" / "a.py").write_text("def f():\n    from pipeline import b\n")
+    (tmp_path / "pipeline" / "b.py").write_text("from .c import x\nimport numpy\n")
+    (tmp_path / "pipeline" / "c.py").write_text("from bogie.d import y\n")
+    (tmp_path / "bogie" / "d.py").write_text("")
+    (tmp_path / "bogie" / "unused.py").write_text("")
+    found = {p.relative_to(tmp_path).as_posix() for p in project_files("pipeline.a", root=tmp_path)}
+    assert found == {"pipeline/__init__.py", "pipeline/a.py", "pipeline/b.py", "pipeline/c.py", "bogie/__init__.py",
+                     "bogie/d.py"}  # fmt: skip
