@@ -16,7 +16,15 @@ from collections.abc import Iterator, Sequence
 from contextlib import contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_outputs", "atomic_file", "replace_dir"]
+__all__ = ["atomic_outputs", "atomic_file", "io_error", "replace_dir"]
+
+
+def io_error(stage: str, exc: OSError) -> str:
+    """One line for a failed read or write: the stage, the path and the cause (``survey: cannot write
+    data/survey: [Errno 28] No space left on device``), with no traceback."""
+    path = exc.filename if exc.filename is not None else "?"
+    cause = f"[Errno {exc.errno}] {exc.strerror}" if exc.strerror else str(exc)
+    return f"{stage}: cannot write {path}: {cause}"
 
 
 def _umask() -> int:

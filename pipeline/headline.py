@@ -19,7 +19,7 @@ from typing import Any
 
 import pandas as pd
 
-from pipeline.atomic import atomic_file
+from pipeline.atomic import atomic_file, io_error
 from pipeline.constants import GROUP_AXLES, PROTOCOLS
 
 __all__ = ["headline", "main"]
@@ -65,8 +65,12 @@ def main(argv: list[str] | None = None) -> int:
         print(f"headline: {exc}", file=sys.stderr)
         return 2
     figures = headline(survey, sensitivity, status)
-    with atomic_file(Path(args.out)) as tmp:
-        tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
+    try:
+        with atomic_file(Path(args.out)) as tmp:
+            tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
+    except OSError as exc:
+        print(io_error("headline", exc), file=sys.stderr)
+        return 2
     print(f"headline: {figures['ranking']}; {figures['runs']} runs, {figures['failed']} failed; wrote {args.out}")
     return 0
 

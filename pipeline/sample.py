@@ -26,7 +26,7 @@ from SALib.sample import sobol
 from scipy.stats import qmc
 
 from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, with_equaliser_arms
-from pipeline.atomic import atomic_file
+from pipeline.atomic import atomic_file, io_error
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.distributions import Choice
@@ -414,9 +414,13 @@ def main(argv: list[str] | None = None) -> int:
     # everything is sampled before anything is written: a failure leaves the previous outputs untouched
     frames = sample_studies(config)
     out = Path(args.out)
-    out.mkdir(parents=True, exist_ok=True)
-    for study, frame in frames.items():
-        write_parquet_atomic(frame, out / f"{study}.parquet")
+    try:
+        out.mkdir(parents=True, exist_ok=True)
+        for study, frame in frames.items():
+            write_parquet_atomic(frame, out / f"{study}.parquet")
+    except OSError as exc:
+        print(io_error("sample", exc), file=sys.stderr)
+        return 2
     counts = ", ".join(f"{study} {len(frame)}" for study, frame in frames.items())
     print(f"sample: wrote {counts} rows to {out}")
     return 0

@@ -39,6 +39,7 @@ from pipeline.ablation import (
     ablation_metrics,
     ablation_pairs,
 )
+from pipeline.atomic import io_error
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import TYRE_WEAR_COLUMNS, design_seed, sensitivity_problem
 from pipeline.survey import (
@@ -383,7 +384,11 @@ def main(argv: list[str] | None = None) -> int:
         "ablation.csv": effects,
         "ablation_pairs.parquet": pairs,
     }
-    write_outputs(tables, args.out, metrics, args.metrics)
+    try:
+        write_outputs(tables, args.out, metrics, args.metrics)
+    except OSError as exc:
+        print(io_error("sensitivity", exc), file=sys.stderr)
+        return 2
     print(f"sensitivity: ranking by {metrics['ranking_measure']}: {' > '.join(metrics['ranking'])}; wrote {args.out}")
     return 0
 

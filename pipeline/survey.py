@@ -28,7 +28,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import yaml
 
-from pipeline.atomic import atomic_outputs
+from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE
 from pipeline.sample import TYRE_WEAR_COLUMNS
@@ -485,7 +485,11 @@ def main(argv: list[str] | None = None) -> int:
     tables = survey(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
     tables["design_guidance.csv"] = design_table(inequality_columns(split_failed(runs)[0]))
-    write_outputs(tables, args.out, metrics, args.metrics)
+    try:
+        write_outputs(tables, args.out, metrics, args.metrics)
+    except OSError as exc:
+        print(io_error("survey", exc), file=sys.stderr)
+        return 2
     n_ok, n_runs, n_failed = metrics["n_ok"], metrics["n_runs"], metrics["n_failed"]
     print(f"survey: {n_ok} of {n_runs} runs succeeded ({n_failed} failed); wrote {args.out} and {args.metrics}")
     return 0

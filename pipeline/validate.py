@@ -20,7 +20,7 @@ from typing import Any
 
 import yaml
 
-from pipeline.atomic import atomic_file
+from pipeline.atomic import atomic_file, io_error
 from pipeline.config import ConfigError, load_config
 from pipeline.resources import available_memory
 from pipeline.sample import check_memory
@@ -53,8 +53,12 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, OSError, yaml.YAMLError) as exc:
         print(f"validate: {args.params}: {exc}", file=sys.stderr)
         return 2
-    with atomic_file(Path(args.out)) as tmp:
-        tmp.write_text(json.dumps(as_json(config), indent=1) + "\n", encoding="utf-8")
+    try:
+        with atomic_file(Path(args.out)) as tmp:
+            tmp.write_text(json.dumps(as_json(config), indent=1) + "\n", encoding="utf-8")
+    except OSError as exc:
+        print(io_error("validate", exc), file=sys.stderr)
+        return 2
     print(f"validate: {args.params} is valid; wrote {args.out}")
     return 0
 

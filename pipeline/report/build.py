@@ -18,7 +18,7 @@ import yaml
 from matplotlib.backends.backend_pdf import PdfPages
 
 from bogie.results import DynamicResult
-from pipeline.atomic import atomic_outputs
+from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
@@ -132,7 +132,11 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, RunsError, OSError, KeyError, ValueError, yaml.YAMLError) as exc:
         print(f"report: {exc}", file=sys.stderr)
         return 2
-    numbers = make_report(inputs, args.pdf, args.png, args.plots)
+    try:
+        numbers = make_report(inputs, args.pdf, args.png, args.plots)
+    except OSError as exc:
+        print(io_error("report", exc), file=sys.stderr)
+        return 2
     failed = int(inputs.runs["status"].ne("ok").sum())
     print(f"report: wrote {args.pdf} ({numbers['pages']} pages; {failed} failed runs listed), {args.png}, {args.plots}")
     return 0

@@ -61,3 +61,23 @@ def test_atomic_file_creates_parents_and_writes_once(tmp_path):
         tmp.write_bytes(b"\x00\x01")
     assert target.read_bytes() == b"\x00\x01"
     assert _listing(target.parent) == ["c.bin"]
+
+
+def test_a_stage_that_cannot_write_says_so_in_one_line_and_writes_nothing(tmp_path, capsys):
+    from pipeline.validate import main
+
+    blocker = tmp_path / "data"
+    blocker.write_text("a file where the output directory should be")  # fails for root too, unlike a chmod
+    assert main(["--out", str(blocker / "config.json")]) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"validate: cannot write {blocker}") and "[Errno" in err
+    assert "\n" not in err and "Traceback" not in err
+    assert blocker.read_text() == "a file where the output directory should be"
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["data"]
+
+
+def test_io_error_names_the_path_and_the_cause():
+    from pipeline.atomic import io_error
+
+    full = OSError(28, "No space left on device", "data/survey")
+    assert io_error("survey", full) == "survey: cannot write data/survey: [Errno 28] No space left on device"
