@@ -123,6 +123,9 @@ def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> t
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
+#: how long an idle loky worker waits for work before it ends [s]
+WORKER_IDLE_TIMEOUT = 10.0
+
 #: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
 WORKER_MEMORY = 300 * 2**20  # [bytes]
 
@@ -163,8 +166,10 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tu
         with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
             yield from Parallel(**options)(tasks)
     else:
-        # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers
-        with parallel_config(backend="loky", inner_max_num_threads=1):
+        # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers. A
+        # worker waits at most WORKER_IDLE_TIMEOUT for its next chunk: if the main process is killed, its workers
+        # finish the chunk in hand and end, instead of idling on for loky's default 300 s
+        with parallel_config(backend="loky", inner_max_num_threads=1, idle_worker_timeout=WORKER_IDLE_TIMEOUT):
             yield from Parallel(n_jobs=execution.n_jobs, **options)(tasks)
 
 

@@ -335,3 +335,32 @@ def test_n_jobs_beyond_the_cores_or_the_memory_is_capped_with_a_warning():
     assert worker_count(16, lines.append, cores=32, memory=1 * 2**30) == 3  # 1 GiB / 300 MiB
     assert "more than the available memory can hold" in lines[-1] and "running 3 workers" in lines[-1]
     assert worker_count(4, lines.append, cores=8, memory=10 * 2**20) == 1  # never fewer than one
+
+
+def test_killing_the_main_process_ends_its_workers(config, samples, tmp_path):
+    import psutil
+
+    params = tmp_path / "params.yaml"
+    params.write_text(yaml.safe_dump(tiny_raw(chunk_size=1)))
+    sample_dir = tmp_path / "samples"
+    sample_dir.mkdir()
+    for study, table in samples.items():
+        write_parquet_atomic(table, sample_dir / f"{study}.parquet")
+    out = tmp_path / "runs"
+    command = [sys.executable, "-m", "pipeline.simulate", "--params", str(params), "--samples", str(sample_dir)]
+    command += ["--out", str(out)]
+    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    proc = subprocess.Popen(command, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
+    try:
+        deadline = time.monotonic() + 120
+        while not list(out.glob("study=*/part-*.parquet")) and proc.poll() is None and time.monotonic() < deadline:
+            time.sleep(0.01)
+        workers = psutil.Process(proc.pid).children(recursive=True)
+        assert workers, "the stage started no worker processes"
+        proc.kill()  # the main process alone, as the OOM killer or a `kill -9 <pid>` does
+    finally:
+        proc.wait()
+    gone, alive = psutil.wait_procs(workers, timeout=60)
+    for p in alive:
+        p.kill()
+    assert not alive, f"{len(alive)} workers outlived their main process by a minute"
