@@ -225,7 +225,7 @@ def test_inputs_are_validated():
     bogie = tandem_trrl()
     with pytest.raises(ValueError, match=r"load_factor = 0.0 is out of range: must be in \(0, 2\]"):
         nl.hold(bogie, 1.0, 0.01, load_factor=0.0)
-    with pytest.raises(ValueError, match=r"dt = -0.01 is out of range: must be > 0 s"):
+    with pytest.raises(ValueError, match=r"dt = -0.01 is out of range: must be in \(0, duration = 1\] s"):
         nl.hold(bogie, 1.0, -0.01)
     with pytest.raises(ValueError, match="inputs are for 2 axles but the bogie has 3"):
         nl.simulate(triaxle_stage1(), nl.hold(bogie, 0.1, 0.01))
