@@ -180,3 +180,21 @@ def test_rod_fields_have_a_rule_a_range_and_a_unit():
 
 def _fields(bogie):
     return {name: getattr(bogie, name) for name in bogie.__dataclass_fields__}
+
+
+def test_the_rods_derivatives_are_those_of_its_position():
+    # the rod's generalised forces use dx/dtheta_c and dx/dz_i: check them against central differences of x
+    from bogie import _nonlinear_core as core
+
+    xi, zeta, length, dh = 6.19, -0.3, 0.5, 0.14
+    for theta, z in ((0.0, 0.0), (0.0175, -0.02), (-0.03, 0.05)):
+        x, dth, dz = core._radius_rod(xi, zeta, length, z, dh, math.cos(theta), math.sin(theta))
+        eps = 1e-6
+
+        def at(t, zz):
+            return core._radius_rod(xi, zeta, length, zz, dh, math.cos(t), math.sin(t))[0]
+
+        assert dth == pytest.approx((at(theta + eps, z) - at(theta - eps, z)) / (2 * eps), rel=1e-7, abs=1e-9)
+        assert dz == pytest.approx((at(theta, z + eps) - at(theta, z - eps)) / (2 * eps), rel=1e-7, abs=1e-9)
+        anchor = (xi * math.cos(theta) + zeta * math.sin(theta), dh - xi * math.sin(theta) + zeta * math.cos(theta))
+        assert math.hypot(x - anchor[0], zeta + z - anchor[1]) == pytest.approx(length, rel=1e-14)
