@@ -17,11 +17,16 @@ Packed parameters (built by :func:`bogie.nonlinear.pack`); this module is the on
 * drive row: ``[road height 0..n-1, road rate 0..n-1, load factor, king pin rise]``.
 * history: the plastic slip s_e of each contact (2n).
 * record: the entries of :data:`RECORD`, each a multiple of n long, in that order: ``[tyre load (n), spring load
-  (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n)]``.
+  (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n), axle position (n)]``.
 
-The force is split by physics into small compiled helpers (body points, rolling contact points, the springs with
-their end friction's return map, pad moments, tyre loads, bushes, the record), each keeping the arithmetic of the
-former single routine in the same order, so results are bit-identical to it. The helpers are inlined into
+Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at a chassis anchor
+(:func:`_radius_rod`), and the rod turns the spring ends' friction into generalised forces on the chassis pitch
+and the axle's vertical freedom.
+
+The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, the
+springs with their end friction's return map, pad moments, tyre loads, bushes, the record); when they were split
+from a former single routine they kept its arithmetic in the same order, so results were bit-identical to it (the
+radius rods, added later, changed the physics). The helpers are inlined into
 :func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
 evaluation. An array passed to an inlined helper still costs reference counting at each call, so the helpers
 used inside loops take and return scalars, and the short loops over pivots, contacts and tyres stay in
@@ -80,6 +85,9 @@ ARRAYS = (
     ("design_contact_x", 2, 0),
     ("pivot_x", 1, -1),
     ("pivot_z", 1, -1),
+    ("rod_anchor_x", 1, 0),
+    ("rod_anchor_z", 1, 0),
+    ("rod_length", 1, 0),
 )
 (
     _XA,
@@ -95,6 +103,9 @@ ARRAYS = (
     _MX0,
     _VX,
     _VZ,
+    _RAX,
+    _RAZ,
+    _RL,
 ) = range(len(ARRAYS))
 _ARRAY_PER_AXLE = tuple(a[1] for a in ARRAYS)
 _ARRAY_EXTRA = tuple(a[2] for a in ARRAYS)
@@ -111,8 +122,9 @@ RECORD = (
     ("stick", 2),
     ("contact_shift", 2),
     ("plastic_slip", 2),
+    ("axle_position", 1),
 )
-_REC_TYRE, _REC_SPRING, _REC_FRICTION, _REC_STICK, _REC_SHIFT, _REC_SLIP = range(len(RECORD))
+_REC_TYRE, _REC_SPRING, _REC_FRICTION, _REC_STICK, _REC_SHIFT, _REC_SLIP, _REC_AXLE_X = range(len(RECORD))
 _RECORD_START = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
 #: record entries per axle
 RECORD_PER_AXLE = _RECORD_START[-1]
@@ -176,6 +188,9 @@ WORK = (
     ("spring_load", 1, 0),
     ("equaliser_cos", 1, -1),
     ("equaliser_sin", 1, -1),
+    ("axle_x", 1, 0),
+    ("axle_x_pitch", 1, 0),
+    ("axle_x_rise", 1, 0),
 )
 _WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
 _WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
@@ -222,6 +237,9 @@ def _work_views(work, n):
         _work_view(work, 11, n),
         _work_view(work, 12, n),
         _work_view(work, 13, n),
+        _work_view(work, 14, n),
+        _work_view(work, 15, n),
+        _work_view(work, 16, n),
     )
 
 
@@ -266,6 +284,25 @@ def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0,
     return xf, zf, xr, zr
 
 
+@njit(cache=True, inline="always")
+def _radius_rod(xi_a, zeta_a, length, z, dh, cc, sc):
+    """Axle x on its radius rod and its derivatives: (x_i [m], dx_i/dtheta_c [m/rad], dx_i/dz_i [-]).
+
+    The rod of ``length`` runs from the chassis anchor (xi_a, zeta_a) (king pin coordinates, pitched (cc, sc) and
+    raised by dh) back to the axle's eye, which is at zeta_a + z: level in the design position. The axle's
+    vertical displacement z is the freedom, its x follows (``docs/models.md``, "Axle location").
+    """
+    x_anchor = xi_a * cc + zeta_a * sc
+    dz = zeta_a + z - (dh - xi_a * sc + zeta_a * cc)
+    s2 = length * length - dz * dz
+    floor = 0.01 * length * length  # a rod beyond 84 degrees: far outside the freedoms' limits
+    if s2 < floor:
+        s2 = floor
+    span = math.sqrt(s2)
+    ratio = dz / span
+    return x_anchor + span, (-xi_a * sc + zeta_a * cc) + ratio * (-xi_a * cc - zeta_a * sc), -ratio
+
+
 # ---- springs and friction --------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _return_map(g, slip_old, limit, k_tan):
@@ -278,15 +315,19 @@ def _return_map(g, slip_old, limit, k_tan):
 
 
 @njit(cache=True, inline="always")
-def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring):
-    """Every spring: contact points (rolling), deflection, end friction, seat load and end loads."""
+def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x):
+    """Every spring: contact points (rolling), deflection, end friction, seat load and end loads.
+
+    ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it.
+    """
     o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
     k_r, mu, k_tan = data_f[_KR], data_f[_MU], data_f[_KTAN]
     for i in range(n):
         ef = 2 * i
         er = 2 * i + 1
-        xa = data_f[o_xa + i]
+        xa = ax_x[i]
+        moved = xa - data_f[o_xa + i]  # the seat's fore-aft motion on its rod, carried by both leaf ends
         za = u[n + i]
         h0 = data_f[o_h0 + i]
         p_x[ef], p_z[ef], p_x[er], p_z[er] = _rolled_contacts(
@@ -302,9 +343,9 @@ def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z,
         # friction: elastic-plastic return map on the slip of each leaf end over its pad
         lam_f = data_f[o_lf + i]
         lam_r = data_f[o_lr + i]
-        g = -lam_f * delta - (m_x[ef] - data_f[o_mx0 + ef])
+        g = moved - lam_f * delta - (m_x[ef] - data_f[o_mx0 + ef])
         t_fric[ef], hist_new[ef], stick[ef] = _return_map(g, hist_old[ef], mu * wf * n_el, k_tan)
-        g = lam_r * delta - (m_x[er] - data_f[o_mx0 + er])
+        g = moved + lam_r * delta - (m_x[er] - data_f[o_mx0 + er])
         t_fric[er], hist_new[er], stick[er] = _return_map(g, hist_old[er], mu * wr * n_el, k_tan)
         # friction resists the ends' sliding, so it stiffens the spring (arch thrust)
         fs = f_elastic - lam_f * t_fric[ef] + lam_r * t_fric[er]
@@ -353,15 +394,17 @@ def _bushes(u, v, data_f, n, f):
 
 
 @njit(cache=True, inline="always")
-def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, rec):
-    """Spring loads, friction forces, stick flags, contact shifts and plastic slips into the record."""
+def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
+    """Spring loads, friction forces, stick flags, contact shifts, plastic slips and axle positions into the record."""
     o_spring = record_start(_REC_SPRING, n)
     o_fric = record_start(_REC_FRICTION, n)
     o_stick = record_start(_REC_STICK, n)
     o_shift = record_start(_REC_SHIFT, n)
     o_slip = record_start(_REC_SLIP, n)
+    o_axle = record_start(_REC_AXLE_X, n)
     for i in range(n):
         rec[o_spring + i] = f_spring[i]
+        rec[o_axle + i] = ax_x[i]
     for e in range(2 * n):
         rec[o_fric + e] = t_fric[e]
         rec[o_stick + e] = stick[e]
@@ -379,7 +422,9 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     sc = math.sin(u[0])
     for k in range(2 * n):
         f[k] = 0.0
-    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s = _work_views(work, n)
+    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz = (
+        _work_views(work, n)
+    )
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(n - 1):
@@ -396,10 +441,20 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
         m_x[e], m_z[e] = _body_point(ox, oz, c, s, data_f[o_px + e], data_f[o_pz + e])
         pad_s[e] = s
         pad_c[e] = c
-    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring)
+    # each axle's x on its radius rod from its chassis anchor
+    o_rax, o_raz, o_rl = array_start(_RAX, n), array_start(_RAZ, n), array_start(_RL, n)
+    for i in range(n):
+        ax_x[i], ax_dth[i], ax_dz[i] = _radius_rod(
+            data_f[o_rax + i], data_f[o_raz + i], data_f[o_rl + i], u[n + i], dh, cc, sc
+        )
+    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x)
     for i in range(n):
         # the spring pushes its axle down: f = -Q
         f[n + i] += f_spring[i]
+        # the seat pushes the axle by -(T_F + T_R) along x; the rod turns that into Q_k = -(T_F + T_R) dx_i/du_k
+        h = t_fric[2 * i] + t_fric[2 * i + 1]
+        f[0] += h * ax_dth[i]
+        f[n + i] += h * ax_dz[i]
     _pad_moments(data_i, n, dh, piv_x, piv_z, p_x, p_z, t_fric, n_load, f)
     # tyres: unilateral, with wear lowering the wheel's reach; the axle weights
     o_c0, o_wear, k_t, c_t = array_start(_C0, n), array_start(_WEAR, n), data_f[_KT], data_f[_CT]
@@ -418,7 +473,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
     if record:
-        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, rec)
+        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec)
 
 
 @njit(cache=True, inline="always")

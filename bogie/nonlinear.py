@@ -273,6 +273,11 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, NDArray[np.float64]], list[i
         "design_contact_x": wx,
         "pivot_x": np.asarray(bogie.equaliser_pivot_x, dtype=float),
         "pivot_z": np.asarray(pivot_z, dtype=float),
+        # radius rods: level in the design position, the line radius_rod_drop below each seat's chord height,
+        # the anchor on the chassis ahead of the axle
+        "rod_anchor_x": np.asarray(bogie.radius_rod_anchor_x, dtype=float),
+        "rod_anchor_z": w_front * zf + (1.0 - w_front) * zr - bogie.radius_rod_drop,
+        "rod_length": np.asarray(bogie.radius_rod_lengths, dtype=float),
     }
     return arrays, bodies
 

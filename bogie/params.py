@@ -72,6 +72,7 @@ SCALAR_RANGES: dict[str, FieldRange] = {
     "bush_damping": FieldRange(0.0, 1e6, "N m s/rad", True),
     "contact_roll_radius": FieldRange(0.0, 0.5, "m", True),
     "friction_coefficient": FieldRange(0.0, 1.5, "-", True),
+    "radius_rod_drop": FieldRange(-0.5, 0.5, "m", True),
 }
 
 #: allowed range and unit of each value of the per-axle fields (one value per axle), by field name
@@ -80,7 +81,10 @@ AXLE_RANGES: dict[str, FieldRange] = {
     "spring_front_half_length": FieldRange(0.05, 2.0, "m", True),
     "spring_rear_half_length": FieldRange(0.05, 2.0, "m", True),
     "tyre_wear": FieldRange(0.0, 0.05, "m", True),
+    "radius_rod_length": FieldRange(0.2, 3.0, "m", True),
 }
+#: per-axle fields that may be left empty, with the rule that then gives their values (see the Bogie docstring)
+_AXLE_RULES = ("radius_rod_length",)
 #: allowed range and unit of each value of the per-equaliser fields (one value per equaliser), by field name
 EQUALISER_RANGES: dict[str, FieldRange] = {
     "equaliser_front_arm": FieldRange(0.01, 1.0, "m", True),
@@ -197,6 +201,15 @@ class Bogie:
         point along the pad by this radius times the rotation. Inhibitor 3; 0 fixes the contact point.
     friction_coefficient
         Coulomb friction coefficient at the spring ends [-]. Inhibitor 4; 0 switches it off.
+    radius_rod_length
+        Length of each axle's radius rod [m], one per axle, or empty (the default) for a rod from the bracket ahead
+        of the axle: the front hanger for the front axle, the pivot bracket of the equaliser ahead for the others
+        (:attr:`radius_rod_lengths`). The rod locates the axle fore and aft from an anchor on the chassis; it is
+        level in the design position with its anchor ahead of the axle, so the axle follows the chassis's pitch
+        on the rod's arc (``docs/models.md``, "Axle location").
+    radius_rod_drop
+        Height of the spring seat above the rods' line (anchor and axle eye) in the design position [m]; 0 puts
+        the rods at the seat's height, where a chassis pitch moves seats and pads together.
     """
 
     axle_x: tuple[float, ...]
@@ -225,6 +238,8 @@ class Bogie:
     bush_damping: float = 0.0
     contact_roll_radius: float = 0.0
     friction_coefficient: float = 0.0
+    radius_rod_length: tuple[float, ...] = field(default=())
+    radius_rod_drop: float = 0.0
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
@@ -234,6 +249,8 @@ class Bogie:
         if isinstance(self.tyre_wear, tuple) and not self.tyre_wear:
             object.__setattr__(self, "tyre_wear", (0.0,) * n)
         for name, (low, high, unit, inc) in AXLE_RANGES.items():
+            if name in _AXLE_RULES and isinstance(getattr(self, name), tuple) and not getattr(self, name):
+                continue  # empty: the field's rule gives the values (a property), whatever the axle count
             object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))
         for name, (low, high, unit, inc) in EQUALISER_RANGES.items():
             vec = _check_vector(name, getattr(self, name), n - 1, "equaliser", low, high, unit, inc)
@@ -252,6 +269,17 @@ class Bogie:
                 f"{self.payload_mass * self.payload_cg_x**2:g} kg m^2, the least a body with that mass and centre of "
                 "gravity can have about the king pin"
             )
+        if not self.radius_rod_length:
+            # the rule's rods must lie in the field's range too (a very short spring half would make a stub rod)
+            low, high, unit, inc = AXLE_RANGES["radius_rod_length"]
+            for i, length in enumerate(self.radius_rod_lengths):
+                _check_scalar(f"radius_rod_length[{i}] (from the bracket ahead)", length, low, high, unit, inc)
+        for i, length in enumerate(self.radius_rod_lengths):
+            if self.axle_x[i] - length <= 0.0:
+                raise ValueError(
+                    f"radius_rod_length[{i}] = {length!r} puts the rod's anchor at or ahead of the king pin: must be "
+                    f"less than axle_x[{i}] = {self.axle_x[i]!r} m"
+                )
         for i, w in enumerate(self.tyre_wear):
             if w >= self.tyre_radius:
                 raise ValueError(f"tyre_wear[{i}] = {w!r} must be less than tyre_radius = {self.tyre_radius!r} m")
@@ -301,6 +329,21 @@ class Bogie:
     def rear_hanger_x(self) -> float:
         """Rear hanger contact position [m]."""
         return self.axle_x[-1] + self.spring_rear_half_length[-1]
+
+    @property
+    def radius_rod_lengths(self) -> tuple[float, ...]:
+        """Length of each axle's radius rod [m]: :attr:`radius_rod_length`, or if that is empty the distance from
+        each axle back to the bracket ahead of it (the front hanger, then each equaliser's pivot bracket)."""
+        if self.radius_rod_length:
+            return tuple(self.radius_rod_length)
+        ahead = (self.front_hanger_x, *self.equaliser_pivot_x)
+        return tuple(x - a for x, a in zip(self.axle_x, ahead))
+
+    @property
+    def radius_rod_anchor_x(self) -> tuple[float, ...]:
+        """Position of each radius rod's chassis anchor rearward of the king pin in the design position [m]: the
+        rod is level there, with its anchor ahead of the axle."""
+        return tuple(x - length for x, length in zip(self.axle_x, self.radius_rod_lengths))
 
     @property
     def bogie_centre_x(self) -> float:

@@ -12,6 +12,22 @@ from bogie.params import GRAVITY, INHIBITORS, tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep, Sinusoid
 
 
+def rod_geometry(bogie, u, dh, axle_x):
+    """Each radius rod from its chassis anchor to its axle eye, computed here from the Bogie's fields alone.
+
+    Level arms (the presets): each seat's design height is -pad_drop, the rod line radius_rod_drop below it.
+    Returns the anchor's world position, the eye's, and the rod's components dx, dz (eye minus anchor) [m].
+    """
+    n = bogie.n_axles
+    th = u[0]
+    xi = np.asarray(bogie.axle_x) - np.asarray(bogie.radius_rod_lengths)
+    zeta = -bogie.pad_drop - bogie.radius_rod_drop
+    anchor_x = xi * math.cos(th) + zeta * math.sin(th)
+    anchor_z = dh - xi * math.sin(th) + zeta * math.cos(th)
+    eye_z = zeta + np.asarray(u[n : 2 * n])
+    return {"anchor_x": anchor_x, "anchor_z": anchor_z, "eye_z": eye_z, "dx": axle_x - anchor_x, "dz": eye_z - anchor_z}
+
+
 def _ideal(make, **changes):
     """All four inhibitors at their ideal values, then ``changes``."""
     return make(**{**INHIBITORS, **changes})
@@ -62,16 +78,23 @@ def test_static_equilibrium_with_tilt_balances_every_body(make):
     run = _static_laden(bogie)
     assert run.success
     loads, springs = run.wheel_loads[-1], run.extras["spring_load"][-1]
-    # each axle: tyre = spring + axle weight
-    assert loads == pytest.approx(springs + bogie.axle_mass * GRAVITY, abs=1.0)
+    # each axle: tyre = spring + axle weight + the radius rod's vertical pull. The seat pushes the axle by
+    # -(T_F + T_R) along x; the rod, a two-force member along (dx, dz) from anchor to eye, balances it with a
+    # tension whose vertical part on the axle is -(T_F + T_R) dz / dx (the rod tilts with the chassis). To the
+    # solver's tolerance (1e-5 of the wheel load per axle)
+    final = run.final_state
+    rod = rod_geometry(bogie, final.u, bogie.kingpin_height_offset, run.extras["axle_position"][-1])
+    horizontal = run.extras["friction_force"][-1][0::2] + run.extras["friction_force"][-1][1::2]
+    rod_vertical = -horizontal * rod["dz"] / rod["dx"]
+    assert np.max(np.abs(rod_vertical)) > 0.5  # the rods do carry load here (friction 0.3)
+    assert loads == pytest.approx(springs + bogie.axle_mass * GRAVITY + rod_vertical, abs=1e-5 * loads.mean())
     # every body in equilibrium at the final state: the residual of the equations of motion without inertia
     mass, data_f, data_i = nl.pack(bogie)
-    final = run.final_state
     drive = np.r_[np.zeros(2 * n), 1.0, bogie.kingpin_height_offset]
     f = np.zeros(2 * n)
     core.force(
         final.u, np.zeros(2 * n), drive, data_f, data_i, final.slip, final.slip.copy(), f,
-        np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(10 * n), False, False,
+        np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(core.RECORD_PER_AXLE * n), False, False,
         np.zeros(int(core.scratch_size(n)) + 4 * n),
     )  # fmt: skip
     # chassis about the king pin, each equaliser about its pivot, each axle: within the solver's tolerance
@@ -104,11 +127,13 @@ def test_free_frictionless_equaliser_with_fixed_contacts_equalises_a_tilt(make, 
     dev_rolling = float(metrics.max_deviation(rolling.wheel_loads[-1]))
     assert dev_rolling > 4.0 * dev_free
     assert rolling.wheel_loads[-1][-1] > rolling.wheel_loads[-1][0]  # the rear overloads
-    # with friction the equaliser cannot find its balance: the loads depend on the way the load came on
+    # with friction the equaliser cannot find its balance: the loads depend on the way the load came on (2.2 % on
+    # the tandem, 0.95 % on the tri-axle; before the radius rods the pads' swing over world-fixed axles added slip
+    # and made it 3.8 % and 2.5 %)
     rubbing = _ideal(make, chassis_tilt=tilt, friction_coefficient=0.3)
     up = _static_path(rubbing, np.linspace(0.25, 1.0, 41)).wheel_loads[-1]
     down = _static_path(rubbing, np.r_[np.linspace(0.25, 1.3, 41), np.linspace(1.3, 1.0, 13)[1:]]).wheel_loads[-1]
-    assert np.max(np.abs(up - down)) > 0.01 * up.mean()
+    assert np.max(np.abs(up - down)) > 0.005 * up.mean()
     frictionless = _ideal(make, chassis_tilt=tilt)
     up = _static_path(frictionless, np.linspace(0.25, 1.0, 41)).wheel_loads[-1]
     down = _static_path(frictionless, np.r_[np.linspace(0.25, 1.3, 41), np.linspace(1.3, 1.0, 13)[1:]]).wheel_loads[-1]
