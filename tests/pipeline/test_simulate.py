@@ -245,7 +245,8 @@ def test_a_changed_protocol_setting_reruns_only_the_chunks_that_use_it(config, s
     )
 
 
-def test_a_killed_run_resumes_to_the_uninterrupted_dataset(config, samples, reference, tmp_path):
+def stage_command(samples, tmp_path):
+    """The simulate stage as a command on the tiny samples, one chunk per sample: (command, environment, out)."""
     params = tmp_path / "params.yaml"
     params.write_text(yaml.safe_dump(tiny_raw(chunk_size=1)))
     sample_dir = tmp_path / "samples"
@@ -255,7 +256,11 @@ def test_a_killed_run_resumes_to_the_uninterrupted_dataset(config, samples, refe
     out = tmp_path / "runs"
     command = [sys.executable, "-m", "pipeline.simulate", "--params", str(params), "--samples", str(sample_dir)]
     command += ["--out", str(out)]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    return command, {**os.environ, "PYTHONPATH": str(ROOT)}, out
+
+
+def test_a_killed_run_resumes_to_the_uninterrupted_dataset(config, samples, reference, tmp_path):
+    command, env, out = stage_command(samples, tmp_path)
     n_chunks = sum(len(t) for t in samples.values())
 
     # a session of its own, so that SIGKILL reaches the loky workers too, as when the machine kills the job
@@ -340,16 +345,7 @@ def test_n_jobs_beyond_the_cores_or_the_memory_is_capped_with_a_warning():
 def test_killing_the_main_process_ends_its_workers(config, samples, tmp_path):
     import psutil
 
-    params = tmp_path / "params.yaml"
-    params.write_text(yaml.safe_dump(tiny_raw(chunk_size=1)))
-    sample_dir = tmp_path / "samples"
-    sample_dir.mkdir()
-    for study, table in samples.items():
-        write_parquet_atomic(table, sample_dir / f"{study}.parquet")
-    out = tmp_path / "runs"
-    command = [sys.executable, "-m", "pipeline.simulate", "--params", str(params), "--samples", str(sample_dir)]
-    command += ["--out", str(out)]
-    env = {**os.environ, "PYTHONPATH": str(ROOT)}
+    command, env, out = stage_command(samples, tmp_path)
     proc = subprocess.Popen(command, cwd=tmp_path, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL)
     try:
         deadline = time.monotonic() + 120
