@@ -112,11 +112,14 @@ def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | N
     ``wheel_loads`` (a failed weighing) every result is null: NaN for the numbers, None for the two flags.
     ``outside_5pct`` is (max W - min W) / max W > :data:`~pipeline.constants.PAIR_TOLERANCE` (VSB 11) and
     ``over_10pct`` the largest load share n W / sum W above 1 + :data:`~pipeline.constants.SHARE_TOLERANCE`.
+    ``wheel_airborne``: some axle reads 0 N, its wheels in the air as they cross the WIM sensor (the tyres are
+    unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping it; the row
+    stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
     """
     row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}
     if wheel_loads is None:
         row.update(dict.fromkeys(RESULT_COLUMNS, math.nan))
-        row.update(outside_5pct=None, over_10pct=None)
+        row.update(outside_5pct=None, over_10pct=None, wheel_airborne=None)
         return row
     loads = 2.0 * np.asarray(wheel_loads, dtype=float)
     axle = np.zeros(MAX_AXLES)
@@ -135,6 +138,7 @@ def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | N
         chassis_pitch=float(pitch),
         outside_5pct=bool((heaviest - lightest) / heaviest > PAIR_TOLERANCE),
         over_10pct=bool(heaviest / (loads.sum() / n_axles) > 1.0 + SHARE_TOLERANCE),
+        wheel_airborne=bool(lightest <= 0.0),
     )
     for i in range(MAX_AXLES):
         row[f"axle_load_{i}"] = float(axle[i])

@@ -65,18 +65,18 @@ UNITS: dict[str, str] = {
     "kg m^2", "chassis_tilt_deg": "degree", "protocol": "-", "status": "-", "message": "-",
     **{f"axle_load_{i}": "N" for i in range(MAX_AXLES)}, **{f"load_share_{i}": "-" for i in range(MAX_AXLES)},
     "group_load": "N", "p": "-", "p1": "-", "max_deviation": "-", "spread": "N", "spread_kg": "kg",
-    "road_wear_factor": "-", "chassis_pitch": "rad", "outside_5pct": "-", "over_10pct": "-",
+    "road_wear_factor": "-", "chassis_pitch": "rad", "outside_5pct": "-", "over_10pct": "-", "wheel_airborne": "-",
 }  # fmt: skip
 
 #: the weighing's result: null in a failed row, never null in a successful one
 RESULT_COLUMNS: tuple[str, ...] = (
     *(f"axle_load_{i}" for i in range(MAX_AXLES)), *(f"load_share_{i}" for i in range(MAX_AXLES)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",
-    "outside_5pct", "over_10pct",
+    "outside_5pct", "over_10pct", "wheel_airborne",
 )  # fmt: skip
 
 #: boolean result columns
-_BOOLEANS: tuple[str, ...] = ("outside_5pct", "over_10pct")
+_BOOLEANS: tuple[str, ...] = ("outside_5pct", "over_10pct", "wheel_airborne")
 
 #: column -> pandas dtype of a run row, in file order
 RUN_COLUMNS: dict[str, str] = {

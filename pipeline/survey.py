@@ -51,6 +51,7 @@ DISTRIBUTED: tuple[str, ...] = (*LOAD_SHARE_COLUMNS, "spread_pct", "spread_kg", 
 REQUIRED_COLUMNS: tuple[str, ...] = (
     "sample_id", "group", "n_axles", "protocol", "status", "message", "chassis_tilt", *TYRE_WEAR_COLUMNS,
     *AXLE_LOAD_COLUMNS, *LOAD_SHARE_COLUMNS, "group_load", "max_deviation", "spread_kg", "road_wear_factor",
+    "wheel_airborne",
 )  # fmt: skip
 KEYS = ["protocol", "group"]
 
@@ -118,6 +119,17 @@ def split_failed(runs: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     return runs[ok].reset_index(drop=True), runs[~ok].reset_index(drop=True)
 
 
+def readings(runs: pd.DataFrame) -> pd.DataFrame:
+    """The rows the survey's statistics use: succeeded, with every wheel on the road at the reading.
+
+    A weighing with an axle at 0 N (``wheel_airborne``: its wheels in the air over the WIM sensor) is a valid run
+    but not a reading of the group's load sharing; a WIM system flags such a record. It is counted
+    (:func:`run_counts`, ``n_airborne``) and left out.
+    """
+    ok, _ = split_failed(runs)
+    return ok[~ok["wheel_airborne"].astype(bool)].reset_index(drop=True)
+
+
 # ---- per-row quantities --------------------------------------------------------------------------------------------
 def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
     """Per-row inequality quantities of succeeded runs, derived from the axle loads.
@@ -171,11 +183,13 @@ def band(values: pd.Series | np.ndarray, width: float) -> tuple[np.ndarray, np.n
 
 # ---- statistics ---------------------------------------------------------------------------------------------------
 def run_counts(runs: pd.DataFrame) -> pd.DataFrame:
-    """Runs, succeeded and failed per protocol and group (columns n_runs, n_ok, n_failed)."""
+    """Runs, succeeded, failed and succeeded with a wheel in the air per protocol and group (columns n_runs, n_ok,
+    n_failed, n_airborne; n_ok includes the n_airborne, which the statistics leave out)."""
     failed = runs["status"] != "ok"
+    airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
     table = (
-        runs.assign(failed=failed, ok=~failed).groupby(KEYS, observed=True).agg(n_runs=("status", "size"),
-        n_ok=("ok", "sum"), n_failed=("failed", "sum"))
+        runs.assign(failed=failed, ok=~failed, airborne=airborne).groupby(KEYS, observed=True).agg(
+        n_runs=("status", "size"), n_ok=("ok", "sum"), n_failed=("failed", "sum"), n_airborne=("airborne", "sum"))
     )  # fmt: skip
     return table.astype("int64").reset_index()
 
@@ -384,8 +398,7 @@ def survey(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: Mapping
     dict
         Output file name -> DataFrame (see ``docs/outputs.md``).
     """
-    ok, _ = split_failed(runs)
-    ok = inequality_columns(ok)
+    ok = inequality_columns(readings(runs))
     legal = legal_limits(ok, legal_axle_load, legal_group_load)
     pairs, pair_summary = static_vs_wim(ok)
     return {
@@ -424,10 +437,11 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
         "n_runs": int(summary["n_runs"].sum()),
         "n_ok": int(summary["n_ok"].sum()),
         "n_failed": int(summary["n_failed"].sum()),
+        "n_airborne": int(summary["n_airborne"].sum()),
     }
     for row in summary.itertuples(index=False):
         entry = {key: rounded(getattr(row, key), digits) for key, digits in _HEADLINE_DIGITS.items()}
-        entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed))
+        entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed), n_airborne=int(row.n_airborne))
         metrics.setdefault(row.protocol, {})[row.group] = entry
     pairs = tables["static_vs_wim.csv"]
     if not pairs.empty:
@@ -484,7 +498,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     tables = survey(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
-    tables["design_guidance.csv"] = design_table(inequality_columns(split_failed(runs)[0]))
+    tables["design_guidance.csv"] = design_table(inequality_columns(readings(runs)))
     try:
         write_outputs(tables, args.out, metrics, args.metrics)
     except OSError as exc:

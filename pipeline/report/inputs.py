@@ -16,7 +16,7 @@ import pandas as pd
 import bogie
 import pipeline
 from pipeline.config import Config, load_config, load_params
-from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, split_failed
+from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, readings
 
 __all__ = ["ReportInputs", "build_date", "code_digest", "read_inputs", "read_tables"]
 
@@ -120,7 +120,7 @@ def read_inputs(
         raise RunsError(f"{runs}/ holds no runs; run the simulate stage first")
     every = pd.read_parquet(runs, columns=STATUS_COLUMNS)
     every["study"] = every["study"].astype(str)
-    ok = inequality_columns(split_failed(read_runs(runs, "fleet", REQUIRED_COLUMNS))[0])
+    ok = inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
     metrics_dir = Path(metrics_dir)
     return ReportInputs(
         raw_params=load_params(params),

@@ -299,7 +299,9 @@ def test_definitions_take_the_protocols_from_params():
         pair_tolerance=0.05,
         share_tolerance=0.1,
         nose_up_deg=0.5,
+        n_airborne=140,
     )
+    assert any("its wheels in the air over the WIM sensor" in p and "(140 in the fleet study" in p for p in paras)
     headings = [p for p in paras if p.startswith("## ")]
     assert headings == [
         "## Survey protocols (params.yaml, protocol:)",

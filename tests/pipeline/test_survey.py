@@ -252,11 +252,12 @@ def test_headline_metrics_keys_and_rounding():
         shares = 1 + 0.04 * tilt * np.array([-1.0, 0.0, 1.0]) + 0.01 * rng.standard_normal(3)
         rows += [run(i, 80e3 * shares, tilt_deg=tilt), run(i, 80e3 * shares * (1 + 0.02 * rng.random(3)), "wim")]
     metrics = headline_metrics(survey(frame(rows), 10 * TONNE, LEGAL_GROUP))
-    assert set(metrics) == {"n_runs", "n_ok", "n_failed", "static", "wim", "static_vs_wim"}
+    assert set(metrics) == {"n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim"}
     entry = metrics["static"]["triaxle"]
     assert set(entry) == {
         "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
         "mean_road_wear_factor", "rear_overload_share_nose_up", "frac_axle_over_group_legal", "n_ok", "n_failed",
+        "n_airborne",
     }  # fmt: skip
     assert entry["rear_overload_share_nose_up"] == 1.0  # the fabricated shares rise towards the rear when nose up
     assert round(entry["mean_spread_kg"], 1) == entry["mean_spread_kg"]
@@ -388,3 +389,16 @@ def test_the_stage_refuses_an_incomplete_runs_dataset(stage_dir, capsys):
     err = capsys.readouterr().err
     assert "the fleet runs are incomplete: 3 of 80 (sample, protocol) runs missing" in err
     assert not (stage_dir / "metrics" / "survey.json").exists()
+
+
+def test_a_reading_with_a_wheel_in_the_air_is_counted_and_kept_out_of_the_statistics():
+    # 9 WIM readings within 2 %, and one tri-axle read 25 kN / 0 / 0: its wheels were off the road over the sensor
+    rows = [run(i, [80e3, 80.5e3, 81e3], "wim") for i in range(9)] + [run(9, [25e3, 0.0, 0.0], "wim")]
+    assert [r["wheel_airborne"] for r in rows] == [False] * 9 + [True]
+    assert rows[-1]["max_deviation"] == pytest.approx(2.0)  # what an unflagged reading would add to the mean
+    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    summary = tables["summary.csv"].iloc[0]
+    assert (summary["n_ok"], summary["n_airborne"]) == (10, 1)
+    assert summary["share_outside_5pct"] == 0.0  # the nine real readings, all within 5 %
+    assert summary["mean_max_deviation"] == pytest.approx(0.5 / 80.5)  # |W - mean| / mean of the nine
+    assert headline_metrics(tables)["n_airborne"] == 1

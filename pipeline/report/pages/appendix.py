@@ -83,6 +83,7 @@ def definitions(ctx: Context) -> list[Page]:
         pair_tolerance=PAIR_TOLERANCE,
         share_tolerance=SHARE_TOLERANCE,
         nose_up_deg=NOSE_UP_DEG,
+        n_airborne=ctx.inputs.survey_metrics.get("n_airborne", 0),
     )
     fig = text_page("Appendix B: protocols, definitions and model assumptions", paragraphs)
     return [Page("Appendix B: protocols, definitions, assumptions", "", fig)]
