@@ -459,6 +459,16 @@ def run(name: str, **bogie_changes: Any) -> DynamicResult:
 
 
 def summary(name: str, result: DynamicResult | None = None) -> dict[str, float]:
-    """The run's figures in the form of the reference's table (runs the case if no result is given)."""
+    """The run's figures in the form of the reference's table (runs the case if no result is given).
+
+    Raises
+    ------
+    ValueError
+        If the run failed: the figures of a history cut short (a NaN here, the last load difference of a
+        half-finished run there) would read as results, e.g. as perfect equalisation.
+    """
     case = get(name)
-    return case.summarise(run(name) if result is None else result)
+    result = run(name) if result is None else result
+    if not result.success:
+        raise ValueError(f"run {case.name} failed ({result.message}): it has no figures to compare")
+    return case.summarise(result)

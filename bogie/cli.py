@@ -62,8 +62,8 @@ def _cmd_case(args: argparse.Namespace) -> int:
     ref = _figures(case, case.reference)
     print(f"{case.name}: {case.description}")
     print(f"status {result.status}: {result.message}")
-    ours = cases.summary(case.name, result)
-    print(f"ours: {_figures(case, ours)}")
+    ours = cases.summary(case.name, result) if result.success else {}
+    print(f"ours: {_figures(case, ours) if result.success else 'none (the run failed)'}")
     print(f"reference: {ref or 'no figure printed'}")
     if args.csv:
         out = Path(args.csv)

@@ -136,3 +136,13 @@ def test_a_table_2_history_plots_p1_in_newtons_with_the_references_figures():
     assert levels == {1000, 2700, 3200}  # ours, and the reference's front and rear on the step
     linear = case_history(result)  # without a case: the non-dimensional p and P1 as before
     assert linear.axes[0].get_ylabel() == "wheel load\nparameter [-]"
+
+
+def test_the_summary_of_a_failed_run_is_refused_not_read_as_figures():
+    from dataclasses import replace
+
+    result = cases.run("L03")
+    failed = replace(result, status="failed", message="Newton did not converge at t = 3.2 s")
+    with pytest.raises(ValueError, match=r"run L03 failed \(Newton did not converge at t = 3.2 s\): it has no figures"):
+        cases.summary("L03", failed)
+    assert cases.summary("L03", result)  # the run itself has its figures
