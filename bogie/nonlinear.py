@@ -376,11 +376,18 @@ def equilibrium(
     work = np.zeros(_work_size(bogie))
     tol = _tolerance(bogie)
     f_try = np.zeros(ndof)
-    for _ in range(60):
+    last = np.zeros(ndof)
+    for _ in range(100):
         core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True, work)
         if np.all(np.abs(f) <= tol):
             break
         if not lu_factor(kt, piv):
+            if np.max(np.abs(last)) > 1e-9:
+                # the last step lifted an axle off both its spring and its tyre (a stiff stop's onset can throw
+                # one there): take back half of it and go on from there
+                last *= 0.5
+                u -= last
+                continue
             raise RuntimeError(
                 f"static equilibrium: singular stiffness at u = {np.array2string(u, precision=4)} "
                 "(a spring and its tyre both unloaded: is the load factor or king pin rise out of reach?)"
@@ -399,6 +406,7 @@ def equilibrium(
                 break
             step *= 0.5
         u += step
+        last = step
     else:
         worst = int(np.argmax(np.abs(f) / tol))
         raise RuntimeError(
