@@ -17,16 +17,17 @@ Packed parameters (built by :func:`bogie.nonlinear.pack`); this module is the on
 * drive row: ``[road height 0..n-1, road rate 0..n-1, load factor, king pin rise]``.
 * history: the plastic slip s_e of each contact (2n).
 * record: the entries of :data:`RECORD`, each a multiple of n long, in that order: ``[tyre load (n), spring load
-  (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n), axle position (n)]``.
+  (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n), axle position (n), stop
+  moment (n - 1)]``.
 
 Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at a chassis anchor
 (:func:`_radius_rod`), and the rod turns the spring ends' friction into generalised forces on the chassis pitch
 and the axle's vertical freedom.
 
 The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, the
-springs with their end friction's return map, pad moments, tyre loads, bushes, the record); when they were split
-from a former single routine they kept its arithmetic in the same order, so results were bit-identical to it (the
-radius rods, added later, changed the physics). The helpers are inlined into
+springs with their end friction's return map, pad moments, tyre loads, bushes, bump stops, the record); when they
+were split from a former single routine they kept its arithmetic in the same order, so results were bit-identical
+to it (the radius rods and the equaliser stops, added later, changed the physics). The helpers are inlined into
 :func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
 evaluation. An array passed to an inlined helper still costs reference counting at each call, so the helpers
 used inside loops take and return scalars, and the short loops over pivots, contacts and tyres stay in
@@ -52,6 +53,8 @@ SCALARS = (
     "payload_weight",
     "payload_cg_x",
     "axle_weight",
+    "equaliser_stop",
+    "equaliser_stop_stiffness",
 )
 (
     _KR,
@@ -66,6 +69,8 @@ SCALARS = (
     _WPAY,
     _XCG,
     _WAXLE,
+    _STOP,
+    _KSTOP,
 ) = range(len(SCALARS))
 NS = len(SCALARS)
 
@@ -114,20 +119,38 @@ _ARRAY_EXTRA = tuple(a[2] for a in ARRAYS)
 _START_PER_AXLE = tuple(sum(_ARRAY_PER_AXLE[:k]) for k in range(len(ARRAYS) + 1))
 _START_EXTRA = tuple(sum(_ARRAY_EXTRA[:k]) for k in range(len(ARRAYS) + 1))
 
-#: recorded outputs: (name, entries per axle), in record order
+#: recorded outputs: (name, entries per axle, extra entries), in record order; length = per_axle * n + extra, as
+#: in :data:`ARRAYS`. New outputs go at the end, so that the earlier ones keep their slices.
 RECORD = (
-    ("tyre_load", 1),
-    ("spring_load", 1),
-    ("friction_force", 2),
-    ("stick", 2),
-    ("contact_shift", 2),
-    ("plastic_slip", 2),
-    ("axle_position", 1),
+    ("tyre_load", 1, 0),
+    ("spring_load", 1, 0),
+    ("friction_force", 2, 0),
+    ("stick", 2, 0),
+    ("contact_shift", 2, 0),
+    ("plastic_slip", 2, 0),
+    ("axle_position", 1, 0),
+    ("stop_moment", 1, -1),
 )
-_REC_TYRE, _REC_SPRING, _REC_FRICTION, _REC_STICK, _REC_SHIFT, _REC_SLIP, _REC_AXLE_X = range(len(RECORD))
-_RECORD_START = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
-#: record entries per axle
-RECORD_PER_AXLE = _RECORD_START[-1]
+(
+    _REC_TYRE,
+    _REC_SPRING,
+    _REC_FRICTION,
+    _REC_STICK,
+    _REC_SHIFT,
+    _REC_SLIP,
+    _REC_AXLE_X,
+    _REC_STOP,
+) = range(len(RECORD))
+_RECORD_START_PER_AXLE = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
+_RECORD_START_EXTRA = tuple(sum(r[2] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
+#: record entries per axle: ``RECORD_PER_AXLE * n`` is at least the record's length, :func:`record_length` (n)
+#: exactly (the per-equaliser outputs are one short of n)
+RECORD_PER_AXLE = _RECORD_START_PER_AXLE[-1]
+
+#: [rad] width of a stop's onset: its contact stiffness grows linearly from 0 to the full stiffness over this much
+#: rotation beyond the stop angle (a crowned rubber face whose contact area grows over its first 0.75 mm at
+#: 0.15 m), so that the moment has a continuous slope and the forward-difference tangent no kink
+STOP_ONSET = 0.005
 
 FD_STEP = 1e-7  # [m] or [rad]: forward-difference step of the tangent
 
@@ -160,16 +183,21 @@ def data_length(n: int) -> int:
 
 @njit(cache=True, inline="always")
 def record_start(k, n):
-    """Index in the record of the first entry of output k (an index into :data:`RECORD`) for n axles."""
-    return _RECORD_START[k] * n
+    """Index in the record of the first entry of output k (an index into :data:`RECORD`) for n axles.
+
+    k = len(RECORD) gives the record's length.
+    """
+    return _RECORD_START_PER_AXLE[k] * n + _RECORD_START_EXTRA[k]
+
+
+def record_length(n: int) -> int:
+    """Length of the record of n axles."""
+    return int(record_start(len(RECORD), n))
 
 
 def record_slices(n: int) -> dict[str, slice]:
     """Where each recorded output sits in the record of n axles, by name."""
-    return {
-        name: slice(int(record_start(k, n)), int(record_start(k, n)) + per_axle * n)
-        for k, (name, per_axle) in enumerate(RECORD)
-    }
+    return {name: slice(int(record_start(k, n)), int(record_start(k + 1, n))) for k, (name, _, _) in enumerate(RECORD)}
 
 
 #: scratch arrays of :func:`_internal` in the work buffer, in order: (name, length per axle, extra length)
@@ -394,6 +422,24 @@ def _bushes(u, v, data_f, n, f):
 
 
 @njit(cache=True, inline="always")
+def _stop_moment(phi, stop, k_stop):
+    """Moment of an equaliser's bump stop for the relative rotation phi = theta_e - theta_c [N m] (f = -Q).
+
+    Zero within +-stop; beyond, the excess e = |phi| - stop gives k e^2 / (2 e_0) over the onset e_0
+    (:data:`STOP_ONSET`) and k (e - e_0 / 2) past it, with the sign of phi: unilateral on each side, C1, and the
+    derivative of the potential k e^3 / (6 e_0), k (e - e_0 / 2)^2 / 2 + k e_0^2 / 24 (``docs/models.md``).
+    """
+    excess = abs(phi) - stop
+    if excess <= 0.0:
+        return 0.0
+    if excess < STOP_ONSET:
+        m = 0.5 * k_stop * excess * excess / STOP_ONSET
+    else:
+        m = k_stop * (excess - 0.5 * STOP_ONSET)
+    return m if phi > 0.0 else -m
+
+
+@njit(cache=True, inline="always")
 def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
     """Spring loads, friction forces, stick flags, contact shifts, plastic slips and axle positions into the record."""
     o_spring = record_start(_REC_SPRING, n)
@@ -470,6 +516,15 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
         if record:
             rec[i] = ft
     _bushes(u, v, data_f, n, f)
+    # bump stops between each equaliser and the chassis: equal and opposite, like the bush
+    stop, k_stop = data_f[_STOP], data_f[_KSTOP]
+    o_stop = record_start(_REC_STOP, n)
+    for j in range(n - 1):
+        m_s = _stop_moment(u[1 + j] - u[0], stop, k_stop)
+        f[1 + j] += m_s
+        f[0] -= m_s
+        if record:
+            rec[o_stop + j] = m_s
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
     if record:

@@ -244,6 +244,8 @@ def _packed_scalars(bogie: Bogie) -> dict[str, float]:
         "payload_weight": bogie.payload_mass * GRAVITY,
         "payload_cg_x": bogie.payload_cg_x,
         "axle_weight": bogie.axle_mass * GRAVITY,
+        "equaliser_stop": bogie.equaliser_stop,
+        "equaliser_stop_stiffness": bogie.equaliser_stop_stiffness,
     }
 
 
@@ -314,6 +316,25 @@ def limits(bogie: Bogie) -> NDArray[np.float64]:
     return np.asarray([math.radians(20.0)] + [math.radians(60.0)] * (n - 1) + [0.5] * n)
 
 
+def _check_limits(bogie: Bogie, u: NDArray[np.float64]) -> None:
+    """Refuse a solution outside the freedoms' limits (:func:`limits`): a ``ValueError`` naming the freedom, its
+    value and the limit with their unit. Beyond the limits the model's equilibria are spurious, not a bogie's."""
+    names = dof_names(bogie.n_axles)
+    lim = limits(bogie)
+    n = bogie.n_axles
+    for k in range(2 * n):
+        if not abs(u[k]) <= lim[k]:
+            if k < n:
+                value, limit, unit = math.degrees(u[k]), math.degrees(lim[k]), "degrees"
+            else:
+                value, limit, unit = u[k], lim[k], "m"
+            raise ValueError(
+                f"static equilibrium lies outside the model's range of validity: {names[k]} = {value:.4g} {unit}, "
+                f"beyond its limit of +-{limit:g} {unit} (a spurious equilibrium, e.g. an equaliser turned over on a "
+                "slack spring: are the equaliser stops switched off, or the king pin rise or load out of reach?)"
+            )
+
+
 def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
     """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]."""
     w = float(np.mean(design_wheel_loads(bogie)))
@@ -331,6 +352,9 @@ def equilibrium(
     With ``slip`` None the friction is relaxed: the equilibrium is solved without friction and each contact's
     slip is set so that it carries no friction force there (no locked-in forces, as after a long vibration).
     With ``slip`` given, friction holds those slips and the equilibrium includes the friction forces.
+
+    Raises ``ValueError`` if the equilibrium lies outside the freedoms' limits (:func:`limits`): it is refused,
+    not returned. An equaliser that meets its bump stop (``Bogie.equaliser_stop``) is a valid equilibrium.
     """
     n = bogie.n_axles
     ndof = 2 * n
@@ -347,15 +371,23 @@ def equilibrium(
     f = np.zeros(ndof)
     kt = np.zeros((ndof, ndof))
     ct = np.zeros((ndof, ndof))
-    rec = np.zeros(core.RECORD_PER_AXLE * n)
+    rec = np.zeros(core.record_length(n))
     piv = np.zeros(ndof, dtype=np.int64)
     work = np.zeros(_work_size(bogie))
     tol = _tolerance(bogie)
-    for _ in range(60):
+    f_try = np.zeros(ndof)
+    last = np.zeros(ndof)
+    for _ in range(100):
         core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True, work)
         if np.all(np.abs(f) <= tol):
             break
         if not lu_factor(kt, piv):
+            if np.max(np.abs(last)) > 1e-9:
+                # the last step lifted an axle off both its spring and its tyre (a stiff stop's onset can throw
+                # one there): take back half of it and go on from there
+                last *= 0.5
+                u -= last
+                continue
             raise RuntimeError(
                 f"static equilibrium: singular stiffness at u = {np.array2string(u, precision=4)} "
                 "(a spring and its tyre both unloaded: is the load factor or king pin rise out of reach?)"
@@ -364,9 +396,24 @@ def equilibrium(
         lu_solve(kt, piv, step)
         # limit the rotation and displacement of one iteration to keep Newton inside the physical range
         scale = max(1.0, np.max(np.abs(step[:n])) / 0.05, np.max(np.abs(step[n:])) / 0.05)
-        u += step / scale
+        step /= scale
+        # backtrack while the step raises the residual: a free equaliser is unstable inside its stops and stiff on
+        # them, where the full Newton step can cycle across a stop's onset
+        norm = np.linalg.norm(f / tol)
+        for _ in range(12):
+            core.force(u + step, v, drv, data_f, data_i, hist, hist_new, f_try, kt, ct, rec, False, False, work)
+            if np.linalg.norm(f_try / tol) < norm:
+                break
+            step *= 0.5
+        u += step
+        last = step
     else:
-        raise RuntimeError(f"static equilibrium did not converge: largest force residual {np.max(np.abs(f)):.3g}")
+        worst = int(np.argmax(np.abs(f) / tol))
+        raise RuntimeError(
+            f"static equilibrium did not converge: largest force residual {np.max(np.abs(f)):.3g} "
+            f"(on {dof_names(n)[worst]}) at u = {np.array2string(u, precision=4)}"
+        )
+    _check_limits(bogie, u)
     return State(u=u, v=v, a=np.zeros(ndof), slip=hist_new.copy() if relaxed else hist.copy())
 
 
@@ -380,7 +427,7 @@ def _result(bogie: Bogie, run, inputs: Inputs, final: State | None) -> Nonlinear
         "chassis_pitch": run.u[:, 0],
         "equaliser_rotation": run.u[:, 1:n] - run.u[:, :1],
         "axle_displacement": run.u[:, n:],
-        **{name: rec[:, where[name]] for name, _ in core.RECORD if name != "tyre_load"},
+        **{name: rec[:, where[name]] for name, *_ in core.RECORD if name != "tyre_load"},
         "road_height": inputs.road_height[:keep],
         "load_factor": inputs.load_factor[:keep],
     }
@@ -434,7 +481,7 @@ def simulate(
     mass, data_f, data_i = pack(bogie)
     drive = inputs.drive(bogie)
     state = equilibrium(bogie, drive[0]) if initial is None else initial
-    n_rec = core.RECORD_PER_AXLE * bogie.n_axles
+    n_rec = core.record_length(bogie.n_axles)
     ndof = 2 * bogie.n_axles
     f0 = np.zeros(ndof)
     hist_new = state.slip.copy()
@@ -468,7 +515,7 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
         np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
-        max_halvings=8, n_record=core.RECORD_PER_AXLE * bogie.n_axles, work_size=_work_size(bogie),
+        max_halvings=8, n_record=core.record_length(bogie.n_axles), work_size=_work_size(bogie),
         limits=limits(bogie), quasi_static=True,
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())

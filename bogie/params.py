@@ -73,6 +73,8 @@ SCALAR_RANGES: dict[str, FieldRange] = {
     "contact_roll_radius": FieldRange(0.0, 0.5, "m", True),
     "friction_coefficient": FieldRange(0.0, 1.5, "-", True),
     "radius_rod_drop": FieldRange(-0.5, 0.5, "m", True),
+    "equaliser_stop": FieldRange(0.0, math.pi, "rad", False),
+    "equaliser_stop_stiffness": FieldRange(0.0, 1e9, "N m/rad", True),
 }
 
 #: allowed range and unit of each value of the per-axle fields (one value per axle), by field name
@@ -98,6 +100,16 @@ INHIBITORS: dict[str, float] = {
     "contact_roll_radius": 0.0,
     "friction_coefficient": 0.0,
 }
+
+#: an ``equaliser_stop`` that no equaliser can reach inside the freedoms' limits (relative rotation at most
+#: 60 + 20 degrees): the stop switched off, for what-if runs [rad]
+NO_STOP = math.pi
+#: the presets' stop angle: 40 mm of free travel at the tip of a 0.155 m arm, asin(0.04 / 0.155) = 15 degrees,
+#: mid-way in the model notes' 10-20 degrees (a choice; ``docs/presets.md``) [rad]
+PRESET_EQUALISER_STOP = math.radians(15.0)
+#: the presets' stop contact stiffness: a 60 x 60 x 12 mm rubber pad of 60 IRHD at 0.15 m from the pivot
+#: (``docs/models.md``, "Equaliser stops") [N m/rad]
+PRESET_EQUALISER_STOP_STIFFNESS = 8.4e4
 
 #: the reference's Stage 1 chassis downward displacement alpha [m] (Figure 2)
 STAGE1_CHASSIS_DEFLECTION = 0.057
@@ -210,6 +222,14 @@ class Bogie:
     radius_rod_drop
         Height of the spring seat above the rods' line (anchor and axle eye) in the design position [m]; 0 puts
         the rods at the seat's height, where a chassis pitch moves seats and pads together.
+    equaliser_stop
+        Relative rotation of an equaliser and the chassis, either way, at which the equaliser meets its rubber
+        bump stop [rad]; the same for every equaliser (they are alike in every preset and share one bush
+        stiffness). :data:`NO_STOP` (pi) switches the stops off: no equaliser reaches it inside the freedoms'
+        limits. Not an inhibitor: a physical limit of travel (``docs/models.md``, "Equaliser stops").
+    equaliser_stop_stiffness
+        Rotational contact stiffness of a stop once fully in contact [N m/rad] (a rubber pad's compression times
+        its lever squared); 0 also switches the stops off.
     """
 
     axle_x: tuple[float, ...]
@@ -240,6 +260,8 @@ class Bogie:
     friction_coefficient: float = 0.0
     radius_rod_length: tuple[float, ...] = field(default=())
     radius_rod_drop: float = 0.0
+    equaliser_stop: float = PRESET_EQUALISER_STOP
+    equaliser_stop_stiffness: float = PRESET_EQUALISER_STOP_STIFFNESS
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
@@ -470,6 +492,8 @@ def tandem_trrl(**changes: Any) -> Bogie:
         bush_damping=0.0,
         contact_roll_radius=0.075,
         friction_coefficient=0.3,
+        equaliser_stop=PRESET_EQUALISER_STOP,
+        equaliser_stop_stiffness=PRESET_EQUALISER_STOP_STIFFNESS,
     )
     return base.replace(**changes) if changes else base
 
@@ -509,6 +533,8 @@ def triaxle_stage1(**changes: Any) -> Bogie:
         bush_damping=0.0,
         contact_roll_radius=0.075,
         friction_coefficient=0.3,
+        equaliser_stop=PRESET_EQUALISER_STOP,
+        equaliser_stop_stiffness=PRESET_EQUALISER_STOP_STIFFNESS,
     )
     return base.replace(**changes) if changes else base
 

@@ -62,6 +62,8 @@ def test_replace_switches_one_inhibitor_off_and_nothing_else():
         ("contact_roll_radius", -0.01, "contact_roll_radius = -0.01 is out of range: must be in [0, 0.5] m"),
         ("chassis_tilt", math.radians(10.5), "chassis_tilt = 0.1832"),
         ("tyre_damping", "soft", "tyre_damping = 'soft' is not a number"),
+        ("equaliser_stop", -0.1, "equaliser_stop = -0.1 is out of range: must be in (0, 3.14159] rad"),
+        ("equaliser_stop_stiffness", 2e9, "equaliser_stop_stiffness = 2000000000.0 is out of range"),
     ],
 )
 def test_validation_names_field_value_range_and_unit(field, value, fragment):
