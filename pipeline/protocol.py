@@ -81,6 +81,7 @@ def static_weighbridge(
     if settled.success:
         window = settled.t >= settled.t[-1] - READ_TIME
         settled.extras["reading"] = np.mean(settled.wheel_loads[window], axis=0)
+        settled.extras["on_stop"] = _on_stop(settled, window)
     return settled
 
 
@@ -102,10 +103,19 @@ def wim_pass(
         run.extras["reading"] = np.array(
             [np.interp(crossing[i], run.t, run.wheel_loads[:, i]) for i in range(bogie.n_axles)]
         )
+        run.extras["on_stop"] = _on_stop(run, (run.t >= crossing[0] - 0.5 * dt) & (run.t <= crossing[-1] + 0.5 * dt))
     return run
 
 
-def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float) -> dict[str, Any]:
+def _on_stop(run: nonlinear.NonlinearResult, window: NDArray[np.bool_]) -> bool:
+    """Whether an equaliser bears on its bump stop (a non-zero stop moment) at any step of ``window``."""
+    moment = np.asarray(run.extras["stop_moment"])
+    return bool(np.any(moment[window] != 0.0))
+
+
+def result_row(
+    protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float, on_stop: bool = False
+) -> dict[str, Any]:
     """The result columns of one weighing (:data:`pipeline.schema.RESULT_COLUMNS`) with ``protocol``.
 
     Axle loads [N] are twice the wheel loads (both sides); an axle the group does not have reads 0. With no
@@ -115,11 +125,12 @@ def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | N
     ``wheel_airborne``: some axle reads 0 N, its wheels in the air as they cross the WIM sensor (the tyres are
     unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping it; the row
     stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
+    ``equaliser_on_stop``: an equaliser bears on its bump stop while the protocol reads (a valid reading).
     """
     row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}
     if wheel_loads is None:
         row.update(dict.fromkeys(RESULT_COLUMNS, math.nan))
-        row.update(outside_5pct=None, over_10pct=None, wheel_airborne=None)
+        row.update(outside_5pct=None, over_10pct=None, wheel_airborne=None, equaliser_on_stop=None)
         return row
     loads = 2.0 * np.asarray(wheel_loads, dtype=float)
     axle = np.zeros(MAX_AXLES)
@@ -139,6 +150,7 @@ def result_row(protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | N
         outside_5pct=bool((heaviest - lightest) / heaviest > PAIR_TOLERANCE),
         over_10pct=bool(heaviest / (loads.sum() / n_axles) > 1.0 + SHARE_TOLERANCE),
         wheel_airborne=bool(lightest <= 0.0),
+        equaliser_on_stop=bool(on_stop),
     )
     for i in range(MAX_AXLES):
         row[f"axle_load_{i}"] = float(axle[i])
@@ -151,6 +163,7 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
     status, message = "ok", "ok"
     reading = None
     pitch = 0.0
+    on_stop = False
     try:
         runner = static_weighbridge if protocol == "static" else wim_pass
         run = runner(
@@ -159,6 +172,7 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
         if run.success and np.all(np.isfinite(run.extras["reading"])):
             reading = run.extras["reading"]
             pitch = float(run.extras["chassis_pitch"][-1])
+            on_stop = bool(run.extras["on_stop"])
             # a wheel in the air as it crosses a WIM sensor is a real reading (zero load), not a failure
             if np.sum(reading) <= 0.0:
                 status, message = "failed", "the group carries no load at the reading"
@@ -168,6 +182,6 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
     except Exception as exc:  # noqa: BLE001 - any error of one bogie (MemoryError included) fails its row only
         status, message = "failed", f"{type(exc).__name__}: {exc}"
         reading = None
-    row = result_row(protocol, bogie.n_axles, reading, pitch)
+    row = result_row(protocol, bogie.n_axles, reading, pitch, on_stop)
     row.update(status=status, message=message)
     return row

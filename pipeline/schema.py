@@ -66,17 +66,18 @@ UNITS: dict[str, str] = {
     **{f"axle_load_{i}": "N" for i in range(MAX_AXLES)}, **{f"load_share_{i}": "-" for i in range(MAX_AXLES)},
     "group_load": "N", "p": "-", "p1": "-", "max_deviation": "-", "spread": "N", "spread_kg": "kg",
     "road_wear_factor": "-", "chassis_pitch": "rad", "outside_5pct": "-", "over_10pct": "-", "wheel_airborne": "-",
+    "equaliser_on_stop": "-",
 }  # fmt: skip
 
 #: the weighing's result: null in a failed row, never null in a successful one
 RESULT_COLUMNS: tuple[str, ...] = (
     *(f"axle_load_{i}" for i in range(MAX_AXLES)), *(f"load_share_{i}" for i in range(MAX_AXLES)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",
-    "outside_5pct", "over_10pct", "wheel_airborne",
+    "outside_5pct", "over_10pct", "wheel_airborne", "equaliser_on_stop",
 )  # fmt: skip
 
 #: boolean result columns
-_BOOLEANS: tuple[str, ...] = ("outside_5pct", "over_10pct", "wheel_airborne")
+_BOOLEANS: tuple[str, ...] = ("outside_5pct", "over_10pct", "wheel_airborne", "equaliser_on_stop")
 
 #: column -> pandas dtype of a run row, in file order
 RUN_COLUMNS: dict[str, str] = {

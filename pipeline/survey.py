@@ -51,7 +51,7 @@ DISTRIBUTED: tuple[str, ...] = (*LOAD_SHARE_COLUMNS, "spread_pct", "spread_kg", 
 REQUIRED_COLUMNS: tuple[str, ...] = (
     "sample_id", "group", "n_axles", "protocol", "status", "message", "chassis_tilt", *TYRE_WEAR_COLUMNS,
     *AXLE_LOAD_COLUMNS, *LOAD_SHARE_COLUMNS, "group_load", "max_deviation", "spread_kg", "road_wear_factor",
-    "wheel_airborne",
+    "wheel_airborne", "equaliser_on_stop",
 )  # fmt: skip
 KEYS = ["protocol", "group"]
 
@@ -374,6 +374,7 @@ def summary_table(ok: pd.DataFrame, runs: pd.DataFrame, legal: pd.DataFrame) -> 
         mean_max_deviation=("max_deviation", "mean"), mean_spread_pct=("spread_pct", "mean"),
         mean_spread_kg=("spread_kg", "mean"), mean_road_wear_factor=("road_wear_factor", "mean"),
         rear_overload_share_nose_up=("rear_nose_up", "mean"), n_nose_up=("rear_nose_up", "count"),
+        share_on_stop=("equaliser_on_stop", "mean"),
     ).reset_index()  # fmt: skip
     table = table.merge(legal[[*KEYS, "frac_axle_over_group_legal"]], on=KEYS, how="left")
     # (protocol, group) pairs where every run failed still get a row, with counts and NaN statistics
@@ -426,7 +427,7 @@ def rounded(x: Any, digits: int) -> float | None:
 _HEADLINE_DIGITS = {
     "share_outside_5pct": 4, "share_outside_10pct": 4, "mean_max_deviation": 4, "mean_spread_pct": 2,
     "mean_spread_kg": 1, "mean_road_wear_factor": 4, "rear_overload_share_nose_up": 4,
-    "frac_axle_over_group_legal": 4,
+    "frac_axle_over_group_legal": 4, "share_on_stop": 4,
 }  # fmt: skip
 
 

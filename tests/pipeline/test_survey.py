@@ -257,7 +257,7 @@ def test_headline_metrics_keys_and_rounding():
     assert set(entry) == {
         "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
         "mean_road_wear_factor", "rear_overload_share_nose_up", "frac_axle_over_group_legal", "n_ok", "n_failed",
-        "n_airborne",
+        "n_airborne", "share_on_stop",
     }  # fmt: skip
     assert entry["rear_overload_share_nose_up"] == 1.0  # the fabricated shares rise towards the rear when nose up
     assert round(entry["mean_spread_kg"], 1) == entry["mean_spread_kg"]
