@@ -70,8 +70,34 @@ def test_low_speed_run_settles_to_the_quasi_static_state_with_the_front_wheel_on
     loads = linear.wheel_loads_from_state(bogie, m, u, u * 0.0, np.zeros(2))
     p_static = abs(loads[0] - loads[1]) / r.reference_load
     assert late.mean() == pytest.approx(p_static, rel=0.03)
-    assert np.ptp(late) < 0.8 * np.ptp(early)
     assert np.ptp(late) < 0.1 * p_static
+    assert np.ptp(early) < 0.15 * p_static
+
+
+def test_l01s_residual_oscillation_is_the_equaliser_rocking_mode_as_newmark_maps_it(runs):
+    """At the reference's dt = 0.0625 s the small oscillation of L01's p is numerical, not a physical decay.
+
+    The equaliser rocks, with the chassis held, at omega = sqrt((K_S b^2 / 2 + K_B) / I) (docs/validation.md).
+    Average-acceleration Newmark, undamped, maps a mode of angular frequency omega to 2 / dt atan(omega dt / 2)
+    (period elongation, Newmark 1959): 28 Hz becomes 7.1 Hz at dt = 0.0625 s. At dt / 8 the oscillation is gone but
+    for the chassis's own small pitch oscillation.
+    """
+    r = runs["L01"]
+    bogie = cases.get("L01").bogie()
+    dt = float(np.mean(np.diff(r.t)))
+    window = (r.t > 3.5) & (r.t < 9.0)  # the front wheel alone on the plateau
+    x = r.p[window] - r.p[window].mean()
+    freq = np.fft.rfftfreq(len(x), dt)
+    peak = freq[np.argmax(np.abs(np.fft.rfft(x))[1:]) + 1]
+    omega = np.sqrt((bogie.combined_stiffness * bogie.equaliser_front_arm[0] ** 2 / 2 + bogie.bush_stiffness)
+                    / bogie.equaliser_inertia)  # fmt: skip
+    assert omega / (2 * np.pi) == pytest.approx(28.1, abs=0.1)
+    mapped = 2.0 / dt * np.arctan(omega * dt / 2.0) / (2 * np.pi)
+    assert peak == pytest.approx(mapped, abs=1.0 / (len(x) * dt))  # within one frequency bin, 0.18 Hz
+    fine = linear.simulate(bogie, RampedStep(), 0.2, dt / 8, 8 * len(r.t) - 8, front_axle_start=-cases.STEP_LEAD)
+    late = (fine.t > 7.5) & (fine.t < 9.0)
+    coarse = (r.t > 7.5) & (r.t < 9.0)
+    assert np.ptp(fine.p[late]) < 0.2 * np.ptp(r.p[coarse])  # it converges away: a numerical artefact
 
 
 def test_unknown_case_and_frame():
