@@ -123,8 +123,10 @@ def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> t
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
-#: how long an idle loky worker waits for work before it ends [s]
-WORKER_IDLE_TIMEOUT = 10.0
+#: how long an idle loky worker waits for work before it ends [s]: long enough that a worker never times out
+#: while chunks are still coming (10 s did, once, on a loaded machine: loky then restarts it with a warning),
+#: short enough that killing the main process does not leave its workers for loky's default 300 s
+WORKER_IDLE_TIMEOUT = 30.0
 
 #: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
 WORKER_MEMORY = 300 * 2**20  # [bytes]
