@@ -14,10 +14,12 @@ from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from bogie.road import ISO8608_CLASSES
 from pipeline.distributions import Choice, Constant, Distribution, LogNormal, LogUniform, Normal, TruncNormal, Uniform
 
 #: ISO 8608 road roughness classes, smoothest first
-ROAD_CLASSES: tuple[str, ...] = ("A", "B", "C", "D", "E", "F", "G", "H")
+#: the ISO 8608 road classes, as bogie.road defines them
+ROAD_CLASSES: tuple[str, ...] = tuple(ISO8608_CLASSES)
 
 #: a road class label
 RoadClass = Literal[ROAD_CLASSES]  # type: ignore[valid-type]

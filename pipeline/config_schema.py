@@ -28,10 +28,9 @@ from pydantic import (
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config_errors import config_error
-from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, READ_TIME, ROUTE_MARGIN
+from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN
 from pipeline.distributions import Choice, Constant, Distribution, ParameterError
 
-PROTOCOLS: tuple[str, ...] = ("static", "wim")
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
 BACKENDS: tuple[str, ...] = ("loky", "dask")
 

@@ -15,6 +15,7 @@ import numpy as np
 import pandas as pd
 
 from pipeline.config import Config
+from pipeline.constants import PROTOCOLS
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.sample import STUDIES, TYRE_WEAR_COLUMNS
 from pipeline.survey_design import DESIGN_BINS
@@ -81,7 +82,7 @@ def summary_numbers(survey: Mapping[str, Any], sensitivity: Mapping[str, Any]) -
     )
     headline = {
         protocol: {group: {k: entry[k] for k in keys} for group, entry in survey[protocol].items()}
-        for protocol in ("static", "wim")
+        for protocol in PROTOCOLS
         if protocol in survey
     }
     copied = ("ranking", "ranking_measure", "reference_check", "ranking_other_measures", "sobol", "ablation")
@@ -118,7 +119,7 @@ def plot_series(
     grid = np.arange(0.0, 30.01, 0.5)
     tolerance, rear = {"tolerance_pct": grid}, {}
     for group in GROUP_LABEL:
-        for protocol in ("static", "wim"):
+        for protocol in PROTOCOLS:
             x = 100.0 * ok.loc[(ok["group"] == group) & (ok["protocol"] == protocol), "pair_difference"].to_numpy()
             share = 100.0 * (x[None, :] > grid[:, None]).mean(axis=1) if len(x) else np.full(len(grid), np.nan)
             tolerance[f"{group}_{protocol}_pct"] = np.round(share, 3)
