@@ -208,6 +208,10 @@ def _attempt(
         r_prev = rnorm
         if not _update(jac, piv, res, du, u_new, u_limit):
             return STATUS_OUT_OF_RANGE, rnorm, it
+        # the matrix now belongs to an earlier iterate: if the next residual falls slowly, form it anew there (a
+        # tangent formed at a kink, e.g. a leaf spring's reversal, can be wrong by a factor of two, and modified
+        # Newton with it stalls)
+        fresh = False
     return STATUS_NO_CONVERGENCE, rnorm, max_iter
 
 

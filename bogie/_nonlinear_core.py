@@ -15,10 +15,11 @@ Packed parameters (built by :func:`bogie.nonlinear.pack`); this module is the on
 * ``data_f``: the scalars of :data:`SCALARS` then the arrays of :data:`ARRAYS`, in that order; array k starts at
   :func:`array_start` (k, n) and has :func:`array_length` (k, n) entries.
 * drive row: ``[road height 0..n-1, road rate 0..n-1, load factor, king pin rise]``.
-* history: the plastic slip s_e of each contact (2n).
+* history: the entries of :data:`HISTORY`: the plastic slip s_e of each contact (2n), then each spring's deflection
+  (n) and the hysteretic part of its force (n) at the last converged step.
 * record: the entries of :data:`RECORD`, each a multiple of n long, in that order: ``[tyre load (n), spring load
   (n), friction force (2n), stick flag (2n), contact shift (2n), plastic slip (2n), axle position (n), stop
-  moment (n - 1)]``.
+  moment (n - 1), spring deflection (n), spring hysteresis (n)]``.
 
 Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at a chassis anchor
 (:func:`_radius_rod`), and the rod turns the spring ends' friction into generalised forces on the chassis pitch
@@ -55,6 +56,8 @@ SCALARS = (
     "axle_weight",
     "equaliser_stop",
     "equaliser_stop_stiffness",
+    "spring_friction_band",
+    "spring_friction_decay",
 )
 (
     _KR,
@@ -71,6 +74,8 @@ SCALARS = (
     _WAXLE,
     _STOP,
     _KSTOP,
+    _BAND,
+    _BETA,
 ) = range(len(SCALARS))
 NS = len(SCALARS)
 
@@ -130,6 +135,8 @@ RECORD = (
     ("plastic_slip", 2, 0),
     ("axle_position", 1, 0),
     ("stop_moment", 1, -1),
+    ("spring_deflection", 1, 0),
+    ("spring_hysteresis", 1, 0),
 )
 (
     _REC_TYRE,
@@ -140,12 +147,43 @@ RECORD = (
     _REC_SLIP,
     _REC_AXLE_X,
     _REC_STOP,
+    _REC_DEFLECTION,
+    _REC_HYSTERESIS,
 ) = range(len(RECORD))
 _RECORD_START_PER_AXLE = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
 _RECORD_START_EXTRA = tuple(sum(r[2] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
 #: record entries per axle: ``RECORD_PER_AXLE * n`` is at least the record's length, :func:`record_length` (n)
 #: exactly (the per-equaliser outputs are one short of n)
 RECORD_PER_AXLE = _RECORD_START_PER_AXLE[-1]
+
+#: history variables, committed at converged steps: (name, entries per axle, extra entries), in order
+HISTORY = (
+    ("plastic_slip", 2, 0),
+    ("spring_deflection", 1, 0),
+    ("spring_hysteresis", 1, 0),
+)
+_HIST_SLIP, _HIST_DEFLECTION, _HIST_HYSTERESIS = range(len(HISTORY))
+_HISTORY_START = tuple(sum(h[1] for h in HISTORY[:k]) for k in range(len(HISTORY) + 1))
+
+
+@njit(cache=True, inline="always")
+def history_start(k, n):
+    """Index in the history of the first entry of variable k (an index into :data:`HISTORY`) for n axles.
+
+    k = len(HISTORY) gives the history's length.
+    """
+    return _HISTORY_START[k] * n
+
+
+def history_length(n: int) -> int:
+    """Length of the history of n axles: the plastic slips, then each spring's deflection and hysteretic force."""
+    return int(history_start(len(HISTORY), n))
+
+
+def history_slices(n: int) -> dict[str, slice]:
+    """Where each history variable sits in the history of n axles, by name."""
+    return {name: slice(int(history_start(k, n)), int(history_start(k + 1, n))) for k, (name, _, _) in enumerate(HISTORY)}
+
 
 #: [rad] width of a stop's onset: its contact stiffness grows linearly from 0 to the full stiffness over this much
 #: rotation beyond the stop angle (a crowned rubber face whose contact area grows over its first 0.75 mm at
@@ -219,6 +257,8 @@ WORK = (
     ("axle_x", 1, 0),
     ("axle_x_pitch", 1, 0),
     ("axle_x_rise", 1, 0),
+    ("spring_deflection", 1, 0),
+    ("spring_hysteresis", 1, 0),
 )
 _WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
 _WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
@@ -268,6 +308,8 @@ def _work_views(work, n):
         _work_view(work, 14, n),
         _work_view(work, 15, n),
         _work_view(work, 16, n),
+        _work_view(work, 17, n),
+        _work_view(work, 18, n),
     )
 
 
@@ -343,14 +385,38 @@ def _return_map(g, slip_old, limit, k_tan):
 
 
 @njit(cache=True, inline="always")
-def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x):
-    """Every spring: contact points (rolling), deflection, end friction, seat load and end loads.
+def _hysteresis(delta, delta_old, h_old, band, decay):
+    """Hysteretic part h of a leaf spring's force [N] at deflection delta [m], from its last converged state.
 
-    ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it.
+    The Fancher form in the elastic line's frame: h moves towards +band while the spring compresses and -band while
+    it extends, h = h_env + (h_old - h_env) exp(-|delta - delta_old| / decay); the loading and unloading envelopes
+    are the elastic line +- band. Exact composition (two steps give the same h as one), so the loop does not depend
+    on the time step (``docs/models.md``, "Leaf-spring hysteresis"). band = 0 switches it off.
+    """
+    if band <= 0.0:
+        return 0.0
+    step = delta - delta_old
+    if step == 0.0:
+        return h_old
+    target = band if step > 0.0 else -band
+    return target + (h_old - target) * math.exp(-abs(step) / decay)
+
+
+@njit(cache=True, inline="always")
+def _springs(
+    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x, s_def,
+    s_hys,
+):
+    """Every spring: contact points (rolling), deflection, interleaf hysteresis, end friction, seat and end loads.
+
+    ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it. Each spring's deflection and
+    hysteretic force go to ``s_def``, ``s_hys`` and the new history.
     """
     o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
     k_r, mu, k_tan = data_f[_KR], data_f[_MU], data_f[_KTAN]
+    band, decay = data_f[_BAND], data_f[_BETA]
+    o_hd, o_hh = history_start(_HIST_DEFLECTION, n), history_start(_HIST_HYSTERESIS, n)
     for i in range(n):
         ef = 2 * i
         er = 2 * i + 1
@@ -366,7 +432,13 @@ def _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z,
         wf = (p_x[er] - xa) / span
         wr = 1.0 - wf
         delta = za - (wf * p_z[ef] + wr * p_z[er] - h0)
-        f_elastic = data_f[o_wd + i] + k_r * delta
+        # interleaf friction: the leaf pack's force is the elastic line plus its hysteretic part
+        h = _hysteresis(delta, hist_old[o_hd + i], hist_old[o_hh + i], band, decay)
+        hist_new[o_hd + i] = delta
+        hist_new[o_hh + i] = h
+        s_def[i] = delta
+        s_hys[i] = h
+        f_elastic = data_f[o_wd + i] + k_r * delta + h
         n_el = max(f_elastic, 0.0)
         # friction: elastic-plastic return map on the slip of each leaf end over its pad
         lam_f = data_f[o_lf + i]
@@ -440,17 +512,22 @@ def _stop_moment(phi, stop, k_stop):
 
 
 @njit(cache=True, inline="always")
-def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
-    """Spring loads, friction forces, stick flags, contact shifts, plastic slips and axle positions into the record."""
+def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, s_def, s_hys, rec):
+    """Spring loads, friction forces, stick flags, contact shifts, plastic slips, axle positions, spring deflections
+    and hysteretic forces into the record."""
     o_spring = record_start(_REC_SPRING, n)
     o_fric = record_start(_REC_FRICTION, n)
     o_stick = record_start(_REC_STICK, n)
     o_shift = record_start(_REC_SHIFT, n)
     o_slip = record_start(_REC_SLIP, n)
     o_axle = record_start(_REC_AXLE_X, n)
+    o_def = record_start(_REC_DEFLECTION, n)
+    o_hys = record_start(_REC_HYSTERESIS, n)
     for i in range(n):
         rec[o_spring + i] = f_spring[i]
         rec[o_axle + i] = ax_x[i]
+        rec[o_def + i] = s_def[i]
+        rec[o_hys + i] = s_hys[i]
     for e in range(2 * n):
         rec[o_fric + e] = t_fric[e]
         rec[o_stick + e] = stick[e]
@@ -468,9 +545,10 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     sc = math.sin(u[0])
     for k in range(2 * n):
         f[k] = 0.0
-    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz = (
-        _work_views(work, n)
-    )
+    (
+        piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz,
+        s_def, s_hys,
+    ) = _work_views(work, n)  # fmt: skip
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(n - 1):
@@ -493,7 +571,10 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
         ax_x[i], ax_dth[i], ax_dz[i] = _radius_rod(
             data_f[o_rax + i], data_f[o_raz + i], data_f[o_rl + i], u[n + i], dh, cc, sc
         )
-    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x)
+    _springs(
+        u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x,
+        s_def, s_hys,
+    )  # fmt: skip
     for i in range(n):
         # the spring pushes its axle down: f = -Q
         f[n + i] += f_spring[i]
@@ -528,7 +609,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
     if record:
-        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec)
+        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, s_def, s_hys, rec)
 
 
 @njit(cache=True, inline="always")

@@ -382,7 +382,8 @@ def _bush(stiffness: str) -> float:
 
 def _nl_bogie(friction: float, bush: float, long_arm: bool, changes: dict[str, Any]) -> Callable[[], Bogie]:
     def make() -> Bogie:
-        b = tandem_trrl(friction_coefficient=friction, bush_stiffness=bush, **changes)
+        # the reference's Stage 4 model has no interleaf friction in its springs: its runs keep it off
+        b = tandem_trrl(friction_coefficient=friction, bush_stiffness=bush, spring_friction_band=0.0, **changes)
         return with_equaliser_arms(b, LONG_ARM) if long_arm else b
 
     return make
@@ -415,7 +416,8 @@ def _nl_case(row: Table2Row) -> Case:
     fr = _level(row.friction) if row.friction_value is None else row.friction_value
     description = (
         f"Table 2 block {row.block} run {row.name}: {row.what}; spring-end friction {row.friction} ({fr:g}), bush "
-        f"stiffness {row.bush} ({_bush(row.bush):g} N m/rad); {setting}; tandem_trrl() otherwise"
+        f"stiffness {row.bush} ({_bush(row.bush):g} N m/rad); {setting}; no leaf-spring hysteresis (the "
+        "reference's springs have none); tandem_trrl() otherwise"
     )
     return Case(
         name=row.name,

@@ -2,7 +2,8 @@
 
 Finite chassis pitch and equaliser rotation, spring-end contact points that roll along cylindrical pads
 (``contact_roll_radius``), Coulomb friction with stick and slip at the spring ends (``friction_coefficient``,
-elastic-plastic return map), bush stiffness and damping, unilateral tyres with per-axle wear, axle masses,
+elastic-plastic return map), interleaf friction of the leaf springs (``spring_friction_band``, Fancher's
+hysteresis), bush stiffness and damping, unilateral tyres with per-axle wear, axle masses,
 payload on the chassis and chassis tilt from a king pin rise. The equations are in ``docs/models.md``; the
 compiled force is :mod:`bogie._nonlinear_core`; time stepping is :mod:`bogie.newmark`.
 
@@ -164,15 +165,22 @@ def hold(bogie: Bogie, duration: float, dt: float, load_factor: float = 1.0, roa
 
 @dataclass(frozen=True)
 class State:
-    """Configuration of the model: displacements, velocities, accelerations and friction slips.
+    """Configuration of the model: displacements, velocities, accelerations and the history variables.
 
     ``u`` = [chassis pitch [rad], equaliser rotations [rad], axle displacements [m]] from the design position.
+    ``history`` holds the variables of :data:`bogie._nonlinear_core.HISTORY` (4n): the spring ends' plastic
+    slips [m], then each spring's deflection [m] and the hysteretic part of its force [N] at the last step.
     """
 
     u: NDArray[np.float64]
     v: NDArray[np.float64]
     a: NDArray[np.float64]
-    slip: NDArray[np.float64]
+    history: NDArray[np.float64]
+
+    @property
+    def slip(self) -> NDArray[np.float64]:
+        """The plastic slip of each spring end over its pad (2n) [m]."""
+        return self.history[core.history_slices(len(self.u) // 2)["plastic_slip"]]
 
 
 @dataclass(frozen=True, repr=False)
@@ -246,6 +254,8 @@ def _packed_scalars(bogie: Bogie) -> dict[str, float]:
         "axle_weight": bogie.axle_mass * GRAVITY,
         "equaliser_stop": bogie.equaliser_stop,
         "equaliser_stop_stiffness": bogie.equaliser_stop_stiffness,
+        "spring_friction_band": bogie.spring_friction_band,
+        "spring_friction_decay": bogie.spring_friction_decay,
     }
 
 
@@ -343,25 +353,38 @@ def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
     return 1e-5 * w * np.asarray(levers)
 
 
+def _history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]:
+    """A copy of a history (:attr:`State.history`) after checking its length against the bogie's axles."""
+    hist = np.array(history, dtype=float)
+    expected = core.history_length(bogie.n_axles)
+    if hist.shape != (expected,):
+        raise ValueError(
+            f"{what} has shape {hist.shape}: a {bogie.n_axles}-axle bogie's history has {expected} entries "
+            f"({', '.join(name for name, *_ in core.HISTORY)}; State.history)"
+        )
+    return hist
+
+
 # ---- static equilibrium ----------------------------------------------------------------------------------------
 def equilibrium(
-    bogie: Bogie, drive_row: ArrayLike, slip: ArrayLike | None = None, u0: ArrayLike | None = None
+    bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None = None, u0: ArrayLike | None = None
 ) -> State:
     """Static equilibrium for one drive row (no inertia, no damping).
 
-    With ``slip`` None the friction is relaxed: the equilibrium is solved without friction and each contact's
-    slip is set so that it carries no friction force there (no locked-in forces, as after a long vibration).
-    With ``slip`` given, friction holds those slips and the equilibrium includes the friction forces.
+    With ``history`` None the friction is relaxed: the equilibrium is solved without end friction and without the
+    springs' interleaf friction, each contact's slip is set so that it carries no friction force there and each
+    spring sits on its elastic line (no locked-in forces, as after a long vibration). With ``history`` given
+    (:attr:`State.history`), friction and hysteresis start from it and the equilibrium includes their forces.
 
     Raises ``ValueError`` if the equilibrium lies outside the freedoms' limits (:func:`limits`): it is refused,
     not returned. An equaliser that meets its bump stop (``Bogie.equaliser_stop``) is a valid equilibrium.
     """
     n = bogie.n_axles
     ndof = 2 * n
-    relaxed = slip is None
-    _, data_f, data_i = pack(bogie.replace(friction_coefficient=0.0) if relaxed else bogie)
+    relaxed = history is None
+    _, data_f, data_i = pack(bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0) if relaxed else bogie)
     drv = np.asarray(drive_row, dtype=float)
-    hist = np.zeros(ndof) if relaxed else np.asarray(slip, dtype=float).copy()
+    hist = np.zeros(core.history_length(n)) if relaxed else _history(bogie, history, "history")
     hist_new = hist.copy()
     u = np.zeros(ndof) if u0 is None else np.asarray(u0, dtype=float).copy()
     if u0 is None:
@@ -414,7 +437,7 @@ def equilibrium(
             f"(on {dof_names(n)[worst]}) at u = {np.array2string(u, precision=4)}"
         )
     _check_limits(bogie, u)
-    return State(u=u, v=v, a=np.zeros(ndof), slip=hist_new.copy() if relaxed else hist.copy())
+    return State(u=u, v=v, a=np.zeros(ndof), history=hist_new.copy() if relaxed else hist.copy())
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
@@ -481,21 +504,22 @@ def simulate(
     mass, data_f, data_i = pack(bogie)
     drive = inputs.drive(bogie)
     state = equilibrium(bogie, drive[0]) if initial is None else initial
+    _history(bogie, state.history, "initial.history")
     n_rec = core.record_length(bogie.n_axles)
     ndof = 2 * bogie.n_axles
     f0 = np.zeros(ndof)
-    hist_new = state.slip.copy()
+    hist_new = state.history.copy()
     core.force(
-        state.u, state.v, drive[0], data_f, data_i, state.slip, hist_new, f0,
+        state.u, state.v, drive[0], data_f, data_i, state.history, hist_new, f0,
         np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False, np.zeros(_work_size(bogie)),
     )  # fmt: skip
     a0 = consistent_acceleration(mass, f0) if initial is None else state.a
     run = integrate(
-        MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.slip.copy(),
+        MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.history.copy(),
         inputs.dt, inputs.n_steps, _tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
         max_halvings=max_halvings, n_record=n_rec, work_size=_work_size(bogie), limits=limits(bogie),
     )  # fmt: skip
-    final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), slip=run.history.copy())
+    final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), history=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
 
 
@@ -511,12 +535,13 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     _, data_f, data_i = pack(quiet)
     drive = inputs.drive(quiet)
     state = equilibrium(quiet, drive[0]) if initial is None else initial
+    _history(bogie, state.history, "initial.history")
     ndof = 2 * bogie.n_axles
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
-        np.zeros(ndof), state.slip.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
+        np.zeros(ndof), state.history.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
         max_halvings=8, n_record=core.record_length(bogie.n_axles), work_size=_work_size(bogie),
         limits=limits(bogie), quasi_static=True,
     )  # fmt: skip
-    final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), slip=run.history.copy())
+    final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), history=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)

@@ -75,6 +75,8 @@ SCALAR_RANGES: dict[str, FieldRange] = {
     "radius_rod_drop": FieldRange(-0.5, 0.5, "m", True),
     "equaliser_stop": FieldRange(0.0, math.pi, "rad", False),
     "equaliser_stop_stiffness": FieldRange(0.0, 1e9, "N m/rad", True),
+    "spring_friction_band": FieldRange(0.0, 2e4, "N", True),
+    "spring_friction_decay": FieldRange(1e-4, 0.05, "m", True),
 }
 
 #: allowed range and unit of each value of the per-axle fields (one value per axle), by field name
@@ -93,13 +95,21 @@ EQUALISER_RANGES: dict[str, FieldRange] = {
     "equaliser_rear_arm": FieldRange(0.01, 1.0, "m", True),
 }
 
-#: the four inhibitors of equalisation and the value that switches each one off
+#: the inhibitors of equalisation and the value that switches each one off: the reference's four (bush stiffness
+#: and damping, contact movement, spring-end friction) and its preface's leaf-spring hysteresis
 INHIBITORS: dict[str, float] = {
     "bush_stiffness": 0.0,
     "bush_damping": 0.0,
     "contact_roll_radius": 0.0,
     "friction_coefficient": 0.0,
+    "spring_friction_band": 0.0,
 }
+#: the presets' interleaf friction band of a multi-leaf trailer spring: half the width of its load-deflection
+#: loop, about a tenth of the springs' 19-25 kN design load (``docs/presets.md``, "Leaf-spring hysteresis") [N]
+PRESET_SPRING_FRICTION_BAND = 2000.0
+#: the presets' decay length of that friction: the deflection over which the force crosses from one envelope to
+#: the other is a few of these (``docs/presets.md``) [m]
+PRESET_SPRING_FRICTION_DECAY = 0.005
 
 #: an ``equaliser_stop`` that no equaliser can reach inside the freedoms' limits (relative rotation at most
 #: 60 + 20 degrees): the stop switched off, for what-if runs [rad]
@@ -230,6 +240,14 @@ class Bogie:
     equaliser_stop_stiffness
         Rotational contact stiffness of a stop once fully in contact [N m/rad] (a rubber pad's compression times
         its lever squared); 0 also switches the stops off.
+    spring_friction_band
+        Interleaf friction of each leaf spring: the half-width [N] of the band about the elastic line inside which
+        its force lies; compressing, the force tends to the loading envelope (elastic line + band), extending, to
+        the unloading envelope (elastic line - band) (Fancher et al. 1980; ``docs/models.md``, "Leaf-spring
+        hysteresis"). The preface's spring hysteresis; 0 switches it off.
+    spring_friction_decay
+        Decay length of that friction [m]: after a reversal the force closes on the other envelope as
+        exp(-|delta - delta_reversal| / decay).
     """
 
     axle_x: tuple[float, ...]
@@ -262,6 +280,8 @@ class Bogie:
     radius_rod_drop: float = 0.0
     equaliser_stop: float = PRESET_EQUALISER_STOP
     equaliser_stop_stiffness: float = PRESET_EQUALISER_STOP_STIFFNESS
+    spring_friction_band: float = 0.0
+    spring_friction_decay: float = PRESET_SPRING_FRICTION_DECAY
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
@@ -402,7 +422,7 @@ class Bogie:
         return dataclasses.replace(self, **changes)
 
     def without(self, *inhibitors: str) -> Bogie:
-        """A copy with the named inhibitors switched off (each set to its ideal value); all four if none named."""
+        """A copy with the named inhibitors switched off (each set to its ideal value); all of them if none named."""
         names = inhibitors or tuple(INHIBITORS)
         unknown = [n for n in names if n not in INHIBITORS]
         if unknown:
@@ -494,6 +514,8 @@ def tandem_trrl(**changes: Any) -> Bogie:
         friction_coefficient=0.3,
         equaliser_stop=PRESET_EQUALISER_STOP,
         equaliser_stop_stiffness=PRESET_EQUALISER_STOP_STIFFNESS,
+        spring_friction_band=PRESET_SPRING_FRICTION_BAND,
+        spring_friction_decay=PRESET_SPRING_FRICTION_DECAY,
     )
     return base.replace(**changes) if changes else base
 
@@ -535,6 +557,8 @@ def triaxle_stage1(**changes: Any) -> Bogie:
         friction_coefficient=0.3,
         equaliser_stop=PRESET_EQUALISER_STOP,
         equaliser_stop_stiffness=PRESET_EQUALISER_STOP_STIFFNESS,
+        spring_friction_band=PRESET_SPRING_FRICTION_BAND,
+        spring_friction_decay=PRESET_SPRING_FRICTION_DECAY,
     )
     return base.replace(**changes) if changes else base
 

@@ -28,14 +28,14 @@ def _laden(bogie, dt=0.002):
     return nl.simulate(bogie, nl.load_ramp(bogie, 0.25, 1.0, 2.0, dt).then(nl.hold(bogie, 2.0, dt)))
 
 
-def _force(bogie, u, drive=None):
-    """The compiled f = -Q at rest at u, and the record."""
+def _force(bogie, u, drive=None, hist=None):
+    """The compiled f = -Q at rest at u with the history ``hist`` (zeros if None), and the record."""
     n = bogie.n_axles
     _, data_f, data_i = nl.pack(bogie)
     drive = np.r_[np.zeros(2 * n), 1.0, bogie.kingpin_height_offset] if drive is None else drive
     f = np.zeros(2 * n)
     rec = np.zeros(core.record_length(n))
-    hist = np.zeros(2 * n)
+    hist = np.zeros(core.history_length(n)) if hist is None else np.asarray(hist, dtype=float)
     core.force(
         np.asarray(u, dtype=float), np.zeros(2 * n), drive, data_f, data_i, hist, hist.copy(), f,
         np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), rec, True, False, np.zeros(core.work_size(n)),
@@ -156,7 +156,7 @@ def test_the_held_equilibrium_balances_the_chassis_about_the_king_pin():
     bogie = triaxle_stage1(bush_stiffness=0.0, friction_coefficient=0.0, chassis_tilt=TWO_DEGREES)
     n = bogie.n_axles
     state = nl.equilibrium(bogie, np.r_[np.zeros(2 * n), 1.0, bogie.kingpin_height_offset])
-    f, moment = _force(bogie, state.u)
+    f, moment = _force(bogie, state.u, hist=state.history)
     assert np.max(np.abs(moment)) > 50.0  # the stop carries load in this equilibrium
     phi = state.u[1:n] - state.u[0]
     assert np.all(np.abs(phi) <= bogie.equaliser_stop + 0.5 * core.STOP_ONSET + np.abs(moment) / 8.4e4 + 1e-9)

@@ -93,7 +93,7 @@ def test_static_equilibrium_with_tilt_balances_every_body(make):
     drive = np.r_[np.zeros(2 * n), 1.0, bogie.kingpin_height_offset]
     f = np.zeros(2 * n)
     core.force(
-        final.u, np.zeros(2 * n), drive, data_f, data_i, final.slip, final.slip.copy(), f,
+        final.u, np.zeros(2 * n), drive, data_f, data_i, final.history, final.history.copy(), f,
         np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(core.record_length(n)), False, False,
         np.zeros(int(core.scratch_size(n)) + 4 * n),
     )  # fmt: skip
@@ -200,7 +200,8 @@ def _static_path(bogie, factors, initial=None):
 
 
 def test_a_stuck_contact_holds_a_sub_threshold_load_without_creep():
-    bogie = tandem_trrl(friction_coefficient=0.6)
+    # the end friction alone (the springs' interleaf friction has its own tests: test_spring_hysteresis.py)
+    bogie = tandem_trrl(friction_coefficient=0.6, spring_friction_band=0.0)
     # load, then take 2 % off: the slip reverses and every contact sticks inside its friction cone
     loaded = _static_path(bogie, np.r_[np.linspace(0.25, 1.0, 41), np.linspace(1.0, 0.98, 5)[1:]])
     # twenty small load cycles: the friction forces change but stay below mu N, so nothing may slip or creep
@@ -291,7 +292,9 @@ def test_record_slices_cover_the_record_once():
     assert np.all(covered == 1)
     assert where["tyre_load"] == slice(0, n) and where["plastic_slip"] == slice(8 * n, 10 * n)
     # the outputs added later sit at the end, so the earlier ones keep their slices; one stop moment per equaliser
-    assert where["stop_moment"] == slice(11 * n, 12 * n - 1) and core.record_length(n) == 12 * n - 1
+    assert where["stop_moment"] == slice(11 * n, 12 * n - 1)
+    assert where["spring_deflection"] == slice(12 * n - 1, 13 * n - 1)
+    assert where["spring_hysteresis"] == slice(13 * n - 1, 14 * n - 1) and core.record_length(n) == 14 * n - 1
     run = nl.static_loads(tandem_trrl(), nl.hold(tandem_trrl(), 0.2, 0.1))
     assert set(core.record_slices(2)) - {"tyre_load"} <= set(run.extras)
 
