@@ -10,7 +10,7 @@ export PATH := $(abspath $(BIN)):$(PATH)
 export DVC_NO_ANALYTICS := 1
 export MPLBACKEND := Agg
 
-.PHONY: repro test lint bench clean-venv
+.PHONY: repro test lint bench validation-tables clean-venv
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python >= 3.11 needed, found " + sys.version' 
@@ -42,10 +42,14 @@ test: $(STAMP)
 	$(BIN)/python -m pytest
 
 lint: $(STAMP)
-	$(BIN)/ruff check bogie pipeline tests bench
+	$(BIN)/ruff check bogie pipeline tests bench tools
 
 bench: $(STAMP)
 	$(BIN)/python -m bench
+
+# docs/validation.md's tables from bogie.cases (after any change to the physics); `--check` only compares
+validation-tables: $(STAMP)
+	$(BIN)/python tools/validation_tables.py
 
 clean-venv:
 	rm -rf $(VENV)
