@@ -217,8 +217,8 @@ def test_tilted_load_cycle_balances_to_the_rolling_contacts_approximation(make, 
     # Nose-up 1 degree: the free equalisers turn 6-8 degrees and the rolling contact points (rho = 0.075 m) move
     # along their pads. The balance then misses by more than the solver's bound: 8.4e-4 (tandem) and 4.6e-3
     # (tri-axle) of the dissipation, the same at 20 and 80 rows a quarter cycle, so not a step error. The kernel's
-    # forces are not exactly the gradient of the model's stored energy where the contacts roll (normal loads taken
-    # vertical at the rolled point, docs/models.md): 1.3 and 6.3 times the solver's bound; with a stiff bush
+    # forces are not exactly the gradient of the model's stored energy where the contacts roll (likely the normal
+    # loads taken vertical at the rolled point, docs/models.md): 1.3 and 6.3 times the solver's bound; with a stiff bush
     # (equalisers held level) it falls within the bound. This test keeps it below 1 % of the dissipation.
     bogie = _quiet(make, chassis_tilt=math.radians(1.0))
     start, run = static_cycle(bogie)
@@ -310,7 +310,7 @@ def test_frictionless_dynamic_cycle_puts_in_what_the_dampers_dissipate(make):
 def test_rolling_contacts_miss_the_dynamic_balance_by_their_approximation(make, measured):
     # The frictionless damped cycle again, with the presets' rolling contacts (rho = 0.075 m): the bush dampers
     # make the equalisers lag the chassis, the path in u opens into a loop, and around it the kernel's forces do
-    # work that the springs' energy does not account for (the normal loads are taken vertical at the rolled
+    # work that the springs' energy does not account for (likely the normal loads taken vertical at the rolled
     # contact point, docs/models.md). The miss, 4.5e-3 (tandem) and 1.05e-2 (tri-axle) of the damping (0.7 and 2.4
     # times the solver's bound), is the same at dt and dt/2 and 30 and 40 times what it is with rho = 0 (above):
     # the model's approximation, not the integrator's. This test keeps it below 2 % and says when it changes.
