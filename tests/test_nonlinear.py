@@ -182,17 +182,6 @@ def test_friction_and_stiffness_worsen_rms_more_at_low_speed_than_at_high():
     assert low > high + 0.1
 
 
-def test_friction_dissipates_only_while_slipping():
-    r = cases.run("N07")
-    t = np.asarray(r.extras["friction_force"])
-    s = np.asarray(r.extras["plastic_slip"])
-    stick = np.asarray(r.extras["stick"])
-    work = t[1:] * np.diff(s, axis=0)  # plastic work of each contact in each step [J]
-    assert np.all(work >= -1e-9)
-    assert np.all(np.abs(np.diff(s, axis=0))[stick[1:] == 1.0] == 0.0)
-    assert np.sum(work) > 0.0
-
-
 def _static_path(bogie, factors, initial=None):
     zeros = np.zeros((len(factors), bogie.n_axles))
     inputs = nl.Inputs(1.0, zeros, zeros.copy(), np.asarray(factors, dtype=float), np.zeros(len(factors)))
