@@ -221,7 +221,8 @@ class Config:
 
     ``distributions`` maps the SI name of each sampled quantity (``bush_stiffness``, ``bush_damping``,
     ``friction_coefficient``, ``contact_roll_radius`` [m], ``tyre_wear`` [m], ``chassis_tilt`` [rad],
-    ``payload_fraction``, ``road_class``) to its distribution in SI units.
+    ``payload_fraction``, ``equaliser_arm`` [m], ``spring_friction_band`` [N], ``spring_friction_decay`` [m],
+    ``road_class``) to its distribution in SI units.
     """
 
     seed: int

@@ -52,6 +52,14 @@ def _m_to_mm(x: float) -> float:
     return x * 1000.0
 
 
+def _kn_to_n(x: float) -> float:
+    return x * 1000.0
+
+
+def _n_to_kn(x: float) -> float:
+    return x / 1000.0
+
+
 @dataclass(frozen=True)
 class Quantity:
     """One sampled quantity: its params.yaml key and unit, its SI name (Bogie field, sample column) and range.
@@ -107,6 +115,8 @@ QUANTITIES: dict[str, Quantity] = {
         _bogie_quantity("contact_roll_radius_mm", "contact_roll_radius", "mm", _mm_to_m, _m_to_mm),
         _bogie_quantity("tyre_wear_mm", "tyre_wear", "mm", _mm_to_m, _m_to_mm),
         _bogie_quantity("chassis_tilt_deg", "chassis_tilt", "degree", math.radians, math.degrees),
+        _bogie_quantity("spring_friction_band_kn", "spring_friction_band", "kN", _kn_to_n, _n_to_kn),
+        _bogie_quantity("spring_friction_decay_mm", "spring_friction_decay", "mm", _mm_to_m, _m_to_mm),
         # every equaliser arm of a bogie, the axle spacing kept (params.with_equaliser_arms)
         Quantity("equaliser_arm_mm", "equaliser_arm", "mm", FieldRange(0.05, 0.5, "m", True), _mm_to_m, _m_to_mm),
         # up to half as much again as the legal load: overloaded trailers are part of what a survey finds

@@ -51,6 +51,8 @@ _SCALARS: tuple[str, ...] = (
     "chassis_tilt",
     "payload_fraction",
     "equaliser_arm",
+    "spring_friction_band",
+    "spring_friction_decay",
 )
 
 #: dimensions of the fleet design, in order; the order is part of the design (changing it changes the draws)
@@ -73,6 +75,8 @@ COLUMNS: dict[str, str] = {
     "chassis_tilt": "float64",  # nose up positive [rad]
     "payload_fraction": "float64",  # of the legal group load [-]
     "equaliser_arm": "float64",  # length of every equaliser arm, axle spacing kept [m]
+    "spring_friction_band": "float64",  # interleaf friction band of every leaf spring, half-width [N]
+    "spring_friction_decay": "float64",  # its decay length [m]
     "road_class": "str",  # ISO 8608 class
     "road_seed": "int64",  # seed of the approach road's random profile [-]
     "legal_group_load": "float64",  # both sides [N]
@@ -174,6 +178,8 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
         bush_damping=float(row["bush_damping"]),
         friction_coefficient=float(row["friction_coefficient"]),
         contact_roll_radius=float(row["contact_roll_radius"]),
+        spring_friction_band=float(row["spring_friction_band"]),
+        spring_friction_decay=float(row["spring_friction_decay"]),
         tyre_wear=tuple(float(row[c]) for c in TYRE_WEAR_COLUMNS[:n_axles]),
         chassis_tilt=float(row["chassis_tilt"]),
         payload_mass=float(row["payload_mass"]),

@@ -43,10 +43,11 @@ FACTOR_LABEL = {
     "bush_damping": "bush damping",
     "contact_roll_radius": "contact movement",
     "friction_coefficient": "spring-end friction",
+    "spring_friction_band": "leaf-spring hysteresis",
     "chassis_tilt": "chassis tilt",
     "tyre_wear": "tyre wear",
     "baseline": "none removed",
-    "all": "all four removed",
+    "all": "all five removed",
 }
 MEASURE_LABEL = {"max_deviation": "max. deviation", "p1": "P1", "road_wear_factor": "road-wear factor"}
 

@@ -229,6 +229,8 @@ SAMPLED: tuple[tuple[str, str, str, str, float, bool], ...] = (
     ("friction_coefficient", "friction_coefficient", "spring-end friction coefficient", "-", 1.0, False),
     ("contact_roll_radius", "contact_roll_radius_mm", "contact roll radius", "mm", 1e3, False),
     ("equaliser_arm", "equaliser_arm_mm", "equaliser arm", "mm", 1e3, False),
+    ("spring_friction_band", "spring_friction_band_kn", "leaf-spring friction band", "kN", 1e-3, False),
+    ("spring_friction_decay", "spring_friction_decay_mm", "leaf-spring friction decay", "mm", 1e3, False),
     ("tyre_wear", "tyre_wear_mm", "tyre wear, every tyre", "mm", 1e3, False),
     ("chassis_tilt", "chassis_tilt_deg", "chassis tilt, nose up +", "degree", float(np.degrees(1.0)), False),
     ("payload_fraction", "payload_fraction", "payload, fraction of the legal group load", "-", 1.0, False),

@@ -44,6 +44,8 @@ def test_default_params_load_and_are_converted_to_si():
     assert d["contact_roll_radius"].support == (0.0, 0.12)
     assert d["tyre_wear"].support == (0.0, 0.012)
     assert d["bush_stiffness"].support == (1.0, 3000.0)
+    assert d["spring_friction_band"].support == (0.0, 4000.0)  # from kN
+    assert d["spring_friction_decay"].support == (0.002, 0.008)  # from mm
     assert config.fleet.legal_group_load["triaxle"] == pytest.approx(24_000 * GRAVITY, rel=1e-15)
     assert config.fleet.legal_axle_load == pytest.approx(10_000 * GRAVITY, rel=1e-15)
     assert sum(config.fleet.axle_mix.values()) == pytest.approx(1.0)
@@ -52,6 +54,7 @@ def test_default_params_load_and_are_converted_to_si():
         "bush_damping",
         "friction_coefficient",
         "contact_roll_radius",
+        "spring_friction_band",
         "chassis_tilt",
         "tyre_wear",
     )
