@@ -140,3 +140,38 @@ def test_a_single_bad_record_among_good_ones_is_skipped_and_named(tmp_path):
     result = read_weighings(tmp_path / "x.mon", "mon")
     assert (result.n_read, result.n_skipped) == (2, 1)
     assert result.bad_lines == {"implausible axle load (allowed 100-22680 kg)": [2]}
+
+
+CSV_HEADER = "timestamp,speed_kmh,lane,n_axles,axle_load_1,axle_load_2,spacing_1\n"
+CSV_GOOD = "2026-01-01T00:00:00,80,1,2,5000,6000,1.3\n"
+
+
+def test_csv_with_a_spreadsheets_byte_order_mark_and_a_weighbridge_record_without_speed_or_lane(tmp_path):
+    path = tmp_path / "bridge.csv"
+    path.write_text("\ufeff" + CSV_HEADER + CSV_GOOD + "2026-01-01T00:05:00,,,2,5000,6000,1.3\n", encoding="utf-8")
+    v = read_weighings(path, "csv").vehicles
+    assert v["speed"].tolist()[0] == pytest.approx(80 / 3.6) and math.isnan(v["speed"].tolist()[1])
+    assert v["lane"].tolist() == [1, -1]
+
+
+@pytest.mark.parametrize(
+    ("row", "reason"),
+    [(",80,1,2,5000,6000,1.3", "invalid date or time"), ("2026-01-01,80,1,2.5,5000,6000,1.3", "non-numeric field"),
+     ("2026-01-01,-5,1,2,5000,6000,1.3", "implausible speed"), ("2026-01-01,80,1,2,nan,6000,1.3", "non-numeric"),
+     ("2026-01-01,80,1,3,5000,6000,1.3", "more axles than the file has columns for"),
+     ("2026-01-01,80,1,2,5000,6000,0.4", "implausible axle spacing")],
+)  # fmt: skip
+def test_each_bad_csv_row_is_skipped_under_its_reason(tmp_path, row, reason):
+    path = tmp_path / "one.csv"
+    path.write_text(CSV_HEADER + row + "\n" + CSV_GOOD + CSV_GOOD)
+    result = read_weighings(path, "csv")
+    assert (result.n_read, result.n_skipped) == (2, 1)
+    assert [r for r in result.bad_lines if r.startswith(reason)] and result.bad_lines[next(iter(result.bad_lines))] == [
+        2
+    ]
+
+
+def test_a_csv_file_with_only_its_header_is_refused(tmp_path):
+    (tmp_path / "h.csv").write_text(CSV_HEADER)
+    with pytest.raises(ValueError, match=r"no records: expected CSV layout \(format csv\), found a header and no"):
+        read_weighings(tmp_path / "h.csv", "csv")

@@ -297,6 +297,7 @@ def _frame(rows: list[tuple[int, dict]]) -> pd.DataFrame:
     frame = pd.DataFrame(data)
     frame["timestamp"] = pd.to_datetime(frame["timestamp"])
     frame["n_groups"] = frame["n_groups"].astype(float)
+    frame["lane"] = frame["lane"].astype(np.int64)  # -1: not given (CSV)
     return frame
 
 
@@ -326,7 +327,7 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     if fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: {', '.join(FORMATS)}")
     path = Path(path)
-    with path.open(encoding="utf-8", errors="replace", newline="") as fh:
+    with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:  # a BOM from a spreadsheet
         lines = fh.read().splitlines()
     name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
     rows: list[tuple[int, dict]] = []
@@ -345,9 +346,8 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     result = ReadResult(_frame(rows), fmt, skipped, bad_lines)
     total = result.n_read + result.n_skipped
     if total == 0:
-        raise ValueError(
-            f"{path}: no records: expected {name} (format {fmt}), found an empty file (no line but blank ones)"
-        )
+        found = "a header and no record" if any(line.strip() for line in lines) else "an empty file"
+        raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
     if result.n_skipped > MAX_BAD_FRACTION * total:
         first = next(line for line in lines if line.strip())
         raise ValueError(
