@@ -166,9 +166,8 @@ def test_each_bad_csv_row_is_skipped_under_its_reason(tmp_path, row, reason):
     path.write_text(CSV_HEADER + row + "\n" + CSV_GOOD + CSV_GOOD)
     result = read_weighings(path, "csv")
     assert (result.n_read, result.n_skipped) == (2, 1)
-    assert [r for r in result.bad_lines if r.startswith(reason)] and result.bad_lines[next(iter(result.bad_lines))] == [
-        2
-    ]
+    ((found, lines),) = result.bad_lines.items()
+    assert found.startswith(reason) and lines == [2]
 
 
 def test_a_csv_file_with_only_its_header_is_refused(tmp_path):
