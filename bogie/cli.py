@@ -1,4 +1,4 @@
-"""The ``bogie`` command: single cases and figures from the command line."""
+"""The ``bogie`` command: single cases, figures and observed weighings from the command line."""
 
 from __future__ import annotations
 
@@ -79,6 +79,72 @@ def _cmd_case(args: argparse.Namespace) -> int:
     return 0 if result.success else 1
 
 
+def _range(name: str, low: float, high: float, unit: str):
+    """An argparse type: a float in [low, high], refused with the parameter, value, range and unit."""
+
+    def parse(text: str) -> float:
+        try:
+            value = float(text)
+        except ValueError:
+            raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number ({unit})") from None
+        if not low <= value <= high:
+            raise argparse.ArgumentTypeError(f"{name} {text} outside the allowed range [{low:g}, {high:g}] {unit}")
+        return value
+
+    return parse
+
+
+def _weighings_table(survey) -> str:
+    """The readable table of ``bogie weighings``."""
+    from bogie.weighings.survey import SURVEYED
+
+    data = survey.to_dict()["groups"]
+    lines = [
+        f"{'group':<8} {'n':>5} {'mean spread':>12} {'median spread':>14} {'outside 5 %':>12} {'over 10 %':>10}",
+        f"{'':<8} {'':>5} {'[kg]':>12} {'[%]':>14} {'[%]':>12} {'[%]':>10}",
+    ]
+
+    def num(x, scale=1.0, fmt=".1f"):
+        return "-" if x is None else format(x * scale, fmt)
+
+    for size in SURVEYED:
+        e = data[size]
+        lines.append(
+            f"{size:<8} {e['n_groups']:>5} {num(e['mean_spread_kg'], fmt='.0f'):>12} "
+            f"{num(e['median_spread_pct']):>14} {num(e['share_outside_5pct'], 100):>12} "
+            f"{num(e['share_over_10pct'], 100):>10}"
+        )
+    lines += ["", "load share LSC = n W / sum W (1 = equal share), quantiles over the groups:",
+              f"{'group':<8} {'axle':>4} {'p05':>6} {'p25':>6} {'p50':>6} {'p75':>6} {'p95':>6}"]  # fmt: skip
+    for size in SURVEYED:
+        for axle, q in data[size]["load_share_quantiles"].items():
+            values = " ".join(f"{num(q.get(k), fmt='.3f'):>6}" for k in ("p05", "p25", "p50", "p75", "p95"))
+            lines.append(f"{size:<8} {axle.removeprefix('axle_'):>4} {values}")
+    return "\n".join(lines)
+
+
+def _cmd_weighings(args: argparse.Namespace) -> int:
+    import json
+
+    from bogie.weighings.survey import observed_survey
+
+    try:
+        survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position)
+    except OSError as exc:
+        print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
+    if args.json:
+        print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
+        return 0
+    print(f"{args.path} ({args.format}): {survey.read.summary()}")
+    print(
+        f"{len(survey.groups)} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
+        f"{args.position}, axles at most {args.group_spacing_m:g} m apart"
+    )
+    print(_weighings_table(survey))
+    return 0
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -107,6 +173,28 @@ def build_parser() -> argparse.ArgumentParser:
     case.add_argument("--plot", help="write the histories (as the reference's Figures 5-12) to this image file")
     case.add_argument("--csv", help="write the histories to this CSV file")
     case.set_defaults(func=_cmd_case, parser=case)
+    from bogie.weighings.formats import FORMATS
+
+    weigh = sub.add_parser(
+        "weighings",
+        help="survey statistics of observed WIM or weighbridge records (formats: docs/weighings.md)",
+        description="Read a file of weighings, split the vehicles into axle groups, keep the groups that pass the "
+        "filters and print the survey statistics of the tandems and tri-axles.",
+    )
+    weigh.add_argument("path", help="the file of records")
+    weigh.add_argument("--format", required=True, choices=FORMATS, help="record layout (docs/weighings.md)")
+    weigh.add_argument(
+        "--min-group-load-t", type=_range("--min-group-load-t", 0.0, 100.0, "t"), default=0.0,
+        help="keep groups of at least this load [t] (default 0: every group)",
+    )  # fmt: skip
+    weigh.add_argument(
+        "--group-spacing-m", type=_range("--group-spacing-m", 0.1, 5.0, "m"), default=2.0,
+        help="largest spacing of two axles of one group [m] (default 2.0)",
+    )  # fmt: skip
+    weigh.add_argument("--position", choices=("all", "trailer", "drive"), default="all",
+                       help="which groups: all (default), the trailer's or the drive groups")  # fmt: skip
+    weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
+    weigh.set_defaults(func=_cmd_weighings, parser=weigh)
     return parser
 
 
@@ -117,7 +205,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.parser.error(f"unrecognized arguments: {' '.join(extra)}")
     if args.command == "case":
         _image_suffix(args.parser, "--plot", args.plot)
-    else:
+    elif args.command == "figure2":
         _image_suffix(args.parser, "--out", args.out)
     try:
         return args.func(args)

@@ -27,6 +27,9 @@ ROUTE_MARGIN: float = 4.0
 #: the weighing protocols: static weighbridge, weigh-in-motion pass
 PROTOCOLS: tuple[str, ...] = ("static", "wim")
 
+# The survey statistics (bogie.weighings.stats) hold the same two tolerances for observed groups; they are not
+# imported from there because the simulate stage's chunk hash covers every file protocol.py imports
+# (tests/test_weighings_stats.py checks the two pairs agree).
 #: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
 PAIR_TOLERANCE: float = 0.05
 #: load-sharing suspension rule: no axle more than 10 % over its equal share, max LSC <= 1.10 [-]

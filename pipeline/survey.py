@@ -28,9 +28,11 @@ import pandas as pd
 import pyarrow.parquet as pq
 import yaml
 
+from bogie.params import GRAVITY
+from bogie.weighings.stats import group_inequality, survey_statistics
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
-from pipeline.constants import GROUP_AXLES, MAX_AXLES, PAIR_TOLERANCE, SHARE_TOLERANCE
+from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.sample import TYRE_WEAR_COLUMNS
 from pipeline.schema import SchemaError, check_file_schema, check_runs
 from pipeline.survey_design import DESIGN_COLUMNS, design_table
@@ -132,7 +134,8 @@ def readings(runs: pd.DataFrame) -> pd.DataFrame:
 
 # ---- per-row quantities --------------------------------------------------------------------------------------------
 def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
-    """Per-row inequality quantities of succeeded runs, derived from the axle loads.
+    """Per-row inequality quantities of succeeded runs, derived from the axle loads
+    (:func:`bogie.weighings.stats.group_inequality`, the definitions observed groups share).
 
     Parameters
     ----------
@@ -150,21 +153,18 @@ def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
         minus least worn tyre of the group [mm]).
     """
     n = runs["n_axles"].to_numpy(dtype=np.int64)
-    loads = runs[list(AXLE_LOAD_COLUMNS)].to_numpy(dtype=float)
+    ineq = group_inequality(runs[list(AXLE_LOAD_COLUMNS)].to_numpy(dtype=float), n)
     present = np.arange(MAX_AXLES) < n[:, None]
-    heaviest = np.where(present, loads, -np.inf).max(axis=1)
-    lightest = np.where(present, loads, np.inf).min(axis=1)
-    mean = np.where(present, loads, 0.0).sum(axis=1) / n
     wear = runs[list(TYRE_WEAR_COLUMNS)].to_numpy(dtype=float)
     wear_max = np.where(present, wear, -np.inf).max(axis=1)
     wear_min = np.where(present, wear, np.inf).min(axis=1)
     out = runs.copy()
-    out["spread_pct"] = 100.0 * (heaviest - lightest) / mean
-    out["pair_difference"] = (heaviest - lightest) / heaviest
-    out["max_load_share"] = heaviest / mean
-    out["outside_5pct"] = out["pair_difference"] > PAIR_TOLERANCE
-    out["outside_10pct"] = out["max_load_share"] > 1.0 + SHARE_TOLERANCE
-    out["heaviest_axle"] = np.argmax(np.where(present, loads, -np.inf), axis=1)
+    out["spread_pct"] = ineq["spread_pct"]
+    out["pair_difference"] = ineq["pair_difference"]
+    out["max_load_share"] = ineq["max_load_share"]
+    out["outside_5pct"] = ineq["outside_5pct"]
+    out["outside_10pct"] = ineq["over_10pct"]
+    out["heaviest_axle"] = ineq["heaviest_axle"]
     out["rear_heaviest"] = out["heaviest_axle"].to_numpy() == n - 1
     out["tilt_deg"] = np.degrees(runs["chassis_tilt"].to_numpy(dtype=float))
     out["wear_diff_mm"] = 1000.0 * (wear_max - wear_min)
@@ -367,15 +367,25 @@ def _corr(a: pd.Series, b: pd.Series) -> float:
 
 
 def summary_table(ok: pd.DataFrame, runs: pd.DataFrame, legal: pd.DataFrame) -> pd.DataFrame:
-    """The headline numbers per protocol and group (the rows of metrics/survey.json)."""
+    """The headline numbers per protocol and group (the rows of metrics/survey.json).
+
+    The shares outside 5 % and 10 % and the mean spread [kg] are those of
+    :func:`bogie.weighings.stats.survey_statistics`, the function an observed survey's groups go through.
+    """
     nose_up = ok.assign(rear_nose_up=ok["rear_heaviest"].astype(float).where(ok["tilt_deg"] > NOSE_UP_DEG))
     table = nose_up.groupby(KEYS, observed=True).agg(
-        share_outside_5pct=("outside_5pct", "mean"), share_outside_10pct=("outside_10pct", "mean"),
         mean_max_deviation=("max_deviation", "mean"), mean_spread_pct=("spread_pct", "mean"),
-        mean_spread_kg=("spread_kg", "mean"), mean_road_wear_factor=("road_wear_factor", "mean"),
+        mean_road_wear_factor=("road_wear_factor", "mean"),
         rear_overload_share_nose_up=("rear_nose_up", "mean"), n_nose_up=("rear_nose_up", "count"),
         share_on_stop=("equaliser_on_stop", "mean"),
     ).reset_index()  # fmt: skip
+    shared = survey_statistics(ok, by=KEYS, unit_per_kg=GRAVITY).rename(
+        columns={"share_over_10pct": "share_outside_10pct"}
+    )[[*KEYS, "share_outside_5pct", "share_outside_10pct", "mean_spread_kg"]]
+    table = table.merge(shared, on=KEYS, how="left")[
+        [*KEYS, "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct",
+         "mean_spread_kg", "mean_road_wear_factor", "rear_overload_share_nose_up", "n_nose_up", "share_on_stop"]
+    ]  # fmt: skip
     table = table.merge(legal[[*KEYS, "frac_axle_over_group_legal"]], on=KEYS, how="left")
     # (protocol, group) pairs where every run failed still get a row, with counts and NaN statistics
     return run_counts(runs).merge(table, on=KEYS, how="left")

@@ -1,0 +1,91 @@
+"""An observed survey from Python: read a file of weighings, split it into axle groups, filter, tabulate.
+
+:func:`observed_survey` is what ``bogie weighings`` prints; its statistics are those of
+:func:`bogie.weighings.stats.survey_statistics`, the function the pipeline's survey stage applies to the simulated
+fleet.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+
+from bogie.weighings.groups import GROUP_SPACING_M, axle_groups, filter_groups
+from bogie.weighings.readers import ReadResult, read_weighings
+from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
+
+__all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
+
+#: the group sizes the statistics are tabulated for
+SURVEYED: tuple[str, ...] = ("tandem", "triaxle")
+
+
+@dataclass
+class ObservedSurvey:
+    """An observed survey: the groups that passed the filters, their statistics and what the reader skipped.
+
+    Attributes
+    ----------
+    groups
+        One row per group (:func:`bogie.weighings.groups.axle_groups`), every size, after the filters.
+    statistics
+        :func:`bogie.weighings.stats.survey_statistics` of the tandems and tri-axles, one row each.
+    read
+        The reader's result: the vehicles and the skipped records.
+    """
+
+    groups: pd.DataFrame
+    statistics: pd.DataFrame
+    read: ReadResult
+
+    def to_dict(self) -> dict[str, Any]:
+        """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
+
+        ``{"records": {"read", "skipped"}, "groups": {"tandem": {...}, "triaxle": {...}}}``; shares are fractions
+        0..1; a size with no group has ``n_groups`` 0 and None for its numbers.
+        """
+        stats = statistics_dict(self.statistics)
+        empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
+        return {
+            "records": {"read": self.read.n_read, "skipped": self.read.n_skipped},
+            "groups": {size: stats.get(size, empty) for size in SURVEYED},
+        }
+
+
+def observed_survey(
+    path: str | Path,
+    fmt: str,
+    min_group_load_t: float = 0.0,
+    group_spacing_m: float = GROUP_SPACING_M,
+    position: str = "all",
+    speed_kmh: Sequence[float] | None = None,
+) -> ObservedSurvey:
+    """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
+
+    Parameters
+    ----------
+    path, fmt
+        The file and its format (:func:`bogie.weighings.readers.read_weighings`).
+    min_group_load_t
+        Smallest group load kept [t].
+    group_spacing_m
+        Largest spacing of two axles of one group [m].
+    position
+        ``all``, ``steer``, ``drive`` or ``trailer``.
+    speed_kmh
+        (lowest, highest) speed kept [km/h]; None keeps every speed.
+
+    Raises
+    ------
+    ValueError
+        A file refused by the reader, or a parameter out of its range (named, with its unit).
+    """
+    read = read_weighings(path, fmt)
+    groups = filter_groups(axle_groups(read.vehicles, group_spacing_m), min_group_load_t, position, speed_kmh)
+    surveyed = groups[groups["group"].isin(SURVEYED)]
+    statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
+    return ObservedSurvey(groups, statistics, read)

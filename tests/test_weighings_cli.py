@@ -1,0 +1,76 @@
+"""``bogie weighings``: the table, the JSON of issue 13 item 4, and the errors, on the hand-written files."""
+
+import json
+from pathlib import Path
+
+import pytest
+
+from bogie.cli import main
+
+DATA = Path(__file__).parent / "data" / "weighings"
+
+
+def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
+    assert main(["weighings", str(DATA / "site.mon"), "--format", "mon", "--min-group-load-t", "15", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert set(out) == {"records", "groups"}
+    assert out["records"] == {"read": 5, "skipped": 4}
+    assert set(out["groups"]) == {"tandem", "triaxle"}
+    for entry in out["groups"].values():
+        assert set(entry) == {"n_groups", "mean_spread_kg", "median_spread_pct", "share_outside_5pct",
+                              "share_over_10pct", "load_share_quantiles"}  # fmt: skip
+        assert 0.0 <= entry["share_outside_5pct"] <= 1.0 and 0.0 <= entry["share_over_10pct"] <= 1.0
+    # the hand-worked tri-axles A and C (test_weighings_groups.py): 1600 kg, 20 %, all outside 5 %, half over 10 %
+    tri = out["groups"]["triaxle"]
+    assert (tri["n_groups"], tri["mean_spread_kg"], tri["share_outside_5pct"], tri["share_over_10pct"]) == (
+        2, 1600.0, 1.0, 0.5)  # fmt: skip
+
+
+def test_the_json_follows_the_filters(capsys):
+    args = ["weighings", str(DATA / "site.castor"), "--format", "castor", "--json"]
+    assert main([*args, "--min-group-load-t", "15", "--position", "drive"]) == 0
+    drive = json.loads(capsys.readouterr().out)["groups"]
+    assert (drive["tandem"]["n_groups"], drive["triaxle"]["n_groups"]) == (2, 0)
+    # no load filter: D's unladen tri-axle (2000, 2100, 1900: spread 200 kg) joins -> mean (1200 + 2000 + 200) / 3
+    assert main(args) == 0
+    tri = json.loads(capsys.readouterr().out)["groups"]["triaxle"]
+    assert tri["n_groups"] == 3 and tri["mean_spread_kg"] == pytest.approx(3400 / 3, abs=1e-4)
+    # at 1 m no two axles form a group: no tandem, no tri-axle
+    assert main([*args, "--group-spacing-m", "1.0"]) == 0
+    none = json.loads(capsys.readouterr().out)["groups"]
+    assert none["tandem"]["n_groups"] == none["triaxle"]["n_groups"] == 0
+
+
+def test_the_table_names_the_skipped_lines_and_the_statistics_in_percent(capsys):
+    assert main(["weighings", str(DATA / "site.ditis"), "--format", "ditis", "--min-group-load-t", "15"]) == 0
+    out = capsys.readouterr().out
+    assert "5 records read, 4 skipped" in out and "wrong length: 1, line 9" in out
+    table = [line.split() for line in out.splitlines() if line.startswith(("tandem ", "triaxle "))]
+    rows = {row[0]: row for row in reversed(table)}  # the first rows are the statistics, then the quantiles
+    # group, n, mean spread [kg], median spread [%], outside 5 % [%], over 10 % [%]
+    assert rows["triaxle"][:6] == ["triaxle", "2", "1600", "20.0", "100.0", "50.0"]
+    assert rows["tandem"][:6] == ["tandem", "2", "500", "5.6", "50.0", "0.0"]
+    # then the load-share quantiles: the tri-axles' front axle, LSC 0.925 and 1.125 -> p05 0.935, p50 1.025
+    assert ["triaxle", "1", "0.935", "0.975", "1.025", "1.075", "1.115"] in table
+
+
+@pytest.mark.parametrize(
+    ("args", "message"),
+    [(["--min-group-load-t", "-2"], "--min-group-load-t -2 outside the allowed range [0, 100] t"),
+     (["--min-group-load-t", "heavy"], "--min-group-load-t 'heavy' is not a number (t)"),
+     (["--group-spacing-m", "9"], "--group-spacing-m 9 outside the allowed range [0.1, 5] m"),
+     (["--position", "steer"], "invalid choice: 'steer'")],
+)  # fmt: skip
+def test_bad_arguments_name_the_parameter_value_range_and_unit(capsys, args, message):
+    with pytest.raises(SystemExit) as exc:
+        main(["weighings", str(DATA / "site.mon"), "--format", "mon", *args])
+    assert exc.value.code == 2
+    assert message in capsys.readouterr().err
+
+
+def test_a_file_in_another_format_or_missing_is_an_error_not_a_traceback(capsys):
+    assert main(["weighings", str(DATA / "site.mon"), "--format", "bedit"]) == 2
+    err = capsys.readouterr().err
+    assert err.startswith("bogie: error: ") and "(format bedit)" in err and "--format mon?" in err
+    assert main(["weighings", str(DATA / "missing.mon"), "--format", "mon"]) == 2
+    assert "missing.mon: No such file or directory" in capsys.readouterr().err

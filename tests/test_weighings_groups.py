@@ -1,0 +1,121 @@
+"""bogie.weighings.groups and .survey: axle groups of the hand-written vehicles (see test_weighings_readers.py),
+their labels, the filters, and the statistics of an observed survey worked out by hand."""
+
+from pathlib import Path
+
+import pandas as pd
+import pytest
+
+from bogie.weighings.groups import axle_groups, filter_groups
+from bogie.weighings.readers import read_weighings
+from bogie.weighings.survey import observed_survey
+
+DATA = Path(__file__).parent / "data" / "weighings"
+
+
+@pytest.fixture(scope="module")
+def groups():
+    return axle_groups(read_weighings(DATA / "site.mon", "mon").vehicles)
+
+
+def test_groups_sizes_and_positions_at_2_m(groups):
+    # A: 3.6 | 5.2 | 1.31 1.31 -> steer single, drive single, trailer tri-axle (3 groups)
+    # B: 4.2 | 1.35 -> steer single, drive tandem (2 groups: no trailer)
+    # C: 3.8 | 1.35 | 6.0 | 1.31 1.31 -> steer, drive tandem, trailer tri-axle
+    # D: as A (unladen); E: 2.6 -> steer single, drive single
+    by_vehicle = groups.groupby("line")
+    assert by_vehicle["group"].apply(list).tolist() == [
+        ["other", "other", "triaxle"], ["other", "tandem"], ["other", "tandem", "triaxle"],
+        ["other", "other", "triaxle"], ["other", "other"],
+    ]  # fmt: skip
+    assert by_vehicle["position"].apply(list).tolist() == [
+        ["steer", "drive", "trailer"], ["steer", "drive"], ["steer", "drive", "trailer"],
+        ["steer", "drive", "trailer"], ["steer", "drive"],
+    ]  # fmt: skip
+    # group loads: A's tri-axle 7400 + 8000 + 8600 = 24 000 kg, C's tandem 18 000, D's tri-axle 6000
+    assert groups["group_load"].tolist() == [6500, 9000, 24000, 6000, 18000, 7000, 18000, 24000, 5000, 6000, 6000,
+                                             1200, 1100]  # fmt: skip
+    tri = groups.iloc[2]
+    assert (tri["first_axle"], tri["axle_load_0"], tri["axle_load_2"], tri["spacing_1"]) == (2, 7400, 8600, 1.31)
+    # the MON file's own count of groups agrees with the 2 m rule here
+    assert groups.groupby("line")["vehicle_groups"].first().tolist() == [3, 2, 3, 3, 2]
+
+
+def test_a_wider_group_spacing_joins_axles_and_a_narrower_one_splits_them(groups):
+    vehicles = read_weighings(DATA / "site.mon", "mon").vehicles
+    # at 1.0 m no spacing qualifies: every axle a group of its own, 5 + 3 + 6 + 5 + 2 = 21
+    assert len(axle_groups(vehicles, 1.0)) == 21
+    # at 4.0 m A's 3.6 m joins steer and drive: (steer + drive) [2], tri-axle -> 2 groups, no trailer
+    wide = axle_groups(vehicles, 4.0)
+    assert wide[wide["line"] == 1][["group", "position"]].values.tolist() == [["tandem", "steer"],
+                                                                              ["triaxle", "drive"]]  # fmt: skip
+
+
+def test_filters_on_group_load_position_and_speed(groups):
+    laden = filter_groups(groups, min_group_load_t=15)
+    # >= 15 000 kg: A's and C's tri-axles (24 t), B's and C's tandems (18 t); D's tri-axle (6 t) left out
+    assert laden[["line", "group"]].values.tolist() == [[1, "triaxle"], [2, "tandem"], [4, "tandem"],
+                                                        [4, "triaxle"]]  # fmt: skip
+    assert filter_groups(groups, 15, "trailer")["line"].tolist() == [1, 4]
+    assert filter_groups(groups, 15, "drive")["group"].tolist() == ["tandem", "tandem"]
+    # MON speeds 82.08, 74.88, 87.84, 90, 100.08 km/h: 80-90 keeps A, C and D
+    assert sorted(set(filter_groups(groups, speed_kmh=(80, 90))["line"])) == [1, 4, 6]
+
+
+@pytest.mark.parametrize(
+    ("kwargs", "message"),
+    [({"min_group_load_t": -1.0}, r"min_group_load_t = -1.0 t outside the allowed range \[0, 100\] t"),
+     ({"position": "front"}, r"position = 'front' unknown; allowed: all, steer, drive, trailer"),
+     ({"speed_kmh": (90, 80)}, r"speed_kmh highest = 80 km/h outside the allowed range \[90, 160\] km/h")],
+)  # fmt: skip
+def test_bad_filters_are_refused_naming_the_parameter_value_range_and_unit(groups, kwargs, message):
+    with pytest.raises(ValueError, match=message):
+        filter_groups(groups, **kwargs)
+
+
+def test_a_group_spacing_out_of_range_is_refused():
+    with pytest.raises(ValueError, match=r"group_spacing_m = 0.0 m outside the allowed range \(0, 5\] m"):
+        axle_groups(pd.DataFrame(), 0.0)
+
+
+def test_observed_survey_statistics_by_hand():
+    survey = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15)
+    out = survey.to_dict()
+    assert out["records"] == {"read": 5, "skipped": 4}
+    tandem, tri = out["groups"]["tandem"], out["groups"]["triaxle"]
+    # tandems B (9500, 8500) and C (9000, 9000): spreads 1000 and 0 kg -> mean 500 kg;
+    # spread over the mean axle load 1000/9000 = 11.11 % and 0 % -> median 5.556 %;
+    # (max - min)/max = 0.105 > 0.05 for B only -> 0.5; LSC 1.056, 1.0 -> none over 1.10
+    assert tandem == {
+        "n_groups": 2, "mean_spread_kg": 500.0, "median_spread_pct": 5.5556, "share_outside_5pct": 0.5,
+        "share_over_10pct": 0.0,
+        # front axle LSC 9500/9000 = 1.0556 and 1.0: p50 1.0278, p05 1.0 + 0.05 x 0.0556 = 1.0028
+        "load_share_quantiles": {
+            "axle_1": {"p05": 1.0028, "p25": 1.0139, "p50": 1.0278, "p75": 1.0417, "p95": 1.0528},
+            "axle_2": {"p05": 0.9472, "p25": 0.9583, "p50": 0.9722, "p75": 0.9861, "p95": 0.9972},
+        },
+    }  # fmt: skip
+    # tri-axles A (7400, 8000, 8600) and C (9000, 7000, 8000), both 24 t, mean axle 8000 kg:
+    # spreads 1200 and 2000 kg -> mean 1600; 15 % and 25 % -> median 20 %; 0.140 and 0.222 > 0.05 -> 1.0;
+    # largest LSC 1.075 and 1.125 -> C over 1.10 -> 0.5; front LSC 0.925 and 1.125 -> p50 1.025
+    assert (tri["n_groups"], tri["mean_spread_kg"], tri["median_spread_pct"]) == (2, 1600.0, 20.0)
+    assert (tri["share_outside_5pct"], tri["share_over_10pct"]) == (1.0, 0.5)
+    assert tri["load_share_quantiles"]["axle_1"]["p50"] == 1.025
+    assert tri["load_share_quantiles"]["axle_3"]["p50"] == pytest.approx((1.075 + 1.0) / 2)
+
+
+def test_every_format_gives_the_same_survey_of_the_same_vehicles():
+    ref = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15).to_dict()
+    for fmt in ("mon", "castor", "bedit", "ditis"):
+        assert observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_t=15).to_dict() == ref, fmt
+
+
+def test_a_filter_that_leaves_no_tandem_gives_an_empty_entry_not_an_error():
+    out = observed_survey(DATA / "site.mon", "mon", min_group_load_t=15, position="trailer").to_dict()
+    assert out["groups"]["tandem"] == {
+        "n_groups": 0, "mean_spread_kg": None, "median_spread_pct": None, "share_outside_5pct": None,
+        "share_over_10pct": None, "load_share_quantiles": {},
+    }  # fmt: skip
+    assert out["groups"]["triaxle"]["n_groups"] == 2
+    none = observed_survey(DATA / "site.mon", "mon", min_group_load_t=99).to_dict()
+    assert none["groups"]["triaxle"]["n_groups"] == 0
