@@ -376,9 +376,60 @@ def equilibrium(
     spring sits on its elastic line (no locked-in forces, as after a long vibration). With ``history`` given
     (:attr:`State.history`), friction and hysteresis start from it and the equilibrium includes their forces.
 
-    Raises ``ValueError`` if the equilibrium lies outside the freedoms' limits (:func:`limits`): it is refused,
-    not returned. An equaliser that meets its bump stop (``Bogie.equaliser_stop``) is a valid equilibrium.
+    Newton starts from ``u0`` or, by default, from the design position with the chassis pitched to the king pin's
+    height. When that fails (no convergence, or a solution outside the freedoms' limits: an equaliser that turned
+    over onto a slack spring is an equilibrium of the equations but not of a bogie) and no ``u0`` was given, the
+    equilibrium is followed from the design state (level road, full load, king pin at design height: ``u = 0``)
+    to ``drive_row`` in small steps, each starting from the last: the state a bogie reaches when its load, tilt
+    and road heights change slowly (:data:`CONTINUATION_STEPS`, halved where a step fails).
+
+    Raises ``ValueError`` if the equilibrium lies outside the freedoms' limits (:func:`limits`) and the
+    continuation cannot reach one inside them (a bogie without stops has none there, e.g. a free tri-axle with
+    low pads at 2 degrees); ``RuntimeError`` if neither converges. An equaliser that meets its bump stop
+    (``Bogie.equaliser_stop``) is a valid equilibrium.
     """
+    try:
+        return _equilibrium(bogie, drive_row, history, u0)
+    except (RuntimeError, ValueError) as direct:
+        if u0 is not None:
+            raise
+        failure = direct
+    try:
+        return _continued_equilibrium(bogie, np.asarray(drive_row, dtype=float), history)
+    except (RuntimeError, ValueError) as followed:
+        raise type(failure)(f"{failure}; following the equilibrium from the design state: {followed}") from None
+
+
+#: equal steps of the continuation from the design state to the drive row (:func:`equilibrium`)
+CONTINUATION_STEPS = 20
+#: smallest fraction of the path a continuation step may shrink to before it gives up
+CONTINUATION_MIN_STEP = 1.0 / 640.0
+
+
+def _continued_equilibrium(bogie: Bogie, drive_row: NDArray[np.float64], history: ArrayLike | None) -> State:
+    """Follow the static equilibrium from the design state (u = 0) to ``drive_row`` (see :func:`equilibrium`)."""
+    n = bogie.n_axles
+    design = np.r_[np.zeros(2 * n), 1.0, 0.0]
+    u = np.zeros(2 * n)
+    done, step = 0.0, 1.0 / CONTINUATION_STEPS
+    state = None
+    while done < 1.0:
+        target = min(1.0, done + step)
+        try:
+            state = _equilibrium(bogie, design + target * (drive_row - design), history, u)
+        except (RuntimeError, ValueError) as err:
+            step *= 0.5
+            if step < CONTINUATION_MIN_STEP:
+                raise type(err)(f"stopped at {100.0 * done:.3g} % of the way: {err}") from None
+            continue
+        u, done = state.u, target
+        step = min(2.0 * step, 1.0 / CONTINUATION_STEPS)
+    assert state is not None
+    return state
+
+
+def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, u0: ArrayLike | None) -> State:
+    """Newton's static equilibrium from ``u0`` (see :func:`equilibrium`)."""
     n = bogie.n_axles
     ndof = 2 * n
     relaxed = history is None
