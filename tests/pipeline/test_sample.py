@@ -33,7 +33,15 @@ from pipeline.sample import (
 )
 
 ROOT = Path(__file__).resolve().parents[2]
-SCALARS = ("bush_stiffness", "bush_damping", "friction_coefficient", "contact_roll_radius", "chassis_tilt")
+SCALARS = (
+    "bush_stiffness",
+    "bush_damping",
+    "friction_coefficient",
+    "contact_roll_radius",
+    "chassis_tilt",
+    "spring_friction_band",
+    "spring_friction_decay",
+)
 
 
 def small_raw(**changes):
@@ -80,6 +88,8 @@ def test_sampled_columns_are_si_and_inside_their_distributions_support(config, s
         tilt = frame["chassis_tilt"]
         assert tilt.abs().max() <= math.radians(2.0)  # rad, not degrees
         assert frame["contact_roll_radius"].max() <= 0.120  # m, not mm
+        assert 4.0 < frame["spring_friction_band"].max() <= 4000.0  # N, not kN
+        assert frame["spring_friction_decay"].between(0.002, 0.008).all()  # m, not mm
         wear = frame[list(TYRE_WEAR_COLUMNS)]
         assert ((wear >= 0.0) & (wear <= 0.012)).all().all()
         assert frame["payload_fraction"].between(0.5, 1.0).all()
