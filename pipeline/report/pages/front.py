@@ -14,6 +14,7 @@ from pipeline.report.context import Context, Page
 from pipeline.report.layout import A4, LEFT, RIGHT, page_header, table_axes, text_block
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import run_counts
+from pipeline.sample import VARIANTS
 from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["SUBTITLE", "TITLE", "summary", "summary_page", "summary_table", "title", "title_facts", "title_page"]
@@ -41,7 +42,7 @@ def title_facts(
             + ", ".join(f"{groups.get(g, 0):,} {GROUP_LABEL[g]}" for g in config.fleet.axle_mix),
         ),
         ("Sobol' design", f"base size {sens.base_size}, {sens.protocol} protocol, {GROUP_LABEL[sens.group]} bogie"),
-        ("Ablation", f"{config.ablation.n_bogies} fleet bogies x 6 variants"),
+        ("Ablation", f"{config.ablation.n_bogies} fleet bogies x {len(VARIANTS)} variants"),
         ("Runs", f"{int(total.n_ok):,} succeeded, {int(total.n_failed):,} failed, of {int(total.n_runs):,}"),
     ]
 
@@ -122,9 +123,9 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
             ]
         )
     a, b = abl["all"], abl["baseline"]
-    rows.append(["all four removed", "", "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("all"), "", "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
     baseline = text.pct(b["mean_max_deviation"], 2, unit=False)
-    rows.append(["none removed", "", "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("baseline"), "", "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
     return list(SUMMARY_HEADER), rows
 
 
