@@ -20,7 +20,7 @@ from pipeline.survey import NOSE_UP_DEG
 __all__ = ["SUBTITLE", "TITLE", "summary", "summary_page", "summary_table", "title", "title_facts", "title_page"]
 
 TITLE = "Why mechanically equalised trailer bogies do not share load equally"
-SUBTITLE = "Sensitivity report: the four inhibitors of axle-load equalisation across a sampled fleet"
+SUBTITLE = "Sensitivity report: the five inhibitors of axle-load equalisation across a sampled fleet"
 
 
 # ---- title page ----------------------------------------------------------------------------------------------------
@@ -154,7 +154,7 @@ def summary(ctx: Context) -> list[Page]:
     n = (numbers["ablation"].get(s["protocol"]) or {}).get("baseline", {}).get("n_bogies", "–")
     header, rows = summary_table(numbers)
     table_title = (
-        f"The four inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
+        f"The five inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
     )
     paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG)
     notes = text.render("summary_notes.j2", s=s, n=n)
