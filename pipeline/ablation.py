@@ -28,7 +28,7 @@ __all__ = [
     "ablation_pairs",
 ]
 
-#: the four inhibitors, each switched off in one variant
+#: the five inhibitors (the reference's four and the leaf-spring hysteresis), each switched off in one variant
 INHIBITOR_NAMES: tuple[str, ...] = tuple(INHIBITORS)
 #: ablation statistic -> per-bogie column it averages
 ABLATION_STATISTICS: dict[str, str] = {

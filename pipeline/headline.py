@@ -29,7 +29,7 @@ def headline(survey: Mapping[str, Any], sensitivity: Mapping[str, Any], status: 
     """The headline figures from the two metrics files and the ``status`` of every run (all studies).
 
     Keys: ``ranking`` (the inhibitors, most influential first, as one string), ``ST_<factor>`` (total Sobol' index
-    of the ranking measure for the four inhibitors and chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
+    of the ranking measure for the five inhibitors and chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
     groups whose lightest axle is more than 5 % below the heaviest [-]), ``spread_kg_<protocol>_<group>`` (mean
     heaviest minus lightest axle load [kg]), ``runs`` and ``failed`` [-]. A figure the metrics lack is left out.
     """

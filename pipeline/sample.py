@@ -34,7 +34,7 @@ from pipeline.resources import available_memory
 
 STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
 
-#: ablation variants: the baseline, each inhibitor switched off alone, and all four off
+#: ablation variants: the baseline, each inhibitor switched off alone, and all five off
 VARIANTS: tuple[str, ...] = ("baseline", *INHIBITORS, "all")
 
 #: radius of gyration of the sprung mass about its centre of gravity in pitch [m]

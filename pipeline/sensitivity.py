@@ -1,11 +1,11 @@
 """DVC stage ``sensitivity``: Sobol' indices and the switch-off ablation -> data/sensitivity/, metrics/sensitivity.json.
 
 ``python -m pipeline.sensitivity`` reads the runs of the ``sensitivity`` study (SALib's Saltelli design over the
-four inhibitors, chassis tilt and tyre wear, see :func:`pipeline.sample.sample_sensitivity`) and of the
+five inhibitors, chassis tilt and tyre wear, see :func:`pipeline.sample.sample_sensitivity`) and of the
 ``ablation`` study (fleet bogies with each inhibitor switched off), and writes:
 
 - first-order and total Sobol' indices with bootstrap confidence intervals of the inequality measures
-  (:data:`SOBOL_MEASURES`) under ``sensitivity.protocol``, and the ranking of the four inhibitors by the total
+  (:data:`SOBOL_MEASURES`) under ``sensitivity.protocol``, and the ranking of the five inhibitors by the total
   index of ``max_deviation``;
 - the ablation: the fleet's mean inequality and tolerance exceedance for each variant, and what removing each
   inhibitor buys against the baseline, with paired bootstrap intervals over bogies.

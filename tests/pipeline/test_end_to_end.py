@@ -19,7 +19,7 @@ import pandas as pd
 import pytest
 import yaml
 
-from bogie.params import GRAVITY, preset
+from bogie.params import GRAVITY, INHIBITORS, preset
 from pipeline.config import load_params
 from pipeline.schema import RUN_COLUMNS
 
@@ -99,9 +99,10 @@ def test_runs_have_the_schema_and_one_row_per_sample_and_protocol(project, runs)
     assert not runs[ok].isna().any().any()  # a failed row's results are null, a successful row has no null
     counts = runs.groupby(["study", "protocol"], observed=True).size().to_dict()
     n_sensitivity = BASE_SIZE * (len(tiny_params()["sensitivity"]["factors"]) + 2)
+    n_variants = 1 + len(INHIBITORS) + 1  # the baseline, each inhibitor off alone, all off
     assert counts == {
-        ("ablation", "static"): 6 * ABLATION,
-        ("ablation", "wim"): 6 * ABLATION,
+        ("ablation", "static"): n_variants * ABLATION,
+        ("ablation", "wim"): n_variants * ABLATION,
         ("fleet", "static"): FLEET,
         ("fleet", "wim"): FLEET,
         ("sensitivity", "static"): n_sensitivity,

@@ -2,14 +2,16 @@
 guidance table they draw from (pipeline.survey_design.design_table), on small hand-computed inputs."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pandas as pd
 import pytest
 
+from pipeline.config import load_params, parse_config
 from pipeline.report import tables
 from pipeline.report.pages.appendix import failures_table
-from pipeline.report.pages.front import summary_table
+from pipeline.report.pages.front import summary_table, title_facts
 from pipeline.survey_design import design_table, wilson_interval
 
 
@@ -32,6 +34,17 @@ def test_run_counts_per_study_in_pipeline_order_then_the_total():
     assert counts["n_runs"].tolist() == [4, 1, 5]
     assert counts["n_ok"].tolist() == [1, 1, 2]
     assert counts["n_failed"].tolist() == [3, 0, 3]
+
+
+def test_title_facts_give_the_study_sizes_of_params_yaml():
+    config = parse_config(load_params(Path(__file__).resolve().parents[2] / "params.yaml"))
+    fleet = pd.DataFrame({"group": ["tandem", "triaxle", "triaxle"]})
+    counts = tables.run_counts(status_rows())
+    facts = dict(title_facts({"code_sha256": "c", "params_sha256": "p"}, config, fleet, counts))
+    assert facts["Fleet"] == "3 bogies: 1 tandem, 2 tri-axle"
+    # the baseline, each of the five inhibitors off alone, all five off
+    assert facts["Ablation"] == "500 fleet bogies x 7 variants"
+    assert facts["Runs"] == "2 succeeded, 3 failed, of 5"
 
 
 def test_failed_runs_group_messages_that_differ_only_in_numbers():
@@ -94,7 +107,7 @@ def test_summary_table_formats_indices_and_ablation_without_units():
         "contact movement", "1", "0.24 (0.19 to 0.29)", "0.20 (0.16 to 0.24)", "1.50", "1.71 (1.61 to 1.81)", "25.0"
     ]  # fmt: skip
     assert rows[1] == ["spring-end friction", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"]
-    assert rows[2] == ["all four removed", "", "", "", "0.12", "1.71 (1.61 to 1.81)", "0.0"]
+    assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71 (1.61 to 1.81)", "0.0"]
     assert rows[3] == ["none removed", "", "", "", "3.21", "", "62.5"]
 
 

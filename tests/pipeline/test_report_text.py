@@ -140,7 +140,10 @@ def numbers(agrees=True, resolved=True, survey=True):
 def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
     paras = text.render("summary.j2", numbers=numbers(), nose_up_deg=0.5)
     assert paras[0] == "## Which inhibitor matters"
-    assert paras[1].startswith("By the total Sobol index ST of max_deviation, with 95 % intervals, the four inhibitors")
+    assert paras[1].startswith(
+        "By the total Sobol index ST of max_deviation, with 95 % intervals, the five inhibitors (the reference's four "
+        "and its preface's leaf-spring hysteresis) rank: "
+    )
     assert "rank: 1. contact movement, ST 0.24 (0.19 to 0.29); 2. bush stiffness, ST 0.03 (0.02 to 0.04). " in paras[1]
     assert "external causes in the same design: chassis tilt 0.78. As the reference concluded" in paras[1]
     assert paras[1].endswith("contact movement, and the intervals separate them.")
@@ -155,7 +158,7 @@ def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
     assert paras[6] == (
         "Static weighbridge, 40 fleet bogies: the fleet mean of the maximum deviation from the mean axle load, 3.21 % "
         "with every inhibitor present, becomes 1.50 % without contact movement (reduction 1.71 points, 1.61 to 1.81), "
-        "3.00 % without bush stiffness (reduction 0.21 points, 0.11 to 0.31); and 0.12 % with all four removed. "
+        "3.00 % without bush stiffness (reduction 0.21 points, 0.11 to 0.31); and 0.12 % with all five removed. "
         "The largest single gain is from removing contact movement: the share outside 5 % goes from 62.5 % to 25.0 %."
     )
     assert len(paras) == 7

@@ -14,12 +14,13 @@ from pipeline.report.context import Context, Page
 from pipeline.report.layout import A4, LEFT, RIGHT, page_header, table_axes, text_block
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import run_counts
+from pipeline.sample import VARIANTS
 from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["SUBTITLE", "TITLE", "summary", "summary_page", "summary_table", "title", "title_facts", "title_page"]
 
 TITLE = "Why mechanically equalised trailer bogies do not share load equally"
-SUBTITLE = "Sensitivity report: the four inhibitors of axle-load equalisation across a sampled fleet"
+SUBTITLE = "Sensitivity report: the five inhibitors of axle-load equalisation across a sampled fleet"
 
 
 # ---- title page ----------------------------------------------------------------------------------------------------
@@ -41,7 +42,7 @@ def title_facts(
             + ", ".join(f"{groups.get(g, 0):,} {GROUP_LABEL[g]}" for g in config.fleet.axle_mix),
         ),
         ("Sobol' design", f"base size {sens.base_size}, {sens.protocol} protocol, {GROUP_LABEL[sens.group]} bogie"),
-        ("Ablation", f"{config.ablation.n_bogies} fleet bogies x 6 variants"),
+        ("Ablation", f"{config.ablation.n_bogies} fleet bogies x {len(VARIANTS)} variants"),
         ("Runs", f"{int(total.n_ok):,} succeeded, {int(total.n_failed):,} failed, of {int(total.n_runs):,}"),
     ]
 
@@ -122,9 +123,9 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
             ]
         )
     a, b = abl["all"], abl["baseline"]
-    rows.append(["all four removed", "", "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("all"), "", "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
     baseline = text.pct(b["mean_max_deviation"], 2, unit=False)
-    rows.append(["none removed", "", "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("baseline"), "", "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
     return list(SUMMARY_HEADER), rows
 
 
@@ -153,7 +154,7 @@ def summary(ctx: Context) -> list[Page]:
     n = (numbers["ablation"].get(s["protocol"]) or {}).get("baseline", {}).get("n_bogies", "–")
     header, rows = summary_table(numbers)
     table_title = (
-        f"The four inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
+        f"The five inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
     )
     paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG)
     notes = text.render("summary_notes.j2", s=s, n=n)

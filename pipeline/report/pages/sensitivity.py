@@ -1,4 +1,4 @@
-"""The sensitivity page: Sobol' indices of every inequality measure and the ablation of the four inhibitors."""
+"""The sensitivity page: Sobol' indices of every inequality measure and the ablation of the five inhibitors."""
 
 from __future__ import annotations
 
