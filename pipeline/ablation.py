@@ -61,8 +61,9 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
     Returns
     -------
     pandas.DataFrame
-        One row per protocol, bogie and variant (the baseline included): ``ok`` (variant and baseline succeeded),
-        and ``max_deviation``, ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of
+        One row per protocol, bogie and variant (the baseline included): ``ok`` (variant and baseline succeeded
+        and neither reading has a wheel in the air), ``airborne`` (either reading has an axle at 0 N over the WIM
+        sensor: a record a WIM system flags, left out like a failure but counted apart), and ``max_deviation``, ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of
         the variant and of the baseline (suffix ``_baseline``); NaN for a failed run.
 
     Raises
@@ -81,16 +82,23 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
             f" {wrong}; every bogie needs each of {', '.join(VARIANTS)} once"
         )
     frame = runs.reset_index(drop=True)
-    ok = frame["status"] == "ok"
+    airborne = (
+        frame["wheel_airborne"].fillna(False).astype(bool)
+        if "wheel_airborne" in frame
+        else pd.Series(False, index=frame.index)
+    )
+    ok = (frame["status"] == "ok") & ~airborne
     values = ["max_deviation", "p1", "outside_5pct", "outside_10pct"]
     flags = inequality_columns(frame[ok])[["outside_5pct", "outside_10pct"]].astype(float)
     frame = frame.assign(outside_5pct=np.nan, outside_10pct=np.nan)
     frame.loc[ok, ["outside_5pct", "outside_10pct"]] = flags.to_numpy()
     frame.loc[~ok, ["max_deviation", "p1"]] = np.nan
+    frame["airborne"] = airborne.to_numpy()
     keys = ["protocol", "base_id"]
-    base = frame.loc[frame["variant"] == "baseline", [*keys, *values]]
-    pairs = frame[[*keys, "group", "variant", *values]].merge(base, on=keys, suffixes=("", "_baseline"))
+    base = frame.loc[frame["variant"] == "baseline", [*keys, *values, "airborne"]]
+    pairs = frame[[*keys, "group", "variant", *values, "airborne"]].merge(base, on=keys, suffixes=("", "_baseline"))
     pairs["ok"] = pairs[values[0]].notna() & pairs[f"{values[0]}_baseline"].notna()
+    pairs["airborne"] = pairs["airborne"] | pairs.pop("airborne_baseline")
     pairs["variant"] = pd.Categorical(pairs["variant"], categories=list(VARIANTS))
     return pairs.sort_values(["protocol", "variant", "base_id"]).reset_index(drop=True)
 
@@ -136,7 +144,8 @@ def ablation_effects(pairs: pd.DataFrame, num_resamples: int, conf_level: float,
             state = _PairedDraws(rng, n, num_resamples)
             for statistic, column in ABLATION_STATISTICS.items():
                 row = {"protocol": protocol, "group": group, "variant": variant, "statistic": statistic}
-                row.update(n_pairs=n, n_failed=len(sub) - n)
+                n_airborne = int(sub["airborne"].sum()) if "airborne" in sub else 0
+                row.update(n_pairs=n, n_failed=len(sub) - n - n_airborne, n_airborne=n_airborne)
                 value, baseline = good[column].to_numpy(float), good[f"{column}_baseline"].to_numpy(float)
                 row.update(_paired_effect(value, baseline, state, conf_level))
                 rows.append(row)
@@ -230,6 +239,7 @@ def ablation_metrics(effects: pd.DataFrame) -> dict[str, Any]:
                 "reduction_low": rounded(dev["reduction_low"], 4), "reduction_high": rounded(dev["reduction_high"], 4),
                 "relative_reduction": rounded(dev["relative_reduction"], 3),
                 "share_outside_5pct": rounded(out5["value"], 4), "n_failed": int(dev["n_failed"]),
+                "n_airborne": int(dev["n_airborne"]),
             }  # fmt: skip
         singles = {v: entry[v]["reduction"] for v in INHIBITOR_NAMES if entry[v]["reduction"] is not None}
         entry["largest_single_gain"] = max(singles, key=singles.get) if singles else None

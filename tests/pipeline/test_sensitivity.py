@@ -333,6 +333,26 @@ def test_ablation_excludes_a_failed_run_from_its_pairs_only_and_counts_it():
     assert effects_of(runs).loc[("static", "all", "all", "mean_max_deviation"), "n_pairs"] == 59
 
 
+def test_ablation_leaves_out_a_wim_reading_with_a_wheel_in_the_air_and_counts_it_apart_from_failures():
+    # a WIM record with an axle at 0 N is flagged by the site, as the survey does: its pair is left out of the
+    # effects and counted as airborne, not as failed; a baseline in the air takes every variant's pair with it
+    runs = ablation_runs()
+    assert "wheel_airborne" in runs and not runs["wheel_airborne"].any()
+    hit = (runs["base_id"] == 3) & (runs["variant"] == "contact_roll_radius") & (runs["protocol"] == "wim")
+    runs.loc[hit, "wheel_airborne"] = True
+    base = (runs["base_id"] == 5) & (runs["variant"] == "baseline") & (runs["protocol"] == "wim")
+    runs.loc[base, "wheel_airborne"] = True
+    effects = effects_of(runs)
+    contact = effects.loc[("wim", "all", "contact_roll_radius", "mean_max_deviation")]
+    assert (contact["n_pairs"], contact["n_failed"], contact["n_airborne"]) == (58, 0, 2)
+    friction = effects.loc[("wim", "all", "friction_coefficient", "mean_max_deviation")]
+    assert (friction["n_pairs"], friction["n_failed"], friction["n_airborne"]) == (59, 0, 1)
+    static = effects.loc[("static", "all", "bush_damping", "mean_max_deviation")]
+    assert (static["n_pairs"], static["n_airborne"]) == (60, 0)
+    # the effect over the other pairs is unchanged: the synthetic effect is the same for every bogie
+    assert contact["difference"] == pytest.approx(EFFECT["contact_roll_radius"])
+
+
 def test_an_incomplete_ablation_is_refused():
     runs = ablation_runs(n_bogies=5)
     drop = (runs["base_id"] == 2) & (runs["variant"] == "bush_damping") & (runs["protocol"] == "wim")
