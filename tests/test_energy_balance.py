@@ -97,7 +97,12 @@ def dissipated_work(bogie, result):
     h = np.asarray(result.extras["spring_hysteresis"])
     delta = np.asarray(result.extras["spring_deflection"])
     hysteresis = float(np.sum(0.5 * (h[1:] + h[:-1]) * np.diff(delta, axis=0)))
-    return {"friction": friction_work(result), "tyre_damper": tyre, "bush_damper": bush, "spring_hysteresis": hysteresis}
+    return {
+        "friction": friction_work(result),
+        "tyre_damper": tyre,
+        "bush_damper": bush,
+        "spring_hysteresis": hysteresis,
+    }
 
 
 def kinetic_energy(bogie, state):
@@ -283,8 +288,8 @@ def _damped(make, **changes):
     to rest and the measured cycle ends where it began, bush dampers, so that both damper terms take part, and
     fixed contact points (rho = 0), so that the balance is the integrator's and the dissipation terms' alone (the
     rolling contacts' own miss: :func:`test_rolling_contacts_miss_the_dynamic_balance_by_their_approximation`)."""
-    return make(**{"tyre_damping": 3.0e4, "bush_damping": 2000.0, "contact_roll_radius": 0.0, "spring_friction_band": 0.0,
-                   **changes})  # fmt: skip
+    quiet = {"tyre_damping": 3.0e4, "bush_damping": 2000.0, "contact_roll_radius": 0.0, "spring_friction_band": 0.0}
+    return make(**{**quiet, **changes})
 
 
 def _dynamic_balance(bogie, dt):

@@ -206,8 +206,11 @@ def test_equilibrium_refuses_a_solution_outside_the_freedoms_limits():
     drive = np.r_[np.zeros(6), 1.0, loose.kingpin_height_offset]
     # following the equilibrium up from the level bogie finds none inside the limits either: the free equalisers
     # with low pads are inverted pendulums, and beyond about 0.8 degrees they have nowhere to stop
-    with pytest.raises(ValueError, match=r"equaliser_0 = 75\.\d+ degrees, beyond its limit of \+-60 degrees.*"
-                       r"following the equilibrium from the design state: stopped at \d+(\.\d+)? % of the way"):
+    with pytest.raises(
+        ValueError,
+        match=r"equaliser_0 = 75\.\d+ degrees, beyond its limit of \+-60 degrees.*"
+        r"following the equilibrium from the design state: stopped at \d+(\.\d+)? % of the way",
+    ):
         nl.equilibrium(loose, drive)
     # with the stops the equalisers cannot get there: the direct Newton does not converge, and the continuation
     # from the level bogie finds the equilibrium with both equalisers on their stops
