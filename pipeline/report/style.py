@@ -43,7 +43,7 @@ FACTOR_LABEL = {
     "bush_damping": "bush damping",
     "contact_roll_radius": "contact movement",
     "friction_coefficient": "spring-end friction",
-    "spring_friction_band": "leaf-spring hysteresis",
+    "spring_friction_band": "spring hysteresis",
     "chassis_tilt": "chassis tilt",
     "tyre_wear": "tyre wear",
     "baseline": "none removed",

@@ -136,15 +136,25 @@ def summary_page(
     table_title: str,
     notes: Sequence[str],
 ) -> Figure:
-    """The summary in words, then its one table."""
-    fig = Figure(figsize=A4)
-    page_header(fig, "Summary")
-    y = text_block(fig, 0.925, paragraphs, size=8.9)
-    fig.text(LEFT, y - 0.005, table_title, fontsize=9.5, weight="bold", va="top")
-    widths = [0.17, 0.05, 0.165, 0.175, 0.11, 0.2, 0.13]
-    y = table_axes(fig, y - 0.03, header, rows, widths, 7.3)
-    text_block(fig, y - 0.012, notes, size=7.5)
+    """The summary in words, then its one table, in the largest type (of :data:`SUMMARY_SIZES`) that ends above the
+    footer's rule (:data:`SUMMARY_BOTTOM`)."""
+    for size in SUMMARY_SIZES:
+        fig = Figure(figsize=A4)
+        page_header(fig, "Summary")
+        y = text_block(fig, 0.925, paragraphs, size=size)
+        fig.text(LEFT, y - 0.005, table_title, fontsize=9.5, weight="bold", va="top")
+        widths = [0.19, 0.05, 0.165, 0.165, 0.1, 0.2, 0.13]
+        y = table_axes(fig, y - 0.03, header, rows, widths, 7.3)
+        y = text_block(fig, y - 0.012, notes, size=min(size, 7.5))
+        if y >= SUMMARY_BOTTOM:
+            break
     return fig
+
+
+#: type sizes the summary's text tries, largest first [pt]
+SUMMARY_SIZES = (8.9, 8.6, 8.3, 8.0, 7.7)
+#: lowest page height the summary may reach: above the footer's rule at 0.04 [page fraction]
+SUMMARY_BOTTOM = 0.05
 
 
 def summary(ctx: Context) -> list[Page]:
