@@ -182,7 +182,9 @@ def history_length(n: int) -> int:
 
 def history_slices(n: int) -> dict[str, slice]:
     """Where each history variable sits in the history of n axles, by name."""
-    return {name: slice(int(history_start(k, n)), int(history_start(k + 1, n))) for k, (name, _, _) in enumerate(HISTORY)}
+    return {
+        name: slice(int(history_start(k, n)), int(history_start(k + 1, n))) for k, (name, _, _) in enumerate(HISTORY)
+    }
 
 
 #: [rad] width of a stop's onset: its contact stiffness grows linearly from 0 to the full stiffness over this much
@@ -404,9 +406,9 @@ def _hysteresis(delta, delta_old, h_old, band, decay):
 
 @njit(cache=True, inline="always")
 def _springs(
-    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x, s_def,
-    s_hys,
-):
+    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x,
+    s_def, s_hys,
+):  # fmt: skip
     """Every spring: contact points (rolling), deflection, interleaf hysteresis, end friction, seat and end loads.
 
     ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it. Each spring's deflection and
@@ -546,8 +548,8 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     for k in range(2 * n):
         f[k] = 0.0
     (
-        piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz,
-        s_def, s_hys,
+        piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth,
+        ax_dz, s_def, s_hys,
     ) = _work_views(work, n)  # fmt: skip
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation

@@ -63,8 +63,9 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         One row per protocol, bogie and variant (the baseline included): ``ok`` (variant and baseline succeeded
         and neither reading has a wheel in the air), ``airborne`` (either reading has an axle at 0 N over the WIM
-        sensor: a record a WIM system flags, left out like a failure but counted apart), and ``max_deviation``, ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of
-        the variant and of the baseline (suffix ``_baseline``); NaN for a failed run.
+        sensor: a record a WIM system flags, left out like a failure but counted apart), and ``max_deviation``,
+        ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of the variant and of the
+        baseline (suffix ``_baseline``); NaN for a failed run.
 
     Raises
     ------
