@@ -23,7 +23,7 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
 
 
 def _figures(case, values: dict) -> str:
-    """A run's figures with their units (:meth:`bogie.cases.Case.unit`): ``p1_front_on_step 1592 N``."""
+    """A run's figures with their units (:meth:`bogie.cases.Case.unit`): ``p1_front_on_step 1583 N``."""
     return ", ".join(f"{k} {v:.4g} {case.unit(k)}" if isinstance(v, float) else f"{k} {v} {case.unit(k)}"
                      for k, v in values.items())  # fmt: skip
 
