@@ -24,12 +24,12 @@ from pipeline.sample import (
     check_memory,
     memory_needed,
     road_seed,
-    sensor_seed,
     sample_ablation,
     sample_fleet,
     sample_sensitivity,
     sample_studies,
     sensitivity_problem,
+    sensor_seed,
     write_parquet_atomic,
 )
 
