@@ -160,8 +160,8 @@ def result_row(
     ``outside_5pct`` is (max W - min W) / max W > :data:`~pipeline.constants.PAIR_TOLERANCE` (VSB 11) and
     ``over_10pct`` the largest load share n W / sum W above 1 + :data:`~pipeline.constants.SHARE_TOLERANCE`.
     ``wheel_airborne``: some axle reads 0 N, its wheels in the air over their whole passage across the WIM sensor
-    (the tyres are unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping it; the row
-    stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
+    (the tyres are unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping
+    it; the row stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
     ``equaliser_on_stop``: an equaliser bears on its bump stop while the protocol reads (a valid reading).
     """
     row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}

@@ -50,8 +50,9 @@ def test_a_smooth_site_and_a_long_sensor_lower_the_dynamic_scatter_on_a_rough_ro
     assert site < 0.5 * rough
     # averaging over the passage: a cosine of frequency f keeps sinc(f S / v) sinc(f L / v) of its amplitude. Wheel
     # hop (10-15 Hz) keeps 0.8-0.9 over a 0.5 m bending plate and at most 0.2 over a 3 m weighing length; body
-    # bounce (2-3 Hz) keeps 0.99 and 0.75-0.9 (22 m/s, a 0.2 m patch). Measured: 0.87 and 0.44 of the point sensor's scatter here (up to 0.96 and
-    # 0.76 on the next twelve bogies), so the limits below hold with a margin on these four
+    # bounce (2-3 Hz) keeps 0.99 and 0.75-0.9 (22 m/s, a 0.2 m patch). Measured: 0.87 and 0.44 of the point
+    # sensor's scatter on these four bogies (up to 0.96 and 0.76 on the next twelve, whose body bounce weighs
+    # more), so the limits below hold with a margin on these four
     lengths = (0.05, 0.5, 3.0)
     longer = [scatter(fleet, dataclasses.replace(point, sensor_length=s, contact_length=0.2)) for s in lengths]
     assert rough >= longer[0] >= longer[1] >= longer[2]
