@@ -10,13 +10,14 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from pipeline.constants import READ_TIME, TARE_FRACTION
+from bogie.wim import axle_error_sd
+from pipeline.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, table_pages, text_block, text_page
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import failed_runs, parameter_panels
-from pipeline.survey import NOSE_UP_DEG, PAIR_TOLERANCE, SHARE_TOLERANCE
+from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["definitions", "failures", "failures_table", "parameters", "parameters_page"]
 
@@ -75,6 +76,7 @@ def parameters(ctx: Context) -> list[Page]:
 # ---- B: definitions ------------------------------------------------------------------------------------------------
 def definitions(ctx: Context) -> list[Page]:
     """Appendix B: the protocols with params.yaml's settings, the definitions, the studies, the model in short."""
+    wim = ctx.inputs.config.protocol.wim
     paragraphs = text.render(
         "definitions.j2",
         config=ctx.inputs.config,
@@ -84,6 +86,7 @@ def definitions(ctx: Context) -> list[Page]:
         share_tolerance=SHARE_TOLERANCE,
         nose_up_deg=NOSE_UP_DEG,
         n_airborne=ctx.inputs.survey_metrics.get("n_airborne", 0),
+        wim_error_sd=axle_error_sd(wim.accuracy_class, wim.confidence_level),
     )
     fig = text_page("Appendix B: protocols, definitions and model assumptions", paragraphs)
     return [Page("Appendix B: protocols, definitions, assumptions", "", fig)]
