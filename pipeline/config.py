@@ -20,6 +20,7 @@ import yaml
 from pydantic import ValidationError
 
 from bogie.params import GRAVITY
+from bogie.wim import axle_error_sd
 from pipeline.config_distributions import ROAD_CLASSES
 from pipeline.config_errors import ConfigError, to_config_error
 from pipeline.config_schema import (
@@ -182,6 +183,11 @@ class WimProtocol:
     contact_length: float = 0.0
     accuracy_class: str = "none"
     confidence_level: float = 0.95
+
+    @property
+    def axle_error_sd(self) -> float:
+        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.wim.axle_error_sd`)."""
+        return axle_error_sd(self.accuracy_class, self.confidence_level)
 
 
 @dataclass(frozen=True)

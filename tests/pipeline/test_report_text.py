@@ -6,7 +6,6 @@ from pathlib import Path
 import jinja2
 import pytest
 
-from bogie.wim import axle_error_sd
 from pipeline.config import load_params, parse_config
 from pipeline.report import text
 
@@ -288,7 +287,7 @@ def test_the_wim_protocol_text_says_when_the_old_point_sensor_is_chosen():
     wim.update(accuracy_class="none")
     paras = text.render(
         "definitions.j2", config=parse_config(raw), tare=0.25, read_time=0.5, pair_tolerance=0.05,
-        share_tolerance=0.1, nose_up_deg=0.5, n_airborne=0, wim_error_sd=0.0,
+        share_tolerance=0.1, nose_up_deg=0.5, n_airborne=0,
     )  # fmt: skip
     assert "There is no smooth site: the sensor lies in the random road." in paras[2]
     assert "Each axle's load is read as that axle crosses a point sensor." in paras[2]
@@ -318,7 +317,6 @@ def test_definitions_take_the_protocols_from_params():
         share_tolerance=0.1,
         nose_up_deg=0.5,
         n_airborne=140,
-        wim_error_sd=axle_error_sd("B(10)", 0.95),  # 0.0765
     )
     assert any("its wheels in the air over the WIM sensor" in p and "(140 in the fleet study" in p for p in paras)
     headings = [p for p in paras if p.startswith("## ")]

@@ -10,7 +10,6 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from bogie.wim import axle_error_sd
 from pipeline.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
 from pipeline.report import text
 from pipeline.report.context import Context, Page
@@ -76,7 +75,6 @@ def parameters(ctx: Context) -> list[Page]:
 # ---- B: definitions ------------------------------------------------------------------------------------------------
 def definitions(ctx: Context) -> list[Page]:
     """Appendix B: the protocols with params.yaml's settings, the definitions, the studies, the model in short."""
-    wim = ctx.inputs.config.protocol.wim
     paragraphs = text.render(
         "definitions.j2",
         config=ctx.inputs.config,
@@ -86,7 +84,6 @@ def definitions(ctx: Context) -> list[Page]:
         share_tolerance=SHARE_TOLERANCE,
         nose_up_deg=NOSE_UP_DEG,
         n_airborne=ctx.inputs.survey_metrics.get("n_airborne", 0),
-        wim_error_sd=axle_error_sd(wim.accuracy_class, wim.confidence_level),
     )
     fig = text_page("Appendix B: protocols, definitions and model assumptions", paragraphs)
     return [Page("Appendix B: protocols, definitions, assumptions", "", fig)]
