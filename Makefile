@@ -10,7 +10,7 @@ export PATH := $(abspath $(BIN)):$(PATH)
 export DVC_NO_ANALYTICS := 1
 export MPLBACKEND := Agg
 
-.PHONY: repro test lint bench validation-tables clean-venv
+.PHONY: repro test lint bench validation-tables wim-site-study clean-venv
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python >= 3.11 needed, found " + sys.version' 
@@ -50,6 +50,10 @@ bench: $(STAMP)
 # docs/validation.md's tables from bogie.cases (after any change to the physics); `--check` only compares
 validation-tables: $(STAMP)
 	$(BIN)/python tools/validation_tables.py
+
+# docs/wim-site.md's table: each part of the WIM site and sensor, one at a time (300 bogies, WIM only, about a minute)
+wim-site-study: $(STAMP)
+	$(BIN)/python tools/wim_site_study.py
 
 clean-venv:
 	rm -rf $(VENV)

@@ -20,6 +20,7 @@ import yaml
 from pydantic import ValidationError
 
 from bogie.params import GRAVITY
+from bogie.wim import axle_error_sd
 from pipeline.config_distributions import ROAD_CLASSES
 from pipeline.config_errors import ConfigError, to_config_error
 from pipeline.config_schema import (
@@ -154,11 +155,39 @@ class StaticProtocol:
 
 @dataclass(frozen=True)
 class WimProtocol:
-    """Weigh-in-motion pass: road speed [m/s] over an approach [m]; time step [s]."""
+    """Weigh-in-motion pass: road speed [m/s] over an approach [m]; time step [s]; the site and the sensor.
+
+    Attributes
+    ----------
+    site_before, site_after
+        Length of the smooth WIM site ahead of and past the sensor [m] (both 0: the sensor lies in the sampled road).
+    site_iri
+        International Roughness Index of the site's pavement [m/km] (the IRI's own unit, ASTM E1926; not SI m/m).
+    sensor_length
+        The sensor's weighing length along the road [m] (0: a point sensor).
+    contact_length
+        The tyres' contact patch length [m].
+    accuracy_class
+        COST 323 accuracy class of the sensor's axle readings (``none``: no error), :data:`bogie.wim.ACCURACY_CLASSES`.
+    confidence_level
+        Confidence level at which the class's tolerance holds [-].
+    """
 
     speed: float
     approach_length: float
     dt: float
+    site_before: float = 0.0
+    site_after: float = 0.0
+    site_iri: float = 1.3
+    sensor_length: float = 0.0
+    contact_length: float = 0.0
+    accuracy_class: str = "none"
+    confidence_level: float = 0.95
+
+    @property
+    def axle_error_sd(self) -> float:
+        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.wim.axle_error_sd`)."""
+        return axle_error_sd(self.accuracy_class, self.confidence_level)
 
 
 @dataclass(frozen=True)
@@ -258,7 +287,18 @@ def _protocol(protocol: Any) -> ProtocolConfig:
             settle_time=st.settle_time_s,
             dt=st.dt_s,
         ),
-        wim=WimProtocol(speed=wim.speed_m_s, approach_length=wim.approach_length_m, dt=wim.dt_s),
+        wim=WimProtocol(
+            speed=wim.speed_m_s,
+            approach_length=wim.approach_length_m,
+            dt=wim.dt_s,
+            site_before=wim.site_length_before_m,
+            site_after=wim.site_length_after_m,
+            site_iri=wim.site_iri_m_km,
+            sensor_length=wim.sensor_length_m,
+            contact_length=wim.contact_length_m,
+            accuracy_class=wim.accuracy_class,
+            confidence_level=wim.confidence_level,
+        ),
     )
 
 

@@ -26,6 +26,7 @@ from pydantic import (
 )
 
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
+from bogie.wim import ACCURACY_CLASSES
 from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config_errors import config_error
 from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN
@@ -349,11 +350,28 @@ class Wim(Strict):
     speed_m_s: float = number("m/s", ge=1.0, le=50.0)
     approach_length_m: float = number("m", gt=0.0, le=10_000.0)
     dt_s: float = number("s", gt=0.0, le=0.01)
+    # the site: COST 323 sets its requirements over 50 m before and 25 m after the sensor; 0 and 0 is no site
+    site_length_before_m: float = number("m", ge=0.0, le=1000.0)
+    site_length_after_m: float = number("m", ge=0.0, le=1000.0)
+    # 0.3 m/km is a very smooth new pavement; above 6 m/km no site class applies (COST 323 class III ends at 4)
+    site_iri_m_km: float = number("m/km", ge=0.3, le=6.0)
+    # 0 is a point sensor; 5 m is about the longest weighing length (a culvert or a long platform)
+    sensor_length_m: float = number("m", ge=0.0, le=5.0)
+    # a truck tyre's contact patch is 0.15-0.30 m long; 0 with sensor_length_m 0 is the instantaneous force
+    contact_length_m: float = number("m", ge=0.0, le=1.0)
+    accuracy_class: Literal[ACCURACY_CLASSES] = named("accuracy class")  # type: ignore[valid-type]
+    confidence_level: float = number("[-]", ge=0.5, lt=1.0)
 
     @model_validator(mode="after")
     def _pass_fits(self) -> Wim:
         route = (self.approach_length_m + ROUTE_MARGIN) / self.speed_m_s
         _check_steps("approach_length_m", self.approach_length_m, route, self.dt_s)
+        if self.site_length_before_m > self.approach_length_m:
+            expected = (
+                f"must not exceed approach_length_m = {self.approach_length_m:g} m: the site lies on the approach "
+                "road ahead of the sensor"
+            )
+            raise config_error("site_length_before_m", self.site_length_before_m, expected)
         return self
 
 

@@ -5,8 +5,12 @@ payload fraction on level ground, crawls at walking pace over a few metres of ra
 class and seed) onto a level weighbridge, stops and settles; the axle loads are the mean over the last half
 second. The load history and the approach leave friction forces locked in, as on a real weighbridge.
 
-``wim``: the laden trailer passes at road speed over the random approach road and a WIM sensor at its end; each
-axle's dynamic load is recorded as that axle crosses the sensor.
+``wim``: the laden trailer passes at road speed over the random approach road and a WIM site at its end: the road
+made smoother over the site's length before and after the sensor (:class:`bogie.wim.SiteRoad`), a sensor that reads
+each tyre's force averaged over its passage across the sensor's weighing length (:func:`bogie.wim.sensor_reading`),
+and a random error on each axle reading from the sensor's COST 323 accuracy class, drawn from the sample's
+``sensor_seed`` (:func:`bogie.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
+instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
 Both run the full non-linear model (:mod:`bogie.nonlinear`). One side of the bogie is modelled; axle loads are
 twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
@@ -24,9 +28,9 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import metrics, nonlinear
+from bogie import metrics, nonlinear, wim
 from bogie.params import GRAVITY, Bogie
-from bogie.road import ISO8608Profile
+from bogie.road import ISO8608_CLASSES, ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
 from pipeline.schema import RESULT_COLUMNS
@@ -85,25 +89,58 @@ def static_weighbridge(
     return settled
 
 
+def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.SiteRoad:
+    """The approach road with the WIM site of ``spec`` around the sensor, at ``spec.approach_length`` [m].
+
+    The site's heights are the sampled road's scaled by r = min(1, sqrt(G_site / G_road)) (:class:`bogie.wim.SiteRoad`),
+    G_site the ISO 8608 G_d(n0) of the site's IRI (:func:`bogie.wim.gd_n0_for_iri`) and G_road that of the
+    sampled class.
+    """
+    scale = min(1.0, math.sqrt(wim.gd_n0_for_iri(spec.site_iri) / ISO8608_CLASSES[road_class.upper()]))
+    return wim.SiteRoad(road, spec.approach_length, spec.site_before, spec.site_after, scale)
+
+
 def wim_pass(
-    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
+    bogie: Bogie,
+    payload_fraction: float,
+    road_class: str,
+    road_seed: int,
+    spec: WimProtocol,
+    sensor_seed: int | None = None,
 ) -> nonlinear.NonlinearResult:
-    """Run the WIM protocol; ``extras["reading"]`` holds each wheel's load as its axle crosses the sensor [N]."""
+    """Run the WIM protocol; ``extras["reading"]`` holds each wheel's load read by the sensor [N].
+
+    ``extras["reading_error_free"]`` is the same before the sensor's error, each tyre's force averaged over its
+    passage across the sensor (:func:`bogie.wim.sensor_reading`). ``sensor_seed`` seeds the errors of
+    ``spec.accuracy_class``; it may be None only for class ``none``.
+    """
     dt = spec.dt
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    road = _approach(road_class, road_seed, spec.approach_length + group_length + 5.0)
-    # the sensor lies inside the random road (WIM sites are on ordinary road), not on the level run-out
+    road = wim_site(_approach(road_class, road_seed, spec.approach_length + group_length + 5.0), road_class, spec)
+    # the site lies on the random road (WIM sites are on ordinary road, made smooth), not on the level run-out
     sensor = spec.approach_length
-    duration = (sensor + group_length) / spec.speed + 0.05
+    half = 0.5 * (spec.sensor_length + spec.contact_length) / spec.speed  # half a tyre's passage over it [s]
+    duration = (sensor + group_length) / spec.speed + half + 0.05
     inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, dt, 0.0, load_factor=payload_fraction)
     state = nonlinear.equilibrium(bogie, inputs.drive(bogie)[0])
     run = nonlinear.simulate(bogie, inputs, initial=state)
     if run.success:
         crossing = (sensor + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / spec.speed
-        run.extras["reading"] = np.array(
-            [np.interp(crossing[i], run.t, run.wheel_loads[:, i]) for i in range(bogie.n_axles)]
-        )
-        run.extras["on_stop"] = _on_stop(run, (run.t >= crossing[0] - 0.5 * dt) & (run.t <= crossing[-1] + 0.5 * dt))
+        passage = [
+            wim.sensor_reading(run.t, run.wheel_loads[:, i], crossing[i], spec.speed, spec.sensor_length,
+                               spec.contact_length)
+            for i in range(bogie.n_axles)
+        ]  # fmt: skip
+        run.extras["reading_error_free"] = np.array(passage)
+        if spec.accuracy_class == "none":
+            error = np.zeros(bogie.n_axles)
+        elif sensor_seed is None:
+            raise ValueError(f"accuracy_class {spec.accuracy_class} needs a sensor_seed (a non-negative integer)")
+        else:
+            error = wim.axle_errors(spec.accuracy_class, spec.confidence_level, sensor_seed, bogie.n_axles)
+        run.extras["reading"] = run.extras["reading_error_free"] * (1.0 + error)
+        window = (run.t >= crossing[0] - half - 0.5 * dt) & (run.t <= crossing[-1] + half + 0.5 * dt)
+        run.extras["on_stop"] = _on_stop(run, window)
     return run
 
 
@@ -122,9 +159,9 @@ def result_row(
     ``wheel_loads`` (a failed weighing) every result is null: NaN for the numbers, None for the two flags.
     ``outside_5pct`` is (max W - min W) / max W > :data:`~pipeline.constants.PAIR_TOLERANCE` (VSB 11) and
     ``over_10pct`` the largest load share n W / sum W above 1 + :data:`~pipeline.constants.SHARE_TOLERANCE`.
-    ``wheel_airborne``: some axle reads 0 N, its wheels in the air as they cross the WIM sensor (the tyres are
-    unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping it; the row
-    stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
+    ``wheel_airborne``: some axle reads 0 N, its wheels in the air over their whole passage across the WIM sensor
+    (the tyres are unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping
+    it; the row stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
     ``equaliser_on_stop``: an equaliser bears on its bump stop while the protocol reads (a valid reading).
     """
     row: dict[str, Any] = {"protocol": protocol, "n_axles": int(n_axles)}
@@ -165,10 +202,11 @@ def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticPr
     pitch = 0.0
     on_stop = False
     try:
-        runner = static_weighbridge if protocol == "static" else wim_pass
-        run = runner(
-            bogie, float(sample["payload_fraction"]), str(sample["road_class"]), int(sample["road_seed"]), spec
-        )
+        args = (bogie, float(sample["payload_fraction"]), str(sample["road_class"]), int(sample["road_seed"]), spec)
+        if protocol == "static":
+            run = static_weighbridge(*args)
+        else:
+            run = wim_pass(*args, sensor_seed=int(sample["sensor_seed"]))
         if run.success and np.all(np.isfinite(run.extras["reading"])):
             reading = run.extras["reading"]
             pitch = float(run.extras["chassis_pitch"][-1])

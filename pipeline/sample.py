@@ -79,6 +79,7 @@ COLUMNS: dict[str, str] = {
     "spring_friction_decay": "float64",  # its decay length [m]
     "road_class": "str",  # ISO 8608 class
     "road_seed": "int64",  # seed of the approach road's random profile [-]
+    "sensor_seed": "int64",  # seed of the WIM sensor's errors on the axle readings [-]
     "legal_group_load": "float64",  # both sides [N]
     "payload_mass": "float64",  # sprung mass per side of the fully laden design bogie [kg]
     "chassis_pitch_inertia": "float64",  # [kg m^2]
@@ -86,6 +87,7 @@ COLUMNS: dict[str, str] = {
 
 _STREAM_DESIGN = 0
 _STREAM_ROAD = 1
+_STREAM_SENSOR = 2
 
 
 # ---- seeds -----------------------------------------------------------------------------------------------------
@@ -121,6 +123,15 @@ def road_seed(seed: int, study: str, sample_id: int) -> int:
         A non-negative int64, the same whatever the row order or chunking.
     """
     return _seed_int(_seed_sequence(seed, study, _STREAM_ROAD, sample_id))
+
+
+def sensor_seed(seed: int, study: str, sample_id: int) -> int:
+    """Seed of one bogie's WIM sensor errors (:func:`bogie.wim.axle_errors`), like :func:`road_seed` [-].
+
+    A stream of its own, so the sensor's errors are independent of the road's profile; per bogie and kept by the
+    ablation's variants, so a variant and its baseline read with the same errors (common random numbers).
+    """
+    return _seed_int(_seed_sequence(seed, study, _STREAM_SENSOR, sample_id))
 
 
 def design_seed(seed: int, study: str) -> int:
@@ -259,6 +270,7 @@ def sample_fleet(config: Config) -> pd.DataFrame:
             dist = config.distributions[dim]
         values[dim] = dist.ppf(u[:, j])
     values["road_seed"] = np.array([road_seed(config.seed, "fleet", i) for i in range(n)], dtype=np.int64)
+    values["sensor_seed"] = np.array([sensor_seed(config.seed, "fleet", i) for i in range(n)], dtype=np.int64)
     return _frame(config, "fleet", values.pop("group"), values, np.arange(n))
 
 
@@ -296,7 +308,7 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
     The base bogie is the group's preset; each factor is mapped from SALib's unit design through the same
     distribution as in the fleet, and every other quantity is held at its distribution's median. All rows share one
     approach road, ``road_seed(seed, "sensitivity", 0)``: the road is a non-factor too, and a road per row would add
-    variance that no factor explains.
+    variance that no factor explains. So do the WIM sensor's errors, ``sensor_seed(seed, "sensitivity", 0)``.
 
     Parameters
     ----------
@@ -327,6 +339,7 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
         dist = config.distributions["tyre_wear" if name.startswith("tyre_wear_") else name]
         values[name] = dist.ppf(u[:, j])
     values["road_seed"] = np.full(n, road_seed(config.seed, "sensitivity", 0), dtype=np.int64)
+    values["sensor_seed"] = np.full(n, sensor_seed(config.seed, "sensitivity", 0), dtype=np.int64)
     groups = np.full(n, sens.group, dtype=object)
     return _frame(config, "sensitivity", groups, values, np.arange(n) // (n_groups + 2))
 
@@ -335,7 +348,9 @@ def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
     """The switch-off ablation: the first ``ablation.n_bogies`` fleet bogies, each as the variants of :data:`VARIANTS`.
 
     A variant differs from its baseline only in the inhibitor(s) set to the ideal value of
-    :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed, so the baseline rows equal the fleet rows.
+    :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed and WIM sensor seed, so the baseline rows
+    equal the fleet rows and every variant crosses the same road and reads with the same sensor errors as its
+    baseline (common random numbers: a variant's difference is the inhibitor's alone).
 
     Parameters
     ----------

@@ -62,8 +62,8 @@ UNITS: dict[str, str] = {
     "bush_stiffness": "N m/rad", "bush_damping": "N m s/rad", "friction_coefficient": "-", "contact_roll_radius": "m",
     **dict.fromkeys(TYRE_WEAR_COLUMNS, "m"), "chassis_tilt": "rad", "payload_fraction": "-", "equaliser_arm": "m",
     "spring_friction_band": "N", "spring_friction_decay": "m",
-    "road_class": "-", "road_seed": "-", "legal_group_load": "N", "payload_mass": "kg", "chassis_pitch_inertia":
-    "kg m^2", "chassis_tilt_deg": "degree", "protocol": "-", "status": "-", "message": "-",
+    "road_class": "-", "road_seed": "-", "sensor_seed": "-", "legal_group_load": "N", "payload_mass": "kg",
+    "chassis_pitch_inertia": "kg m^2", "chassis_tilt_deg": "degree", "protocol": "-", "status": "-", "message": "-",
     **{f"axle_load_{i}": "N" for i in range(MAX_AXLES)}, **{f"load_share_{i}": "-" for i in range(MAX_AXLES)},
     "group_load": "N", "p": "-", "p1": "-", "max_deviation": "-", "spread": "N", "spread_kg": "kg",
     "road_wear_factor": "-", "chassis_pitch": "rad", "outside_5pct": "-", "over_10pct": "-", "wheel_airborne": "-",

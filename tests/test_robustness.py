@@ -12,7 +12,19 @@ from pipeline.protocol import weigh
 from pipeline.sample import design_bogie
 
 STATIC = StaticProtocol(load_time=1.0, approach_length=3.0, crawl_speed=1.4, settle_time=1.5, dt=0.001)
-WIM = WimProtocol(speed=22.0, approach_length=20.0, dt=0.001)
+# a WIM site, a bending plate and the coarsest accuracy class: every part of the WIM model runs
+WIM = WimProtocol(
+    speed=22.0,
+    approach_length=20.0,
+    dt=0.001,
+    site_before=15.0,
+    site_after=5.0,
+    site_iri=1.3,
+    sensor_length=0.5,
+    contact_length=0.2,
+    accuracy_class="D(25)",
+    confidence_level=0.95,
+)
 
 
 @st.composite
@@ -32,6 +44,7 @@ def sampled_bogies(draw):
         "payload_fraction": draw(st.floats(0.5, 1.0)),
         "road_class": draw(st.sampled_from(["A", "B", "C"])),
         "road_seed": draw(st.integers(0, 2**31)),
+        "sensor_seed": draw(st.integers(0, 2**31)),
     }
     return bogie, sample
 

@@ -59,6 +59,9 @@ def test_default_params_load_and_are_converted_to_si():
         "tyre_wear",
     )
     assert config.protocol.run == ("static", "wim")
+    wim = config.protocol.wim
+    assert (wim.site_before, wim.site_after, wim.site_iri) == (50.0, 25.0, 1.3)  # COST 323 class I site [m, m/km]
+    assert (wim.sensor_length, wim.contact_length, wim.accuracy_class) == (0.05, 0.2, "B(10)")
     assert config.execution.backend == "loky" and config.execution.n_jobs == 2
 
 
@@ -168,6 +171,25 @@ BAD = [
     ("protocol.wim.speed_m_s", 80.0, "protocol.wim.speed_m_s", ["80.0", "[1, 50] m/s"]),
     # accepted before: a WIM pass at 1e-7 m/s asked for a 4.6 TiB history, a 0 s settle failed every static run
     ("protocol.wim.speed_m_s", 1e-7, "protocol.wim.speed_m_s", ["1e-07", "[1, 50] m/s"]),
+    # the WIM site and sensor
+    (
+        "protocol.wim.accuracy_class",
+        "B10",
+        "protocol.wim.accuracy_class",
+        ["'B10'", "did you mean B(10)?", "none, A(5)"],
+    ),
+    ("protocol.wim.accuracy_class", None, "protocol.wim.accuracy_class", ["None", "D+(20), D(25)"]),
+    ("protocol.wim.sensor_length_m", 6.0, "protocol.wim.sensor_length_m", ["6.0", "[0, 5] m"]),
+    ("protocol.wim.contact_length_m", -0.1, "protocol.wim.contact_length_m", ["-0.1", "[0, 1] m"]),
+    ("protocol.wim.site_iri_m_km", 0.0, "protocol.wim.site_iri_m_km", ["0.0", "[0.3, 6] m/km"]),
+    ("protocol.wim.confidence_level", 1.0, "protocol.wim.confidence_level", ["1.0", "[0.5, 1)"]),
+    ("protocol.wim.site_length_after_m", -5.0, "protocol.wim.site_length_after_m", ["-5.0", "[0, 1000] m"]),
+    (
+        "protocol.wim.site_length_before_m",
+        100.0,
+        "protocol.wim.site_length_before_m",
+        ["100.0", "must not exceed approach_length_m = 60 m"],
+    ),
     ("protocol.static.settle_time_s", 0.0, "protocol.static.settle_time_s", ["0.0", "[0.5, 600] s"]),
     ("protocol.static.crawl_speed_m_s", 0.01, "protocol.static.crawl_speed_m_s", ["0.01", "[0.1, 5] m/s"]),
     ("protocol.static.dt_s", 1e-6, "protocol.static.load_time_s", ["2,000,000 steps", "more than 1,000,000"]),

@@ -280,6 +280,20 @@ def test_design_caption_names_the_cells_that_reach_the_target_or_the_best():
     assert paras[2].startswith("Caveat")
 
 
+def test_the_wim_protocol_text_says_when_the_old_point_sensor_is_chosen():
+    raw = load_params(ROOT / "params.yaml")
+    wim = raw["protocol"]["wim"]
+    wim.update(site_length_before_m=0.0, site_length_after_m=0.0, sensor_length_m=0.0, contact_length_m=0.0)
+    wim.update(accuracy_class="none")
+    paras = text.render(
+        "definitions.j2", config=parse_config(raw), tare=0.25, read_time=0.5, pair_tolerance=0.05,
+        share_tolerance=0.1, nose_up_deg=0.5, n_airborne=0,
+    )  # fmt: skip
+    assert "There is no smooth site: the sensor lies in the random road." in paras[2]
+    assert "Each axle's load is read as that axle crosses a point sensor." in paras[2]
+    assert "The sensor has no error." in paras[2]
+
+
 def test_appendix_texts():
     [caption] = text.render("parameters.j2", n=4000, sampling="lhs", seed=42)
     assert caption.startswith("The 4000 bogies of the fleet study as sampled (lhs: Latin hypercube, seed 42), in")
@@ -318,6 +332,16 @@ def test_definitions_take_the_protocols_from_params():
     assert f"crawls at {static.crawl_speed:g} m/s" in paras[1]
     assert f"mean load over the last 0.5 s. Time step {1e3 * static.dt:g} ms." in paras[1]
     assert f"passes at {wim.speed:g} m/s ({3.6 * wim.speed:.0f} km/h)" in paras[2]
+    # the WIM site and sensor as params.yaml sets them
+    assert (
+        "The site, 50 m before the sensor and 25 m after it, is the same road smoothed to an IRI of 1.3 m/km"
+        in paras[2]
+    )
+    assert "across the sensor (0.05 m weighing length, 0.2 m contact patch)" in paras[2]
+    assert (
+        "accuracy class B(10) (standard deviation 7.7 %: the class's single-axle tolerance at 95 % confidence)"
+        in paras[2]
+    )
     assert "(max W - min W) / max W > 0.05. Outside 10 %: the largest load share > 1.1. Nose up" in " ".join(paras)
     assert (
         f"- Fleet: {config.fleet.n_bogies} bogies ({config.fleet.sampling}, seed {config.seed}), axle mix tandem"

@@ -29,6 +29,7 @@ from pipeline.sample import (
     sample_sensitivity,
     sample_studies,
     sensitivity_problem,
+    sensor_seed,
     write_parquet_atomic,
 )
 
@@ -159,6 +160,20 @@ def test_road_seeds_depend_only_on_seed_study_and_sample_id(config, studies):
     assert fleet["road_seed"].is_unique
     assert (fleet["road_seed"] >= 0).all()
     assert road_seed(config.seed, "fleet", 7) != road_seed(config.seed, "ablation", 7)
+
+
+def test_sensor_seeds_are_per_bogie_apart_from_the_road_and_kept_by_the_ablation_variants(config, studies):
+    fleet, ablation = studies["fleet"], studies["ablation"]
+    bigger = sample_fleet(parse_config(small_raw(fleet__n_bogies=600)))
+    assert bigger["sensor_seed"].iloc[: len(fleet)].tolist() == fleet["sensor_seed"].tolist()
+    assert fleet["sensor_seed"].iloc[7] == sensor_seed(config.seed, "fleet", 7)
+    assert fleet["sensor_seed"].is_unique and (fleet["sensor_seed"] >= 0).all()
+    # a stream of its own: no bogie's sensor seed is any bogie's road seed
+    assert not set(fleet["sensor_seed"]) & set(fleet["road_seed"])
+    # common random numbers: every variant reads with its fleet bogie's sensor errors
+    merged = ablation.merge(fleet[["sample_id", "sensor_seed"]], left_on="base_id", right_on="sample_id")
+    assert (merged["sensor_seed_x"] == merged["sensor_seed_y"]).all()
+    assert studies["sensitivity"]["sensor_seed"].nunique() == 1
 
 
 # ---- the ablation ------------------------------------------------------------------------------------------------

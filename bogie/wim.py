@@ -1,0 +1,262 @@
+"""A weigh-in-motion (WIM) site and sensor: the site's pavement, the sensor's weighing length, its accuracy class.
+
+Three parts, each a pure function or a small frozen dataclass (derivations and sources in ``docs/wim-site.md``):
+
+- **site pavement**: :class:`SiteRoad` smooths a sampled road over the site, ``before`` metres ahead of the sensor
+  and ``after`` metres past it (COST 323: 50 m and 25 m), to the roughness of a given International Roughness
+  Index (IRI); :func:`iri_of_iso8608` and :func:`gd_n0_for_iri` convert between IRI and the ISO 8608 displacement
+  PSD G_d(n0) (the golden quarter car's response to the PSD, in closed form);
+- **weighing length**: :func:`sensor_reading` is the tyre force averaged over the tyre's passage across the sensor,
+  weighted by the length of the contact patch that stands on the sensor, integrated exactly on the stored samples;
+- **accuracy**: :func:`axle_error_sd` is the relative standard deviation of one axle reading from a COST 323
+  accuracy class (:data:`COST323_TOLERANCES`) and a confidence level; :func:`axle_errors` draws the seeded errors.
+
+References
+----------
+COST 323, European Specification on Weigh-in-Motion of Road Vehicles, version 3.0, EUCO-COST/323/8/99, LCPC,
+Paris, 1999; Jacob B., O'Brien E.J., Jehaes S. (eds.), Weigh-in-Motion of Road Vehicles: Final Report of the COST
+323 Action, LCPC, Paris, 2002 (accuracy classes, site classes).
+Sayers M.W., Gillespie T.D., Paterson W.D.O., Guidelines for Conducting and Calibrating Road Roughness
+Measurements, World Bank Technical Paper 46, 1986 (the IRI's golden quarter car and 250 mm base).
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable
+from dataclasses import dataclass
+from statistics import NormalDist
+
+import numpy as np
+from numpy.typing import ArrayLike, NDArray
+
+__all__ = [
+    "ACCURACY_CLASSES", "COST323_TOLERANCES", "SITE_BLEND_LENGTH", "SiteRoad", "axle_error_sd", "axle_errors",
+    "gd_n0_for_iri", "iri_of_iso8608", "sensor_reading",
+]  # fmt: skip
+
+# ---- accuracy ------------------------------------------------------------------------------------------------------
+#: COST 323 (1999) accuracy classes: the tolerance delta [%] of the confidence interval [W (1 - delta), W (1 + delta)]
+#: around the static load W, for the gross weight, a group of axles, a single axle and an axle of a group
+COST323_TOLERANCES: dict[str, dict[str, float]] = {
+    "A(5)": {"gross": 5.0, "group": 7.0, "single_axle": 8.0, "axle_of_group": 10.0},
+    "B+(7)": {"gross": 7.0, "group": 10.0, "single_axle": 11.0, "axle_of_group": 14.0},
+    "B(10)": {"gross": 10.0, "group": 13.0, "single_axle": 15.0, "axle_of_group": 20.0},
+    "C(15)": {"gross": 15.0, "group": 18.0, "single_axle": 20.0, "axle_of_group": 25.0},
+    "D+(20)": {"gross": 20.0, "group": 23.0, "single_axle": 25.0, "axle_of_group": 30.0},
+    "D(25)": {"gross": 25.0, "group": 28.0, "single_axle": 30.0, "axle_of_group": 35.0},
+}
+
+#: the accuracy classes a sensor can have; ``none`` is an error-free sensor
+ACCURACY_CLASSES: tuple[str, ...] = ("none", *COST323_TOLERANCES)
+
+
+def axle_error_sd(accuracy_class: str, confidence_level: float) -> float:
+    """Relative standard deviation of one axle reading's error [-] for a COST 323 accuracy class.
+
+    The class's single-axle tolerance delta is read as the half-width of a two-sided normal interval at
+    ``confidence_level`` pi: sigma = delta / z, z = Phi^-1((1 + pi) / 2) (z = 1.960 at pi = 0.95). The single-axle
+    tolerance, not the wider axle-of-a-group one: the class widens the latter for the dynamic load transfer between
+    the axles of a group, which the simulation computes itself (``docs/wim-site.md``).
+
+    Parameters
+    ----------
+    accuracy_class
+        One of :data:`ACCURACY_CLASSES`; ``"none"`` gives 0.
+    confidence_level
+        pi, in (0, 1) [-].
+
+    Returns
+    -------
+    float
+        sigma [-] (a fraction: 0.0765 for B(10) at 0.95).
+    """
+    if accuracy_class not in ACCURACY_CLASSES:
+        raise ValueError(f"accuracy_class = {accuracy_class!r} must be one of {', '.join(ACCURACY_CLASSES)}")
+    if not (isinstance(confidence_level, (int, float)) and 0.0 < confidence_level < 1.0):
+        raise ValueError(f"confidence_level = {confidence_level!r} is out of range: must be in (0, 1) [-]")
+    if accuracy_class == "none":
+        return 0.0
+    z = NormalDist().inv_cdf(0.5 * (1.0 + confidence_level))
+    return COST323_TOLERANCES[accuracy_class]["single_axle"] / 100.0 / z
+
+
+def axle_errors(accuracy_class: str, confidence_level: float, seed: int, n_axles: int) -> NDArray[np.float64]:
+    """Relative errors e_i [-] of ``n_axles`` axle readings, front first: a reading is W_i (1 + e_i).
+
+    e_i = sigma z_i with z_i the i-th standard normal draw of ``numpy.random.default_rng(seed)``, so axle i has the
+    same draw whatever the number of axles, and the same seed the same errors (common random numbers).
+    """
+    sd = axle_error_sd(accuracy_class, confidence_level)
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be a non-negative integer")
+    return sd * np.random.default_rng(int(seed)).standard_normal(int(n_axles))
+
+
+# ---- weighing length -----------------------------------------------------------------------------------------------
+def _weight(xc: NDArray[np.float64], contact_length: float, sensor_length: float) -> NDArray[np.float64]:
+    """The share [-] of a tyre's force on the sensor, its contact patch centred ``xc`` [m] from the sensor's centre,
+    over its largest value: the overlap of patch and strip over the shorter of the two, or, if one has no length,
+    1 while the patch is over the strip (the limit)."""
+    short = min(contact_length, sensor_length)
+    if short == 0.0:
+        reach = 0.5 * max(contact_length, sensor_length)
+        return (np.abs(xc) <= reach * (1.0 + 1e-9)).astype(float)
+    lo = np.maximum(xc - 0.5 * contact_length, -0.5 * sensor_length)
+    hi = np.minimum(xc + 0.5 * contact_length, 0.5 * sensor_length)
+    return np.maximum(hi - lo, 0.0) / short
+
+
+def sensor_reading(
+    t: ArrayLike, force: ArrayLike, t_centre: float, speed: float, sensor_length: float, contact_length: float
+) -> float:
+    """The force a sensor reads from one tyre's passage [N]: its force averaged over the passage.
+
+    A tyre whose contact patch (length L, uniform pressure) is centred at x_c from the sensor's centre puts the
+    share o(x_c) / L of its force on a sensor strip of length S along the road, o the length of patch and strip
+    that overlap (a strip of no length: the patch's uniform pressure, 1 / L while the patch is over it). The
+    system integrates the sensor's force over time and divides by the integral a constant force would give (the
+    usual area method), so the reading is F = int F(t) o(t) dt / int o(t) dt: the mean force over
+    the (S + L) / v the patch takes to cross, weighted by a trapezoid (flat over |S - L| / v). With S = L = 0 it is
+    the force at ``t_centre``, the point sensor. F(t) is taken linear between the stored samples, so the product
+    is quadratic between the merged breakpoints and Simpson's rule on them is exact.
+
+    Parameters
+    ----------
+    t, force
+        Sample times [s] (increasing) and the tyre's force at them [N].
+    t_centre
+        Time the patch's centre is over the sensor's centre [s].
+    speed
+        Road speed [m/s], > 0.
+    sensor_length
+        The sensor's weighing length along the road, S [m], >= 0 (strip ~0.05, bending plate ~0.5).
+    contact_length
+        The tyre's contact patch length, L [m], >= 0.
+
+    Returns
+    -------
+    float
+        The reading [N]; NaN if the passage is not inside ``t``.
+    """
+    t = np.asarray(t, dtype=float)
+    f = np.asarray(force, dtype=float)
+    half = 0.5 * (sensor_length + contact_length) / speed
+    if half <= 0.0:
+        return float(np.interp(t_centre, t, f))
+    if t_centre - half < t[0] or t_centre + half > t[-1]:
+        return math.nan
+    flat = 0.5 * abs(sensor_length - contact_length) / speed
+    inside = t[(t > t_centre - half) & (t < t_centre + half)]
+    knots = np.unique(np.concatenate([inside, t_centre + np.array([-half, -flat, flat, half])]))
+    mid = 0.5 * (knots[:-1] + knots[1:])
+    width = np.diff(knots)
+
+    def weighted(tt: NDArray[np.float64]) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+        o = _weight(speed * (tt - t_centre), contact_length, sensor_length)
+        return o * np.interp(tt, t, f), o
+
+    (fa, oa), (fm, om), (fb, ob) = weighted(knots[:-1]), weighted(mid), weighted(knots[1:])
+    numerator = np.sum(width * (fa + 4.0 * fm + fb)) / 6.0
+    denominator = np.sum(width * (oa + 4.0 * om + ob)) / 6.0
+    return float(numerator / denominator)
+
+
+# ---- site pavement ------------------------------------------------------------------------------------------------
+#: the golden quarter car of the IRI, per unit sprung mass: tyre k1, suspension k2 [1/s^2], damper c [1/s], mass
+#: ratio mu [-], at 80 km/h (Sayers et al. 1986)
+_GOLDEN_CAR = {"k1": 653.0, "k2": 63.3, "c": 6.0, "mu": 0.15, "speed": 80.0 / 3.6}
+#: the IRI's moving-average base length [m]
+_IRI_BASE = 0.25
+
+
+def iri_of_iso8608(gd_n0: float, waviness: float = 2.0, n_min: float = 0.011, n_max: float = 2.83) -> float:
+    """IRI [m/km] of a Gaussian road with the ISO 8608 PSD G_d(n) = G_d(n0) (n / n0)^-w, n0 = 0.1 cycle/m.
+
+    The IRI is the mean rectified relative velocity of the golden quarter car at 80 km/h over its speed,
+    E|z_s' - z_u'| / v; for a Gaussian profile E|X| = sqrt(2 / pi) sd(X), and the variance is the integral of
+    |H(n)|^2 G_d(n) over the band, H the relative velocity's response to the profile (with the IRI's 250 mm moving
+    average, sinc(n 0.25)). IRI is proportional to sqrt(G_d(n0)): 0.543 m/km at 1e-6 m^3 for w = 2, so ISO 8608
+    class A (G_d(n0) 16e-6 m^3 geometric mean, up to 32e-6) is 2.17 m/km (up to 3.07).
+
+    Parameters
+    ----------
+    gd_n0
+        G_d(n0) [m^3], > 0.
+    waviness
+        w [-].
+    n_min, n_max
+        The band of spatial frequencies [cycle/m] (those of :class:`bogie.road.ISO8608Profile`).
+    """
+    if not (gd_n0 > 0.0 and math.isfinite(gd_n0)):
+        raise ValueError(f"gd_n0 = {gd_n0!r} is out of range: must be > 0 m^3")
+    car = _GOLDEN_CAR
+    n = np.geomspace(n_min, n_max, 20_001)
+    s = 2j * np.pi * car["speed"] * n
+    coupling = car["c"] * s + car["k2"]
+    a11, a22 = s**2 + coupling, car["mu"] * s**2 + coupling + car["k1"]
+    det = a11 * a22 - coupling**2
+    z_sprung, z_unsprung = coupling * car["k1"] / det, a11 * car["k1"] / det
+    gain = np.abs(s * (z_sprung - z_unsprung) * np.sinc(n * _IRI_BASE)) ** 2
+    psd = gd_n0 * (n / 0.1) ** -waviness
+    variance = float(np.trapezoid(gain * psd, n))
+    return math.sqrt(2.0 / math.pi) * math.sqrt(variance) / car["speed"] * 1000.0
+
+
+def gd_n0_for_iri(iri: float, waviness: float = 2.0) -> float:
+    """The ISO 8608 G_d(n0) [m^3] of a road whose IRI is ``iri`` [m/km] (inverse of :func:`iri_of_iso8608`)."""
+    if not (iri > 0.0 and math.isfinite(iri)):
+        raise ValueError(f"iri = {iri!r} is out of range: must be > 0 m/km")
+    return 1e-6 * (iri / iri_of_iso8608(1e-6, waviness)) ** 2
+
+
+#: length over which the sampled road's roughness tapers to the site's, outside the site [m]
+SITE_BLEND_LENGTH = 5.0
+
+
+@dataclass(frozen=True)
+class SiteRoad:
+    """A sampled road made smoother over a WIM site: h(x) = road(x) (1 - (1 - r) b(x)).
+
+    b is 1 from ``before`` ahead of the sensor to ``after`` past it and tapers to 0 over
+    :data:`SITE_BLEND_LENGTH` outside (a cosine); r = min(1, sqrt(site_gd_n0 / road_gd_n0)) scales the road's
+    heights to the site's roughness (the ISO 8608 heights scale with sqrt(G_d)), so the site keeps the shape of the
+    road it was built on, smoothed, and a road already smoother than the site is left as it is.
+
+    Parameters
+    ----------
+    road
+        The sampled road, height [m] of distance [m].
+    sensor
+        The sensor's position [m].
+    before, after
+        Site length ahead of and past the sensor [m], >= 0; both 0: no site.
+    scale
+        r [-], in [0, 1].
+    """
+
+    road: Callable[[ArrayLike], NDArray[np.float64]]
+    sensor: float
+    before: float
+    after: float
+    scale: float
+
+    def __post_init__(self) -> None:
+        for name in ("before", "after"):
+            if not getattr(self, name) >= 0.0:
+                raise ValueError(f"{name} = {getattr(self, name)!r} is out of range: must be >= 0 m")
+        if not 0.0 <= self.scale <= 1.0:
+            raise ValueError(f"scale = {self.scale!r} is out of range: must be in [0, 1] [-]")
+
+    def site_weight(self, x: ArrayLike) -> NDArray[np.float64]:
+        """b(x) [-]: 1 on the site, 0 on the sampled road, a cosine taper between."""
+        xx = np.asarray(x, dtype=float)
+        if self.before == 0.0 and self.after == 0.0:
+            return np.zeros_like(xx)
+        outside = np.maximum(self.sensor - self.before - xx, xx - self.sensor - self.after)
+        ramp = np.clip(1.0 - outside / SITE_BLEND_LENGTH, 0.0, 1.0)
+        return 0.5 * (1.0 - np.cos(np.pi * ramp))
+
+    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+        """Road height [m] at distance ``x`` [m]."""
+        return self.road(x) * (1.0 - (1.0 - self.scale) * self.site_weight(x))

@@ -1,0 +1,90 @@
+"""The WIM protocol's site and sensor on the full model: what each part does to the readings."""
+
+import dataclasses
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bogie.wim import axle_errors
+from pipeline.config import load_config
+from pipeline.protocol import weigh, wim_pass
+from pipeline.sample import bogie_from_sample, sample_fleet
+
+ROOT = Path(__file__).resolve().parents[2]
+
+
+@pytest.fixture(scope="module")
+def setup():
+    config = load_config(ROOT / "params.yaml")
+    fleet = sample_fleet(config)
+    # the old WIM model: the sensor in the sampled road, a point sensor, no error
+    point = dataclasses.replace(
+        config.protocol.wim, site_before=0.0, site_after=0.0, sensor_length=0.0, contact_length=0.0,
+        accuracy_class="none",
+    )  # fmt: skip
+    return config, fleet, point
+
+
+def scatter(fleet, spec, road_class="C", n=4):
+    """RMS over the first ``n`` fleet bogies and their axles of (error-free reading / static load - 1) [-], the
+    static load being the pass's equilibrium on the level start."""
+    dev = []
+    for i in range(n):
+        sample = fleet.iloc[i].to_dict()
+        run = wim_pass(bogie_from_sample(sample), sample["payload_fraction"], road_class, sample["road_seed"], spec,
+                       sample["sensor_seed"])  # fmt: skip
+        assert run.success
+        dev.append(run.extras["reading_error_free"] / run.wheel_loads[0] - 1.0)
+    return float(np.sqrt(np.mean(np.concatenate(dev) ** 2)))
+
+
+def test_a_smooth_site_and_a_long_sensor_lower_the_dynamic_scatter_on_a_rough_road(setup):
+    _, fleet, point = setup
+    rough = scatter(fleet, point)
+    assert rough > 0.2  # class C at 80 km/h: the dynamic load is tens of percent
+    # the COST 323 class I site (IRI 1.3 m/km) has 0.15 of class C's heights over the last 50 m (sqrt of the PSD
+    # ratio, 5.7e-6 / 256e-6 m^3), and the bogie's response is nearly linear in them; 0.5 leaves room for what the
+    # rough approach still sets going (0.19 measured on these four bogies, 0.10-0.34 on the next twelve)
+    site = scatter(fleet, dataclasses.replace(point, site_before=50.0, site_after=25.0))
+    assert site < 0.5 * rough
+    # averaging over the passage: a cosine of frequency f keeps sinc(f S / v) sinc(f L / v) of its amplitude. Wheel
+    # hop (10-15 Hz) keeps 0.8-0.9 over a 0.5 m bending plate and at most 0.2 over a 3 m weighing length; body
+    # bounce (2-3 Hz) keeps 0.99 and 0.75-0.9 (22 m/s, a 0.2 m patch). Measured: 0.87 and 0.44 of the point
+    # sensor's scatter on these four bogies (up to 0.96 and 0.76 on the next twelve, whose body bounce weighs
+    # more), so the limits below hold with a margin on these four
+    lengths = (0.05, 0.5, 3.0)
+    longer = [scatter(fleet, dataclasses.replace(point, sensor_length=s, contact_length=0.2)) for s in lengths]
+    assert rough >= longer[0] >= longer[1] >= longer[2]
+    assert longer[1] < 0.95 * rough
+    assert longer[2] < 0.75 * rough
+
+
+def test_the_old_point_sensor_is_the_instantaneous_force_at_the_crossing(setup):
+    _, fleet, point = setup
+    sample = fleet.iloc[0].to_dict()
+    bogie = bogie_from_sample(sample)
+    run = wim_pass(bogie, sample["payload_fraction"], "B", sample["road_seed"], point)
+    crossing = (point.approach_length + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / point.speed
+    expected = [np.interp(crossing[i], run.t, run.wheel_loads[:, i]) for i in range(bogie.n_axles)]
+    assert run.extras["reading"] == pytest.approx(expected, rel=1e-14)
+
+
+def test_each_axle_reading_carries_its_class_error_drawn_from_the_samples_sensor_seed(setup):
+    config, fleet, _ = setup
+    spec = config.protocol.wim
+    assert spec.accuracy_class == "B(10)"
+    sample = fleet.iloc[1].to_dict()
+    bogie = bogie_from_sample(sample)
+    row = weigh(bogie, sample, "wim", spec)
+    run = wim_pass(bogie, sample["payload_fraction"], sample["road_class"], sample["road_seed"], spec,
+                   sample["sensor_seed"])  # fmt: skip
+    error = axle_errors("B(10)", 0.95, sample["sensor_seed"], bogie.n_axles)
+    assert run.extras["reading"] == pytest.approx(run.extras["reading_error_free"] * (1.0 + error), rel=1e-14)
+    assert [row[f"axle_load_{i}"] for i in range(bogie.n_axles)] == pytest.approx(2.0 * run.extras["reading"])
+    # another sensor seed: the same pass, other errors; the same seed: the same reading (deterministic)
+    other = weigh(bogie, {**sample, "sensor_seed": sample["sensor_seed"] + 1}, "wim", spec)
+    assert other["axle_load_0"] != row["axle_load_0"]
+    assert weigh(bogie, sample, "wim", spec) == row
+    with pytest.raises(ValueError, match="needs a sensor_seed"):
+        wim_pass(bogie, sample["payload_fraction"], sample["road_class"], sample["road_seed"], spec)
