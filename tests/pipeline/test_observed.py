@@ -210,3 +210,15 @@ def test_the_outputs_are_byte_reproducible(tmp_path):
     first = [p.read_bytes() for p in outputs]
     assert main(args(root)) == 0
     assert [p.read_bytes() for p in outputs] == first
+
+
+def test_validate_refuses_a_path_that_names_no_file_before_any_result_is_computed(tmp_path, capsys):
+    from pipeline import validate
+
+    root = project(tmp_path, path="observed/site.mon", fmt="mon")
+    assert validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")]) == 2
+    assert "observed.path = 'observed/site.mon': no such file" in capsys.readouterr().err
+    (root / "observed").mkdir()
+    shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.mon", root / "observed" / "site.mon")
+    assert validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")]) == 0
+    assert json.loads((root / "data" / "config.json").read_text())["observed"]["path"] == "observed/site.mon"
