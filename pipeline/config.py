@@ -50,6 +50,7 @@ __all__ = [
     "ExecutionConfig",
     "FleetConfig",
     "FrozenMap",
+    "ObservedConfig",
     "ProtocolConfig",
     "Quantity",
     "SensitivityConfig",
@@ -57,6 +58,7 @@ __all__ = [
     "WimProtocol",
     "load_config",
     "load_params",
+    "observed_file",
     "parse_config",
 ]
 
@@ -245,6 +247,31 @@ class ExecutionConfig:
 
 
 @dataclass(frozen=True)
+class ObservedConfig:
+    """An observed survey to hold against the simulated fleet (``observed:``; ``docs/observed.md``).
+
+    Attributes
+    ----------
+    path
+        The file of records, a POSIX path relative to the project root inside ``observed/``; None: no survey given.
+    format
+        Its record format: ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (``docs/weighings.md``).
+    min_group_load
+        Smallest group load kept, observed and simulated groups alike [kg] (a mass, as the weighings give it).
+    group_spacing
+        Largest spacing of two axles of one observed group [m].
+    position
+        Group position kept: ``all``, ``steer``, ``drive`` or ``trailer``.
+    """
+
+    path: str | None
+    format: str
+    min_group_load: float
+    group_spacing: float
+    position: str
+
+
+@dataclass(frozen=True)
 class Config:
     """The validated pipeline parameters, all SI.
 
@@ -261,6 +288,7 @@ class Config:
     sensitivity: SensitivityConfig
     ablation: AblationConfig
     execution: ExecutionConfig
+    observed: ObservedConfig
 
 
 # ---- from the schema to the configuration -------------------------------------------------------------------
@@ -322,6 +350,16 @@ def _execution(execution: Any) -> ExecutionConfig:
     )
 
 
+def _observed(observed: Any) -> ObservedConfig:
+    return ObservedConfig(
+        path=observed.path,
+        format=observed.format,
+        min_group_load=observed.min_group_load_t * 1000.0,
+        group_spacing=observed.group_spacing_m,
+        position=observed.position,
+    )
+
+
 def to_config(params: Params) -> Config:
     """The validated params.yaml sections (:class:`~pipeline.config_schema.Params`) as a :class:`Config`, SI."""
     distributions = {q.name: si_distribution(getattr(params.distributions, key), q) for key, q in QUANTITIES.items()}
@@ -333,6 +371,7 @@ def to_config(params: Params) -> Config:
         sensitivity=_sensitivity(params.sensitivity),
         ablation=AblationConfig(n_bogies=params.ablation.n_bogies),
         execution=_execution(params.execution),
+        observed=_observed(params.observed),
     )
 
 
@@ -383,3 +422,26 @@ def load_config(path: str | Path = "params.yaml") -> Config:
     except ValueError as exc:
         raise ConfigError("", str(exc)) from None
     return parse_config(raw)
+
+
+def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
+    """The file of the observed survey under the project root ``root`` (the directory of params.yaml).
+
+    Returns None when no survey is given (``observed.path: null``).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``observed.path``, its value and where it was looked for, if it is not a file.
+    """
+    if observed.path is None:
+        return None
+    path = Path(root) / observed.path
+    if not path.is_file():
+        what = "is not a file" if path.exists() else "no such file"
+        raise ConfigError(
+            "observed.path",
+            f"observed.path = {observed.path!r}: {what} (looked for {path}); put the survey's records there or set "
+            "observed.path: null (docs/observed.md)",
+        )
+    return path

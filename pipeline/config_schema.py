@@ -12,6 +12,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
+from pathlib import PurePosixPath
 from typing import Annotated, Any, Literal
 
 from pydantic import (
@@ -34,6 +35,13 @@ from pipeline.distributions import Choice, Constant, Distribution, ParameterErro
 
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
 BACKENDS: tuple[str, ...] = ("loky", "dask")
+#: the formats and group positions of bogie.weighings (formats.FORMATS, groups.POSITIONS), written out here so that
+#: every stage's code (all of them import this schema) does not depend on the readers; a test keeps them equal
+OBSERVED_FORMATS: tuple[str, ...] = ("csv", "mon", "castor", "bedit", "ditis")
+OBSERVED_POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
+#: the directory, relative to the project root, an observed survey's file must be in: dvc.yaml tracks it as a
+#: dependency of the observed stage, so that a changed file reruns the stage (docs/observed.md)
+OBSERVED_DIR = "observed"
 
 #: top-level sections that other stages read themselves (the schema accepts them without looking inside)
 OTHER_SECTIONS: tuple[str, ...] = ("figure2",)
@@ -430,6 +438,37 @@ class Execution(Strict):
         return self
 
 
+def _observed_path(value: str | None) -> str | None:
+    """A path inside :data:`OBSERVED_DIR`, relative to the project root, as a normalised POSIX path."""
+    if value is None:
+        return None
+    path = PurePosixPath(value.replace("\\", "/"))
+    parts = [p for p in path.parts if p != "."]
+    inside = not path.is_absolute() and ".." not in parts and len(parts) >= 2 and parts[0] == OBSERVED_DIR
+    if not inside:
+        raise config_error(
+            "",
+            value,
+            f"must be null or a file in {OBSERVED_DIR}/, relative to the project root (e.g. {OBSERVED_DIR}/site.mon): "
+            f"dvc.yaml tracks {OBSERVED_DIR}/, so only there does a changed file rerun the stage",
+        )
+    return "/".join(parts)
+
+
+class Observed(Strict):
+    """``observed:`` an observed survey (WIM or weighbridge records) to hold against the simulated fleet."""
+
+    path: Annotated[str | None, AfterValidator(_observed_path)] = Field(
+        json_schema_extra={"expected": f"null or a file in {OBSERVED_DIR}/, e.g. {OBSERVED_DIR}/site.mon"}
+    )
+    format: Literal[OBSERVED_FORMATS] = named("record format")  # type: ignore[valid-type]
+    # bogie.weighings.groups.filter_groups' range
+    min_group_load_t: float = number("t", ge=0.0, le=100.0)
+    # bogie.weighings.groups.axle_groups' range
+    group_spacing_m: float = number("m", gt=0.0, le=5.0)
+    position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
+
+
 class Params(Strict):
     """params.yaml: the sections of the Monte Carlo pipeline, and those other stages read themselves."""
 
@@ -440,6 +479,7 @@ class Params(Strict):
     sensitivity: Sensitivity
     ablation: Ablation
     execution: Execution
+    observed: Observed
     figure2: Any = None
 
     @model_validator(mode="after")

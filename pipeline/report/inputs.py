@@ -25,6 +25,7 @@ STATUS_COLUMNS = ["study", "sample_id", "group", "variant", "protocol", "status"
 #: tables the report needs from each stage's output directory
 SURVEY_TABLES = ("tilt.csv", "static_vs_wim_pairs.parquet", "design_guidance.csv")
 SENSITIVITY_TABLES = ("sobol_indices.csv", "ablation.csv")
+OBSERVED_TABLES = ("groups.parquet", "simulated.parquet")
 
 
 @dataclass(frozen=True)
@@ -49,6 +50,11 @@ class ReportInputs:
         The tables of data/survey and data/sensitivity, by file name.
     survey_metrics, sensitivity_metrics
         metrics/survey.json and metrics/sensitivity.json.
+    observed
+        The tables of data/observed (``groups.parquet``: the observed groups, none when no survey is given;
+        ``simulated.parquet``: the fleet's readings under the same filters).
+    observed_metrics
+        metrics/observed.json.
     """
 
     raw_params: dict[str, Any]
@@ -61,6 +67,8 @@ class ReportInputs:
     sensitivity: dict[str, pd.DataFrame]
     survey_metrics: dict[str, Any]
     sensitivity_metrics: dict[str, Any]
+    observed: dict[str, pd.DataFrame]
+    observed_metrics: dict[str, Any]
 
 
 def code_digest() -> str:
@@ -101,8 +109,11 @@ def read_inputs(
     survey_dir: str | Path,
     sensitivity_dir: str | Path,
     metrics_dir: str | Path,
+    observed_dir: str | Path | None = None,
 ) -> ReportInputs:
     """Read and check every input of the report (see :class:`ReportInputs`).
+
+    ``observed_dir`` defaults to ``observed`` beside ``survey_dir`` (data/observed).
 
     Raises
     ------
@@ -122,6 +133,7 @@ def read_inputs(
     every["study"] = every["study"].astype(str)
     ok = inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
     metrics_dir = Path(metrics_dir)
+    observed_dir = Path(survey_dir).with_name("observed") if observed_dir is None else observed_dir
     return ReportInputs(
         raw_params=load_params(params),
         config=config,
@@ -133,4 +145,6 @@ def read_inputs(
         sensitivity=read_tables(sensitivity_dir, SENSITIVITY_TABLES),
         survey_metrics=json.loads((metrics_dir / "survey.json").read_text()),
         sensitivity_metrics=json.loads((metrics_dir / "sensitivity.json").read_text()),
+        observed=read_tables(observed_dir, OBSERVED_TABLES),
+        observed_metrics=json.loads((metrics_dir / "observed.json").read_text()),
     )

@@ -10,6 +10,8 @@ __all__ = [
     "MEASURE_LABEL",
     "PROTOCOL_LABEL",
     "PROTOCOL_LINE",
+    "SOURCE_COLOR",
+    "SOURCE_LABEL",
     "STYLE",
     "axle_name",
     "factor_label",
@@ -38,6 +40,9 @@ GROUP_COLOR = {"tandem": "C0", "triaxle": "C1"}
 PROTOCOL_LABEL = {"static": "static weighbridge", "wim": "weigh-in-motion"}
 PROTOCOL_LINE = {"static": "-", "wim": "--"}
 AXLE_COLOR = {"front": "C2", "middle": "C4", "rear": "C3"}
+#: the sides of the observed page: an observed survey, the simulated fleet's two protocols
+SOURCE_LABEL = {"observed": "observed", "static": "simulated static", "wim": "simulated WIM"}
+SOURCE_COLOR = {"observed": "0.15", "static": "C0", "wim": "C1"}
 FACTOR_LABEL = {
     "bush_stiffness": "bush stiffness",
     "bush_damping": "bush damping",

@@ -199,6 +199,18 @@ BAD = [
     ("execution.chunk_size", 0, "execution.chunk_size", ["= 0", "integer"]),
     ("ablation.n_bogies", 5000, "ablation.n_bogies", ["5000", "fleet.n_bogies"]),
     ("seed", -1, "seed", ["-1", "integer"]),
+    ("observed.path", "/srv/wim/site.mon", "observed.path", ["'/srv/wim/site.mon'", "a file in observed/"]),
+    ("observed.path", "data/site.mon", "observed.path", ["'data/site.mon'", "relative to the project root"]),
+    ("observed.path", "observed/../params.yaml", "observed.path", ["'observed/../params.yaml'", "observed/"]),
+    ("observed.path", "observed", "observed.path", ["'observed'", "e.g. observed/site.mon"]),
+    ("observed.path", 3, "observed.path", ["3", "null or a file in observed/"]),
+    ("observed.format", "wim", "observed.format", ["'wim'", "csv, mon, castor, bedit, ditis"]),
+    ("observed.min_group_load_t", -1.0, "observed.min_group_load_t", ["-1.0", "[0, 100] t"]),
+    ("observed.min_group_load_t", 150, "observed.min_group_load_t", ["150", "[0, 100] t"]),
+    ("observed.group_spacing_m", 0.0, "observed.group_spacing_m", ["0.0", "(0, 5] m"]),
+    ("observed.position", "rear", "observed.position", ["'rear'", "all, steer, drive, trailer"]),
+    ("observed.min_group_load", 15, "observed.min_group_load", ["unknown key", "did you mean min_group_load_t"]),
+    ("observed", _DELETE, "observed", ["missing key"]),
 ]
 
 

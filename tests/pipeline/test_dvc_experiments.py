@@ -8,6 +8,7 @@ compiled kernels are cached, while DVC hashes the copy's identical files.
 """
 
 import copy
+import hashlib
 import os
 import shutil
 import subprocess
@@ -75,7 +76,7 @@ def tiny_params(n_bogies):
 def project(tmp_path):
     """A git repository with DVC holding a copy of the project and a tiny params.yaml, one commit."""
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
-    for name in ("bogie", "pipeline"):
+    for name in ("bogie", "pipeline", "observed"):
         shutil.copytree(ROOT / name, tmp_path / name, ignore=ignore)
     for name in ("dvc.yaml", ".dvcignore", ".gitignore"):
         shutil.copy2(ROOT / name, tmp_path / name)
@@ -130,3 +131,22 @@ def test_a_failed_experiment_stops_at_validate_and_loses_no_result(project):
     run(project, dvc, "checkout", "validate")  # what the failed run deleted: its own data/config.json
     status = run(project, dvc, "status", "simulate").stdout
     assert "up to date" in status, status
+
+
+@pytest.mark.slow
+def test_an_experiment_in_a_temporary_copy_reads_a_dvc_tracked_survey_file(project):
+    """docs/observed.md: `dvc add` the survey's file, and `dvc exp run --temp` finds it in its copy."""
+    dvc = str(BIN / "dvc")
+    shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.csv", project / "observed" / "site.csv")
+    run(project, dvc, "add", "--quiet", "observed/site.csv")
+    # the records stay out of git (observed/.gitignore), their .dvc pointer goes in
+    assert run(project, "git", "status", "--porcelain", "--ignored", "observed/site.csv").stdout.startswith("!!")
+    run(project, "git", "add", "-A")
+    run(project, "git", "commit", "--quiet", "-m", "a survey")
+    args = ["-S", "observed.path=observed/site.csv", "-S", "observed.format=csv"]
+    out = run(project, dvc, "exp", "run", "--temp", "observed", *args).stdout
+    assert "Running stage 'observed'" in out, out
+    # the experiment's metrics/observed.json: the survey's path, format, sha256, records read and skipped
+    sha = hashlib.sha256((project / "observed" / "site.csv").read_bytes()).hexdigest()
+    shown = run(project, dvc, "exp", "show", "--csv").stdout
+    assert f",observed/site.csv,csv,{sha},5,4," in shown, shown

@@ -63,7 +63,7 @@ def project(tmp_path_factory):
     """A copy of the project with tiny params.yaml after one `dvc repro`; returns (path, repro output)."""
     path = tmp_path_factory.mktemp("project")
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
-    for name in ("bogie", "pipeline"):
+    for name in ("bogie", "pipeline", "observed"):  # observed/: the observed stage's input directory
         shutil.copytree(ROOT / name, path / name, ignore=ignore)
     for name in ("dvc.yaml", ".dvcignore"):
         shutil.copy2(ROOT / name, path / name)
@@ -85,7 +85,7 @@ def test_repro_writes_every_stage_output(project):
     for study in ("fleet", "sensitivity", "ablation"):
         assert (path / "data" / "samples" / f"{study}.parquet").is_file()
         assert list((path / "data" / "runs" / f"study={study}").glob("part-*.parquet"))
-    for stage in ("survey", "sensitivity"):
+    for stage in ("survey", "sensitivity", "observed"):
         assert any((path / "data" / stage).iterdir())
         assert isinstance(json.loads((path / "metrics" / f"{stage}.json").read_text()), dict)
     assert (path / "dvc.lock").is_file()
@@ -152,3 +152,26 @@ def test_a_second_repro_changes_nothing(project):
     assert "Running stage" not in out
     assert {p: p.stat().st_mtime_ns for p in sorted((path / "data" / "runs").glob("study=*/part-*.parquet"))} == before
     assert (path / "dvc.lock").read_text() == lock
+
+
+@pytest.mark.slow
+def test_an_observed_survey_given_then_changed_reruns_the_observed_stage_only(project):
+    path, _ = project
+    shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.csv", path / "observed" / "site.csv")
+    raw = yaml.safe_load((path / "params.yaml").read_text())
+    raw["observed"].update(path="observed/site.csv", format="csv")
+    (path / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    out = dvc(path, "repro")
+    assert "Running stage 'observed'" in out and "Running stage 'report'" in out
+    assert "Running stage 'simulate'" not in out
+    observed = json.loads((path / "metrics" / "observed.json").read_text())["observed"]
+    assert (observed["records"]["read"], observed["groups"]["tandem"]["n_groups"]) == (5, 2)
+    # the same path, another content: DVC hashes the whole observed/ directory, so it sees the change
+    text = (path / "observed" / "site.csv").read_text()
+    extra = "2026-03-14T07:13:00.000,80,1,3,6000,9000,8500,,,,4.2,1.35,,,,R3\n"
+    (path / "observed" / "site.csv").write_text(text + ("" if text.endswith("\n") else "\n") + extra)
+    out = dvc(path, "repro")
+    assert "Running stage 'observed'" in out and "Running stage 'validate'" not in out
+    observed = json.loads((path / "metrics" / "observed.json").read_text())["observed"]
+    assert (observed["records"]["read"], observed["groups"]["tandem"]["n_groups"]) == (6, 3)
+    assert "Data and pipelines are up to date" in dvc(path, "repro")

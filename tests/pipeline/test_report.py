@@ -20,16 +20,19 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import report, sensitivity, survey
+from pipeline import observed, report, sensitivity, survey
 from pipeline.config import load_params, parse_config
 from pipeline.report import style
+from pipeline.report.context import Context
+from pipeline.report.pages.observed import page as build_observed_page
 from pipeline.sample import sample_studies, write_parquet_atomic
 from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
-#: title, summary, sensitivity, 2 survey, Figure 2, L01-L03, step runs, design, appendices A, B, C
-PAGES = 14
+#: title, summary, sensitivity, 2 survey, observed, Figure 2, L01-L03, step runs, design, appendices A, B, C
+PAGES = 15
+SITE = ROOT / "tests" / "data" / "weighings" / "site30.csv"
 PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
 NEEDS_POPPLER = pytest.mark.skipif(
     shutil.which("pdftotext") is None or shutil.which("pdftoppm") is None,
@@ -57,6 +60,7 @@ def paths(project):
         "runs": project / "data/runs",
         "survey": project / "data/survey",
         "sensitivity": project / "data/sensitivity",
+        "observed": project / "data/observed",
         "metrics": project / "metrics",
         "pdf": project / "reports/sensitivity_report.pdf",
         "png": project / "reports/figures/report",
@@ -65,12 +69,14 @@ def paths(project):
 
 
 def analyse(project):
-    """Run the survey and sensitivity stages on the project's runs."""
+    """Run the survey, sensitivity and observed stages on the project's runs."""
     p = paths(project)
     common = ["--params", str(p["params"]), "--runs", str(p["runs"])]
     assert survey.main([*common, "--out", str(p["survey"]), "--metrics", str(p["metrics"] / "survey.json")]) == 0
     out = ["--out", str(p["sensitivity"]), "--metrics", str(p["metrics"] / "sensitivity.json")]
     assert sensitivity.main([*common, *out]) == 0
+    out = ["--out", str(p["observed"]), "--metrics", str(p["metrics"] / "observed.json")]
+    assert observed.main([*common, *out]) == 0
 
 
 def report_args(project):
@@ -145,6 +151,7 @@ def test_report_has_every_page_numbered_and_every_chart_page_as_png(built, proje
             "sensitivity",
             "survey_load_share",
             "survey_tilt",
+            "observed",
             "reference_figure2",
             "reference_L01",
             "reference_L02",
@@ -228,6 +235,45 @@ def test_rendered_pages_are_not_blank_and_say_what_the_metrics_say(built, projec
     summary = page_text(p["pdf"], 2)
     for phrase in expected_phrases(inputs.survey_metrics, inputs.sensitivity_metrics):
         assert phrase in summary, phrase
+
+
+# ---- the observed page ------------------------------------------------------------------------------------------
+def observed_page(pages):
+    [fig] = [fig for _, name, fig in pages if name == "observed"]
+    return figure_text(fig)
+
+
+def test_without_an_observed_survey_the_page_says_so_and_how_to_give_one(pages):
+    page = observed_page(pages)
+    for words in (
+        "Observed against simulated", "No observed survey was given", "observed.path is null", "docs/observed.md",
+        "Caveats", "Suspension types are unknown in WIM data", "Sensor error",
+    ):  # fmt: skip
+        assert words in page, words
+
+
+def test_with_an_observed_survey_the_page_draws_and_quotes_it(project, tmp_path):
+    copy_ = tmp_path / "observed"
+    shutil.copytree(project, copy_, ignore=shutil.ignore_patterns("reports"))
+    (copy_ / "observed").mkdir()
+    shutil.copy(SITE, copy_ / "observed" / "site30.csv")
+    raw = yaml.safe_load((copy_ / "params.yaml").read_text())
+    raw["observed"].update(path="observed/site30.csv", format="csv")
+    (copy_ / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    analyse(copy_)
+    p = paths(copy_)
+    inputs = report.read_inputs(p["params"], p["samples"], p["runs"], p["survey"], p["sensitivity"], p["metrics"])
+    m = inputs.observed_metrics["observed"]
+    with matplotlib.rc_context(style.STYLE):
+        [(_, name, fig)] = build_observed_page(Context.of(inputs, {}))
+    page = figure_text(fig)
+    assert name == "observed"
+    assert "No observed survey" not in page
+    assert "Observed: observed/site30.csv (csv, sha256 " + m["sha256"][:12] + "): 30 records read, 0 skipped" in page
+    spread = m["groups"]["triaxle"]["mean_spread_kg"]
+    assert f"mean spread: observed {spread:.0f} kg" in page
+    legends = [t.get_text() for ax in fig.get_axes() if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert f"observed, {m['groups']['tandem']['n_groups']}" in legends
 
 
 # ---- failed runs ------------------------------------------------------------------------------------------------

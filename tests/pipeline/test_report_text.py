@@ -226,6 +226,73 @@ def test_tilt_caption_with_and_without_pairs():
     assert paras[1] == "Bottom: empty, since only static ran; static against WIM needs both protocols."
 
 
+def observed_metrics(given=True, position="all", sensor_error=False):
+    """metrics/observed.json as the observed stage writes it, small numbers chosen to format distinctly."""
+
+    def stats(n, outside, over, spread):
+        return {"n_groups": n, "mean_spread_kg": spread, "median_spread_pct": 5.0, "share_outside_5pct": outside,
+                "share_over_10pct": over, "load_share_quantiles": {}}  # fmt: skip
+
+    none = {"n_groups": 0, "mean_spread_kg": None, "median_spread_pct": None, "share_outside_5pct": None,
+            "share_over_10pct": None, "load_share_quantiles": {}}  # fmt: skip
+    runs = {"n_runs": 40, "n_failed": 1, "n_airborne": 2, "n_light": 7, "n_position": 0, "n_kept": 30}
+    observed = {
+        "path": "observed/site.csv", "format": "csv", "sha256": "0123456789abcdef" * 4,
+        "records": {"read": 5, "skipped": 4, "skipped_by_reason": {"no axles": 1, "wrong length": 3}},
+        "groups": {"tandem": stats(2, 0.5, 0.0, 500.0), "triaxle": stats(2, 1.0, 0.5, 1600.0)},
+    }  # fmt: skip
+    return {
+        "filters": {"min_group_load_t": 15.0, "group_spacing_m": 2.0, "position": position},
+        "observed": observed if given else None,
+        "reason": None if given else "no observed survey given",
+        "simulated": {
+            "study": "fleet",
+            "position_note": None if position == "all" else f"position {position}: no simulated group passes",
+            "wim_model": {"speed_m_s": 22.0, "sensor_error": sensor_error},
+            "static": {"runs": runs, "groups": {"tandem": stats(3, 0.3333, 0.0, 364.2), "triaxle": none}},
+            "wim": {"runs": runs, "groups": {"tandem": stats(3, 0.6667, 0.25, 1113.4), "triaxle": none}},
+        },
+    }
+
+
+def test_observed_text_without_a_survey_says_so_and_how_to_give_one():
+    text_ = " ".join(text.render("observed.j2", m=observed_metrics(given=False), sizes=("tandem", "triaxle")))
+    assert "## No observed survey was given" in text_
+    for words in (
+        "copy the file into observed/", "set observed.path: observed/site.mon", "make repro", "docs/observed.md",
+        "## Caveats", "Suspension types are unknown in WIM data", "Sensor error: not included",
+    ):  # fmt: skip
+        assert words in text_, words
+    assert "Tandem: outside 5 % (lightest axle more than 5 % below the heaviest): static 33.3 %, WIM 66.7 %" in text_
+    assert "observed " not in text_.split("## Caveats")[0].split("Tandem:")[1]
+
+
+def test_observed_text_with_a_survey_quotes_both_sides_and_what_was_skipped():
+    paras = text.render("observed.j2", m=observed_metrics(), sizes=("tandem", "triaxle"))
+    text_ = " ".join(paras)
+    assert "No observed survey" not in text_
+    assert (
+        "Observed: observed/site.csv (csv, sha256 0123456789ab): 5 records read, 4 skipped (no axles: 1; wrong "
+        "length: 3); after the filters 2 tandem and 2 tri-axle groups." in paras
+    )
+    assert "of 40 static runs, 1 failed, 2 with a wheel in the air and 7 below 15 t" in text_
+    assert "mean spread: observed 500 kg, static 364 kg, WIM 1113 kg." in text_
+    # no simulated tri-axle passed: n/a, never a number
+    assert (
+        "Tri-axle: outside 5 % (lightest axle more than 5 % below the heaviest): observed 100.0 %, static n/a" in text_
+    )
+    assert "Position all:" in text_
+
+
+def test_observed_text_states_the_position_note_and_the_sensor_error_when_modelled():
+    text_ = " ".join(
+        text.render("observed.j2", m=observed_metrics(position="drive", sensor_error=True), sizes=("tandem",))
+    )
+    assert "Position drive: no simulated group passes." in text_
+    assert "Position all:" not in text_
+    assert "the simulated WIM readings include a random sensor error" in text_
+
+
 def test_reference_captions():
     paras = text.render("figure2.j2", alpha=0.057, q=4.3, slopes=[0.0, 0.5], fe_p=[0.01234, 0.5], algebra=[0.0, 0.4999])
     assert paras[0].startswith('What the reference reported: the curves of Equations 1 and 2 show "that')

@@ -1,0 +1,136 @@
+"""The observed page: an observed survey's load shares and spreads against the simulated fleet's, and the caveats.
+
+Every chart is drawn from the tables of the ``observed`` stage (data/observed: the observed groups and the fleet's
+readings under the same filters); the words come from metrics/observed.json. Without an observed survey the page
+draws the simulated side alone and says how to give one.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from matplotlib.figure import Figure
+from matplotlib.patches import Patch
+
+from pipeline.constants import n_axles
+from pipeline.report import text
+from pipeline.report.context import Context, Page
+from pipeline.report.layout import new_page, text_block
+from pipeline.report.style import GROUP_LABEL, SOURCE_COLOR, SOURCE_LABEL, axle_name
+
+__all__ = ["SIZES", "SOURCES", "observed_page", "page", "sources"]
+
+#: the group sizes compared
+SIZES: tuple[str, ...] = ("tandem", "triaxle")
+#: the sides compared, in the order drawn
+SOURCES: tuple[str, ...] = ("observed", "static", "wim")
+
+
+def sources(groups: pd.DataFrame, simulated: pd.DataFrame, size: str) -> dict[str, pd.DataFrame]:
+    """The groups of one size on each side: the observed groups, the simulated static and WIM readings.
+
+    A side with no group of that size is left out (no observed survey, a protocol not run, a filter that leaves
+    nothing).
+    """
+    sides = {"observed": groups[groups["group"] == size]}
+    for protocol in ("static", "wim"):
+        sides[protocol] = simulated[(simulated["group"] == size) & (simulated["protocol"] == protocol)]
+    return {name: sides[name] for name in SOURCES if len(sides[name])}
+
+
+def _nothing(ax, what: str) -> None:
+    ax.text(0.5, 0.5, what, ha="center", va="center", transform=ax.transAxes, color="0.4")
+    ax.set_axis_off()
+
+
+def _load_share_boxes(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
+    """Box plots of each axle position's load share, one box per side (quartiles, 5th-95th percentile whiskers)."""
+    n = n_axles(size)
+    title = f"{GROUP_LABEL[size].capitalize()}: load share per axle"
+    if not sides:
+        ax.set_title(title)
+        _nothing(ax, f"no {GROUP_LABEL[size]} group passes the filters")
+        return
+    width = 0.8 / len(SOURCES)
+    for k, name in enumerate(SOURCES):
+        if name not in sides:
+            continue
+        data = [sides[name][f"load_share_{i}"].to_numpy(dtype=float) for i in range(n)]
+        pos = np.arange(n) + (k - (len(SOURCES) - 1) / 2) * width
+        color = SOURCE_COLOR[name]
+        ax.boxplot(
+            data,
+            positions=pos,
+            widths=0.85 * width,
+            whis=(5, 95),
+            showfliers=False,
+            patch_artist=True,
+            boxprops={"facecolor": color, "alpha": 0.35, "edgecolor": color},
+            whiskerprops={"color": color},
+            capprops={"color": color},
+            medianprops={"color": color, "lw": 1.6},
+        )
+    ax.axhspan(0.9, 1.1, color="0.93", lw=0, zorder=0)
+    ax.axhline(1.0, color="0.4", lw=0.6, zorder=0)
+    ax.set_xticks(np.arange(n), [axle_name(i, n) for i in range(n)])
+    ax.set_xlim(-0.5, n - 0.5)
+    ax.set_xlabel("axle")
+    ax.set_ylabel("load share (1 = equal share) [-]")
+    ax.set_title(title)
+    handles = [Patch(facecolor=SOURCE_COLOR[s], alpha=0.5, label=f"{SOURCE_LABEL[s]}, {len(sides[s])}") for s in sides]
+    ax.legend(handles=handles, loc="upper left", title="groups")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + 0.6 * (high - low))  # headroom for the legend
+
+
+def _spread_distribution(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
+    """The share of groups with a spread up to x [kg], every side (empirical distribution functions)."""
+    title = f"{GROUP_LABEL[size].capitalize()}: heaviest minus lightest axle"
+    if not sides:
+        ax.set_title(title)
+        _nothing(ax, f"no {GROUP_LABEL[size]} group passes the filters")
+        return
+    for name, sub in sides.items():
+        x = np.sort(sub["spread_kg"].to_numpy(dtype=float))
+        y = 100.0 * np.arange(1, len(x) + 1) / len(x)
+        ax.step(np.r_[0.0, x], np.r_[0.0, y], where="post", color=SOURCE_COLOR[name], lw=1.4,
+                label=f"{SOURCE_LABEL[name]} (mean {np.mean(x):.0f} kg)")  # fmt: skip
+    ax.set_xlim(left=0.0)
+    ax.set_ylim(0.0, 100.0)
+    ax.set_xlabel("spread [kg]")
+    ax.set_ylabel("groups up to this spread [%]")
+    ax.set_title(title)
+    ax.legend(loc="lower right")
+
+
+def observed_page(groups: pd.DataFrame, simulated: pd.DataFrame, caption: Sequence[str]) -> Figure:
+    """Load shares (box plots) and spreads (distribution functions) of the observed and simulated groups.
+
+    Parameters
+    ----------
+    groups
+        data/observed/groups.parquet: the observed groups after the filters (may be empty).
+    simulated
+        data/observed/simulated.parquet: the fleet's readings after the same filters.
+    caption
+        Paragraphs under the charts.
+    """
+    fig = new_page("Observed against simulated", body=(0.06, 0.5, 0.88, 0.43))
+    axes = fig.subplots(2, len(SIZES), squeeze=False)
+    for c, size in enumerate(SIZES):
+        sides = sources(groups, simulated, size)
+        _load_share_boxes(axes[0, c], sides, size)
+        _spread_distribution(axes[1, c], sides, size)
+    text_block(fig, 0.485, caption, size=7.9)
+    return fig
+
+
+def page(ctx: Context) -> list[Page]:
+    """The observed page: from data/observed and metrics/observed.json."""
+    inputs = ctx.inputs
+    caption = text.render("observed.j2", m=inputs.observed_metrics, sizes=SIZES)
+    tables = inputs.observed
+    fig = observed_page(tables["groups.parquet"], tables["simulated.parquet"], caption)
+    return [Page("Observed against simulated", "observed", fig)]

@@ -1,0 +1,224 @@
+"""The ``observed`` stage: an observed survey against the simulated fleet (pipeline.observed).
+
+The simulated side is four fabricated bogies whose loads are chosen by hand; the observed side is the hand-written
+tests/data/weighings/site.csv, whose statistics under a 15 t filter are worked out in tests/test_weighings_groups.py
+and quoted in docs/weighings.md.
+"""
+
+import copy
+import hashlib
+import json
+import shutil
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import pyarrow.parquet as pq
+import pytest
+import yaml
+
+from bogie.params import GRAVITY
+from bogie.weighings.formats import FORMATS
+from bogie.weighings.groups import POSITIONS
+from pipeline.config import load_params, parse_config
+from pipeline.config_schema import OBSERVED_FORMATS, OBSERVED_POSITIONS
+from pipeline.observed import GROUPS_SCHEMA, SIMULATED_SCHEMA, main, simulated_readings, simulated_statistics
+from pipeline.protocol import result_row
+from pipeline.sample import sample_studies
+from pipeline.schema import runs_frame, write_runs_file
+
+ROOT = Path(__file__).resolve().parents[2]
+SITE = ROOT / "tests" / "data" / "weighings" / "site.csv"
+
+#: (group, static loads, WIM loads or "failed") [kg]; every group is laden (>= 15 t) except bogie 1
+BOGIES = [
+    ("tandem", [9000, 8000], [9500, 7500]),
+    ("tandem", [7000, 6000], "failed"),  # 13 t: below the filter
+    ("triaxle", [8000, 8000, 8000], [12000, 0, 12000]),  # WIM: the middle wheels in the air
+    ("triaxle", [9000, 8000, 7000], [10000, 8000, 6000]),
+]
+
+
+def raw_params(path=None, fmt="csv", position="all"):
+    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
+    raw["fleet"]["n_bogies"] = len(BOGIES)
+    raw["sensitivity"]["base_size"] = 2
+    raw["ablation"]["n_bogies"] = 2
+    raw["observed"].update(path=path, format=fmt, position=position)
+    return raw
+
+
+def fabricated_runs(raw):
+    """The fleet's runs with the loads of :data:`BOGIES` (both sides, kg), through the protocol's result_row."""
+    rows = []
+    samples = sample_studies(parse_config(raw))["fleet"].to_dict("records")
+    for sample, (group, static, wim) in zip(samples, BOGIES):
+        n = len(static)
+        sample.update(group=group, n_axles=n)
+        for protocol, loads in (("static", static), ("wim", wim)):
+            wheel = None if loads == "failed" else np.asarray(loads, dtype=float) * GRAVITY / 2.0
+            row = result_row(protocol, n, wheel, 0.0)
+            row.update(status="failed" if wheel is None else "ok", message="diverged" if wheel is None else "ok")
+            rows.append({**sample, **row, "chassis_tilt_deg": np.degrees(sample["chassis_tilt"])})
+    return runs_frame(rows)
+
+
+def project(tmp_path, **params):
+    raw = raw_params(**params)
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    part = tmp_path / "data" / "runs" / "study=fleet"
+    part.mkdir(parents=True)
+    write_runs_file(fabricated_runs(raw), part / "part-000000.parquet")
+    return tmp_path
+
+
+def args(root):
+    return [
+        "--params", str(root / "params.yaml"), "--runs", str(root / "data" / "runs"),
+        "--out", str(root / "data" / "observed"), "--metrics", str(root / "metrics" / "observed.json"),
+    ]  # fmt: skip
+
+
+def metrics(root):
+    return json.loads((root / "metrics" / "observed.json").read_text())
+
+
+def test_the_schema_offers_the_formats_and_positions_of_the_readers():
+    assert OBSERVED_FORMATS == FORMATS
+    assert OBSERVED_POSITIONS == POSITIONS
+
+
+def test_simulated_readings_leave_out_failed_airborne_and_light_groups_and_count_them(tmp_path):
+    runs = fabricated_runs(raw_params())
+    readings, counts = simulated_readings(runs, 15_000.0, "all")
+    assert counts == {
+        "static": {"n_runs": 4, "n_failed": 0, "n_airborne": 0, "n_light": 1, "n_position": 0, "n_kept": 3},
+        "wim": {"n_runs": 4, "n_failed": 1, "n_airborne": 1, "n_light": 0, "n_position": 0, "n_kept": 2},
+    }
+    assert readings.columns.tolist() == SIMULATED_SCHEMA.names
+    static = readings[readings["protocol"] == "static"].set_index("sample_id")
+    assert static.loc[0, "group_load"] == pytest.approx(17_000.0, rel=1e-12)  # N back to kg
+    assert np.isnan(static.loc[0, "axle_load_2"])  # a tandem has no third axle
+    # bogie 3: loads 9, 8, 7 t: shares 9/8, 1, 7/8; spread 2000 kg, 25 % of the 8 t mean
+    assert static.loc[3, ["load_share_0", "load_share_1", "load_share_2"]].tolist() == pytest.approx([1.125, 1, 0.875])
+    assert static.loc[3, "spread_kg"] == pytest.approx(2000.0)
+    assert static.loc[3, "spread_pct"] == pytest.approx(25.0)
+    stats = simulated_statistics(readings, counts)
+    # static tri-axles: 0 and 2000 kg spread; only bogie 3 is outside 5 % (2/9) and over 10 % (1.125)
+    tri = stats["static"]["groups"]["triaxle"]
+    assert (tri["n_groups"], tri["mean_spread_kg"], tri["share_outside_5pct"], tri["share_over_10pct"]) == (
+        2, 1000.0, 0.5, 0.5,
+    )  # fmt: skip
+    # WIM: bogie 0 (9500, 7500: spread 2000 kg) and bogie 3 (10, 8, 6 t: spread 4000 kg, share 1.25)
+    wim = stats["wim"]["groups"]
+    assert (wim["tandem"]["n_groups"], wim["tandem"]["mean_spread_kg"]) == (1, 2000.0)
+    assert (wim["triaxle"]["n_groups"], wim["triaxle"]["mean_spread_kg"], wim["triaxle"]["share_over_10pct"]) == (
+        1, 4000.0, 1.0,
+    )  # fmt: skip
+    assert wim["triaxle"]["load_share_quantiles"]["axle_1"]["p50"] == 1.25
+
+
+def test_without_a_path_the_stage_writes_the_simulated_side_and_an_empty_groups_table(tmp_path, capsys):
+    root = project(tmp_path)
+    assert main(args(root)) == 0
+    assert "no observed survey given" in capsys.readouterr().out
+    m = metrics(root)
+    assert sorted(m) == ["filters", "observed", "reason", "simulated"]
+    assert m["observed"] is None
+    assert "observed.path is null" in m["reason"] and "docs/observed.md" in m["reason"]
+    assert m["filters"] == {"min_group_load_t": 15.0, "group_spacing_m": 2.0, "position": "all"}
+    assert m["simulated"]["static"]["groups"]["tandem"]["mean_spread_kg"] == 1000.0
+    assert m["simulated"]["wim_model"]["sensor_error"] is False
+    groups = pq.read_table(root / "data" / "observed" / "groups.parquet")
+    assert groups.num_rows == 0
+    assert groups.schema.equals(GROUPS_SCHEMA, check_metadata=False)
+    assert groups.schema.field("group_load").metadata[b"unit"] == b"kg"
+    assert groups.schema.field("speed").metadata[b"unit"] == b"m/s"
+    assert pq.read_table(root / "data" / "observed" / "simulated.parquet").num_rows == 5
+    assert sorted(p.name for p in (root / "data" / "observed").iterdir()) == ["groups.parquet", "simulated.parquet"]
+    assert [p.name for p in (root / "metrics").iterdir()] == ["observed.json"]
+
+
+def test_with_a_path_the_observed_statistics_are_those_of_bogie_weighings(tmp_path):
+    root = project(tmp_path, path="observed/site.csv")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    assert main(args(root)) == 0
+    obs = metrics(root)["observed"]
+    assert metrics(root)["reason"] is None
+    assert (obs["path"], obs["format"]) == ("observed/site.csv", "csv")
+    assert obs["sha256"] == hashlib.sha256(SITE.read_bytes()).hexdigest()
+    assert obs["records"]["read"] == 5 and obs["records"]["skipped"] == 4
+    assert sum(obs["records"]["skipped_by_reason"].values()) == 4
+    # docs/weighings.md: two tandems (spreads 1000 and 0 kg, mean 500), two tri-axles (mean 1600 kg)
+    tandem, tri = obs["groups"]["tandem"], obs["groups"]["triaxle"]
+    assert (tandem["n_groups"], tandem["mean_spread_kg"], tandem["median_spread_pct"]) == (2, 500.0, 5.5556)
+    assert (tandem["share_outside_5pct"], tandem["share_over_10pct"]) == (0.5, 0.0)
+    assert (tri["n_groups"], tri["mean_spread_kg"], tri["share_over_10pct"]) == (2, 1600.0, 0.5)
+    assert tandem["load_share_quantiles"]["axle_1"] == {
+        "p05": 1.0028, "p25": 1.0139, "p50": 1.0278, "p75": 1.0417, "p95": 1.0528,
+    }  # fmt: skip
+    groups = pd.read_parquet(root / "data" / "observed" / "groups.parquet")
+    assert len(groups) == 4 and set(groups["group"]) == {"tandem", "triaxle"}
+    # line 3: a rigid truck's tandem of 9500 and 8500 kg: shares 19/18 and 17/18, spread 1000 kg
+    row = groups[groups["line"] == 3].iloc[0]
+    assert [row["load_share_0"], row["load_share_1"]] == pytest.approx([19 / 18, 17 / 18])
+    assert row["spread_kg"] == 1000.0 and np.isnan(row["load_share_2"])
+
+
+def test_a_drive_position_leaves_no_simulated_group_and_says_so(tmp_path):
+    root = project(tmp_path, position="drive")
+    assert main(args(root)) == 0
+    sim = metrics(root)["simulated"]
+    assert "semi-trailer groups only" in sim["position_note"]
+    assert sim["static"]["runs"]["n_position"] == 3 and sim["static"]["runs"]["n_kept"] == 0
+    assert sim["static"]["groups"]["triaxle"] == {
+        "n_groups": 0, "mean_spread_kg": None, "median_spread_pct": None, "share_outside_5pct": None,
+        "share_over_10pct": None, "load_share_quantiles": {},
+    }  # fmt: skip
+
+
+def test_a_missing_file_names_the_key_and_the_path_and_leaves_the_old_outputs(tmp_path, capsys):
+    root = project(tmp_path)
+    assert main(args(root)) == 0
+    before = (root / "metrics" / "observed.json").read_bytes()
+    params = yaml.safe_load((root / "params.yaml").read_text())
+    params["observed"]["path"] = "observed/nowhere.mon"
+    (root / "params.yaml").write_text(yaml.safe_dump(params, sort_keys=False))
+    assert main(args(root)) == 2
+    err = capsys.readouterr().err
+    assert "observed.path = 'observed/nowhere.mon': no such file" in err
+    assert str(root / "observed" / "nowhere.mon") in err
+    assert (root / "metrics" / "observed.json").read_bytes() == before
+
+
+def test_a_file_in_another_format_is_refused_with_the_readers_message(tmp_path, capsys):
+    root = project(tmp_path, path="observed/site.csv", fmt="mon")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    assert main(args(root)) == 2
+    assert "format mon" in capsys.readouterr().err
+
+
+def test_the_outputs_are_byte_reproducible(tmp_path):
+    root = project(tmp_path, path="observed/site.csv")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    outputs = [root / "metrics" / "observed.json", *(root / "data" / "observed" / n for n in
+               ("groups.parquet", "simulated.parquet"))]  # fmt: skip
+    assert main(args(root)) == 0
+    first = [p.read_bytes() for p in outputs]
+    assert main(args(root)) == 0
+    assert [p.read_bytes() for p in outputs] == first
+
+
+def test_validate_refuses_a_path_that_names_no_file_before_any_result_is_computed(tmp_path, capsys):
+    from pipeline import validate
+
+    root = project(tmp_path, path="observed/site.mon", fmt="mon")
+    assert validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")]) == 2
+    assert "observed.path = 'observed/site.mon': no such file" in capsys.readouterr().err
+    (root / "observed").mkdir()
+    shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.mon", root / "observed" / "site.mon")
+    assert validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")]) == 0
+    assert json.loads((root / "data" / "config.json").read_text())["observed"]["path"] == "observed/site.mon"
