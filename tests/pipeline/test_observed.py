@@ -128,7 +128,10 @@ def test_without_a_path_the_stage_writes_the_simulated_side_and_an_empty_groups_
     assert "observed.path is null" in m["reason"] and "docs/observed.md" in m["reason"]
     assert m["filters"] == {"min_group_load_t": 15.0, "group_spacing_m": 2.0, "position": "all"}
     assert m["simulated"]["static"]["groups"]["tandem"]["mean_spread_kg"] == 1000.0
-    assert m["simulated"]["wim_model"]["sensor_error"] is False
+    wim = raw_params()["protocol"]["wim"]
+    model = m["simulated"]["wim_model"]
+    assert model["sensor_error"] is (wim.get("accuracy_class", "none") != "none")
+    assert model["site_pavement"] is (wim.get("site_length_before_m", 0.0) + wim.get("site_length_after_m", 0.0) > 0)
     groups = pq.read_table(root / "data" / "observed" / "groups.parquet")
     assert groups.num_rows == 0
     assert groups.schema.equals(GROUPS_SCHEMA, check_metadata=False)

@@ -248,7 +248,12 @@ def observed_metrics(given=True, position="all", sensor_error=False):
         "simulated": {
             "study": "fleet",
             "position_note": None if position == "all" else f"position {position}: no simulated group passes",
-            "wim_model": {"speed_m_s": 22.0, "sensor_error": sensor_error},
+            "wim_model": {
+                "speed_m_s": 22.0, "site_pavement": True, "site_before_m": 50.0, "site_after_m": 25.0,
+                "site_iri_m_km": 1.3, "weighing_length": True, "sensor_length_m": 0.05, "contact_length_m": 0.2,
+                "sensor_error": sensor_error, "accuracy_class": "B(10)" if sensor_error else None,
+                "confidence_level": 0.95 if sensor_error else None,
+            },  # fmt: skip
             "static": {"runs": runs, "groups": {"tandem": stats(3, 0.3333, 0.0, 364.2), "triaxle": none}},
             "wim": {"runs": runs, "groups": {"tandem": stats(3, 0.6667, 0.25, 1113.4), "triaxle": none}},
         },
@@ -290,7 +295,9 @@ def test_observed_text_states_the_position_note_and_the_sensor_error_when_modell
     )
     assert "Position drive: no simulated group passes." in text_
     assert "Position all:" not in text_
-    assert "the simulated WIM readings include a random sensor error" in text_
+    assert "included: each simulated WIM axle reading carries a random error of COST 323 class B(10)" in text_
+    assert "on a smooth site (IRI 1.3 m/km from 50 m before to 25 m after the sensor" in text_
+    assert "averaged over its passage across a 0.05 m sensor (0.2 m contact patch)" in text_
 
 
 def test_reference_captions():
