@@ -69,12 +69,22 @@ def adopt_page(fig: Figure, title: str, body: Sequence[float] = BODY) -> Figure:
     return fig
 
 
+#: lowest page height a page's text may reach: above the footer's rule at 0.04 [page fraction]
+TEXT_BOTTOM = 0.05
+#: smallest type a text page shrinks to so that its text ends above the footer [pt]
+SMALLEST_TEXT = 7.0
+
+
 def text_page(title: str, paragraphs: Sequence[str], size: float = 8.8) -> Figure:
-    """A page of text only (definitions, assumptions)."""
-    fig = Figure(figsize=A4)
-    page_header(fig, title)
-    text_block(fig, 0.92, paragraphs, size=size)
-    return fig
+    """A page of text only (definitions, assumptions), in ``size`` point type or, if the text would run into the
+    footer, the largest smaller size (in steps of 0.3 pt, down to :data:`SMALLEST_TEXT`) with which it ends above
+    :data:`TEXT_BOTTOM`."""
+    while True:
+        fig = Figure(figsize=A4)
+        page_header(fig, title)
+        if text_block(fig, 0.92, paragraphs, size=size) >= TEXT_BOTTOM or size - 0.3 < SMALLEST_TEXT:
+            return fig
+        size = round(size - 0.3, 2)
 
 
 # ---- text ----------------------------------------------------------------------------------------------------------

@@ -117,14 +117,23 @@ def observed_page(groups: pd.DataFrame, simulated: pd.DataFrame, caption: Sequen
     caption
         Paragraphs under the charts.
     """
-    fig = new_page("Observed against simulated", body=(0.06, 0.5, 0.88, 0.43))
-    axes = fig.subplots(2, len(SIZES), squeeze=False)
-    for c, size in enumerate(SIZES):
-        sides = sources(groups, simulated, size)
-        _load_share_boxes(axes[0, c], sides, size)
-        _spread_distribution(axes[1, c], sides, size)
-    text_block(fig, 0.485, caption, size=7.9)
+    for bottom, type_size in FITS:
+        fig = new_page("Observed against simulated", body=(0.06, bottom, 0.88, 0.93 - bottom))
+        axes = fig.subplots(2, len(SIZES), squeeze=False)
+        for c, size in enumerate(SIZES):
+            sides = sources(groups, simulated, size)
+            _load_share_boxes(axes[0, c], sides, size)
+            _spread_distribution(axes[1, c], sides, size)
+        if text_block(fig, bottom - 0.015, caption, size=type_size) >= LOWEST_TEXT:
+            break
     return fig
+
+
+#: (bottom of the charts [page fraction], type size of the text [pt]) tried in turn until the text ends above the
+#: footer: the caveats grow with what the runs modelled, and a survey adds its own lines
+FITS = ((0.5, 7.9), (0.5, 7.5), (0.53, 7.5), (0.53, 7.1), (0.56, 7.1), (0.58, 6.8))
+#: lowest page height the text may reach: above the footer's rule at 0.04 [page fraction]
+LOWEST_TEXT = 0.05
 
 
 def page(ctx: Context) -> list[Page]:
