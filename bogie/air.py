@@ -407,7 +407,7 @@ def coupled_time_constants(bogie: AirBogie) -> NDArray[np.float64]:
         jac[:, j] = (p - p_base) / step
     proj = np.eye(n) - np.full((n, n), 1.0 / n)
     rates = np.sort(np.abs(np.real(np.linalg.eigvals(bogie.pipe_conductance * proj @ jac))))
-    return 1.0 / rates[1:][::-1]
+    return 1.0 / rates[1:]
 
 
 # ---- dynamics ----------------------------------------------------------------------------------------------------
@@ -487,7 +487,7 @@ def _forces(bogie: AirBogie, y: NDArray[np.float64], drive_row, valve: bool) -> 
         "powers": np.array([
             float(np.sum(damper * e_d)),
             float(np.sum((tyre - bogie.tyre_stiffness * np.maximum(comp, 0.0)) * (road_rate - z_d))),
-            float(-np.sum(pipe * eta)),
+            float(bogie.pipe_conductance * np.sum((p - np.mean(p)) * (eta - specific_enthalpy(bogie, np.mean(p))))),
             float(np.sum(fill * (eta_s - eta)) + np.sum(vent * (eta - eta_a))),
             float(np.sum(tyre * road_rate)),
             float(np.sum(fill) * eta_s),
@@ -561,7 +561,8 @@ def simulate(
     -------
     AirResult
         Wheel loads [N] at the input rows and the histories (chassis pitch, axle displacements, bag extensions,
-        gauge pressures and forces, air masses, the running dissipations and works of :data:`WORK_TERMS`);
+        gauge pressures and forces, air masses, the running dissipations and works of :data:`WORK_TERMS` [J],
+        ``dissipation_rate`` of the damper, tyre, pipe and valve at each row [W]);
         ``status`` "failed" with the solver's message and the history up to there if the solve stopped.
     """
     n = bogie.n_axles
@@ -586,7 +587,7 @@ def simulate(
     if not ok and len(ts) == 0:
         ys, ts = y0[None, :], t[:1]
     rows = [_forces(bogie, y, drive(tk), valve) for tk, y in zip(ts, ys)]
-    stack = {k: np.array([r[k] for r in rows]) for k in ("extension", "pressure", "bag", "tyre")}
+    stack = {k: np.array([r[k] for r in rows]) for k in ("extension", "pressure", "bag", "tyre", "powers")}
     works = ys[:, 3 * n + 2 :]
     extras = {
         "chassis_pitch": ys[:, 0],
@@ -596,6 +597,7 @@ def simulate(
         "bag_force": stack["bag"],
         "gas_mass": ys[:, 2 * n + 2 : 3 * n + 2],
         **{name: works[:, k] for k, name in enumerate(WORK_TERMS)},
+        "dissipation_rate": stack["powers"][:, :4],
         "road_height": inputs.road_height[: len(ts)],
         "load_factor": inputs.load_factor[: len(ts)],
     }
