@@ -10,7 +10,7 @@ import math
 import numpy as np
 import pytest
 
-from bogie import air, nonlinear, static
+from bogie import air, air_dynamics, air_static, nonlinear, static
 from bogie.params import tandem_trrl, triaxle_stage1
 from bogie.results import DynamicResult
 from bogie.road import RampedStep
@@ -28,11 +28,11 @@ def _tilted_worn(make, tilt_deg, worn_axle):
 
 def _parted(bogie, fraction=0.02):
     """The levelled state with a share of the front bag's air moved to the rear bag: pressures parted."""
-    s = air.equilibrium(bogie)
+    s = air_static.equilibrium(bogie)
     m = s.gas_mass.copy()
     m[0] += fraction * m[0]
     m[-1] -= fraction * s.gas_mass[0]
-    return air.AirState(s.u, s.v, m)
+    return air_static.AirState(s.u, s.v, m)
 
 
 def _decay_time(t, dp, start, end):
@@ -49,7 +49,7 @@ def test_presets_carry_the_steel_presets_loads_on_bags_in_the_documented_ranges(
         steel.axle_mass,
         steel.chassis_pitch_inertia,
     )
-    loads = air.static_wheel_loads(b)
+    loads = air_static.static_wheel_loads(b)
     np.testing.assert_allclose(loads, b.design_bag_load + b.axle_mass * 9.81, rtol=1e-12)
     # moments about the king pin: the bags carry the payload's moment, as the steel springs do
     assert sum(x * (w - b.axle_mass * 9.81) for x, w in zip(b.axle_x, loads)) == pytest.approx(
@@ -67,13 +67,13 @@ def test_presets_carry_the_steel_presets_loads_on_bags_in_the_documented_ranges(
 @pytest.mark.parametrize("worn", [0, -1])
 def test_static_loads_under_tilt_and_wear_differ_only_by_the_effective_area(make, tilt_deg, worn):
     b = _tilted_worn(make, tilt_deg, worn)
-    state = air.equilibrium(b)
-    out = air.state_loads(b, state)
+    state = air_static.equilibrium(b)
+    out = air_static.state_loads(b, state)
     p = out["bag_pressure"]
     np.testing.assert_allclose(p, p[0], rtol=1e-10)  # one pressure at rest
     assert np.mean(out["bag_extension"]) == pytest.approx(0.0, abs=1e-10)  # the valve has levelled
     force = out["bag_force"]
-    np.testing.assert_allclose(force / force.mean() - 1.0, air.area_load_spread(b, state), atol=1e-10)
+    np.testing.assert_allclose(force / force.mean() - 1.0, air_static.area_load_spread(b, state), atol=1e-10)
     # the heights from the geometry alone: the valve levels the mean height, so the chassis pitches by the tilt
     # plus the mean wear over the group's distance from the king pin; each bag lengthens by its tyre's wear; the
     # tyres' share of the load differences is second order: the closed form A'/A_0 (e_i - mean e) to 3 %
@@ -98,36 +98,36 @@ def test_static_loads_under_tilt_and_wear_differ_only_by_the_effective_area(make
 @pytest.mark.parametrize("make", MAKERS)
 def test_a_constant_effective_area_shares_exactly_whatever_the_tilt_and_wear(make):
     b = _tilted_worn(make, 2.0, 0).replace(bag_area_rate=0.0)
-    out = air.state_loads(b, air.equilibrium(b))
+    out = air_static.state_loads(b, air_static.equilibrium(b))
     np.testing.assert_allclose(out["bag_force"], out["bag_force"].mean(), rtol=1e-10)
 
 
 def test_the_valve_shut_keeps_the_air_and_still_equalises_the_pressures():
     b = _tilted_worn(air.air_triaxle, 1.5, 0)
     total = 3 * b.design_gas_mass
-    state = air.equilibrium(b, gas_mass=total)
-    out = air.state_loads(b, state)
+    state = air_static.equilibrium(b, gas_mass=total)
+    out = air_static.state_loads(b, state)
     assert np.sum(state.gas_mass) == pytest.approx(total, rel=1e-12)
     np.testing.assert_allclose(out["bag_pressure"], out["bag_pressure"][0], rtol=1e-10)
     # a tilt at fixed air moves the mean height (the valve would have corrected it) but not the sharing rule
     np.testing.assert_allclose(
-        out["bag_force"] / out["bag_force"].mean() - 1.0, air.area_load_spread(b, state), atol=1e-10
+        out["bag_force"] / out["bag_force"].mean() - 1.0, air_static.area_load_spread(b, state), atol=1e-10
     )
 
 
 @pytest.mark.parametrize("make", MAKERS)
 def test_the_equilibrium_is_at_rest_in_the_simulation(make):
     b = _tilted_worn(make, 1.0, 0)
-    run = air.simulate(b, nonlinear.hold(b, 2.0, 0.05))
+    run = air_dynamics.simulate(b, nonlinear.hold(b, 2.0, 0.05))
     assert isinstance(run, DynamicResult) and run.success, run.message
     np.testing.assert_allclose(run.wheel_loads, np.broadcast_to(run.wheel_loads[0], run.wheel_loads.shape), rtol=1e-7)
-    np.testing.assert_allclose(run.wheel_loads[0], air.static_wheel_loads(b), rtol=1e-10)
+    np.testing.assert_allclose(run.wheel_loads[0], air_static.static_wheel_loads(b), rtol=1e-10)
 
 
 def test_the_pressure_equalisation_time_constant_with_volumes_held_is_the_closed_form():
     # tyres near rigid and a chassis too heavy to move in the run: the bags' volumes are held
     b = air.air_tandem(tyre_stiffness=1e8, chassis_pitch_inertia=1e9)
-    run = air.simulate(b, nonlinear.hold(b, 5.0, 0.02), initial=_parted(b), valve=False)
+    run = air_dynamics.simulate(b, nonlinear.hold(b, 5.0, 0.02), initial=_parted(b), valve=False)
     p = run.extras["bag_pressure"]
     tau = _decay_time(run.t, p[:, 0] - p[:, 1], 1.0, 5.0)
     assert tau == pytest.approx(air.pipe_time_constant(b), rel=0.01)  # V / (n R T C)
@@ -137,10 +137,10 @@ def test_the_pressure_equalisation_time_constant_with_volumes_held_is_the_closed
 @pytest.mark.parametrize("make", MAKERS)
 def test_the_pressure_equalisation_time_constant_on_the_tyres_is_the_series_closed_form(make):
     b = make()
-    run = air.simulate(b, nonlinear.hold(b, 8.0, 0.02), initial=_parted(b), valve=False)
+    run = air_dynamics.simulate(b, nonlinear.hold(b, 8.0, 0.02), initial=_parted(b), valve=False)
     p = run.extras["bag_pressure"]
     tau = _decay_time(run.t, p[:, 0] - p.mean(axis=1), 3.0, 8.0)
-    slowest = air.coupled_time_constants(b)[0]
+    slowest = air_static.coupled_time_constants(b)[0]
     assert tau == pytest.approx(slowest, rel=0.01)
     # the tyre in series with the gas (chassis held) to 2 %; the chassis's pitch adds the rest
     assert tau == pytest.approx(air.equalisation_time_constant(b), rel=0.02)
@@ -154,7 +154,7 @@ def test_the_pressure_equalisation_time_constant_on_the_tyres_is_the_series_clos
 def test_pressures_part_over_a_road_step_and_reequalise_with_the_time_constant(make):
     b = make()
     inputs = nonlinear.road_inputs(b, RampedStep(rise=0.025), 10.0, 8.0, 0.005, front_axle_start=-2.0)
-    run = air.simulate(b, inputs)
+    run = air_dynamics.simulate(b, inputs)
     assert run.success, run.message
     p = run.extras["bag_pressure"]
     dp = p[:, 0] - p[:, -1]
@@ -163,7 +163,7 @@ def test_pressures_part_over_a_road_step_and_reequalise_with_the_time_constant(m
     assert abs(dp[-1]) < 0.002 * peak
     # the tail after the bounce has died away decays with the slowest time constant
     tau = _decay_time(run.t, dp, 5.0, 8.0)
-    assert tau == pytest.approx(air.coupled_time_constants(b)[0], rel=0.05)
+    assert tau == pytest.approx(air_static.coupled_time_constants(b)[0], rel=0.05)
     # and the wheel loads return to equal
     assert np.max(np.abs(run.wheel_loads[-1] / run.wheel_loads[-1].mean() - 1.0)) < 1e-3
 
@@ -172,7 +172,7 @@ def test_pressures_part_over_a_road_step_and_reequalise_with_the_time_constant(m
 def test_energy_dissipated_is_never_negative_and_the_balance_closes(make):
     b = make()
     inputs = nonlinear.road_inputs(b, RampedStep(rise=0.025), 5.0, 5.0, 0.005, front_axle_start=-1.0)
-    run = air.simulate(b, inputs)
+    run = air_dynamics.simulate(b, inputs)
     assert run.success, run.message
     w = run.extras
     dissipations = ("damper_dissipation", "tyre_dissipation", "pipe_dissipation", "valve_dissipation")
@@ -181,8 +181,8 @@ def test_energy_dissipated_is_never_negative_and_the_balance_closes(make):
         # the running totals between rows are the integrator's interpolation: non-decreasing to its accuracy
         assert np.all(np.diff(w[name]) >= -1e-5 * w[name][-1]), name
         assert w[name][-1] > 0.0, name
-    start = air.stored_energy(b, air.equilibrium(b))
-    end = air.stored_energy(b, run.final_state)
+    start = air_dynamics.stored_energy(b, air_static.equilibrium(b))
+    end = air_dynamics.stored_energy(b, run.final_state)
     dissipated = sum(w[name][-1] for name in dissipations)
     supplied = w["road_work"][-1] + w["supply_energy"][-1] - w["vent_energy"][-1]
     assert end - start == pytest.approx(supplied - dissipated, abs=1e-6 * dissipated)
