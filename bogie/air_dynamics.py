@@ -166,7 +166,9 @@ def simulate(
     bogie
         The group.
     inputs
-        Road, load and king pin histories, one row per time step.
+        Road, load and king pin histories, one row per time step. Between rows each is linear in time and the
+        road's rate is that line's slope (``inputs.road_rate`` is not used), so that the tyre's damper and the
+        road's work see the same road as the tyre's spring.
     initial
         State to start from; by default the levelled equilibrium at the first input row.
     valve

@@ -88,11 +88,21 @@ def equilibrium(
 
     Raises
     ------
+    ValueError
+        If the bags are not connected (``pipe_conductance`` 0) and ``gas_mass`` does not give each bag's air: then
+        nothing makes their pressures equal, and the state at rest depends on how each bag was filled.
     RuntimeError
         If the solve does not converge.
     """
     _check_scalar("load_factor", load_factor, 0.0, 2.0, "-", False)
     n = bogie.n_axles
+    if bogie.pipe_conductance == 0.0 and (gas_mass is None or np.ndim(gas_mass) == 0):
+        raise ValueError(
+            "pipe_conductance = 0.0 kg/(s Pa): unconnected bags have no common pressure at rest; give gas_mass as "
+            f"one value per bag ({n} values, kg)"
+        )
+    if gas_mass is not None and np.ndim(gas_mass) == 1 and len(gas_mass) != n:
+        raise ValueError(f"gas_mass has {len(gas_mass)} values but the group has {n} bags: give one per bag in kg")
     r = np.zeros(n) if road is None else np.asarray(road, dtype=float).reshape(n)
     rise = bogie.kingpin_height_offset + float(kingpin_rise)
     y0 = np.concatenate([[rise / bogie.bogie_centre_x], r - np.asarray(bogie.tyre_wear), np.ones(n) * load_factor])
