@@ -2,8 +2,9 @@
 
 Issue 15 asks for the new and the previous code in the same run on the same samples. Each tree is imported in its
 own subprocess (``PYTHONPATH`` pointing at it, so nothing of one tree leaks into the other): this working tree as it
-is (uncommitted changes included) and the reference commit (default ``main``) extracted with ``git archive`` into a
-cache directory keyed by its hash, reused by later runs so that its numba cache stays warm. Every worker samples the
+is (uncommitted changes included) and the reference commit (default: the merge base of HEAD and ``main``, the code
+before this branch's changes) extracted with ``git archive`` into a cache directory keyed by its hash, reused by
+later runs so that its numba cache stays warm. Every worker samples the
 same :data:`N_BOGIES` fleet bogies (``params.yaml`` of this tree, ``fleet.n_bogies`` set to that), loads the
 compiled kernels with one untimed weighing per protocol, then times :data:`PASSES` passes of
 :func:`pipeline.protocol.weigh` over the sample per protocol. Workers of the two trees alternate
@@ -38,7 +39,7 @@ DT_DIVISOR = 4
 #: timed passes over the sample per protocol in one worker [-]
 PASSES = 2
 #: alternating worker rounds per tree [-]
-ROUNDS = 2
+ROUNDS = 3
 #: where reference trees are extracted (one directory per commit hash)
 TREE_CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "bogie-bench-trees"
 PROTOCOLS = ("static", "wim")
@@ -138,7 +139,11 @@ def largest_differences(rows: list[dict], reference: list[dict]) -> dict[str, fl
     return worst
 
 
-def main(reference: str = "main") -> None:
+def main(reference: str | None = None) -> None:
+    if reference is None:  # the commit this branch started from: the code before its changes
+        reference = subprocess.run(
+            ["git", "merge-base", "HEAD", "main"], cwd=ROOT, check=True, capture_output=True, text=True
+        ).stdout.strip()
     sha, ref_tree = reference_tree(reference)
     load_before = os.getloadavg()
     print(f"{N_BOGIES} fleet bogies, this tree {ROOT} against {reference} = {sha[:10]} ({ref_tree})")
@@ -180,7 +185,7 @@ def main(reference: str = "main") -> None:
 
 if __name__ == "__main__":
     parser = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    parser.add_argument("--reference", default="main", help="git revision to compare against (default main)")
+    parser.add_argument("--reference", help="git revision to compare against (default: the merge base with main)")
     parser.add_argument("--worker", help=argparse.SUPPRESS)
     parser.add_argument("--params", help=argparse.SUPPRESS)
     parser.add_argument("--n", type=int, default=N_BOGIES, help=argparse.SUPPRESS)
