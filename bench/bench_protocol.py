@@ -8,8 +8,9 @@ later runs so that its numba cache stays warm. Every worker samples the
 same :data:`N_BOGIES` fleet bogies (``params.yaml`` of this tree, ``fleet.n_bogies`` set to that), loads the
 compiled kernels with one untimed weighing per protocol, then times :data:`PASSES` passes of
 :func:`pipeline.protocol.weigh` over the sample per protocol. Workers of the two trees alternate
-(:data:`ROUNDS` rounds) so that a burst of other work on the shared machine falls on both; the best pass of each
-protocol is kept.
+(:data:`ROUNDS` rounds, which goes first alternating) so that a burst of other work on the shared machine falls on
+both; the best pass of each protocol is kept. ``--reference HEAD`` with a clean tree times the same code twice: the
+ratio it prints is the bench's own scatter.
 
 Accuracy: the reference tree at dt / :data:`DT_DIVISOR` (both protocols) is the converged answer; the table gives,
 per result column, the largest difference over the sample of each tree's dt = params.yaml run from it (rows where
@@ -151,8 +152,9 @@ def main(reference: str | None = None) -> None:
     print(f"load average at start: {start} on {os.cpu_count()} cores")
     best: dict[str, dict[str, float]] = {"this": {}, "reference": {}}
     answers: dict[str, dict] = {}
-    for _ in range(ROUNDS):
-        for label, tree in (("this", ROOT), ("reference", ref_tree)):
+    for k in range(ROUNDS):
+        order = (("this", ROOT), ("reference", ref_tree))
+        for label, tree in order if k % 2 == 0 else order[::-1]:  # neither tree always goes first
             answer = run_worker(tree)
             answers[label] = answer
             for name in PROTOCOLS:
@@ -180,6 +182,11 @@ def main(reference: str | None = None) -> None:
         print(f"\n{name}:\n| column | reference | this |\n|---|---|---|")
         for column in ref_d:
             print(f"| {column} | {ref_d[column]:.4g} | {new_d[column]:.4g} |")
+    print("\nlargest difference between the two trees at the same dt (0: the same results to the bit)")
+    for name in PROTOCOLS:
+        between = largest_differences(answers["this"]["rows"][name], answers["reference"]["rows"][name])
+        column = max((c for c in between if c in FLOAT_COLUMNS), key=lambda c: between[c])
+        print(f"{name}: {between[column]:.3g} ({column}); flags differing: {sum(between[c] for c in FLAG_COLUMNS):.0f}")
     print(f"\nload average at end: {load_after[0]:.2f} {load_after[1]:.2f} {load_after[2]:.2f}")
 
 
