@@ -6,7 +6,13 @@ import importlib
 import time
 
 #: benchmark modules, each with a ``main()`` that prints its table
-BENCHMARKS = ("bench.bench_linear", "bench.bench_nonlinear", "bench.bench_pipeline")
+BENCHMARKS = (
+    "bench.bench_linear",
+    "bench.bench_nonlinear",
+    "bench.bench_pipeline",
+    "bench.bench_protocol",
+    "bench.profile_protocol",
+)
 
 
 def main() -> None:
