@@ -259,8 +259,6 @@ WORK = (
     ("axle_x", 1, 0),
     ("axle_x_pitch", 1, 0),
     ("axle_x_rise", 1, 0),
-    ("spring_deflection", 1, 0),
-    ("spring_hysteresis", 1, 0),
 )
 _WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
 _WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
@@ -310,8 +308,6 @@ def _work_views(work, n):
         _work_view(work, 14, n),
         _work_view(work, 15, n),
         _work_view(work, 16, n),
-        _work_view(work, 17, n),
-        _work_view(work, 18, n),
     )
 
 
@@ -406,13 +402,12 @@ def _hysteresis(delta, delta_old, h_old, band, decay):
 
 @njit(cache=True, inline="always")
 def _springs(
-    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x,
-    s_def, s_hys,
+    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x
 ):  # fmt: skip
     """Every spring: contact points (rolling), deflection, interleaf hysteresis, end friction, seat and end loads.
 
     ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it. Each spring's deflection and
-    hysteretic force go to ``s_def``, ``s_hys`` and the new history.
+    hysteretic force go to the new history (and from there to the record).
     """
     o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
@@ -438,8 +433,6 @@ def _springs(
         h = _hysteresis(delta, hist_old[o_hd + i], hist_old[o_hh + i], band, decay)
         hist_new[o_hd + i] = delta
         hist_new[o_hh + i] = h
-        s_def[i] = delta
-        s_hys[i] = h
         f_elastic = data_f[o_wd + i] + k_r * delta + h
         n_el = max(f_elastic, 0.0)
         # friction: elastic-plastic return map on the slip of each leaf end over its pad
@@ -514,7 +507,7 @@ def _stop_moment(phi, stop, k_stop):
 
 
 @njit(cache=True, inline="always")
-def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, s_def, s_hys, rec):
+def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
     """Spring loads, friction forces, stick flags, contact shifts, plastic slips, axle positions, spring deflections
     and hysteretic forces into the record."""
     o_spring = record_start(_REC_SPRING, n)
@@ -525,11 +518,13 @@ def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, s_def
     o_axle = record_start(_REC_AXLE_X, n)
     o_def = record_start(_REC_DEFLECTION, n)
     o_hys = record_start(_REC_HYSTERESIS, n)
+    h_def = history_start(_HIST_DEFLECTION, n)
+    h_hys = history_start(_HIST_HYSTERESIS, n)
     for i in range(n):
         rec[o_spring + i] = f_spring[i]
         rec[o_axle + i] = ax_x[i]
-        rec[o_def + i] = s_def[i]
-        rec[o_hys + i] = s_hys[i]
+        rec[o_def + i] = hist_new[h_def + i]
+        rec[o_hys + i] = hist_new[h_hys + i]
     for e in range(2 * n):
         rec[o_fric + e] = t_fric[e]
         rec[o_stick + e] = stick[e]
@@ -547,10 +542,9 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     sc = math.sin(u[0])
     for k in range(2 * n):
         f[k] = 0.0
-    (
-        piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth,
-        ax_dz, s_def, s_hys,
-    ) = _work_views(work, n)  # fmt: skip
+    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz = (
+        _work_views(work, n)
+    )
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(n - 1):
@@ -573,10 +567,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
         ax_x[i], ax_dth[i], ax_dz[i] = _radius_rod(
             data_f[o_rax + i], data_f[o_raz + i], data_f[o_rl + i], u[n + i], dh, cc, sc
         )
-    _springs(
-        u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x,
-        s_def, s_hys,
-    )  # fmt: skip
+    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x)
     for i in range(n):
         # the spring pushes its axle down: f = -Q
         f[n + i] += f_spring[i]
@@ -611,7 +602,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
     if record:
-        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, s_def, s_hys, rec)
+        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec)
 
 
 @njit(cache=True, inline="always")

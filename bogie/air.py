@@ -20,7 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie.params import GRAVITY, FieldRange, _check_scalar, _check_vector, tandem_trrl, triaxle_stage1
+from bogie.params import GRAVITY, AxleGroup, FieldRange, _check_scalar, _check_vector, tandem_trrl, triaxle_stage1
 
 GAS_CONSTANT_AIR = 287.05
 #: the standard atmosphere [Pa]
@@ -56,7 +56,7 @@ AIR_AXLE_RANGES: dict[str, FieldRange] = {
 
 
 @dataclass(frozen=True)
-class AirBogie:
+class AirBogie(AxleGroup):
     """One side of an n-axle air-sprung group (n >= 2), its bags connected by one line.
 
     Parameters
@@ -139,21 +139,6 @@ class AirBogie:
     def replace(self, **changes: Any) -> AirBogie:
         """A validated copy with some fields changed."""
         return dataclasses.replace(self, **changes)
-
-    @property
-    def n_axles(self) -> int:
-        """Number of axles."""
-        return len(self.axle_x)
-
-    @property
-    def bogie_centre_x(self) -> float:
-        """Mean of the axle positions [m]."""
-        return sum(self.axle_x) / self.n_axles
-
-    @property
-    def kingpin_height_offset(self) -> float:
-        """Rise of the king pin above its design height that makes :attr:`chassis_tilt` [m]."""
-        return self.bogie_centre_x * math.tan(self.chassis_tilt)
 
     @property
     def design_bag_load(self) -> float:

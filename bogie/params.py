@@ -165,8 +165,31 @@ def _check_vector(
     return tuple(_check_scalar(f"{name}[{k}]", v, low, high, unit, low_inclusive) for k, v in enumerate(values))
 
 
+class AxleGroup:
+    """What any axle group's parameters derive from their ``axle_x`` [m] and ``chassis_tilt`` [rad]: the steel
+    :class:`Bogie` and the air-sprung :class:`bogie.air.AirBogie` alike."""
+
+    axle_x: tuple[float, ...]
+    chassis_tilt: float
+
+    @property
+    def n_axles(self) -> int:
+        """Number of axles n [-]."""
+        return len(self.axle_x)
+
+    @property
+    def bogie_centre_x(self) -> float:
+        """Mean of the axle positions [m]."""
+        return sum(self.axle_x) / self.n_axles
+
+    @property
+    def kingpin_height_offset(self) -> float:
+        """Rise of the king pin above its design height that makes :attr:`chassis_tilt` [m]."""
+        return self.bogie_centre_x * math.tan(self.chassis_tilt)
+
+
 @dataclass(frozen=True)
-class Bogie:
+class Bogie(AxleGroup):
     """One side of an n-axle mechanically equalised leaf-spring bogie (n >= 2, n - 1 equalisers).
 
     Parameters
@@ -350,11 +373,6 @@ class Bogie:
 
     # ---- derived geometry -------------------------------------------------------------------------------
     @property
-    def n_axles(self) -> int:
-        """Number of axles n [-]."""
-        return len(self.axle_x)
-
-    @property
     def equaliser_pivot_x(self) -> tuple[float, ...]:
         """Equaliser pivot positions rearward of the king pin [m]."""
         return tuple(
@@ -386,16 +404,6 @@ class Bogie:
         """Position of each radius rod's chassis anchor rearward of the king pin in the design position [m]: the
         rod is level there, with its anchor ahead of the axle."""
         return tuple(x - length for x, length in zip(self.axle_x, self.radius_rod_lengths))
-
-    @property
-    def bogie_centre_x(self) -> float:
-        """Mean of the axle positions [m]."""
-        return sum(self.axle_x) / self.n_axles
-
-    @property
-    def kingpin_height_offset(self) -> float:
-        """Rise of the king pin above its design height that makes :attr:`chassis_tilt` [m]."""
-        return self.bogie_centre_x * math.tan(self.chassis_tilt)
 
     @property
     def combined_stiffness(self) -> float:

@@ -9,8 +9,9 @@ assembled.
 from __future__ import annotations
 
 import textwrap
-from collections.abc import Sequence
+from collections.abc import Callable, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
@@ -75,16 +76,30 @@ TEXT_BOTTOM = 0.05
 SMALLEST_TEXT = 7.0
 
 
+def first_fit(options: Sequence[Any], draw: Callable[[Any], tuple[Figure, float]]) -> Figure:
+    """The page ``draw`` (option) makes with the first of ``options`` whose text ends above :data:`TEXT_BOTTOM`
+    (``draw`` returns the figure and the height its text ended at); the last option's page if none does."""
+    fig = None
+    for option in options:
+        fig, bottom = draw(option)
+        if bottom >= TEXT_BOTTOM:
+            break
+    assert fig is not None, "first_fit needs at least one option"
+    return fig
+
+
 def text_page(title: str, paragraphs: Sequence[str], size: float = 8.8) -> Figure:
     """A page of text only (definitions, assumptions), in ``size`` point type or, if the text would run into the
     footer, the largest smaller size (in steps of 0.3 pt, down to :data:`SMALLEST_TEXT`) with which it ends above
     :data:`TEXT_BOTTOM`."""
-    while True:
+
+    def draw(type_size: float) -> tuple[Figure, float]:
         fig = Figure(figsize=A4)
         page_header(fig, title)
-        if text_block(fig, 0.92, paragraphs, size=size) >= TEXT_BOTTOM or size - 0.3 < SMALLEST_TEXT:
-            return fig
-        size = round(size - 0.3, 2)
+        return fig, text_block(fig, 0.92, paragraphs, size=type_size)
+
+    steps = int((size - SMALLEST_TEXT) / 0.3 + 1e-9)
+    return first_fit([round(size - 0.3 * k, 2) for k in range(steps + 1)], draw)
 
 
 # ---- text ----------------------------------------------------------------------------------------------------------

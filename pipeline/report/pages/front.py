@@ -11,7 +11,7 @@ from matplotlib.figure import Figure
 
 from pipeline.report import text
 from pipeline.report.context import Context, Page
-from pipeline.report.layout import A4, LEFT, RIGHT, page_header, table_axes, text_block
+from pipeline.report.layout import A4, LEFT, RIGHT, first_fit, page_header, table_axes, text_block
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import run_counts
 from pipeline.sample import VARIANTS
@@ -137,24 +137,22 @@ def summary_page(
     notes: Sequence[str],
 ) -> Figure:
     """The summary in words, then its one table, in the largest type (of :data:`SUMMARY_SIZES`) that ends above the
-    footer's rule (:data:`SUMMARY_BOTTOM`)."""
-    for size in SUMMARY_SIZES:
+    footer (:func:`~pipeline.report.layout.first_fit`)."""
+
+    def draw(size: float) -> tuple[Figure, float]:
         fig = Figure(figsize=A4)
         page_header(fig, "Summary")
         y = text_block(fig, 0.925, paragraphs, size=size)
         fig.text(LEFT, y - 0.005, table_title, fontsize=9.5, weight="bold", va="top")
         widths = [0.19, 0.05, 0.165, 0.165, 0.1, 0.2, 0.13]
         y = table_axes(fig, y - 0.03, header, rows, widths, 7.3)
-        y = text_block(fig, y - 0.012, notes, size=min(size, 7.5))
-        if y >= SUMMARY_BOTTOM:
-            break
-    return fig
+        return fig, text_block(fig, y - 0.012, notes, size=min(size, 7.5))
+
+    return first_fit(SUMMARY_SIZES, draw)
 
 
 #: type sizes the summary's text tries, largest first [pt]
 SUMMARY_SIZES = (8.9, 8.6, 8.3, 8.0, 7.7)
-#: lowest page height the summary may reach: above the footer's rule at 0.04 [page fraction]
-SUMMARY_BOTTOM = 0.05
 
 
 def summary(ctx: Context) -> list[Page]:

@@ -17,7 +17,7 @@ from matplotlib.patches import Patch
 from pipeline.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
-from pipeline.report.layout import new_page, text_block
+from pipeline.report.layout import first_fit, new_page, text_block
 from pipeline.report.style import GROUP_LABEL, SOURCE_COLOR, SOURCE_LABEL, axle_name
 
 __all__ = ["SIZES", "SOURCES", "observed_page", "page", "sources"]
@@ -117,23 +117,24 @@ def observed_page(groups: pd.DataFrame, simulated: pd.DataFrame, caption: Sequen
     caption
         Paragraphs under the charts.
     """
-    for bottom, type_size in FITS:
+
+    def draw(fit: tuple[float, float]) -> tuple[Figure, float]:
+        bottom, type_size = fit
         fig = new_page("Observed against simulated", body=(0.06, bottom, 0.88, 0.93 - bottom))
         axes = fig.subplots(2, len(SIZES), squeeze=False)
         for c, size in enumerate(SIZES):
             sides = sources(groups, simulated, size)
             _load_share_boxes(axes[0, c], sides, size)
             _spread_distribution(axes[1, c], sides, size)
-        if text_block(fig, bottom - 0.015, caption, size=type_size) >= LOWEST_TEXT:
-            break
-    return fig
+        return fig, text_block(fig, bottom - 0.015, caption, size=type_size)
+
+    return first_fit(FITS, draw)
 
 
 #: (bottom of the charts [page fraction], type size of the text [pt]) tried in turn until the text ends above the
-#: footer: the caveats grow with what the runs modelled, and a survey adds its own lines
+#: footer (:func:`~pipeline.report.layout.first_fit`): the caveats grow with what the runs modelled, and a survey
+#: adds its own lines
 FITS = ((0.5, 7.9), (0.5, 7.5), (0.53, 7.5), (0.53, 7.1), (0.56, 7.1), (0.58, 6.8))
-#: lowest page height the text may reach: above the footer's rule at 0.04 [page fraction]
-LOWEST_TEXT = 0.05
 
 
 def page(ctx: Context) -> list[Page]:
