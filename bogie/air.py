@@ -289,11 +289,30 @@ def _from_steel(steel, bag_volume_m3: float, **changes: Any) -> AirBogie:
     return base.replace(damper_damping=damping, **changes)
 
 
+#: the presets' bag volume of each group size, by number of axles [m^3]
+PRESET_BAG_VOLUMES: dict[int, float] = {2: 0.012, 3: 0.015}
+
+
+def from_steel(steel, **changes: Any) -> AirBogie:
+    """The air-sprung group that replaces the steel group ``steel`` (a :class:`bogie.params.Bogie`) on its trailer.
+
+    It keeps the steel group's axle layout, tyres, axle masses, payload, centre of gravity and pitch inertia, and
+    takes the presets' bags (:data:`PRESET_BAG_VOLUMES` by number of axles, the design pressure, area rate, pipe,
+    valve and dampers of :func:`air_tandem`), so a steel and an air group of the fleet carry the same load.
+    ``changes`` replace fields of the result (tilt, tyre wear, ...).
+    """
+    if steel.n_axles not in PRESET_BAG_VOLUMES:
+        raise ValueError(
+            f"n_axles = {steel.n_axles}: air bags are preset for groups of {sorted(PRESET_BAG_VOLUMES)} axles"
+        )
+    return _from_steel(steel, PRESET_BAG_VOLUMES[steel.n_axles], **changes)
+
+
 def air_tandem(**changes: Any) -> AirBogie:
     """An air-sprung tandem on the layout, tyres and payload of :func:`bogie.params.tandem_trrl`, 12 l bags."""
-    return _from_steel(tandem_trrl(), 0.012, **changes)
+    return _from_steel(tandem_trrl(), PRESET_BAG_VOLUMES[2], **changes)
 
 
 def air_triaxle(**changes: Any) -> AirBogie:
     """An air-sprung tri-axle on the layout, tyres and payload of :func:`bogie.params.triaxle_stage1`, 15 l bags."""
-    return _from_steel(triaxle_stage1(), 0.015, **changes)
+    return _from_steel(triaxle_stage1(), PRESET_BAG_VOLUMES[3], **changes)

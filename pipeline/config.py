@@ -34,7 +34,7 @@ from pipeline.config_schema import (
     si_distribution,
 )
 from pipeline.config_yaml import DuplicateKeyError, read_yaml
-from pipeline.constants import GROUP_AXLES
+from pipeline.constants import GROUP_AXLES, SUSPENSIONS
 
 __all__ = [
     "BACKENDS",
@@ -123,6 +123,9 @@ class FleetConfig:
         ``lhs`` (Latin hypercube) or ``sobol`` (scrambled Sobol'), both from scipy.stats.qmc.
     axle_mix
         Fraction of the fleet in each axle group [-], summing to 1.
+    suspension_mix
+        Per axle group, the fraction of its groups of each suspension (``steel``: leaf springs and equalisers,
+        ``air``: connected air springs) [-], summing to 1.
     presets
         Name of the base bogie (a bogie.params preset) of each group.
     legal_group_load
@@ -134,6 +137,7 @@ class FleetConfig:
     n_bogies: int
     sampling: str
     axle_mix: FrozenMap
+    suspension_mix: FrozenMap
     presets: FrozenMap
     legal_group_load: FrozenMap
     legal_axle_load: float
@@ -298,6 +302,9 @@ def _fleet(fleet: Any) -> FleetConfig:
         n_bogies=fleet.n_bogies,
         sampling=fleet.sampling,
         axle_mix=FrozenMap({g: getattr(fleet.axle_mix, g) for g in GROUP_AXLES}),
+        suspension_mix=FrozenMap(
+            {g: FrozenMap({k: getattr(getattr(fleet.suspension_mix, g), k) for k in SUSPENSIONS}) for g in GROUP_AXLES}
+        ),
         presets=FrozenMap({g: getattr(fleet.presets, g) for g in GROUP_AXLES}),
         legal_group_load=FrozenMap({g: getattr(tonnes, g) * 1000.0 * GRAVITY for g in GROUP_AXLES}),
         legal_axle_load=fleet.legal_axle_load_t * 1000.0 * GRAVITY,

@@ -30,7 +30,7 @@ from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from bogie.wim import ACCURACY_CLASSES
 from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config_errors import config_error
-from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN
+from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
 from pipeline.distributions import Choice, Constant, Distribution, ParameterError
 
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
@@ -279,6 +279,19 @@ AxleMix = _group_map(
     lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
     "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
 )
+SuspensionShares = create_model(
+    "SuspensionShares",
+    __base__=_Mix,
+    __doc__="One axle group's fractions of steel-equalised and air-sprung groups [-], summing to 1.",
+    **{kind: (float, number("[-] (a fraction)", ge=0.0, le=1.0)) for kind in SUSPENSIONS},
+)
+SuspensionMix = _group_map(
+    "SuspensionMix",
+    Strict,
+    SuspensionShares,
+    lambda: Field(default_factory=lambda: SuspensionShares(steel=1.0, air=0.0)),
+    "``fleet.suspension_mix``: per axle group, the fractions of steel-equalised and air-sprung groups [-].",
+)
 GroupPresets = _group_map(
     "GroupPresets",
     _Presets,
@@ -302,6 +315,8 @@ class Fleet(Strict):
     n_bogies: int = integer(1, 10_000_000)
     sampling: Literal[SAMPLINGS] = named("sampling method")  # type: ignore[valid-type]
     axle_mix: AxleMix  # type: ignore[valid-type]
+    # all steel when not given: the study of the steel bogies the inhibitors belong to
+    suspension_mix: SuspensionMix = Field(default_factory=lambda: SuspensionMix())  # type: ignore[valid-type]
     presets: GroupPresets  # type: ignore[valid-type]
     legal_group_load_t: GroupLoads  # type: ignore[valid-type]
     legal_axle_load_t: float = number("t", gt=0.0, le=100.0)

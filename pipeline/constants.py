@@ -6,11 +6,15 @@ from bogie.params import TARE_FRACTION
 
 __all__ = [
     "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN",
-    "SHARE_TOLERANCE", "TARE_FRACTION", "n_axles",
+    "SHARE_TOLERANCE", "SUSPENSIONS", "TARE_FRACTION", "n_axles",
 ]  # fmt: skip
 
 #: axles in each axle group the fleet is made of [-]
 GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
+
+#: the suspensions of a group: steel leaf springs linked by equalisers (bogie.params.Bogie), or air springs with
+#: connected bags (bogie.air.AirBogie)
+SUSPENSIONS: tuple[str, ...] = ("steel", "air")
 
 #: most axles in a group: the runs have columns axle_load_0..MAX_AXLES-1 [-]
 MAX_AXLES: int = max(GROUP_AXLES.values())

@@ -12,7 +12,9 @@ and a random error on each axle reading from the sensor's COST 323 accuracy clas
 ``sensor_seed`` (:func:`bogie.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
 instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
-Both run the full non-linear model (:mod:`bogie.nonlinear`). One side of the bogie is modelled; axle loads are
+Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air_dynamics`
+for an air-sprung one (:class:`bogie.air.AirBogie`: the same loading, roads, site, sensor and readings; its bags
+start levelled and equalised, its valve and pipe work throughout). One side of the bogie is modelled; axle loads are
 twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
 failed simulation: the row then has ``status = "failed"`` and the solver's message, and its results are null
 (:mod:`pipeline.schema`).
@@ -28,7 +30,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import metrics, nonlinear, wim
+from bogie import air_dynamics, metrics, nonlinear, wim
+from bogie.air import AirBogie
 from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
@@ -61,15 +64,22 @@ def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
     return ApproachRoad(profile, length)
 
 
+def _simulate(bogie: Bogie | AirBogie, inputs: nonlinear.Inputs, initial: Any = None) -> Any:
+    """The group's time simulation over ``inputs`` from ``initial`` (None: at rest at the first input row)."""
+    if isinstance(bogie, AirBogie):
+        return air_dynamics.simulate(bogie, inputs, initial=initial)
+    return nonlinear.simulate(bogie, inputs, initial=initial)
+
+
 def static_weighbridge(
-    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
+    bogie: Bogie | AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
 ) -> nonlinear.NonlinearResult:
     """Run the static protocol; the result's ``extras["reading"]`` holds the weighbridge's wheel loads [N]."""
     dt = spec.dt
     lead = 0.5  # the front axle starts this far before the random road [m]
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     load = nonlinear.load_ramp(bogie, TARE_FRACTION, payload_fraction, spec.load_time, dt)
-    loaded = nonlinear.simulate(bogie, load)
+    loaded = _simulate(bogie, load)
     if not loaded.success:
         return loaded
     road = _approach(road_class, road_seed, spec.approach_length)
@@ -77,11 +87,11 @@ def static_weighbridge(
     crawl = nonlinear.road_inputs(
         bogie, road, spec.crawl_speed, distance / spec.crawl_speed, dt, -lead, load_factor=payload_fraction
     )
-    crawled = nonlinear.simulate(bogie, crawl, initial=loaded.final_state)
+    crawled = _simulate(bogie, crawl, initial=loaded.final_state)
     if not crawled.success:
         return crawled
     settle = nonlinear.hold(bogie, spec.settle_time, dt, load_factor=payload_fraction)
-    settled = nonlinear.simulate(bogie, settle, initial=crawled.final_state)
+    settled = _simulate(bogie, settle, initial=crawled.final_state)
     if settled.success:
         window = settled.t >= settled.t[-1] - READ_TIME
         settled.extras["reading"] = np.mean(settled.wheel_loads[window], axis=0)
@@ -101,7 +111,7 @@ def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.Site
 
 
 def wim_pass(
-    bogie: Bogie,
+    bogie: Bogie | AirBogie,
     payload_fraction: float,
     road_class: str,
     road_seed: int,
@@ -122,8 +132,9 @@ def wim_pass(
     half = 0.5 * (spec.sensor_length + spec.contact_length) / spec.speed  # half a tyre's passage over it [s]
     duration = (sensor + group_length) / spec.speed + half + 0.05
     inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, dt, 0.0, load_factor=payload_fraction)
-    state = nonlinear.equilibrium(bogie, inputs.drive(bogie)[0])
-    run = nonlinear.simulate(bogie, inputs, initial=state)
+    # at rest at the first row: a steel group with its friction relaxed, an air group levelled and equalised
+    state = None if isinstance(bogie, AirBogie) else nonlinear.equilibrium(bogie, inputs.drive(bogie)[0])
+    run = _simulate(bogie, inputs, initial=state)
     if run.success:
         crossing = (sensor + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / spec.speed
         passage = [
@@ -145,7 +156,10 @@ def wim_pass(
 
 
 def _on_stop(run: nonlinear.NonlinearResult, window: NDArray[np.bool_]) -> bool:
-    """Whether an equaliser bears on its bump stop (a non-zero stop moment) at any step of ``window``."""
+    """Whether an equaliser bears on its bump stop (a non-zero stop moment) at any step of ``window``; an
+    air-sprung group has no equaliser (False)."""
+    if "stop_moment" not in run.extras:
+        return False
     moment = np.asarray(run.extras["stop_moment"])
     return bool(np.any(moment[window] != 0.0))
 
@@ -195,7 +209,9 @@ def result_row(
     return row
 
 
-def weigh(bogie: Bogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol) -> dict:
+def weigh(
+    bogie: Bogie | AirBogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol
+) -> dict:
     """Weigh one sampled bogie by ``protocol``; never raises for a failed simulation (see the module text)."""
     status, message = "ok", "ok"
     reading = None

@@ -25,6 +25,8 @@ import yaml
 from SALib.sample import sobol
 from scipy.stats import qmc
 
+from bogie import air
+from bogie.air import AirBogie
 from bogie.params import GRAVITY, INHIBITORS, Bogie, design_spring_loads, preset, with_equaliser_arms
 from pipeline.atomic import atomic_file, io_error
 from pipeline.config import Config, ConfigError, load_config
@@ -67,6 +69,7 @@ COLUMNS: dict[str, str] = {
     "n_axles": "int64",
     "preset": "str",  # bogie.params preset of the group
     "variant": "str",  # baseline, or the inhibitor switched off (ablation)
+    "suspension": "str",  # steel (leaf springs, equalisers) | air (connected air springs: bogie.air)
     "bush_stiffness": "float64",  # [N m/rad]
     "bush_damping": "float64",  # [N m s/rad]
     "friction_coefficient": "float64",  # [-]
@@ -88,6 +91,7 @@ COLUMNS: dict[str, str] = {
 _STREAM_DESIGN = 0
 _STREAM_ROAD = 1
 _STREAM_SENSOR = 2
+_STREAM_SUSPENSION = 3
 
 
 # ---- seeds -----------------------------------------------------------------------------------------------------
@@ -134,6 +138,23 @@ def sensor_seed(seed: int, study: str, sample_id: int) -> int:
     return _seed_int(_seed_sequence(seed, study, _STREAM_SENSOR, sample_id))
 
 
+def suspension_draw(seed: int, study: str, sample_id: int) -> float:
+    """One bogie's uniform draw in [0, 1) that sets its suspension: air if below its group's air share [-].
+
+    A stream of its own, outside the fleet's design, so that a fleet with no air share is the fleet of before
+    (the design's dimensions and draws unchanged), and a bogie keeps its draw whatever the share: raising the air
+    share turns steel groups into air ones and never the other way (common random numbers for ``calibrate``).
+    """
+    return float(np.random.default_rng(_seed_sequence(seed, study, _STREAM_SUSPENSION, sample_id)).random())
+
+
+def suspensions(draws: np.ndarray, groups: np.ndarray, mix: Mapping[str, Mapping[str, float]]) -> np.ndarray:
+    """``air`` where a bogie's draw is below its group's air share in ``mix`` (``fleet.suspension_mix``), else
+    ``steel``."""
+    share = np.array([mix[g]["air"] for g in groups], dtype=float)
+    return np.where(np.asarray(draws, dtype=float) < share, "air", "steel").astype(object)
+
+
 def design_seed(seed: int, study: str) -> int:
     """Seed of a study's uniform design (Latin hypercube, Sobol' scrambling, Saltelli) [-]."""
     return _seed_int(_seed_sequence(seed, study, _STREAM_DESIGN))
@@ -169,8 +190,12 @@ def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
     )
 
 
-def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
+def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
     """The bogie of one sample row: its group's preset with the sampled parameters and the design payload.
+
+    A row whose ``suspension`` is ``air`` gives the air-sprung group on the same trailer
+    (:func:`bogie.air.from_steel` of the steel design bogie): its own tilt, tyre wear, payload and pitch inertia;
+    the steel-only parameters (bush, friction, contact, springs' band, equaliser arm) do not apply to it.
 
     Parameters
     ----------
@@ -183,6 +208,17 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie:
         The validated bogie. ``payload_fraction`` is not applied: the protocol applies it as a load factor.
     """
     n_axles = int(row["n_axles"])
+    if str(row.get("suspension", "steel")) == "air":
+        design = preset(
+            str(row["preset"]),
+            payload_mass=float(row["payload_mass"]),
+            chassis_pitch_inertia=float(row["chassis_pitch_inertia"]),
+        )
+        return air.from_steel(
+            design,
+            tyre_wear=tuple(float(row[c]) for c in TYRE_WEAR_COLUMNS[:n_axles]),
+            chassis_tilt=float(row["chassis_tilt"]),
+        )
     bogie = preset(
         str(row["preset"]),
         bush_stiffness=float(row["bush_stiffness"]),
@@ -214,10 +250,18 @@ def _unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
 
 
 def _frame(
-    config: Config, study: str, groups: np.ndarray, values: dict[str, np.ndarray], base_id: np.ndarray
+    config: Config,
+    study: str,
+    groups: np.ndarray,
+    values: dict[str, np.ndarray],
+    base_id: np.ndarray,
+    suspension: np.ndarray | None = None,
 ) -> pd.DataFrame:
-    """Assemble a study table from per-row groups and sampled values, adding the group constants and seeds."""
+    """Assemble a study table from per-row groups and sampled values, adding the group constants and seeds.
+
+    ``suspension``: each row's, all ``steel`` by default."""
     n = len(groups)
+    suspension = np.full(n, "steel", dtype=object) if suspension is None else suspension
     fleet = config.fleet
     design = {g: design_bogie(fleet.presets[g], fleet.legal_group_load[g]) for g in GROUP_AXLES}
     n_axles = np.array([GROUP_AXLES[g] for g in groups], dtype=np.int64)
@@ -230,6 +274,7 @@ def _frame(
         "n_axles": n_axles,
         "preset": np.array([fleet.presets[g] for g in groups], dtype=object),
         "variant": np.full(n, "baseline", dtype=object),
+        "suspension": suspension,
         "legal_group_load": np.array([fleet.legal_group_load[g] for g in groups], dtype=float),
         "payload_mass": np.array([design[g].payload_mass for g in groups], dtype=float),
         "chassis_pitch_inertia": np.array([design[g].chassis_pitch_inertia for g in groups], dtype=float),
@@ -271,7 +316,10 @@ def sample_fleet(config: Config) -> pd.DataFrame:
         values[dim] = dist.ppf(u[:, j])
     values["road_seed"] = np.array([road_seed(config.seed, "fleet", i) for i in range(n)], dtype=np.int64)
     values["sensor_seed"] = np.array([sensor_seed(config.seed, "fleet", i) for i in range(n)], dtype=np.int64)
-    return _frame(config, "fleet", values.pop("group"), values, np.arange(n))
+    groups = values.pop("group")
+    draws = np.array([suspension_draw(config.seed, "fleet", i) for i in range(n)])
+    kinds = suspensions(draws, groups, config.fleet.suspension_mix)
+    return _frame(config, "fleet", groups, values, np.arange(n), kinds)
 
 
 def sensitivity_problem(config: Config) -> dict[str, Any]:
@@ -345,7 +393,8 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
 
 
 def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
-    """The switch-off ablation: the first ``ablation.n_bogies`` fleet bogies, each as the variants of :data:`VARIANTS`.
+    """The switch-off ablation: the first ``ablation.n_bogies`` steel fleet bogies, each as the variants of
+    :data:`VARIANTS` (the inhibitors are the steel groups'; an air-sprung group has none to remove).
 
     A variant differs from its baseline only in the inhibitor(s) set to the ideal value of
     :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed and WIM sensor seed, so the baseline rows
@@ -364,7 +413,15 @@ def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         ``len(VARIANTS)`` consecutive rows per fleet bogie, ``base_id`` its fleet ``sample_id``.
     """
-    base = fleet.iloc[: config.ablation.n_bogies]
+    steel = fleet[fleet["suspension"] == "steel"]
+    if len(steel) < config.ablation.n_bogies:
+        raise ConfigError(
+            "ablation.n_bogies",
+            f"ablation.n_bogies = {config.ablation.n_bogies}: the fleet has only {len(steel)} steel-equalised "
+            "bogies (fleet.suspension_mix), and the ablation removes the steel groups' inhibitors; allowed: at most "
+            f"{len(steel)} [-]",
+        )
+    base = steel.iloc[: config.ablation.n_bogies]
     frame = base.loc[base.index.repeat(len(VARIANTS))].reset_index(drop=True)
     variant = np.tile(np.array(VARIANTS, dtype=object), len(base))
     for name, ideal in INHIBITORS.items():
@@ -433,7 +490,11 @@ def main(argv: list[str] | None = None) -> int:
         print(f"sample: {args.params}: {exc}", file=sys.stderr)
         return 2
     # everything is sampled before anything is written: a failure leaves the previous outputs untouched
-    frames = sample_studies(config)
+    try:
+        frames = sample_studies(config)
+    except ConfigError as exc:
+        print(f"sample: {args.params}: {exc}", file=sys.stderr)
+        return 2
     out = Path(args.out)
     try:
         out.mkdir(parents=True, exist_ok=True)

@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 from bogie.params import PRESETS
 from bogie.road import ISO8608_CLASSES
 from pipeline.atomic import atomic_file
-from pipeline.constants import GROUP_AXLES, MAX_AXLES, PROTOCOLS
+from pipeline.constants import GROUP_AXLES, MAX_AXLES, PROTOCOLS, SUSPENSIONS
 from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS
 
 __all__ = [
@@ -47,6 +47,7 @@ CATEGORIES: dict[str, tuple[str, ...]] = {
     "group": tuple(GROUP_AXLES),
     "preset": tuple(PRESETS),
     "variant": VARIANTS,
+    "suspension": SUSPENSIONS,
     "road_class": tuple(ISO8608_CLASSES),
     "protocol": PROTOCOLS,
     "status": ("ok", "failed"),
@@ -58,7 +59,7 @@ SAMPLE_COLUMNS: tuple[str, ...] = tuple(c for c in COLUMNS if c != "study")
 
 #: unit of every column ("-" for a pure number or a label)
 UNITS: dict[str, str] = {
-    "sample_id": "-", "base_id": "-", "group": "-", "n_axles": "-", "preset": "-", "variant": "-",
+    "sample_id": "-", "base_id": "-", "group": "-", "n_axles": "-", "preset": "-", "variant": "-", "suspension": "-",
     "bush_stiffness": "N m/rad", "bush_damping": "N m s/rad", "friction_coefficient": "-", "contact_roll_radius": "m",
     **dict.fromkeys(TYRE_WEAR_COLUMNS, "m"), "chassis_tilt": "rad", "payload_fraction": "-", "equaliser_arm": "m",
     "spring_friction_band": "N", "spring_friction_decay": "m",

@@ -32,7 +32,7 @@ from bogie.params import GRAVITY
 from bogie.weighings.stats import group_inequality, survey_statistics
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
-from pipeline.constants import GROUP_AXLES, MAX_AXLES
+from pipeline.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
 from pipeline.sample import TYRE_WEAR_COLUMNS
 from pipeline.schema import SchemaError, check_file_schema, check_runs
 from pipeline.survey_design import DESIGN_COLUMNS, design_table
@@ -51,7 +51,7 @@ HISTOGRAM_BINS = 30
 DISTRIBUTED: tuple[str, ...] = (*LOAD_SHARE_COLUMNS, "spread_pct", "spread_kg", "max_deviation", "road_wear_factor")
 #: the columns a runs table must have for the survey
 REQUIRED_COLUMNS: tuple[str, ...] = (
-    "sample_id", "group", "n_axles", "protocol", "status", "message", "chassis_tilt", *TYRE_WEAR_COLUMNS,
+    "sample_id", "group", "suspension", "n_axles", "protocol", "status", "message", "chassis_tilt", *TYRE_WEAR_COLUMNS,
     *AXLE_LOAD_COLUMNS, *LOAD_SHARE_COLUMNS, "group_load", "max_deviation", "spread_kg", "road_wear_factor",
     "wheel_airborne", "equaliser_on_stop",
 )  # fmt: skip
@@ -391,6 +391,48 @@ def summary_table(ok: pd.DataFrame, runs: pd.DataFrame, legal: pd.DataFrame) -> 
     return run_counts(runs).merge(table, on=KEYS, how="left")
 
 
+#: the statistics of the suspension table, as :func:`bogie.weighings.stats.survey_statistics` names them
+_SUSPENSION_STATISTICS: tuple[str, ...] = (
+    "share_outside_5pct", "share_over_10pct", "mean_spread_kg", "median_spread_pct",
+)  # fmt: skip
+
+
+def suspension_table(ok: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
+    """The survey's statistics per protocol, group and suspension (steel-equalised, air-sprung).
+
+    A survey's own file does not say which suspension a group has; the simulated fleet does, so this splits what
+    the survey sees (the rows of :func:`summary_table`, both suspensions together) into the two kinds. One row per
+    (protocol, group, suspension) of :data:`~pipeline.constants.SUSPENSIONS`, every pair present: ``n_runs``,
+    ``n_ok``, ``n_failed``, ``n_airborne`` (:func:`run_counts`) and the statistics of the readings
+    (:func:`bogie.weighings.stats.survey_statistics`: shares outside 5 % and over 10 %, mean spread [kg], median
+    spread [%]), NaN for a kind with no reading.
+    """
+    keys = [*KEYS, "suspension"]
+    # a table from before suspensions were sampled holds steel groups only
+    ok, runs = (t if "suspension" in t else t.assign(suspension="steel") for t in (ok, runs))
+    protocols = sorted(runs["protocol"].astype(str).unique())
+    groups = [g for g in GROUP_AXLES if g in set(runs["group"].astype(str))]
+    frame = pd.DataFrame([(p, g, k) for p in protocols for g in groups for k in SUSPENSIONS], columns=keys)
+    failed = runs["status"] != "ok"
+    airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
+    counts = (
+        runs.assign(failed=failed, ok=~failed, airborne=airborne)
+        .astype({c: str for c in keys})
+        .groupby(keys).agg(n_runs=("status", "size"), n_ok=("ok", "sum"), n_failed=("failed", "sum"),
+                           n_airborne=("airborne", "sum"))
+        .reset_index()
+    )  # fmt: skip
+    numbers = ("n_runs", "n_ok", "n_failed", "n_airborne")
+    frame = frame.merge(counts, on=keys, how="left").fillna(dict.fromkeys(numbers, 0))
+    frame = frame.astype(dict.fromkeys(numbers, "int64"))
+    if len(ok):
+        stats = survey_statistics(ok.astype({c: str for c in keys}), by=keys, unit_per_kg=GRAVITY)
+        frame = frame.merge(stats[[*keys, *_SUSPENSION_STATISTICS]], on=keys, how="left")
+    else:
+        frame = frame.assign(**dict.fromkeys(_SUSPENSION_STATISTICS, math.nan))
+    return frame
+
+
 # ---- the whole survey ----------------------------------------------------------------------------------------------
 def survey(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: Mapping[str, float]) -> dict[str, Any]:
     """Every survey table of one study's runs.
@@ -414,6 +456,7 @@ def survey(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: Mapping
     pairs, pair_summary = static_vs_wim(ok)
     return {
         "summary.csv": summary_table(ok, runs, legal),
+        "by_suspension.csv": suspension_table(ok, runs),
         "counts.csv": run_counts(runs),
         "failures.csv": failure_table(runs),
         "distributions.csv": distribution_stats(ok),
@@ -454,6 +497,12 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
         entry = {key: rounded(getattr(row, key), digits) for key, digits in _HEADLINE_DIGITS.items()}
         entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed), n_airborne=int(row.n_airborne))
         metrics.setdefault(row.protocol, {})[row.group] = entry
+    by_kind: dict[str, Any] = {}
+    for row in tables["by_suspension.csv"].to_dict("records"):
+        entry = {"n_ok": int(row["n_ok"]), "n_failed": int(row["n_failed"]), "n_airborne": int(row["n_airborne"])}
+        entry.update({key: rounded(row[key], 4 if key.startswith("share") else 1) for key in _SUSPENSION_STATISTICS})
+        by_kind.setdefault(row["protocol"], {}).setdefault(row["group"], {})[row["suspension"]] = entry
+    metrics["by_suspension"] = by_kind
     pairs = tables["static_vs_wim.csv"]
     if not pairs.empty:
         metrics["static_vs_wim"] = {

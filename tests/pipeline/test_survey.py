@@ -252,7 +252,8 @@ def test_headline_metrics_keys_and_rounding():
         shares = 1 + 0.04 * tilt * np.array([-1.0, 0.0, 1.0]) + 0.01 * rng.standard_normal(3)
         rows += [run(i, 80e3 * shares, tilt_deg=tilt), run(i, 80e3 * shares * (1 + 0.02 * rng.random(3)), "wim")]
     metrics = headline_metrics(survey(frame(rows), 10 * TONNE, LEGAL_GROUP))
-    assert set(metrics) == {"n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim"}
+    expected = {"n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim", "by_suspension"}
+    assert set(metrics) == expected
     entry = metrics["static"]["triaxle"]
     assert set(entry) == {
         "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
@@ -265,7 +266,25 @@ def test_headline_metrics_keys_and_rounding():
     assert round(entry["mean_road_wear_factor"], 4) == entry["mean_road_wear_factor"]
     assert set(metrics["static_vs_wim"]["triaxle"]) == {"mean_dynamic_excess", "corr_max_deviation", "n_pairs"}
     assert (metrics["n_runs"], metrics["n_ok"]) == (60, 60)
-    assert len(json.dumps(metrics)) < 2000
+    assert len(json.dumps(metrics)) < 4000
+
+
+def test_the_suspension_table_splits_the_survey_into_steel_and_air_groups():
+    # 6 steel tri-axles 10 % apart front to rear (outside 5 %), 4 air ones equal (inside), one air one failed
+    steel = [run(i, [76e3, 80e3, 84e3]) for i in range(6)]
+    air = [run(6 + i, [80e3, 80e3, 80e3]) for i in range(4)] + [run(10, [80e3] * 3, status="failed", message="x")]
+    rows = [{**r, "suspension": "steel"} for r in steel] + [{**r, "suspension": "air"} for r in air]
+    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    table = tables["by_suspension.csv"].set_index("suspension")
+    assert table.loc["steel", "share_outside_5pct"] == 1.0 and table.loc["air", "share_outside_5pct"] == 0.0
+    assert table.loc["steel", "mean_spread_kg"] == pytest.approx(8e3 / GRAVITY)
+    assert table.loc["air", "mean_spread_kg"] == 0.0
+    assert (table.loc["air", "n_runs"], table.loc["air", "n_ok"], table.loc["air", "n_failed"]) == (5, 4, 1)
+    # the survey itself (both kinds together, as a WIM file sees them): 6 of 10 readings outside
+    summary = tables["summary.csv"].set_index("group")
+    assert summary.loc["triaxle", "share_outside_5pct"] == pytest.approx(0.6)
+    metrics = headline_metrics(tables)["by_suspension"]["static"]["triaxle"]
+    assert metrics["air"]["n_failed"] == 1 and metrics["steel"]["share_over_10pct"] == 0.0
 
 
 # ---- the stage ------------------------------------------------------------------------------------------------------
@@ -316,8 +335,9 @@ def test_stage_writes_every_table_and_the_metrics(stage_dir):
     assert main(stage_args(stage_dir)) == 0
     out = stage_dir / "data" / "survey"
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["summary.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv", "tilt.csv",
-         "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv", "design_guidance.csv"]
+        ["summary.csv", "by_suspension.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv",
+         "tilt.csv", "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv",
+         "design_guidance.csv"]
     )  # fmt: skip
     metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())
     assert (metrics["n_runs"], metrics["n_failed"]) == (80, 1)
