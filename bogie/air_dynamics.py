@@ -52,7 +52,8 @@ class _Drive:
         self.rise = bogie.kingpin_height_offset + inputs.kingpin_rise
 
     def __call__(self, t: float):
-        k = min(max(int(t / self.dt), 0), self.n - 1)
+        # t / dt of a row's time can fall a rounding error short of the row: snap so that the row uses its own segment
+        k = min(max(int(math.floor(t / self.dt + 1e-9)), 0), self.n - 1)
         s = t / self.dt - k
         road_rate = (self.road[k + 1] - self.road[k]) / self.dt
         rise_rate = (self.rise[k + 1] - self.rise[k]) / self.dt
