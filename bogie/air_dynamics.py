@@ -1,9 +1,9 @@
 """Air-sprung groups in motion: the time simulation, its energy terms and its result.
 
 The state is the chassis pitch, the axle displacements, their rates, the air in each bag and the running
-integrals of the dissipations and works; a compiled RK4 (or scipy's LSODA) integrates it over :class:`bogie.nonlinear.Inputs`
-(``docs/air-suspension.md``, "Numerics"). The result is a :class:`~bogie.results.DynamicResult`, as the steel
-model's.
+integrals of the dissipations and works; a compiled RK4 (:mod:`bogie._air_core`, the default) or scipy's LSODA
+(the reference) integrates it over :class:`bogie.nonlinear.Inputs` (``docs/air-suspension.md``, "Numerics").
+The result is a :class:`~bogie.results.DynamicResult`, as the steel model's.
 """
 
 from __future__ import annotations
