@@ -1,7 +1,8 @@
 """Air groups: the compiled RK4 of ``bogie._air_core`` against the LSODA reference, measured in one process.
 
 Two scenarios on the tri-axle (1 degree tilt, wear 0 / 5 / 10 mm): a 3 s WIM pass at 22 m/s over ISO 8608 class B
-at 1 ms rows, and the static-weighbridge chain (load ramp 2 s, crawl 1.4 m/s for ~8 m, hold 3 s, each continued
+at 1 ms rows, and the static-weighbridge chain (load ramp 0.2 to 0.8 in 2 s,
+crawl 1.4 m/s for ~8 m, hold 3 s, each continued
 from the previous ``final_state``). RK4: median of 20 runs after a warm-up (compilation excluded); LSODA: one run.
 """
 
@@ -32,7 +33,7 @@ def _wim(b, method):
 
 
 def _static_chain(b, method):
-    ramp = air_dynamics.simulate(b, nonlinear.load_ramp(b, 0.0, 0.8, 2.0, DT), method=method)
+    ramp = air_dynamics.simulate(b, nonlinear.load_ramp(b, 0.2, 0.8, 2.0, DT), method=method)
     prof = ISO8608Profile("B", length=50.0, seed=7)
     crawl_in = nonlinear.road_inputs(b, prof, 1.4, 8.0 / 1.4, DT, 0.0, load_factor=0.8)
     crawl = air_dynamics.simulate(b, crawl_in, initial=ramp.final_state, method=method)
