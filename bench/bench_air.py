@@ -1,9 +1,9 @@
 """Air groups: the compiled RK4 of ``bogie._air_core`` against the LSODA reference, measured in one process.
 
 Two scenarios on the tri-axle (1 degree tilt, wear 0 / 5 / 10 mm): a 3 s WIM pass at 22 m/s over ISO 8608 class B
-at 1 ms rows, and the static-weighbridge chain (load ramp 0.2 to 0.8 in 2 s,
-crawl 1.4 m/s for ~8 m, hold 3 s, each continued
-from the previous ``final_state``). RK4: median of 20 runs after a warm-up (compilation excluded); LSODA: one run.
+at 1 ms rows, and the static-weighbridge chain (load ramp 0.2 to 0.8 in 2 s, crawl 1.4 m/s for ~8 m, hold 3 s,
+each continued from the previous ``final_state``).
+RK4: median of 20 runs after a warm-up (compilation excluded); LSODA: one run.
 """
 
 from __future__ import annotations
