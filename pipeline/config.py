@@ -45,6 +45,7 @@ __all__ = [
     "ROAD_CLASSES",
     "SAMPLINGS",
     "AblationConfig",
+    "CalibrateConfig",
     "Config",
     "ConfigError",
     "ExecutionConfig",
@@ -276,6 +277,39 @@ class ObservedConfig:
 
 
 @dataclass(frozen=True)
+class CalibrateConfig:
+    """The fleet quantities fitted to an observed survey (``calibrate:``; ``docs/calibration.md``).
+
+    Attributes
+    ----------
+    protocol
+        The protocol whose readings are held against the survey: ``wim`` or ``static``.
+    n_bogies
+        The calibration fleet: the first ``n_bogies`` fleet bogies, each as a steel and an air group [-].
+    fit
+        Quantity -> (low, high): the bounds of each fitted quantity, in the unit of its name.
+    tilt_step
+        Step of the chassis-tilt grid the readings are tabulated on [degree].
+    site_iri_levels
+        The WIM site roughnesses the readings are tabulated at [m/km].
+    bootstrap_resamples, confidence_level
+        Of the fitted values' intervals [-].
+    maxiter, popsize
+        Of the differential evolution [-].
+    """
+
+    protocol: str
+    n_bogies: int
+    fit: FrozenMap
+    tilt_step: float
+    site_iri_levels: tuple[float, ...]
+    bootstrap_resamples: int
+    confidence_level: float
+    maxiter: int
+    popsize: int
+
+
+@dataclass(frozen=True)
 class Config:
     """The validated pipeline parameters, all SI.
 
@@ -293,6 +327,7 @@ class Config:
     ablation: AblationConfig
     execution: ExecutionConfig
     observed: ObservedConfig
+    calibrate: CalibrateConfig | None = None
 
 
 # ---- from the schema to the configuration -------------------------------------------------------------------
@@ -367,6 +402,22 @@ def _observed(observed: Any) -> ObservedConfig:
     )
 
 
+def _calibrate(calibrate: Any) -> CalibrateConfig | None:
+    if calibrate is None:
+        return None
+    return CalibrateConfig(
+        protocol=calibrate.protocol,
+        n_bogies=calibrate.n_bogies,
+        fit=FrozenMap({name: (float(b[0]), float(b[1])) for name, b in calibrate.fit.items()}),
+        tilt_step=calibrate.tilt_step_deg,
+        site_iri_levels=tuple(float(x) for x in calibrate.site_iri_levels_m_km),
+        bootstrap_resamples=calibrate.bootstrap_resamples,
+        confidence_level=calibrate.confidence_level,
+        maxiter=calibrate.maxiter,
+        popsize=calibrate.popsize,
+    )
+
+
 def to_config(params: Params) -> Config:
     """The validated params.yaml sections (:class:`~pipeline.config_schema.Params`) as a :class:`Config`, SI."""
     distributions = {q.name: si_distribution(getattr(params.distributions, key), q) for key, q in QUANTITIES.items()}
@@ -379,6 +430,7 @@ def to_config(params: Params) -> Config:
         ablation=AblationConfig(n_bogies=params.ablation.n_bogies),
         execution=_execution(params.execution),
         observed=_observed(params.observed),
+        calibrate=_calibrate(params.calibrate),
     )
 
 

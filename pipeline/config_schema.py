@@ -484,6 +484,57 @@ class Observed(Strict):
     position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
 
 
+#: the fleet quantities ``calibrate`` can fit, each with its physical range and unit (``docs/calibration.md``)
+CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
+    "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg
+    "chassis_tilt_sd_deg": (0.01, 5.0, "degree"),  # its spread (parent sd)
+    "air_share": (0.0, 1.0, "-"),  # fraction of air-sprung groups, every axle group alike
+    "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
+    "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's relative error on an axle reading
+}
+#: the quantities that belong to the WIM protocol
+WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct")
+
+
+class Calibrate(Strict):
+    """``calibrate:`` the fleet quantities fitted to the observed survey (:class:`pipeline.config.CalibrateConfig`)."""
+
+    protocol: Literal[PROTOCOLS] = named("protocol")  # type: ignore[valid-type]
+    n_bogies: int = integer(20, 100_000)
+    fit: dict[str, list[float]] = Field(min_length=1)
+    tilt_step_deg: float = number("degree", gt=0.0, le=1.0)
+    site_iri_levels_m_km: list[float] = Field(min_length=2)
+    bootstrap_resamples: int = integer(0, 10_000)
+    confidence_level: float = number("-", gt=0.0, lt=1.0)
+    maxiter: int = integer(1, 10_000)
+    popsize: int = integer(2, 200)
+
+    @model_validator(mode="after")
+    def _quantities(self) -> Calibrate:
+        allowed = ", ".join(CALIBRATION_QUANTITIES)
+        levels = self.site_iri_levels_m_km
+        if any(b <= a for a, b in zip(levels, levels[1:])) or levels[0] <= 0.0:
+            raise config_error("site_iri_levels_m_km", levels, "must be positive and increasing [m/km]")
+        for name, bounds in self.fit.items():
+            key = f"fit.{name}"
+            if name not in CALIBRATION_QUANTITIES:
+                raise config_error(key, bounds, f"is not a fleet quantity calibrate can fit; allowed: {allowed}")
+            low, high, unit = CALIBRATION_QUANTITIES[name]
+            if len(bounds) != 2 or not all(isinstance(b, int | float) and math.isfinite(b) for b in bounds):
+                raise config_error(key, bounds, f"must be [low, high], two numbers in {unit}")
+            if not bounds[0] < bounds[1]:
+                raise config_error(key, bounds, f"bounds inverted or equal: low must be below high [{unit}]")
+            if bounds[0] < low or bounds[1] > high:
+                raise config_error(key, bounds, f"must lie within [{low:g}, {high:g}] {unit}")
+            if name in WIM_QUANTITIES and self.protocol != "wim":
+                expected = f"belongs to the WIM protocol, but calibrate.protocol is {self.protocol}"
+                raise config_error(key, bounds, expected)
+            if name == "site_iri_m_km" and (bounds[0] < levels[0] or bounds[1] > levels[-1]):
+                expected = f"must lie within site_iri_levels_m_km, [{levels[0]:g}, {levels[-1]:g}] m/km"
+                raise config_error(key, bounds, expected)
+        return self
+
+
 class Params(Strict):
     """params.yaml: the sections of the Monte Carlo pipeline, and those other stages read themselves."""
 
@@ -495,6 +546,7 @@ class Params(Strict):
     ablation: Ablation
     execution: Execution
     observed: Observed
+    calibrate: Calibrate | None = None
     figure2: Any = None
 
     @model_validator(mode="after")
