@@ -257,34 +257,59 @@ def _tilt_grid(config: Config) -> np.ndarray:
     return np.linspace(low, high, k)
 
 
-def build_table(config: Config, progress: Callable[[str], None] = print) -> Table:
-    """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs."""
-    cal = config.calibrate
+def crn_table(config: Config) -> Table:
+    """The calibration fleet and its common random numbers, with no reading yet (``loads`` empty)."""
     samples = calibration_samples(config)
     dist = config.distributions["chassis_tilt"]
-    n = len(samples)
     # each bogie's rank under its own distribution: the uniform a refitted distribution maps to its tilt
     tilt_u = np.clip(_cdf(dist, samples["chassis_tilt"].to_numpy(dtype=float)), 1e-12, 1 - 1e-12)
     air_u = np.array([suspension_draw(config.seed, "fleet", int(i)) for i in samples["sample_id"]])
+    # the sensor's normals: those of bogie.wim.axle_errors for the bogie's sensor_seed
     z = np.array([np.random.default_rng(int(s)).standard_normal(3) for s in samples["sensor_seed"]])
+    iris = np.asarray(config.calibrate.site_iri_levels, dtype=float) if config.calibrate.protocol == "wim" else [np.nan]
+    size = samples["group"].astype(str).to_numpy()
     tilts = _tilt_grid(config)
-    iris = np.asarray(cal.site_iri_levels, dtype=float) if cal.protocol == "wim" else np.array([np.nan])
-    tasks, records = [], samples.to_dict("records")
+    loads = np.zeros((2, len(samples), len(tilts), len(iris), 3))
+    return Table(samples, size, tilt_u, air_u, z, tilts, np.asarray(iris, dtype=float), loads, 0)
+
+
+def build_table(config: Config, progress: Callable[[str], None] = print) -> Table:
+    """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs."""
+    cal = config.calibrate
+    base = crn_table(config)
+    n, tilts, iris = len(base.size), base.tilts, base.iris
+    tasks, records = [], base.samples.to_dict("records")
     for kind in ("steel", "air"):
         for row in records:
             for tilt in tilts:
                 for iri in iris:
                     sample = {**row, "suspension": kind, "chassis_tilt": math.radians(float(tilt))}
                     tasks.append((sample, cal.protocol, _spec(config, iri)))
-    progress(f"calibrate: weighing {len(tasks)} calibration groups ({n} bogies x steel, air x {len(tilts)} tilts x "
-             f"{len(iris)} site roughnesses)")  # fmt: skip
+    progress(
+        f"calibrate: weighing {len(tasks)} calibration groups ({n} bogies x steel, air x {len(tilts)} tilts x "
+        f"{len(iris)} site roughnesses)"
+    )
     start = time.perf_counter()
-    loads = _weigh_many(tasks, config.execution.n_jobs)
+    loads = _weigh_many(tasks, config.execution.n_jobs).reshape(2, n, len(tilts), len(iris), 3)
     progress(f"calibrate: table done in {time.perf_counter() - start:.0f} s")
-    loads = loads.reshape(2, n, len(tilts), len(iris), 3)
     failed = int(np.isnan(loads[..., 0]).sum())
-    size = samples["group"].astype(str).to_numpy()
-    return Table(samples, size, tilt_u, air_u, z, tilts, iris, loads, failed)
+    return dataclasses.replace(base, loads=loads, n_failed=failed)
+
+
+def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 80.0, spacing_m: float = 1.31) -> None:
+    """Write simulated groups (:func:`simulate_fleet`'s wide loads [kg]) as a survey in the ``csv`` weighings format
+    (``docs/weighings.md``), one record per group, a second apart: a synthetic survey the stage reads as a real one."""
+    rows = []
+    for i, r in enumerate(frame.to_dict("records")):
+        n = int(r["n_axles"])
+        stamp = pd.Timestamp("2026-01-05T06:00:00") + pd.Timedelta(seconds=i)
+        rows.append({
+            "timestamp": stamp.strftime("%Y-%m-%dT%H:%M:%S.000"), "speed_kmh": speed_kmh, "lane": 1, "n_axles": n,
+            **{f"axle_load_{k + 1}": round(float(r[f"axle_load_{k}"])) if k < n else None for k in range(6)},
+            **{f"spacing_{k + 1}": spacing_m if k < n - 1 else None for k in range(5)}, "vehicle_class": "synthetic",
+        })  # fmt: skip
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    pd.DataFrame(rows).to_csv(path, index=False)
 
 
 def _cdf(dist: Any, x: np.ndarray) -> np.ndarray:

@@ -1,0 +1,217 @@
+"""The calibrate stage: a synthetic survey recovered, the table's interpolation, the distance, bad input, the skip.
+
+The synthetic survey is made by the simulator itself from known fleet values on an independent fleet (another
+master seed: other bogies, roads and sensor draws than the calibration fleet's), written in the csv weighings format
+and read back as a real survey would be.
+"""
+
+import copy
+import json
+from pathlib import Path
+
+import numpy as np
+import pytest
+import yaml
+from scipy.stats import truncnorm
+
+from pipeline import calibrate as C
+from pipeline.config import ConfigError, parse_config
+
+ROOT = Path(__file__).resolve().parents[2]
+#: the known fleet of the synthetic survey (site roughness: the protocol's own, not fitted here)
+TRUTH = {
+    "chassis_tilt_mean_deg": 0.8, "chassis_tilt_sd_deg": 0.5, "air_share": 0.4, "site_iri_m_km": 1.3,
+    "sensor_error_pct": 3.0,
+}  # fmt: skip
+FIT = {
+    "chassis_tilt_mean_deg": [-1.0, 1.5], "chassis_tilt_sd_deg": [0.1, 1.5], "air_share": [0.0, 1.0],
+    "sensor_error_pct": [0.0, 8.0],
+}  # fmt: skip
+
+
+def raw_params(n_bogies=60, **calibrate):
+    raw = yaml.safe_load((ROOT / "params.yaml").read_text())
+    raw["fleet"]["n_bogies"] = n_bogies
+    raw["ablation"]["n_bogies"] = 10
+    raw["execution"]["n_jobs"] = 2
+    raw["calibrate"].update(
+        n_bogies=n_bogies, tilt_step_deg=0.5, bootstrap_resamples=20, maxiter=20, popsize=6, fit=copy.deepcopy(FIT)
+    )
+    raw["calibrate"].update(calibrate)
+    return raw
+
+
+def synthetic_survey(path, n_vehicles=300, seed=777):
+    """A survey of ``n_vehicles`` simulated groups of an independent fleet with the fleet values of TRUTH."""
+    raw = raw_params(n_vehicles)
+    raw["seed"] = seed
+    config = parse_config(raw)
+    frame = C.filtered(C.simulate_fleet(C.crn_table(config), TRUTH, config), 0.0)
+    C.write_csv_survey(frame, path)
+    return frame
+
+
+def project(tmp_path, raw, survey="observed/s.csv"):
+    raw = copy.deepcopy(raw)
+    raw["observed"].update(path=survey, format="csv")
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    return [
+        "--params", str(tmp_path / "params.yaml"), "--out", str(tmp_path / "data" / "calibration"),
+        "--metrics", str(tmp_path / "metrics" / "calibration.json"),
+    ]  # fmt: skip
+
+
+@pytest.fixture(scope="module")
+def recovered(tmp_path_factory):
+    root = tmp_path_factory.mktemp("calibrate")
+    synthetic_survey(root / "observed" / "s.csv")
+    assert C.main(project(root, raw_params())) == 0
+    metrics = json.loads((root / "metrics" / "calibration.json").read_text())
+    return root, metrics
+
+
+# ---- recovery ----------------------------------------------------------------------------------------------------
+def test_a_synthetic_survey_of_known_fleet_values_is_recovered_within_the_intervals(recovered):
+    _, metrics = recovered
+    assert set(metrics["fitted"]) == set(FIT)
+    for name, entry in metrics["fitted"].items():
+        assert entry["low"] <= TRUTH[name] <= entry["high"], (name, entry)
+        assert entry["low"] <= entry["value"] <= entry["high"]
+        # an interval that filled the bounds would recover anything: each is narrower than its bounds
+        assert entry["high"] - entry["low"] < 0.8 * (FIT[name][1] - FIT[name][0]), (name, entry)
+    assert metrics["fixed"] == {"site_iri_m_km": TRUTH["site_iri_m_km"]}
+
+
+def test_the_fit_is_closer_to_the_survey_than_the_default_fleet(recovered):
+    root, metrics = recovered
+    config = parse_config(yaml.safe_load((root / "params.yaml").read_text()))
+    observed, _ = C.observed_groups(root / "observed" / "s.csv", config)
+    # the default fleet (all steel, tilt 0.3 +- 0.8 degree, class B(10) sensor) weighed directly, same filters
+    weighed = C.simulate_fleet(C.crn_table(config), C.defaults(config), config)
+    default = C.filtered(weighed, config.observed.min_group_load)
+    problem_obs = {k: C.observed_quantities(v) for k, v in observed.loads.items() if len(v) >= C.MIN_GROUPS}
+    scales = {k: np.std(v, axis=0) for k, v in problem_obs.items()}
+    assert metrics["distance_direct"] < C.frame_distance(default, problem_obs, scales)
+
+
+def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
+    root, metrics = recovered
+    keys = {"n_groups", "mean_spread_kg", "median_spread_pct", "share_outside_5pct", "share_over_10pct",
+            "load_share_quantiles"}  # fmt: skip
+    for side in (metrics["observed"], metrics["calibrated"], metrics["held_out"]):
+        assert set(side["groups"]) == {"tandem", "triaxle"}
+        for entry in side["groups"].values():
+            assert set(entry) == keys
+    held = metrics["held_out"]
+    # alternate records: the two halves hold about the same number of groups
+    total = metrics["observed"]["groups"]["triaxle"]["n_groups"]
+    assert abs(held["groups"]["triaxle"]["n_groups"] - total / 2) <= 0.1 * total
+    assert held["distance_held_out"] > 0.0 and held["distance_halves"] > 0.0
+    assert set(held["fitted"]) == set(FIT)
+    assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
+        ["ablation.csv", "bootstrap.csv", "calibrated.csv", "profiles.csv", "valley.csv"]
+    )
+    assert metrics["ablation"]["baseline/triaxle"]["buys_points"] == 0.0
+
+
+# ---- the table and the distance ----------------------------------------------------------------------------------
+def test_readings_interpolate_the_table_linearly_in_tilt_and_roughness():
+    config = parse_config(raw_params(20, site_iri_levels_m_km=[1.0, 3.0]))
+    table = C.crn_table(config)
+    tilts, iris = table.tilts, table.iris
+    # loads linear in tilt and roughness: 5000 + 100 tilt + 10 iri on every axle, any bogie
+    grid = 5000.0 + 100.0 * tilts[:, None] + 10.0 * iris[None, :]
+    loads = np.broadcast_to(grid[None, None, :, :, None], table.loads.shape).copy()
+    table = C.Table(table.samples, table.size, table.tilt_u, table.air_u, table.z, tilts, iris, loads, 0)
+    values = {**C.defaults(config), "site_iri_m_km": 2.5, "sensor_error_pct": 0.0}
+    got = C.fleet_readings(table, values, (-2.0, 2.0))
+    mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
+    tilt = truncnorm.ppf(table.tilt_u, (-2 - mu) / sd, (2 - mu) / sd, loc=mu, scale=sd)
+    np.testing.assert_allclose(got[0, :, 0], 5000.0 + 100.0 * tilt + 25.0, rtol=1e-12)
+    # the sensor's error multiplies each axle by 1 + s z with the bogie's own normals
+    noisy = C.fleet_readings(table, {**values, "sensor_error_pct": 2.0}, (-2.0, 2.0))
+    np.testing.assert_allclose(noisy / got, np.broadcast_to(1.0 + 0.02 * table.z, got.shape), rtol=1e-12)
+
+
+def test_the_distance_is_zero_between_equal_samples_and_grows_with_a_shift():
+    rng = np.random.default_rng(1)
+    loads = 8000.0 * (1.0 + 0.05 * rng.standard_normal((200, 3)))
+    q = C.observed_quantities(loads)
+    obs, w = {"triaxle": q}, {"triaxle": np.ones(len(q))}
+    scales = {"triaxle": q.std(axis=0)}
+    assert C.distance(obs, w, C.Simulated(obs, w), scales) == pytest.approx(0.0, abs=1e-12)
+    shifted = loads * np.array([0.95, 1.0, 1.05])
+    near = C.distance(obs, w, C.Simulated({"triaxle": C.observed_quantities(shifted)}, w), scales)
+    far = loads * np.array([0.9, 1.0, 1.1])
+    assert 0.0 < near < C.distance(obs, w, C.Simulated({"triaxle": C.observed_quantities(far)}, w), scales)
+
+
+def test_observed_quantities_are_the_survey_statistics_definitions():
+    q = C.observed_quantities(np.array([[7600.0, 8000.0, 8400.0]]))
+    np.testing.assert_allclose(q, [[0.95, 1.0, 1.05, 10.0]])
+
+
+# ---- bad input and the skip --------------------------------------------------------------------------------------
+def test_without_a_survey_the_stage_skips_with_one_line(tmp_path, capsys):
+    raw = raw_params(20)
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw, sort_keys=False))
+    args = ["--params", str(tmp_path / "params.yaml"), "--out", str(tmp_path / "out"),
+            "--metrics", str(tmp_path / "m.json")]  # fmt: skip
+    assert C.main(args) == 0
+    out = capsys.readouterr().out.strip().splitlines()
+    assert len(out) == 1 and out[0].startswith("calibrate: skipped, no observed survey given")
+    metrics = json.loads((tmp_path / "m.json").read_text())
+    assert metrics["skipped"] is True and metrics["fitted"] is None
+
+
+def _refused(tmp_path, raw, capsys, words, survey="observed/s.csv"):
+    args = project(tmp_path, raw, survey)
+    assert C.main(args) == 2
+    err = capsys.readouterr().err
+    for word in words:
+        assert word in err, err
+    assert not (tmp_path / "data").exists() and not (tmp_path / "metrics").exists()
+
+
+def test_a_survey_with_no_group_passing_the_filters_is_refused(tmp_path, capsys):
+    path = tmp_path / "observed" / "s.csv"
+    path.parent.mkdir()
+    # two light single axles and a 3-axle group of 6 t: nothing laden
+    path.write_text(
+        "timestamp,speed_kmh,lane,n_axles,axle_load_1,axle_load_2,axle_load_3,spacing_1,spacing_2\n"
+        "2026-01-05T06:00:00.000,80,1,3,2000,2000,2000,1.31,1.31\n"
+    )
+    _refused(tmp_path, raw_params(20), capsys, ["observed.path", "at least 10 laden tandem or tri-axle groups"])
+
+
+def test_a_missing_survey_file_is_refused(tmp_path, capsys):
+    _refused(tmp_path, raw_params(20), capsys, ["observed.path", "no such file"], survey="observed/none.csv")
+
+
+@pytest.mark.parametrize(
+    ("change", "words"),
+    [
+        ({"fit": {"payload_mass": [0.0, 1.0]}}, ["calibrate.fit.payload_mass", "not a fleet quantity"]),
+        ({"fit": {"air_share": [0.8, 0.2]}}, ["calibrate.fit.air_share", "bounds inverted"]),
+        ({"fit": {"air_share": [0.0, 1.5]}}, ["calibrate.fit.air_share", "within [0, 1]"]),
+        ({"protocol": "static", "fit": {"sensor_error_pct": [0, 5]}}, ["sensor_error_pct", "WIM protocol"]),
+        ({"fit": {"site_iri_m_km": [0.5, 4.0]}}, ["site_iri_m_km", "site_iri_levels_m_km"]),
+    ],
+)
+def test_bad_calibrate_settings_are_refused_naming_the_key(change, words):
+    with pytest.raises(ConfigError) as err:
+        parse_config(raw_params(20, **change))
+    for word in words:
+        assert word in str(err.value)
+
+
+def test_a_quantity_the_fleet_does_not_have_is_refused(tmp_path, capsys):
+    raw = raw_params(20)
+    raw["distributions"]["chassis_tilt_deg"] = {"kind": "uniform", "low": -1.0, "high": 1.0}
+    path = tmp_path / "observed" / "s.csv"
+    path.parent.mkdir()
+    path.write_text("timestamp,speed_kmh,lane,n_axles,axle_load_1,axle_load_2\n")
+    _refused(tmp_path, raw, capsys, ["distributions.chassis_tilt_deg", "truncnormal"])
+    raw = raw_params(20, fit={"site_iri_m_km": [1.0, 4.0]})
+    raw["protocol"]["wim"].update(site_length_before_m=0.0, site_length_after_m=0.0)
+    _refused(tmp_path, raw, capsys, ["site_iri_m_km", "no site"])
