@@ -12,6 +12,7 @@ BENCHMARKS = (
     "bench.bench_pipeline",
     "bench.bench_protocol",
     "bench.bench_air",
+    "bench.bench_calibrate",
     "bench.profile_protocol",
 )
 
