@@ -718,7 +718,6 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
         "distance_direct": _round(frame_distance(direct, problem.obs, problem.scales), 5),
         "sizes_fitted": sorted(problem.obs),
         "evaluations": result.evaluations,
-        "seconds_per_evaluation": None,  # timing is not stored: it would differ at every rebuild (the log has it)
         "trade_offs": result.trade_offs,
         "table": {
             "n_bogies": len(table.size),
