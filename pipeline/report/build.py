@@ -124,15 +124,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--survey", default="data/survey", help="survey tables (default: data/survey)")
     parser.add_argument("--sensitivity", default="data/sensitivity", help="default: data/sensitivity")
     parser.add_argument("--observed", default="data/observed", help="observed survey tables (default: data/observed)")
+    parser.add_argument("--calibration", default="data/calibration", help="default: data/calibration")
     parser.add_argument("--metrics", default="metrics", help="directory of the metrics JSON files")
     parser.add_argument("--pdf", default="reports/sensitivity_report.pdf", help="the report")
     parser.add_argument("--png", default="reports/figures/report", help="directory of the PNG pages")
     parser.add_argument("--plots", default="reports/plots", help="directory of the DVC plot series")
     args = parser.parse_args(argv)
     try:
-        inputs = read_inputs(
-            args.params, args.samples, args.runs, args.survey, args.sensitivity, args.metrics, args.observed
-        )
+        dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration)
+        inputs = read_inputs(args.params, args.samples, args.runs, *dirs)
     except (ConfigError, RunsError, OSError, KeyError, ValueError, yaml.YAMLError) as exc:
         print(f"report: {exc}", file=sys.stderr)
         return 2
