@@ -23,7 +23,7 @@ from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
 from pipeline.report.layout import contents, number_pages
-from pipeline.report.pages import appendix, design, front, observed, reference, sensitivity, survey
+from pipeline.report.pages import appendix, calibration, design, front, observed, reference, sensitivity, survey
 from pipeline.report.style import STYLE
 from pipeline.report.tables import plot_series
 from pipeline.survey import RunsError
@@ -39,6 +39,7 @@ PAGES: tuple[tuple[str, Callable[[Context], list[Page]]], ...] = (
     ("survey: load share", survey.load_share),
     ("survey: tilt, static against WIM", survey.tilt),
     ("observed against simulated", observed.page),
+    ("calibration", calibration.page),
     ("reference: Figure 2", reference.figure2_pages),
     ("reference: linear runs", reference.linear_pages),
     ("reference: step runs", reference.step_runs),
