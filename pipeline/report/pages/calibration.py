@@ -52,8 +52,8 @@ STATS: tuple[tuple[str, str], ...] = (
     ("n_groups", "groups"),
     ("share_outside_5pct", "outside 5 %"),
     ("share_over_10pct", "over 10 %"),
-    ("mean_spread_kg", "mean spread"),
-    ("median_spread_pct", "median spread"),
+    ("mean_spread_kg", "mean spread [kg]"),
+    ("median_spread_pct", "median spread [%]"),
 )
 
 
@@ -186,7 +186,7 @@ def stats_rows(m: Mapping[str, Any]) -> list[list[str]]:
 
 
 STATS_HEADER = ("group", "side", *(h for _, h in STATS))
-STATS_WIDTHS = (0.10, 0.27, 0.11, 0.13, 0.13, 0.13, 0.13)
+STATS_WIDTHS = (0.10, 0.25, 0.09, 0.12, 0.12, 0.16, 0.16)
 
 
 def _quantiles(ax, m: Mapping[str, Any], size: str) -> None:
