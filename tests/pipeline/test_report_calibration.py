@@ -72,7 +72,10 @@ def fitted_metrics(held=True):
         "seconds_per_evaluation": None,
         "trade_offs": [{"quantities": ["chassis_tilt_mean_deg", "chassis_tilt_sd_deg"], "correlation": 0.973}],
         "table": {
-            "n_bogies": 40, "tilts_deg": [-1.0, 0.0, 1.0], "site_iri_levels_m_km": [1.0, 2.0], "n_weighings": 480,
+            "n_bogies": 40,
+            "tilts_deg": [-1.0, 0.0, 1.0],
+            "site_iri_levels_m_km": [1.0, 2.0],
+            "n_weighings": 480,
             "n_failed": 0,
         },  # fmt: skip
         "observed": {"groups": groups(1.0)},
