@@ -132,7 +132,7 @@ def fit_page(m: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], caption: 
         fig = new_page("Calibration: the fit", body=(0.06, bottom, 0.88, 0.93 - bottom))
         has_valley = len(valley) > 0
         rest = max(len(names) - (2 if has_valley else 0), 0)
-        n_rows = (2 if has_valley else 0) + math.ceil(rest / 3)
+        n_rows = max((2 if has_valley else 0) + math.ceil(rest / 3), 2)  # one profile alone: a third of the width
         grid = fig.add_gridspec(n_rows, 3, width_ratios=(1, 1, 1))
         slots = ([(0, 2), (1, 2)] if has_valley else []) + [
             (r, c) for r in range(2 if has_valley else 0, n_rows) for c in range(3)
@@ -186,7 +186,7 @@ def stats_rows(m: Mapping[str, Any]) -> list[list[str]]:
 
 
 STATS_HEADER = ("group", "side", *(h for _, h in STATS))
-STATS_WIDTHS = (0.10, 0.25, 0.09, 0.12, 0.12, 0.16, 0.16)
+STATS_WIDTHS = (0.10, 0.24, 0.08, 0.12, 0.12, 0.16, 0.18)
 
 
 def _quantiles(ax, m: Mapping[str, Any], size: str) -> None:
@@ -250,6 +250,8 @@ def _ablation(ax, ablation: pd.DataFrame) -> None:
     ax.axhline(0.0, color="0.3", lw=0.7)
     ax.set_xticks(x, [factor_label(v) for v in variants], rotation=15, ha="right")
     ax.set_ylabel("mean max. deviation\nreduced by [% points]")
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + 0.35 * (high - low))  # headroom for the legend
     ax.legend(loc="upper right")
 
 
@@ -288,7 +290,8 @@ def page(ctx: Context) -> list[Page]:
     m, tables = ctx.inputs.calibration_metrics, ctx.inputs.calibration
     if m.get("skipped", True):
         return [Page("Calibration", "", skipped_page(m))]
-    fit = fit_page(m, tables, text.render("calibration_fit.j2", m=m, label=quantity_label))
+    valley = len(tables["valley.csv"]) > 0
+    fit = fit_page(m, tables, text.render("calibration_fit.j2", m=m, label=quantity_label, valley=valley))
     intro = text.render("calibration_check_intro.j2", m=m)
     check = check_page(m, tables, intro, text.render("calibration_check.j2", m=m, sizes=SIZES))
     return [
