@@ -1,7 +1,7 @@
 """DVC stage ``report``: the PDF sensitivity report -> reports/sensitivity_report.pdf, its figures, plot series.
 
 ``python -m pipeline.report`` reads what the earlier stages wrote (the fleet samples, the runs of every study, the
-survey and sensitivity tables and their metrics JSON), reruns the reference's named cases it reproduces (about a
+survey, sensitivity, observed and calibration tables and their metrics JSON), reruns the reference's named cases it reproduces (about a
 second with a warm numba cache) and writes:
 
 - ``reports/sensitivity_report.pdf``: A4 pages, vector figures, numbered (contents: ``docs/report.md``);
