@@ -69,7 +69,6 @@ def fitted_metrics(held=True):
         "distance_direct": 7.07898,
         "sizes_fitted": ["tandem", "triaxle"],
         "evaluations": 512,
-        "seconds_per_evaluation": None,
         "trade_offs": [{"quantities": ["chassis_tilt_mean_deg", "chassis_tilt_sd_deg"], "correlation": 0.973}],
         "table": {
             "n_bogies": 40,
