@@ -1,8 +1,8 @@
 """DVC stage ``report``: the PDF sensitivity report -> reports/sensitivity_report.pdf, its figures, plot series.
 
 ``python -m pipeline.report`` reads what the earlier stages wrote (the fleet samples, the runs of every study, the
-survey and sensitivity tables and their metrics JSON), reruns the reference's named cases it reproduces (about a
-second with a warm numba cache) and writes:
+survey, sensitivity, observed and calibration tables and their metrics JSON), reruns the reference's named cases it
+reproduces (about a second with a warm numba cache) and writes:
 
 - ``reports/sensitivity_report.pdf``: A4 pages, vector figures, numbered (contents: ``docs/report.md``);
 - ``reports/figures/report/<page>.png``: every page that holds charts, as PNG;

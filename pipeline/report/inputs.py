@@ -7,7 +7,7 @@ import hashlib
 import json
 import os
 from collections.abc import Sequence
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Any
 
@@ -18,7 +18,10 @@ import pipeline
 from pipeline.config import Config, load_config, load_params
 from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, readings
 
-__all__ = ["ReportInputs", "build_date", "code_digest", "read_inputs", "read_tables"]
+__all__ = [
+    "ReportInputs", "build_date", "calibration_inputs", "code_digest", "read_inputs", "read_tables",
+    "skipped_calibration",
+]  # fmt: skip
 
 #: the columns of every study's runs the report reads (status, not results)
 STATUS_COLUMNS = ["study", "sample_id", "group", "variant", "protocol", "status", "message"]
@@ -26,6 +29,8 @@ STATUS_COLUMNS = ["study", "sample_id", "group", "variant", "protocol", "status"
 SURVEY_TABLES = ("tilt.csv", "static_vs_wim_pairs.parquet", "design_guidance.csv")
 SENSITIVITY_TABLES = ("sobol_indices.csv", "ablation.csv")
 OBSERVED_TABLES = ("groups.parquet", "simulated.parquet")
+#: tables of data/calibration the calibration pages draw when a fit was made (none when it was skipped)
+CALIBRATION_TABLES = ("bootstrap.csv", "valley.csv", "profiles.csv", "calibrated.csv", "ablation.csv")
 
 
 @dataclass(frozen=True)
@@ -55,6 +60,11 @@ class ReportInputs:
         ``simulated.parquet``: the fleet's readings under the same filters).
     observed_metrics
         metrics/observed.json.
+    calibration
+        The tables of data/calibration (:data:`CALIBRATION_TABLES`; none when the calibration was skipped).
+    calibration_metrics
+        metrics/calibration.json; when the file is missing, a skipped calibration with that as its reason
+        (:func:`skipped_calibration`).
     """
 
     raw_params: dict[str, Any]
@@ -69,6 +79,35 @@ class ReportInputs:
     sensitivity_metrics: dict[str, Any]
     observed: dict[str, pd.DataFrame]
     observed_metrics: dict[str, Any]
+    calibration: dict[str, pd.DataFrame] = field(default_factory=dict)
+    calibration_metrics: dict[str, Any] = field(default_factory=lambda: skipped_calibration(NO_CALIBRATION))
+
+
+#: the reason of a calibration whose metrics file is missing
+NO_CALIBRATION = "no metrics/calibration.json: the calibrate stage has not run (dvc repro calibrate)"
+
+
+def skipped_calibration(reason: str) -> dict[str, Any]:
+    """metrics/calibration.json of a calibration that was skipped for ``reason`` (as pipeline.calibrate writes it)."""
+    return {"skipped": True, "reason": reason, "fitted": None, "observed": None, "calibrated": None, "held_out": None}
+
+
+def calibration_inputs(
+    calibration_dir: str | Path, metrics_file: str | Path
+) -> tuple[dict[str, pd.DataFrame], dict[str, Any]]:
+    """data/calibration's tables and metrics/calibration.json.
+
+    A missing metrics file reads as a skipped calibration (:data:`NO_CALIBRATION`), so a project without the
+    calibrate stage still gets its report; a skipped one needs no tables, a fitted one every table of
+    :data:`CALIBRATION_TABLES`.
+    """
+    metrics_file = Path(metrics_file)
+    if not metrics_file.is_file():
+        return {}, skipped_calibration(NO_CALIBRATION)
+    metrics = json.loads(metrics_file.read_text())
+    if metrics.get("skipped", False):
+        return {}, metrics
+    return read_tables(calibration_dir, CALIBRATION_TABLES), metrics
 
 
 def code_digest() -> str:
@@ -110,10 +149,12 @@ def read_inputs(
     sensitivity_dir: str | Path,
     metrics_dir: str | Path,
     observed_dir: str | Path | None = None,
+    calibration_dir: str | Path | None = None,
 ) -> ReportInputs:
     """Read and check every input of the report (see :class:`ReportInputs`).
 
-    ``observed_dir`` defaults to ``observed`` beside ``survey_dir`` (data/observed).
+    ``observed_dir`` defaults to ``observed`` beside ``survey_dir`` (data/observed), ``calibration_dir`` to
+    ``calibration`` beside it (data/calibration); the calibration's metrics are ``metrics_dir``/calibration.json.
 
     Raises
     ------
@@ -134,6 +175,8 @@ def read_inputs(
     ok = inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
     metrics_dir = Path(metrics_dir)
     observed_dir = Path(survey_dir).with_name("observed") if observed_dir is None else observed_dir
+    calibration_dir = Path(survey_dir).with_name("calibration") if calibration_dir is None else calibration_dir
+    calibration, calibration_metrics = calibration_inputs(calibration_dir, metrics_dir / "calibration.json")
     return ReportInputs(
         raw_params=load_params(params),
         config=config,
@@ -147,4 +190,6 @@ def read_inputs(
         sensitivity_metrics=json.loads((metrics_dir / "sensitivity.json").read_text()),
         observed=read_tables(observed_dir, OBSERVED_TABLES),
         observed_metrics=json.loads((metrics_dir / "observed.json").read_text()),
+        calibration=calibration,
+        calibration_metrics=calibration_metrics,
     )

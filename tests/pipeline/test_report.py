@@ -20,7 +20,7 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import observed, report, sensitivity, survey
+from pipeline import calibrate, observed, report, sensitivity, survey
 from pipeline.config import load_params, parse_config
 from pipeline.report import style
 from pipeline.report.context import Context
@@ -30,8 +30,9 @@ from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
-#: title, summary, sensitivity, 2 survey, observed, Figure 2, L01-L03, step runs, design, appendices A, B, C
-PAGES = 15
+#: title, summary, sensitivity, 2 survey, observed, calibration (skipped), Figure 2, L01-L03, step runs, design,
+#: appendices A, B, C
+PAGES = 16
 SITE = ROOT / "tests" / "data" / "weighings" / "site30.csv"
 PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
 NEEDS_POPPLER = pytest.mark.skipif(
@@ -61,6 +62,7 @@ def paths(project):
         "survey": project / "data/survey",
         "sensitivity": project / "data/sensitivity",
         "observed": project / "data/observed",
+        "calibration": project / "data/calibration",
         "metrics": project / "metrics",
         "pdf": project / "reports/sensitivity_report.pdf",
         "png": project / "reports/figures/report",
@@ -98,6 +100,9 @@ def project(tmp_path_factory):
     protocols = {name: study_protocols(config, name) for name in studies}
     simulate_samples(studies, protocols, config.execution, path / "data/runs", lambda line: None)
     analyse(path)
+    # no observed survey: the calibrate stage writes its skipped metrics (and no tables) at once
+    out = ["--out", str(path / "data/calibration"), "--metrics", str(path / "metrics/calibration.json")]
+    assert calibrate.main(["--params", str(path / "params.yaml"), *out]) == 0
     return path
 
 
@@ -274,6 +279,21 @@ def test_with_an_observed_survey_the_page_draws_and_quotes_it(project, tmp_path)
     assert f"mean spread: observed {spread:.0f} kg" in page
     legends = [t.get_text() for ax in fig.get_axes() if ax.get_legend() for t in ax.get_legend().get_texts()]
     assert f"observed, {m['groups']['tandem']['n_groups']}" in legends
+
+
+# ---- the calibration page ---------------------------------------------------------------------------------------
+def test_without_an_observed_survey_one_calibration_page_says_why_and_how_to_give_one(pages, built):
+    _, inputs = built
+    assert inputs.calibration_metrics["skipped"] and inputs.calibration == {}
+    [(section, name, fig)] = [p for p in pages if p.section.startswith("Calibration")]
+    assert (section, name) == ("Calibration", "")
+    page = figure_text(fig)
+    for words in (
+        "Nothing was calibrated", "The calibrate stage was skipped: no observed survey given",
+        "observed.path is null", "observed.path: observed/site.mon", "calibrate section", "calibrate.fit",
+        "docs/calibration.md", "make repro",
+    ):  # fmt: skip
+        assert words in page, words
 
 
 # ---- failed runs ------------------------------------------------------------------------------------------------

@@ -1,0 +1,282 @@
+"""The report's calibration pages (pipeline.report.pages.calibration) from outputs shaped as ``calibrate`` writes them.
+
+The outputs are made here, small and with numbers chosen to format distinctly (no simulation): metrics/calibration.json
+and the tables of data/calibration, written to a temporary directory and read back as the report reads them.
+"""
+
+import json
+from types import SimpleNamespace
+
+import matplotlib
+import numpy as np
+import pandas as pd
+import pytest
+from matplotlib.backends.backend_agg import FigureCanvasAgg
+
+from pipeline.report import build
+from pipeline.report.inputs import NO_CALIBRATION, calibration_inputs, skipped_calibration
+from pipeline.report.layout import TEXT_BOTTOM
+from pipeline.report.pages import calibration
+from pipeline.report.style import STYLE
+from pipeline.survey import RunsError
+
+FITTED = {
+    "chassis_tilt_mean_deg": {"value": 0.7671, "low": 0.5123, "high": 1.4557, "bounds": [-1.0, 1.5]},
+    "chassis_tilt_sd_deg": {"value": 0.4057, "low": 0.2088, "high": 0.6906, "bounds": [0.1, 1.5]},
+    "air_share": {"value": 0.4156, "low": None, "high": None, "bounds": [0.0, 1.0]},
+}
+FIXED = {"site_iri_m_km": 1.5, "sensor_error_pct": 2.25}
+
+
+def stats(n, spread, share, quantiles):
+    """A ``groups`` entry of one size: statistics and the load-share quantiles of each axle."""
+    return {
+        "n_groups": n, "mean_spread_kg": spread, "median_spread_pct": spread / 100.0, "share_outside_5pct": share,
+        "share_over_10pct": share / 4,
+        "load_share_quantiles": {
+            f"axle_{i + 1}": {k: c + d for k, d in zip(("p05", "p25", "p50", "p75", "p95"), (-.1, -.03, 0, .03, .1))}
+            for i, c in enumerate(quantiles)
+        },
+    }  # fmt: skip
+
+
+def groups(scale):
+    return {
+        "tandem": stats(20, 429.6 * scale, 0.4, (0.99, 1.01)),
+        "triaxle": stats(107, 981.87 * scale, 0.7757, (0.97, 1.0, 1.03)),
+    }
+
+
+def fitted_metrics(held=True):
+    """metrics/calibration.json of a fit, shaped as pipeline.calibrate.run writes it."""
+    held_out = {"fit_on": "even records", "held_out": "odd records"}
+    if held:
+        held_out.update(
+            fitted={q: e["value"] for q, e in FITTED.items()}, distance_fit_half=2.21837, distance_held_out=2.32483,
+            distance_halves=2.71184, groups=groups(1.1), calibrated_groups=groups(0.9),
+        )  # fmt: skip
+    else:
+        held_out.update(reason="too few odd records", groups=None)
+    return {
+        "skipped": False,
+        "protocol": "wim",
+        "method": "differential evolution on the energy distance",
+        "fitted": FITTED,
+        "fixed": FIXED,
+        "confidence_level": 0.9,
+        "bootstrap_resamples": 4,
+        "distance": 4.49106,
+        "distance_direct": 7.07898,
+        "sizes_fitted": ["tandem", "triaxle"],
+        "evaluations": 512,
+        "trade_offs": [{"quantities": ["chassis_tilt_mean_deg", "chassis_tilt_sd_deg"], "correlation": 0.973}],
+        "table": {
+            "n_bogies": 40,
+            "tilts_deg": [-1.0, 0.0, 1.0],
+            "site_iri_levels_m_km": [1.0, 2.0],
+            "n_weighings": 480,
+            "n_failed": 0,
+        },  # fmt: skip
+        "observed": {"groups": groups(1.0)},
+        "calibrated": {"groups": groups(0.8)},
+        "held_out": held_out,
+        "ablation": {},
+    }
+
+
+def fitted_tables(names=tuple(FITTED)):
+    """The tables of data/calibration of a fit of ``names``."""
+    x = np.linspace(-1.0, 1.5, 7)
+    y = np.linspace(0.1, 1.5, 6)
+    xx, yy = np.meshgrid(x, y, indexing="ij")
+    valley = pd.DataFrame({
+        "quantity_x": names[0], "x": xx.ravel(), "quantity_y": names[1] if len(names) > 1 else names[0],
+        "y": yy.ravel(), "distance": 4.5 + (xx.ravel() - 0.77) ** 2 + 3 * (yy.ravel() - 0.41) ** 2,
+    }) if len(names) > 1 else pd.DataFrame(columns=["quantity_x", "x", "quantity_y", "y", "distance"])  # fmt: skip
+    profiles = pd.concat(
+        pd.DataFrame({"quantity": q, "value": v, "distance": 4.5 + (v - FITTED[q]["value"]) ** 2})
+        for q in names
+        for v in [np.linspace(*FITTED[q]["bounds"], 9)]
+    )
+    boot = pd.DataFrame({"resample": range(3), **{q: FITTED[q]["value"] + np.r_[-0.1, 0.0, 0.1] for q in names},
+                         "distance": [5.0, 4.8, 5.2]})  # fmt: skip
+    ablation = pd.DataFrame({
+        "variant": ["baseline", "baseline", "bush_stiffness", "bush_stiffness", "friction_coefficient", "all", "all"],
+        "group": ["tandem", "triaxle", "tandem", "triaxle", "triaxle", "tandem", "triaxle"],
+        "n_groups": [1, 11, 1, 11, 11, 2, 10],
+        "mean_max_deviation_pct": [0.01, 11.83, 1.78, 11.45, 14.24, 3.41, 14.17],
+        "share_outside_5pct": [0.0, 0.91, 0.0, 0.91, 0.91, 1.0, 0.8],
+        "buys_points": [0.0, 0.0, -1.77, 0.38, -2.41, -3.40, -2.34],
+    })  # fmt: skip
+    calibrated = pd.DataFrame({
+        "slot": [0, 1], "group": ["triaxle", "tandem"], "n_axles": [3, 2], "suspension": ["steel", "air"],
+        "tilt_deg": [1.16, 0.94], "axle_load_0": [4137.0, 6604.0], "axle_load_1": [5737.1, 6813.8],
+        "axle_load_2": [6425.2, np.nan],
+    })  # fmt: skip
+    return {"bootstrap.csv": boot, "valley.csv": valley, "profiles.csv": profiles, "calibrated.csv": calibrated,
+            "ablation.csv": ablation}  # fmt: skip
+
+
+def written(tmp_path, metrics, tables):
+    """``metrics`` and ``tables`` written as the stage writes them, and read back as the report reads them."""
+    out, metrics_file = tmp_path / "data" / "calibration", tmp_path / "metrics" / "calibration.json"
+    out.mkdir(parents=True)
+    metrics_file.parent.mkdir()
+    metrics_file.write_text(json.dumps(metrics, indent=2))
+    for name, frame in tables.items():
+        frame.to_csv(out / name, index=False, float_format="%.6g")
+    if not tables:
+        (out / "README.txt").write_text(f"calibration skipped: {metrics['reason']}\n")
+    return calibration_inputs(out, metrics_file)
+
+
+def pages_of(tables, metrics):
+    ctx = SimpleNamespace(inputs=SimpleNamespace(calibration=tables, calibration_metrics=metrics))
+    with matplotlib.rc_context(STYLE):
+        return calibration.page(ctx)
+
+
+def figure_text(fig):
+    parts = [t.get_text() for t in fig.texts]
+    for ax in fig.get_axes():
+        parts += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel(), *(t.get_text() for t in ax.texts)]
+        for table in ax.tables:
+            parts += [cell.get_text().get_text() for cell in table.get_celld().values()]
+    return " ".join(" ".join(parts).split())
+
+
+def table_cells(fig):
+    """The rows of the (first) table drawn on a page, header first."""
+    [table] = [t for ax in fig.get_axes() for t in ax.tables][:1]
+    cells = table.get_celld()
+    n_rows, n_cols = max(r for r, _ in cells) + 1, max(c for _, c in cells) + 1
+    return [[cells[r, c].get_text().get_text() for c in range(n_cols)] for r in range(n_rows)]
+
+
+def tables_of(fig):
+    return [t for ax in fig.get_axes() for t in ax.tables]
+
+
+def assert_text_above_the_footer(fig):
+    FigureCanvasAgg(fig)
+    fig.draw_without_rendering()
+    renderer = fig.canvas.get_renderer()
+    height = fig.bbox.height
+    for t in fig.texts:
+        if t.get_text().strip():
+            assert t.get_window_extent(renderer).y0 / height >= TEXT_BOTTOM - 1e-3, t.get_text()[:60]
+
+
+# ---- inputs -------------------------------------------------------------------------------------------------------
+def test_a_missing_metrics_file_reads_as_skipped_with_a_reason(tmp_path):
+    tables, metrics = calibration_inputs(tmp_path / "data" / "calibration", tmp_path / "metrics" / "calibration.json")
+    assert tables == {} and metrics == skipped_calibration(NO_CALIBRATION)
+    assert "calibrate stage has not run" in metrics["reason"]
+
+
+def test_a_skipped_calibration_needs_no_tables_and_a_fit_needs_them_all(tmp_path):
+    tables, metrics = written(tmp_path / "skip", skipped_calibration("no observed survey given"), {})
+    assert tables == {} and metrics["reason"] == "no observed survey given"
+    some = fitted_tables()
+    del some["valley.csv"]
+    with pytest.raises(RunsError, match="valley.csv"):
+        written(tmp_path / "fit", fitted_metrics(), some)
+
+
+def test_the_calibration_pages_follow_the_observed_page():
+    names = [name for name, _ in build.PAGES]
+    assert names.index("calibration") == names.index("observed against simulated") + 1
+    assert ("calibration", calibration.page) in build.PAGES
+
+
+# ---- the pages ----------------------------------------------------------------------------------------------------
+def test_skipped_gives_one_page_that_says_why_and_how_to_give_a_survey(tmp_path):
+    reason = "no observed survey given (observed.path is null in params.yaml; docs/observed.md)"
+    tables, metrics = written(tmp_path, skipped_calibration(reason), {})
+    [(section, name, fig)] = pages_of(tables, metrics)
+    assert (section, name) == ("Calibration", "")
+    assert not fig.get_axes()
+    page = figure_text(fig)
+    assert f"The calibrate stage was skipped: {reason}." in page
+    for words in ("observed.path: observed/site.mon", "calibrate section", "calibrate.fit", "docs/calibration.md"):
+        assert words in page, words
+    assert_text_above_the_footer(fig)
+
+
+def test_a_fit_gives_the_fit_page_and_the_checks_page(tmp_path):
+    tables, metrics = written(tmp_path, fitted_metrics(), fitted_tables())
+    pages = pages_of(tables, metrics)
+    assert [(p.section, p.name) for p in pages] == [
+        ("Calibration: the fit", "calibration_fit"),
+        ("Calibration: observed against calibrated, held out, ablation", "calibration_checks"),
+    ]
+    for _, _, fig in pages:
+        for ax in fig.get_axes():
+            if ax.get_visible() and ax.axison and not ax.tables:
+                assert ax.has_data(), ax.get_title()
+                assert ax.get_ylabel() or ax.get_label() == "<colorbar>", ax.get_title()
+        assert_text_above_the_footer(fig)
+
+
+def test_the_fit_table_gives_the_metrics_numbers(tmp_path):
+    tables, metrics = written(tmp_path, fitted_metrics(), fitted_tables())
+    fig = pages_of(tables, metrics)[0].figure
+    header, *rows = table_cells(fig)
+    assert header == list(calibration.FIT_HEADER)
+    by_label = {row[0]: row for row in rows}
+    assert len(rows) == len(FITTED) + len(FIXED)
+    for q, e in metrics["fitted"].items():
+        row = by_label[calibration.quantity_label(q)]
+        assert row[1] == "fitted"
+        assert float(row[2]) == e["value"]
+        if e["low"] is None:
+            assert row[3].startswith("no interval")
+        else:
+            low, high = row[3].removesuffix(" (90 %)").split(" to ")
+            assert (float(low), float(high)) == (e["low"], e["high"])
+        assert [float(b) for b in row[4].split(" to ")] == e["bounds"]
+    for q, v in metrics["fixed"].items():
+        row = by_label[calibration.quantity_label(q)]
+        assert row[1] == "fixed" and float(row[2]) == v
+    page = figure_text(fig)
+    assert f"Distance reached: {metrics['distance']:g} through the table" in page
+    assert f"simulated directly: {metrics['distance_direct']:g}" in page
+    assert "chassis tilt, centre and chassis tilt, spread (sd): +0.97" in page
+
+
+def test_the_checks_page_gives_each_sides_statistics_and_the_held_out_distances(tmp_path):
+    tables, metrics = written(tmp_path, fitted_metrics(), fitted_tables())
+    fig = pages_of(tables, metrics)[1].figure
+    header, *rows = table_cells(fig)
+    assert len(rows) == 2 * len(calibration.CHECK_SIDES)
+    where = {label: path for label, path, _ in calibration.CHECK_SIDES}
+    for row in rows:
+        size = {"tandem": "tandem", "tri-axle": "triaxle"}[row[0]]
+        entry = metrics
+        for key in where[row[1]]:
+            entry = entry[key]
+        entry = entry[size]
+        assert int(row[2]) == entry["n_groups"]
+        assert row[3] == f"{100 * entry['share_outside_5pct']:.1f}"
+        assert row[4] == f"{100 * entry['share_over_10pct']:.1f}"
+        assert row[5] == f"{entry['mean_spread_kg']:.0f}"
+    page = figure_text(fig)
+    h = metrics["held_out"]
+    for key in ("distance_fit_half", "distance_held_out", "distance_halves"):
+        assert f"{h[key]:g}" in page, key
+    legends = [t.get_text() for ax in fig.get_axes() if ax.get_legend() for t in ax.get_legend().get_texts()]
+    assert "observed, 107" in legends and "tri-axle (11 steel groups, 11.83 % with all present)" in legends
+
+
+def test_a_single_fitted_quantity_and_no_held_out_check_still_give_both_pages(tmp_path):
+    metrics = fitted_metrics(held=False)
+    metrics["fitted"] = {"air_share": FITTED["air_share"]}
+    metrics["trade_offs"] = []
+    tables, metrics = written(tmp_path, metrics, fitted_tables(("air_share",)))
+    fit, check = pages_of(tables, metrics)
+    assert "None: no two fitted quantities" in figure_text(fit.figure)
+    assert "No held-out check: too few odd records." in figure_text(check.figure)
+    rows = table_cells(check.figure)[1:]
+    assert [r[2] for r in rows if r[1].startswith("held-out")] == ["0"] * 4
+    for page in (fit, check):
+        assert_text_above_the_footer(page.figure)
