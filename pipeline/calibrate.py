@@ -780,7 +780,7 @@ def main(argv: list[str] | None = None) -> int:
         if path is None or config.calibrate is None:
             reason = (
                 "no observed survey given (observed.path is null in params.yaml; docs/observed.md)"
-                if path is None else "no calibrate section in params.yaml"
+                if path is None else "no calibrate section in params.yaml (calibrate: null)"
             )  # fmt: skip
             metrics, tables = skipped_metrics(reason), {}
         else:

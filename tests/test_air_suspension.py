@@ -171,11 +171,12 @@ def test_pressures_part_over_a_road_step_and_reequalise_with_the_time_constant(m
     assert np.max(np.abs(run.wheel_loads[-1] / run.wheel_loads[-1].mean() - 1.0)) < 1e-3
 
 
+@pytest.mark.parametrize("method", ["rk4", "lsoda"])
 @pytest.mark.parametrize("make", MAKERS)
-def test_energy_dissipated_is_never_negative_and_the_balance_closes(make):
+def test_energy_dissipated_is_never_negative_and_the_balance_closes(make, method):
     b = make()
     inputs = nonlinear.road_inputs(b, RampedStep(rise=0.025), 5.0, 5.0, 0.005, front_axle_start=-1.0)
-    run = air_dynamics.simulate(b, inputs)
+    run = air_dynamics.simulate(b, inputs, method=method)
     assert run.success, run.message
     w = run.extras
     dissipations = ("damper_dissipation", "tyre_dissipation", "pipe_dissipation", "valve_dissipation")

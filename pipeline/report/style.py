@@ -2,6 +2,8 @@
 
 from __future__ import annotations
 
+import numpy as np
+
 __all__ = [
     "AXLE_COLOR",
     "FACTOR_LABEL",
@@ -15,6 +17,7 @@ __all__ = [
     "STYLE",
     "axle_name",
     "factor_label",
+    "load_share_axes",
 ]
 
 #: matplotlib rc settings of every page: build the pages inside ``matplotlib.rc_context(STYLE)``
@@ -65,3 +68,14 @@ def factor_label(name: str) -> str:
 def axle_name(i: int, n_axles: int) -> str:
     """front, middle or rear for axle position ``i`` (0 = front) of an ``n_axles`` group."""
     return "front" if i == 0 else "rear" if i == n_axles - 1 else "middle"
+
+
+def load_share_axes(ax, n_axles: int) -> None:
+    """The frame of a load-share chart per axle position: the band within 10 % of an equal share, the equal share,
+    the axles named front to rear, the labels."""
+    ax.axhspan(0.9, 1.1, color="0.93", lw=0, zorder=0)
+    ax.axhline(1.0, color="0.4", lw=0.6, zorder=0)
+    ax.set_xticks(np.arange(n_axles), [axle_name(i, n_axles) for i in range(n_axles)])
+    ax.set_xlim(-0.5, n_axles - 0.5)
+    ax.set_xlabel("axle")
+    ax.set_ylabel("load share (1 = equal share) [-]")

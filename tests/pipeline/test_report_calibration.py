@@ -12,6 +12,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from matplotlib.backends.backend_agg import FigureCanvasAgg
+from test_report import figure_text  # the same "every string on a page" as the other report tests
 
 from pipeline.report import build
 from pipeline.report.inputs import NO_CALIBRATION, calibration_inputs, skipped_calibration
@@ -134,15 +135,6 @@ def pages_of(tables, metrics):
     ctx = SimpleNamespace(inputs=SimpleNamespace(calibration=tables, calibration_metrics=metrics))
     with matplotlib.rc_context(STYLE):
         return calibration.page(ctx)
-
-
-def figure_text(fig):
-    parts = [t.get_text() for t in fig.texts]
-    for ax in fig.get_axes():
-        parts += [ax.get_title(), ax.get_xlabel(), ax.get_ylabel(), *(t.get_text() for t in ax.texts)]
-        for table in ax.tables:
-            parts += [cell.get_text().get_text() for cell in table.get_celld().values()]
-    return " ".join(" ".join(parts).split())
 
 
 def table_cells(fig):

@@ -23,7 +23,7 @@ from pipeline.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page
-from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, axle_name, factor_label
+from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, factor_label, load_share_axes
 
 __all__ = [
     "CHECK_SIDES", "QUANTITY", "SIZES", "check_page", "fit_page", "fit_rows", "page", "quantity_label",
@@ -214,12 +214,7 @@ def _quantiles(ax, m: Mapping[str, Any], size: str) -> None:
             ax.plot([x - half * 0.6, x + half * 0.6], [qs["p95"]] * 2, color=color, lw=1.0)
             ax.plot([x - half, x + half], [qs["p50"]] * 2, color=color, lw=1.8)
         handles.append(Patch(facecolor=color, alpha=0.45, edgecolor=color, label=f"{label}, {e['n_groups']}"))
-    ax.axhspan(0.9, 1.1, color="0.93", lw=0, zorder=0)
-    ax.axhline(1.0, color="0.4", lw=0.6, zorder=0)
-    ax.set_xticks(np.arange(n), [axle_name(i, n) for i in range(n)])
-    ax.set_xlim(-0.5, n - 0.5)
-    ax.set_xlabel("axle")
-    ax.set_ylabel("load share (1 = equal share) [-]")
+    load_share_axes(ax, n)
     ax.legend(handles=handles, loc="upper left", title="groups")
     low, high = ax.get_ylim()
     ax.set_ylim(low, high + 0.55 * (high - low))  # headroom for the legend

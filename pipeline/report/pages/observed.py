@@ -18,7 +18,7 @@ from pipeline.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, text_block
-from pipeline.report.style import GROUP_LABEL, SOURCE_COLOR, SOURCE_LABEL, axle_name
+from pipeline.report.style import GROUP_LABEL, SOURCE_COLOR, SOURCE_LABEL, load_share_axes
 
 __all__ = ["SIZES", "SOURCES", "observed_page", "page", "sources"]
 
@@ -72,12 +72,7 @@ def _load_share_boxes(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
             capprops={"color": color},
             medianprops={"color": color, "lw": 1.6},
         )
-    ax.axhspan(0.9, 1.1, color="0.93", lw=0, zorder=0)
-    ax.axhline(1.0, color="0.4", lw=0.6, zorder=0)
-    ax.set_xticks(np.arange(n), [axle_name(i, n) for i in range(n)])
-    ax.set_xlim(-0.5, n - 0.5)
-    ax.set_xlabel("axle")
-    ax.set_ylabel("load share (1 = equal share) [-]")
+    load_share_axes(ax, n)
     ax.set_title(title)
     handles = [Patch(facecolor=SOURCE_COLOR[s], alpha=0.5, label=f"{SOURCE_LABEL[s]}, {len(sides[s])}") for s in sides]
     ax.legend(handles=handles, loc="upper left", title="groups")
