@@ -52,8 +52,9 @@ from scipy.optimize import differential_evolution
 from scipy.stats import energy_distance, truncnorm
 
 from bogie import wim
+from bogie.metrics import max_deviation
 from bogie.params import GRAVITY, INHIBITORS
-from bogie.weighings.stats import survey_statistics
+from bogie.weighings.stats import group_inequality, survey_statistics
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
@@ -130,10 +131,10 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
 
 def observed_quantities(loads: np.ndarray) -> np.ndarray:
     """Per group (rows of ``loads`` [any unit], front first): each axle's load share W_i / mean(W), then the spread
-    (max - min) / mean [%] (:func:`bogie.weighings.stats.group_inequality`'s definitions), shape (groups, n + 1)."""
-    mean = loads.mean(axis=1, keepdims=True)
-    spread = 100.0 * (loads.max(axis=1) - loads.min(axis=1)) / mean[:, 0]
-    return np.column_stack([loads / mean, spread])
+    (max - min) / mean [%], from :func:`bogie.weighings.stats.group_inequality`, shape (groups, n + 1)."""
+    n = loads.shape[1]
+    ineq = group_inequality(loads, np.full(len(loads), n))
+    return np.column_stack([ineq["load_share"][:, :n], ineq["spread_pct"]])
 
 
 # ---- the calibration fleet and its table of readings -------------------------------------------------------------
@@ -262,7 +263,9 @@ def crn_table(config: Config) -> Table:
     samples = calibration_samples(config)
     dist = config.distributions["chassis_tilt"]
     # each bogie's rank under its own distribution: the uniform a refitted distribution maps to its tilt
-    tilt_u = np.clip(_cdf(dist, samples["chassis_tilt"].to_numpy(dtype=float)), 1e-12, 1 - 1e-12)
+    tilt = samples["chassis_tilt"].to_numpy(dtype=float)
+    truncated = isinstance(dist, TruncNormal)
+    tilt_u = np.clip(_cdf(dist, tilt), 1e-12, 1 - 1e-12) if truncated else np.full(len(tilt), np.nan)
     air_u = np.array([suspension_draw(config.seed, "fleet", int(i)) for i in samples["sample_id"]])
     # the sensor's normals: those of bogie.wim.axle_errors for the bogie's sensor_seed
     z = np.array([np.random.default_rng(int(s)).standard_normal(3) for s in samples["sensor_seed"]])
@@ -312,12 +315,19 @@ def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 8
     pd.DataFrame(rows).to_csv(path, index=False)
 
 
-def _cdf(dist: Any, x: np.ndarray) -> np.ndarray:
-    if isinstance(dist, TruncNormal):
-        a, b = (dist.low - dist.mean) / dist.sd, (dist.high - dist.mean) / dist.sd
-        return truncnorm.cdf(x, a, b, loc=dist.mean, scale=dist.sd)
-    low, high = dist.support
-    return (x - low) / (high - low) if high > low else np.full_like(x, 0.5)
+def _cdf(dist: TruncNormal, x: np.ndarray) -> np.ndarray:
+    a, b = (dist.low - dist.mean) / dist.sd, (dist.high - dist.mean) / dist.sd
+    return truncnorm.cdf(x, a, b, loc=dist.mean, scale=dist.sd)
+
+
+def bogie_tilts(table: Table, values: Mapping[str, float], dist: Any) -> np.ndarray:
+    """Each calibration bogie's tilt [degree] in a fleet of ``values``: the quantile of its uniform under the
+    fleet's truncated normal with the centre and spread of ``values``; its own sampled tilt when the fleet's tilt
+    distribution is of another kind (then its centre and spread cannot be fitted, :func:`check_quantities`)."""
+    if not isinstance(dist, TruncNormal):
+        return np.degrees(table.samples["chassis_tilt"].to_numpy(dtype=float))
+    mean, sd = math.radians(values["chassis_tilt_mean_deg"]), math.radians(values["chassis_tilt_sd_deg"])
+    return np.degrees(dataclasses.replace(dist, mean=mean, sd=sd).ppf(table.tilt_u))
 
 
 # ---- a fleet of given quantities, from the table -----------------------------------------------------------------
@@ -327,16 +337,14 @@ def _values(theta: Sequence[float], fitted: Sequence[str], base: Mapping[str, fl
     return values
 
 
-def fleet_readings(table: Table, values: Mapping[str, float], low_high: tuple[float, float]) -> np.ndarray:
+def fleet_readings(table: Table, values: Mapping[str, float], dist: Any) -> np.ndarray:
     """The calibration fleet's readings [kg] with the quantities ``values``: shape (2, n, 3), steel and air.
 
-    Each bogie's tilt is its uniform's quantile under the truncated normal of ``values`` (bounds ``low_high``
-    [degree]), its readings interpolated linearly in tilt and in site roughness, then multiplied by
-    1 + s z (s the sensor error, z the bogie's normals).
+    Each bogie's tilt is :func:`bogie_tilts` under the fleet's tilt distribution ``dist``, its readings
+    interpolated linearly in tilt and in site roughness, then multiplied by 1 + s z (s the sensor error, z the
+    bogie's normals).
     """
-    low, high = low_high
-    mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
-    tilt = np.clip(truncnorm.ppf(table.tilt_u, (low - mu) / sd, (high - mu) / sd, loc=mu, scale=sd), low, high)
+    tilt = bogie_tilts(table, values, dist)
     grid = table.tilts
     k = np.clip(np.searchsorted(grid, tilt, side="right") - 1, 0, len(grid) - 2)
     f = ((tilt - grid[k]) / (grid[k + 1] - grid[k]))[None, :, None, None]
@@ -363,11 +371,11 @@ class Simulated:
 
 
 def simulated(
-    table: Table, values: Mapping[str, float], low_high: tuple[float, float], min_load_kg: float,
+    table: Table, values: Mapping[str, float], dist: Any, min_load_kg: float,
     slot_counts: np.ndarray | None = None,
 ) -> Simulated:  # fmt: skip
     """The simulated survey: the calibration groups that pass the filters, weighted (1 - a) steel and a air."""
-    readings = fleet_readings(table, values, low_high)
+    readings = fleet_readings(table, values, dist)
     share = values["air_share"]
     counts = np.ones(len(table.size)) if slot_counts is None else slot_counts
     quantities, weights = {}, {}
@@ -408,13 +416,13 @@ class Problem:
     fitted: tuple[str, ...]
     bounds: tuple[tuple[float, float], ...]
     base: dict[str, float]
-    low_high: tuple[float, float]
+    tilt_distribution: Any  # the fleet's (pipeline.distributions), SI
     min_load_kg: float
 
     def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
         def f(theta: np.ndarray) -> float:
             values = _values(theta, self.fitted, self.base)
-            sim = simulated(self.table, values, self.low_high, self.min_load_kg, slot_counts)
+            sim = simulated(self.table, values, self.tilt_distribution, self.min_load_kg, slot_counts)
             return distance(self.obs, obs_weights, sim, self.scales)
 
         return f
@@ -427,11 +435,10 @@ def make_problem(table: Table, observed: Observed, config: Config) -> Problem:
     """The fit of ``config.calibrate.fit`` to ``observed`` on ``table`` (sizes with too few groups left out)."""
     obs = {k: observed_quantities(v) for k, v in observed.loads.items() if len(v) >= MIN_GROUPS}
     scales = {k: np.maximum(np.std(v, axis=0), 1e-9) for k, v in obs.items()}
-    dist = config.distributions["chassis_tilt"]
-    low_high = tuple(math.degrees(v) for v in dist.support)
     fitted = tuple(q for q in ORDER if q in config.calibrate.fit)
     bounds = tuple(tuple(config.calibrate.fit[q]) for q in fitted)
-    return Problem(table, obs, scales, fitted, bounds, defaults(config), low_high, config.observed.min_group_load)
+    dist = config.distributions["chassis_tilt"]
+    return Problem(table, obs, scales, fitted, bounds, defaults(config), dist, config.observed.min_group_load)
 
 
 def fit(
@@ -568,9 +575,7 @@ def simulate_fleet(
 
     ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``).
     """
-    low, high = (math.degrees(v) for v in config.distributions["chassis_tilt"].support)
-    mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
-    tilt = np.clip(truncnorm.ppf(table.tilt_u, (low - mu) / sd, (high - mu) / sd, loc=mu, scale=sd), low, high)
+    tilt = bogie_tilts(table, values, config.distributions["chassis_tilt"])
     kinds = np.where(table.air_u < values["air_share"], "air", "steel")
     iri = values["site_iri_m_km"] if config.calibrate.protocol == "wim" else math.nan
     spec = _spec(config, iri)
@@ -647,9 +652,8 @@ def ablation(table: Table, values: Mapping[str, float], config: Config) -> pd.Da
             loads = frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
             if len(loads) == 0:
                 continue
-            mean = loads.mean(axis=1)
-            max_dev = np.max(np.abs(loads - mean[:, None]), axis=1) / mean
-            outside = (loads.max(axis=1) - loads.min(axis=1)) / loads.max(axis=1) > 0.05
+            max_dev = max_deviation(loads)
+            outside = group_inequality(loads, np.full(len(loads), n))["outside_5pct"]
             rows.append({
                 "variant": variant, "group": size, "n_groups": len(loads),
                 "mean_max_deviation_pct": 100.0 * float(max_dev.mean()), "share_outside_5pct": float(outside.mean()),

@@ -182,13 +182,13 @@ def band(values: pd.Series | np.ndarray, width: float) -> tuple[np.ndarray, np.n
 
 
 # ---- statistics ---------------------------------------------------------------------------------------------------
-def run_counts(runs: pd.DataFrame) -> pd.DataFrame:
-    """Runs, succeeded, failed and succeeded with a wheel in the air per protocol and group (columns n_runs, n_ok,
-    n_failed, n_airborne; n_ok includes the n_airborne, which the statistics leave out)."""
+def run_counts(runs: pd.DataFrame, keys: Sequence[str] = KEYS) -> pd.DataFrame:
+    """Runs, succeeded, failed and succeeded with a wheel in the air per protocol and group, or per ``keys``
+    (columns n_runs, n_ok, n_failed, n_airborne; n_ok includes the n_airborne, which the statistics leave out)."""
     failed = runs["status"] != "ok"
     airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
     table = (
-        runs.assign(failed=failed, ok=~failed, airborne=airborne).groupby(KEYS, observed=True).agg(
+        runs.assign(failed=failed, ok=~failed, airborne=airborne).groupby(list(keys), observed=True).agg(
         n_runs=("status", "size"), n_ok=("ok", "sum"), n_failed=("failed", "sum"), n_airborne=("airborne", "sum"))
     )  # fmt: skip
     return table.astype("int64").reset_index()
@@ -413,15 +413,7 @@ def suspension_table(ok: pd.DataFrame, runs: pd.DataFrame) -> pd.DataFrame:
     protocols = sorted(runs["protocol"].astype(str).unique())
     groups = [g for g in GROUP_AXLES if g in set(runs["group"].astype(str))]
     frame = pd.DataFrame([(p, g, k) for p in protocols for g in groups for k in SUSPENSIONS], columns=keys)
-    failed = runs["status"] != "ok"
-    airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
-    counts = (
-        runs.assign(failed=failed, ok=~failed, airborne=airborne)
-        .astype({c: str for c in keys})
-        .groupby(keys).agg(n_runs=("status", "size"), n_ok=("ok", "sum"), n_failed=("failed", "sum"),
-                           n_airborne=("airborne", "sum"))
-        .reset_index()
-    )  # fmt: skip
+    counts = run_counts(runs.astype({c: str for c in keys}), keys)
     numbers = ("n_runs", "n_ok", "n_failed", "n_airborne")
     frame = frame.merge(counts, on=keys, how="left").fillna(dict.fromkeys(numbers, 0))
     frame = frame.astype(dict.fromkeys(numbers, "int64"))

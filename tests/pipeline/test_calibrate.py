@@ -14,6 +14,7 @@ import pytest
 import yaml
 from scipy.stats import truncnorm
 
+from bogie.params import INHIBITORS
 from pipeline import calibrate as C
 from pipeline.config import ConfigError, parse_config
 
@@ -111,7 +112,9 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
     assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
         ["ablation.csv", "bootstrap.csv", "calibrated.csv", "profiles.csv", "valley.csv"]
     )
-    assert metrics["ablation"]["baseline/triaxle"]["buys_points"] == 0.0
+    # every variant of the ablation was weighed on the calibrated fleet's tri-axles
+    variants = {key.split("/")[0] for key in metrics["ablation"] if key.endswith("/triaxle")}
+    assert variants == {"baseline", *INHIBITORS, "all"}
 
 
 # ---- the table and the distance ----------------------------------------------------------------------------------
@@ -124,12 +127,12 @@ def test_readings_interpolate_the_table_linearly_in_tilt_and_roughness():
     loads = np.broadcast_to(grid[None, None, :, :, None], table.loads.shape).copy()
     table = C.Table(table.samples, table.size, table.tilt_u, table.air_u, table.z, tilts, iris, loads, 0)
     values = {**C.defaults(config), "site_iri_m_km": 2.5, "sensor_error_pct": 0.0}
-    got = C.fleet_readings(table, values, (-2.0, 2.0))
+    got = C.fleet_readings(table, values, config.distributions["chassis_tilt"])
     mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
     tilt = truncnorm.ppf(table.tilt_u, (-2 - mu) / sd, (2 - mu) / sd, loc=mu, scale=sd)
     np.testing.assert_allclose(got[0, :, 0], 5000.0 + 100.0 * tilt + 25.0, rtol=1e-12)
     # the sensor's error multiplies each axle by 1 + s z with the bogie's own normals
-    noisy = C.fleet_readings(table, {**values, "sensor_error_pct": 2.0}, (-2.0, 2.0))
+    noisy = C.fleet_readings(table, {**values, "sensor_error_pct": 2.0}, config.distributions["chassis_tilt"])
     np.testing.assert_allclose(noisy / got, np.broadcast_to(1.0 + 0.02 * table.z, got.shape), rtol=1e-12)
 
 
