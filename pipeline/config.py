@@ -46,6 +46,7 @@ __all__ = [
     "SAMPLINGS",
     "AblationConfig",
     "CalibrateConfig",
+    "DesignConfig",
     "Config",
     "ConfigError",
     "ExecutionConfig",
@@ -310,6 +311,36 @@ class CalibrateConfig:
 
 
 @dataclass(frozen=True)
+class DesignConfig:
+    """The controlled experiment over the design factors (``design:``; ``docs/design.md``).
+
+    Attributes
+    ----------
+    groups
+        The axle groups whose designs are studied.
+    n_conditions
+        Operating conditions (tilt, tyre wear, payload, approach road) every design runs over [-].
+    tilt_step
+        Step of the chassis-tilt grid, outward from level over the tilt distribution's bounds [degree].
+    grid
+        SI name of a design factor -> its levels [SI]: the representative designs are every combination, the other
+        factors at today's typical values (the fleet distributions' medians).
+    n_space_filling
+        Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions [-].
+    target_share, confidence_level
+        The share of bogies within 5 % the guidance asks for, and the confidence level of the intervals [-].
+    """
+
+    groups: tuple[str, ...]
+    n_conditions: int
+    tilt_step: float
+    grid: FrozenMap
+    n_space_filling: int
+    target_share: float
+    confidence_level: float
+
+
+@dataclass(frozen=True)
 class Config:
     """The validated pipeline parameters, all SI.
 
@@ -328,6 +359,7 @@ class Config:
     execution: ExecutionConfig
     observed: ObservedConfig
     calibrate: CalibrateConfig | None = None
+    design: DesignConfig | None = None
 
 
 # ---- from the schema to the configuration -------------------------------------------------------------------
@@ -418,6 +450,21 @@ def _calibrate(calibrate: Any) -> CalibrateConfig | None:
     )
 
 
+def _design(design: Any) -> DesignConfig | None:
+    if design is None:
+        return None
+    grid = design.grid
+    return DesignConfig(
+        groups=tuple(design.groups),
+        n_conditions=design.n_conditions,
+        tilt_step=design.tilt_step_deg,
+        grid=FrozenMap({QUANTITIES[k].name: tuple(QUANTITIES[k].to_si(float(x)) for x in v) for k, v in grid.items()}),
+        n_space_filling=design.n_space_filling,
+        target_share=design.target_share,
+        confidence_level=design.confidence_level,
+    )
+
+
 def to_config(params: Params) -> Config:
     """The validated params.yaml sections (:class:`~pipeline.config_schema.Params`) as a :class:`Config`, SI."""
     distributions = {q.name: si_distribution(getattr(params.distributions, key), q) for key, q in QUANTITIES.items()}
@@ -431,6 +478,7 @@ def to_config(params: Params) -> Config:
         execution=_execution(params.execution),
         observed=_observed(params.observed),
         calibrate=_calibrate(params.calibrate),
+        design=_design(params.design),
     )
 
 

@@ -535,6 +535,46 @@ class Calibrate(Strict):
         return self
 
 
+#: the design factors a ``design:`` study controls, by params.yaml key (keys of ``distributions:``): bush, arm, pad
+#: radius (contact movement), spring-end friction and the springs' interleaf band (``docs/design.md``)
+DESIGN_FACTORS: tuple[str, ...] = (
+    "bush_stiffness",
+    "equaliser_arm_mm",
+    "contact_roll_radius_mm",
+    "friction_coefficient",
+    "spring_friction_band_kn",
+)
+
+
+class Design(Strict):
+    """``design:`` the controlled experiment over the design factors (:class:`pipeline.config.DesignConfig`)."""
+
+    groups: Annotated[list[Literal[tuple(GROUP_AXLES)]], _distinct("axle group")] = named("axle group", min_length=1)  # type: ignore[valid-type]
+    n_conditions: int = integer(2, 100_000)
+    tilt_step_deg: float = number("degree", gt=0.0, le=2.0)
+    grid: dict[str, list[float]] = Field(min_length=1)
+    n_space_filling: int = integer(0, 10_000)
+    target_share: float = number("-", gt=0.0, lt=1.0)
+    confidence_level: float = number("-", gt=0.0, lt=1.0)
+
+    @model_validator(mode="after")
+    def _grid(self) -> Design:
+        allowed = ", ".join(DESIGN_FACTORS)
+        for key, levels in self.grid.items():
+            where = f"grid.{key}"
+            if key not in DESIGN_FACTORS:
+                raise config_error(where, levels, f"is not a design factor; allowed: {allowed}")
+            q = QUANTITIES[key]
+            if not levels or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in levels):
+                raise config_error(where, levels, f"must be a list of one or more numbers in {q.yaml_unit}")
+            if len(set(levels)) != len(levels):
+                raise config_error(where, levels, "lists a level twice")
+            for i, v in enumerate(levels):
+                if not (math.isfinite(v) and q.range.contains(q.to_si(float(v)))):
+                    raise config_error(f"{where}[{i}]", v, f"is outside the allowed range {q.range_text} of {q.name}")
+        return self
+
+
 class Params(Strict):
     """params.yaml: the sections of the Monte Carlo pipeline, and those other stages read themselves."""
 
@@ -547,6 +587,7 @@ class Params(Strict):
     execution: Execution
     observed: Observed
     calibrate: Calibrate | None = None
+    design: Design | None = None
     figure2: Any = None
 
     @model_validator(mode="after")

@@ -23,7 +23,17 @@ from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
 from pipeline.report.layout import contents, number_pages
-from pipeline.report.pages import appendix, calibration, design, front, observed, reference, sensitivity, survey
+from pipeline.report.pages import (
+    appendix,
+    calibration,
+    design,
+    front,
+    guidance,
+    observed,
+    reference,
+    sensitivity,
+    survey,
+)  # fmt: skip
 from pipeline.report.style import STYLE
 from pipeline.report.tables import plot_series
 from pipeline.survey import RunsError
@@ -43,7 +53,8 @@ PAGES: tuple[tuple[str, Callable[[Context], list[Page]]], ...] = (
     ("reference: Figure 2", reference.figure2_pages),
     ("reference: linear runs", reference.linear_pages),
     ("reference: step runs", reference.step_runs),
-    ("design guidance", design.page),
+    ("design guidance", guidance.pages),
+    ("fleet correlations by design", design.page),
     ("appendix A: parameters", appendix.parameters),
     ("appendix B: definitions", appendix.definitions),
     ("appendix C: failed runs", appendix.failures),
@@ -126,13 +137,14 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--sensitivity", default="data/sensitivity", help="default: data/sensitivity")
     parser.add_argument("--observed", default="data/observed", help="observed survey tables (default: data/observed)")
     parser.add_argument("--calibration", default="data/calibration", help="default: data/calibration")
+    parser.add_argument("--design", default="data/design", help="design study tables (default: data/design)")
     parser.add_argument("--metrics", default="metrics", help="directory of the metrics JSON files")
     parser.add_argument("--pdf", default="reports/sensitivity_report.pdf", help="the report")
     parser.add_argument("--png", default="reports/figures/report", help="directory of the PNG pages")
     parser.add_argument("--plots", default="reports/plots", help="directory of the DVC plot series")
     args = parser.parse_args(argv)
     try:
-        dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration)
+        dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration, args.design)
         inputs = read_inputs(args.params, args.samples, args.runs, *dirs)
     except (ConfigError, RunsError, OSError, KeyError, ValueError, yaml.YAMLError) as exc:
         print(f"report: {exc}", file=sys.stderr)

@@ -19,7 +19,7 @@ from pipeline.config import Config, load_config, load_params
 from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, readings
 
 __all__ = [
-    "ReportInputs", "build_date", "calibration_inputs", "code_digest", "read_inputs", "read_tables",
+    "ReportInputs", "build_date", "calibration_inputs", "code_digest", "design_inputs", "read_inputs", "read_tables",
     "skipped_calibration",
 ]  # fmt: skip
 
@@ -31,6 +31,8 @@ SENSITIVITY_TABLES = ("sobol_indices.csv", "ablation.csv")
 OBSERVED_TABLES = ("groups.parquet", "simulated.parquet")
 #: tables of data/calibration the calibration pages draw when a fit was made (none when it was skipped)
 CALIBRATION_TABLES = ("bootstrap.csv", "valley.csv", "profiles.csv", "calibrated.csv", "ablation.csv")
+#: tables of data/design the design-guidance pages draw when the study ran (none when it was skipped)
+DESIGN_TABLES = ("designs.csv", "tilt_curves.csv", "check.csv")
 
 
 @dataclass(frozen=True)
@@ -65,6 +67,9 @@ class ReportInputs:
     calibration_metrics
         metrics/calibration.json; when the file is missing, a skipped calibration with that as its reason
         (:func:`skipped_calibration`).
+    design, design_metrics
+        The tables of data/design (:data:`DESIGN_TABLES`) and metrics/design.json; none and a skipped study (with
+        its reason) when the design stage did not run or was not asked for.
     """
 
     raw_params: dict[str, Any]
@@ -81,10 +86,27 @@ class ReportInputs:
     observed_metrics: dict[str, Any]
     calibration: dict[str, pd.DataFrame] = field(default_factory=dict)
     calibration_metrics: dict[str, Any] = field(default_factory=lambda: skipped_calibration(NO_CALIBRATION))
+    design: dict[str, pd.DataFrame] = field(default_factory=dict)
+    design_metrics: dict[str, Any] = field(default_factory=lambda: {"designs": [], "skipped": NO_DESIGN})
 
 
 #: the reason of a calibration whose metrics file is missing
 NO_CALIBRATION = "no metrics/calibration.json: the calibrate stage has not run (dvc repro calibrate)"
+
+
+#: the reason of a design study whose metrics file is missing
+NO_DESIGN = "no metrics/design.json: the design stage has not run (dvc repro design)"
+
+
+def design_inputs(design_dir: str | Path, metrics_file: str | Path) -> tuple[dict[str, pd.DataFrame], dict[str, Any]]:
+    """data/design's tables and metrics/design.json; a missing metrics file reads as a skipped study."""
+    metrics_file = Path(metrics_file)
+    if not metrics_file.is_file():
+        return {}, {"designs": [], "skipped": NO_DESIGN}
+    metrics = json.loads(metrics_file.read_text())
+    if metrics.get("skipped"):
+        return {}, metrics
+    return read_tables(design_dir, DESIGN_TABLES), metrics
 
 
 def skipped_calibration(reason: str) -> dict[str, Any]:
@@ -150,11 +172,13 @@ def read_inputs(
     metrics_dir: str | Path,
     observed_dir: str | Path | None = None,
     calibration_dir: str | Path | None = None,
+    design_dir: str | Path | None = None,
 ) -> ReportInputs:
     """Read and check every input of the report (see :class:`ReportInputs`).
 
     ``observed_dir`` defaults to ``observed`` beside ``survey_dir`` (data/observed), ``calibration_dir`` to
-    ``calibration`` beside it (data/calibration); the calibration's metrics are ``metrics_dir``/calibration.json.
+    ``calibration`` beside it (data/calibration) and ``design_dir`` to ``design`` (data/design); their metrics are
+    ``metrics_dir``/calibration.json and design.json.
 
     Raises
     ------
@@ -177,6 +201,8 @@ def read_inputs(
     observed_dir = Path(survey_dir).with_name("observed") if observed_dir is None else observed_dir
     calibration_dir = Path(survey_dir).with_name("calibration") if calibration_dir is None else calibration_dir
     calibration, calibration_metrics = calibration_inputs(calibration_dir, metrics_dir / "calibration.json")
+    design_dir = Path(survey_dir).with_name("design") if design_dir is None else design_dir
+    design, design_metrics = design_inputs(design_dir, metrics_dir / "design.json")
     return ReportInputs(
         raw_params=load_params(params),
         config=config,
@@ -192,4 +218,6 @@ def read_inputs(
         observed_metrics=json.loads((metrics_dir / "observed.json").read_text()),
         calibration=calibration,
         calibration_metrics=calibration_metrics,
+        design=design,
+        design_metrics=design_metrics,
     )

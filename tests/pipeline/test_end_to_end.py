@@ -39,6 +39,8 @@ def tiny_params():
     raw["protocol"]["static"]["dt_s"] = 0.002
     raw["protocol"]["wim"]["dt_s"] = 0.002
     raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4})
+    raw["design"].update(groups=["triaxle"], n_conditions=2, tilt_step_deg=2.0, n_space_filling=0,
+                         grid={"bush_stiffness": [1.0, 3000.0]})  # fmt: skip
     return raw
 
 
@@ -85,7 +87,7 @@ def test_repro_writes_every_stage_output(project):
     for study in ("fleet", "sensitivity", "ablation"):
         assert (path / "data" / "samples" / f"{study}.parquet").is_file()
         assert list((path / "data" / "runs" / f"study={study}").glob("part-*.parquet"))
-    for stage in ("survey", "sensitivity", "observed"):
+    for stage in ("survey", "sensitivity", "observed", "design"):
         assert any((path / "data" / stage).iterdir())
         assert isinstance(json.loads((path / "metrics" / f"{stage}.json").read_text()), dict)
     assert (path / "dvc.lock").is_file()

@@ -20,7 +20,7 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import calibrate, observed, report, sensitivity, survey
+from pipeline import calibrate, design, observed, report, sensitivity, survey
 from pipeline.config import load_params, parse_config
 from pipeline.report import style
 from pipeline.report.context import Context
@@ -30,9 +30,9 @@ from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
-#: title, summary, sensitivity, 2 survey, observed, calibration (skipped), Figure 2, L01-L03, step runs, design,
-#: appendices A, B, C
-PAGES = 16
+#: title, summary, sensitivity, 2 survey, observed, calibration (skipped), Figure 2, L01-L03, step runs, 2 design
+#: guidance, fleet correlations, appendices A, B, C
+PAGES = 18
 SITE = ROOT / "tests" / "data" / "weighings" / "site30.csv"
 PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
 NEEDS_POPPLER = pytest.mark.skipif(
@@ -50,6 +50,8 @@ def tiny_raw():
     raw["protocol"]["static"]["dt_s"] = 0.002
     raw["protocol"]["wim"]["dt_s"] = 0.002
     raw["execution"].update({"backend": "loky", "n_jobs": 2, "chunk_size": 4, "dask_scheduler": None})
+    raw["design"].update(n_conditions=3, tilt_step_deg=2.0, n_space_filling=1,
+                         grid={"bush_stiffness": [1.0, 3000.0], "contact_roll_radius_mm": [0.0, 120.0]})  # fmt: skip
     return raw
 
 
@@ -63,6 +65,7 @@ def paths(project):
         "sensitivity": project / "data/sensitivity",
         "observed": project / "data/observed",
         "calibration": project / "data/calibration",
+        "design": project / "data/design",
         "metrics": project / "metrics",
         "pdf": project / "reports/sensitivity_report.pdf",
         "png": project / "reports/figures/report",
@@ -103,6 +106,8 @@ def project(tmp_path_factory):
     # no observed survey: the calibrate stage writes its skipped metrics (and no tables) at once
     out = ["--out", str(path / "data/calibration"), "--metrics", str(path / "metrics/calibration.json")]
     assert calibrate.main(["--params", str(path / "params.yaml"), *out]) == 0
+    out = ["--runs", str(path / "data/design_runs"), "--out", str(path / "data/design")]
+    assert design.main(["--params", str(path / "params.yaml"), *out, "--metrics", str(path / "metrics/design.json")]) == 0
     return path
 
 
@@ -162,6 +167,8 @@ def test_report_has_every_page_numbered_and_every_chart_page_as_png(built, proje
             "reference_L02",
             "reference_L03",
             "reference_step_runs",
+            "design_experiment",
+            "design_tolerance",
             "design_guidance",
             "parameters",
         ]

@@ -1,4 +1,6 @@
-"""The design guidance page: what keeps a bogie within 5 %, drawn from the survey's ``design_guidance.csv``."""
+"""The fleet-correlation page: the fleet's share within 5 % binned by design parameter (the survey's
+``design_guidance.csv``), labelled as what it is. It is not design guidance: every other factor varies as sampled
+within a bin. The design guidance is the controlled experiment of :mod:`pipeline.report.pages.guidance`."""
 
 from __future__ import annotations
 
@@ -78,7 +80,8 @@ def design_page(
     caption
         Paragraphs under the charts.
     """
-    fig = new_page("Design guidance: what keeps a bogie within 5 %", body=(0.06, 0.31, 0.88, 0.62))
+    title = "Fleet correlations by design parameter (not a controlled experiment)"
+    fig = new_page(title, body=(0.06, 0.31, 0.88, 0.62))
     sub = fig.subfigures(2, 1, height_ratios=(1.0, 1.3))
     maps = sub[0].subplots(1, len(grids), squeeze=False)[0]
     mesh = None
@@ -96,10 +99,10 @@ def design_page(
 
 
 def page(ctx: Context) -> list[Page]:
-    """Page 11: the design guidance of the ``main`` protocol; the caption quotes cells and bins of MIN_CELL bogies."""
+    """The fleet's correlations of the ``main`` protocol; the caption quotes cells and bins of MIN_CELL bogies."""
     grids, lines = design_tables(ctx.inputs.survey["design_guidance.csv"], ctx.main)
     groups, trends = design_quotes(grids, lines, DESIGN_TARGET, MIN_CELL)
     caption = text.render(
         "design.j2", protocol=ctx.main, target=DESIGN_TARGET, min_cell=MIN_CELL, groups=groups, trends=trends
     )
-    return [Page("Design guidance", "design_guidance", design_page(grids, lines, DESIGN_TARGET, caption))]
+    return [Page("Fleet correlations by design", "design_guidance", design_page(grids, lines, DESIGN_TARGET, caption))]
