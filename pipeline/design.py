@@ -480,14 +480,20 @@ def guidance(table: pd.DataFrame, tilts: np.ndarray, target: float) -> list[str]
                 )
         top = g.sort_values("share_within_5pct", ascending=False, kind="stable").iloc[0]
         typical_share = f"; today's typical design {100 * typ.iloc[0]['share_within_5pct']:.0f} %" if len(typ) else ""
-        verdict = f"the best {name} design reaches {pct}" if top["share_within_5pct"] >= target else (
-            f"no {name} design reaches {pct} within 5 %: the best"
-        )  # fmt: skip
-        out.append(
-            f"Across the fleet's own tilts, wear, payloads and roads {verdict}, with {describe(top)}, "
+        share = (
             f"{100 * top['share_within_5pct']:.0f} % ({100 * top['share_within_5pct_low']:.0f}-"
-            f"{100 * top['share_within_5pct_high']:.0f} %){typical_share}."
+            f"{100 * top['share_within_5pct_high']:.0f} %)"
         )
+        if top["share_within_5pct"] >= target:
+            out.append(
+                f"Across the fleet's own tilts, wear, payloads and roads the best {name} design, with {describe(top)}, "
+                f"keeps {share} within 5 %, the {pct} target{typical_share}."
+            )
+        else:
+            out.append(
+                f"Across the fleet's own tilts, wear, payloads and roads no {name} design reaches {pct} within 5 %: "
+                f"the best, with {describe(top)}, keeps {share}{typical_share}; the chassis tilt must be held as well."
+            )
         air = table[(table["group"] == group) & (table["suspension"] == "air")]
         if len(air):
             a = air.iloc[0]

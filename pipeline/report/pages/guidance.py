@@ -59,7 +59,7 @@ def design_cells(row: Mapping[str, Any]) -> list[str]:
     if row["suspension"] == "air":
         return ["air-sprung", "-", "-", "-", "-", "-"]
     return [
-        {"typical": "today's typical", "grid": "grid", "space": "space-filling"}[row["kind"]],
+        {"typical": "typical", "grid": "grid", "space": "space-filling"}[row["kind"]],
         f"{row['bush_stiffness']:.0f}", f"{1e3 * row['equaliser_arm']:.0f}", f"{1e3 * row['contact_roll_radius']:.0f}",
         f"{row['friction_coefficient']:.2f}", f"{row['spring_friction_band'] / 1e3:.1f}",
     ]  # fmt: skip
