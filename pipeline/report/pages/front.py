@@ -164,6 +164,8 @@ def summary(ctx: Context) -> list[Page]:
     table_title = (
         f"The five inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
     )
-    paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG)
+    # the design study's advice to a designer: per group the design with the widest tilt tolerance (docs/design.md)
+    design = [line for line in ctx.inputs.design_metrics.get("guidance", []) if line.startswith("With ")]
+    paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG, design=design)
     notes = text.render("summary_notes.j2", s=s, n=n)
     return [Page("Summary", "", summary_page(paragraphs, header, rows, table_title, notes))]
