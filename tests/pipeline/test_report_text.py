@@ -138,7 +138,7 @@ def numbers(agrees=True, resolved=True, survey=True):
 
 
 def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
-    paras = text.render("summary.j2", numbers=numbers(), nose_up_deg=0.5)
+    paras = text.render("summary.j2", numbers=numbers(), nose_up_deg=0.5, design=[])
     assert paras[0] == "## Which inhibitor matters"
     assert paras[1].startswith(
         "By the total Sobol index ST of max_deviation, with 95 % intervals, the five inhibitors (the reference's four "
@@ -164,6 +164,14 @@ def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
     assert len(paras) == 7
 
 
+def test_summary_gives_the_design_studys_advice_when_there_is_some():
+    advice = ["With a free bearing, 40 mm pads and a 220 mm arm (...), 95 % of tri-axles stay within 5 % from ..."]
+    paras = text.render("summary.j2", numbers=numbers(), nose_up_deg=0.5, design=advice)
+    start = paras.index("## Design guidance (a controlled experiment: every design over the same conditions)")
+    assert paras[start + 1] == advice[0]
+    assert paras[start + 2].startswith("The design-guidance pages give every design's share and tolerance")
+
+
 @pytest.mark.parametrize(
     ("agrees", "resolved", "verdict"),
     [
@@ -173,7 +181,7 @@ def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
     ],
 )
 def test_summary_verdict_follows_the_reference_check(agrees, resolved, verdict):
-    paras = text.render("summary.j2", numbers=numbers(agrees, resolved, survey=False), nose_up_deg=0.5)
+    paras = text.render("summary.j2", numbers=numbers(agrees, resolved, survey=False), nose_up_deg=0.5, design=[])
     assert verdict in paras[1]
     assert "roadside survey" not in " ".join(paras)
 
@@ -348,10 +356,10 @@ def test_design_caption_names_the_cells_that_reach_the_target_or_the_best():
         "From the lowest to the highest bin, the share within 5 % goes: bush stiffness (tandem 90 % to 20 %, "
         "tri-axle 80 % to 10 %); equaliser arm (tandem 50 % to 60 %)."
     )
-    assert paras[4].startswith("Caveat: these are the fleet's runs as sampled")
+    assert paras[4].startswith("Not design guidance: these are the fleet's runs as sampled, not a controlled experiment")
     paras = text.render("design.j2", protocol="wim", target=0.95, min_cell=10, groups={"tandem": None}, trends={})
     assert paras[1] == "Tandem: no cell holds 10 bogies; too few runs for guidance."
-    assert paras[2].startswith("Caveat")
+    assert paras[2].startswith("Not design guidance")
 
 
 def test_the_wim_protocol_text_says_when_the_old_point_sensor_is_chosen():
