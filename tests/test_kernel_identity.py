@@ -37,6 +37,7 @@ def _thin(key, value):
 def _cases():
     prof = ISO8608Profile("B", length=400, seed=1)
     tri, tan = triaxle_stage1(), tandem_trrl()
+    rough = ISO8608Profile("D", length=400, seed=2)
     out = {}
     out["tri_road"] = nl.simulate(tri, nl.road_inputs(tri, prof, 15.0, 2.0, 1e-3))
     out["tan_road"] = nl.simulate(tan, nl.road_inputs(tan, prof, 15.0, 2.0, 1e-3))
@@ -45,13 +46,9 @@ def _cases():
     out["tri_hold"] = nl.simulate(tri, nl.hold(tri, 0.5, 1e-3), initial=r.final_state)
     out["tan_galpha"] = nl.simulate(tan, nl.road_inputs(tan, prof, 15.0, 1.0, 1e-3), rho_inf=0.8)
     # a coarse step with a tight iteration budget: steps fail and are retried as sub-steps
-    out["tri_substeps"] = nl.simulate(
-        tri, nl.road_inputs(tri, ISO8608Profile("D", length=400, seed=2), 25.0, 1.0, 4e-3), max_iter=2, max_halvings=5
-    )
+    out["tri_substeps"] = nl.simulate(tri, nl.road_inputs(tri, rough, 25.0, 1.0, 4e-3), max_iter=2, max_halvings=5)
     # one that fails outright (no sub-steps allowed)
-    out["tri_fail"] = nl.simulate(
-        tri, nl.road_inputs(tri, ISO8608Profile("D", length=400, seed=2), 25.0, 1.0, 4e-3), max_iter=1, max_halvings=0
-    )
+    out["tri_fail"] = nl.simulate(tri, nl.road_inputs(tri, rough, 25.0, 1.0, 4e-3), max_iter=1, max_halvings=0)
     out["tri_static"] = nl.static_loads(tri, nl.load_ramp(tri, 0.2, 1.0, 0.2, 1e-3))
     return out
 
