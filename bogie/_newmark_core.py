@@ -66,13 +66,15 @@ def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec,
 # The helpers of _attempt run once per Newton iteration; they are inlined (numba IR) so that splitting the
 # iteration into named parts costs no calls and no reference counting of the arrays they share.
 @njit(cache=True, inline="always")
-def _predict(drv0, drv1, frac1, u, v, a, dt, drv, u_new, quasi_static):
-    """Drive row at fraction ``frac1`` of the step and the predictor of u: constant acceleration.
+def _predict(drive, row, frac1, u, v, a, dt, drv, u_new, quasi_static):
+    """Drive at fraction ``frac1`` of the step from drive row ``row`` to the next, and the predictor of u: constant
+    acceleration.
 
     A quasi-static path has no rates and starts from the last equilibrium.
     """
     for k in range(drv.shape[0]):
-        drv[k] = drv0[k] + frac1 * (drv1[k] - drv0[k])
+        d0 = drive[row, k]
+        drv[k] = d0 + frac1 * (drive[row + 1, k] - d0)
     for i in range(u.shape[0]):
         u_new[i] = u[i] if quasi_static else u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
 
@@ -153,14 +155,18 @@ def _update(jac, piv, res, du, u_new, u_limit):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _attempt(
-    model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
-    quasi_static,
+    model, mass, data_f, data_i, drive, row, frac1, u, v, a, f_old, hist, dt, scheme, r_tol, max_iter,
+    trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
 ):  # fmt: skip
-    """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
+    """One step of size dt from (u, v, a) to fraction frac1 of the drive from row ``row`` to the next (the step
+    starts where the last one ended). Returns (status, |r|, iters); ``trial`` = (u_new, v_new, a_new, f_new,
+    hist_new) receives the state at its end, ``scheme`` = (beta, gamma, alpha_m, alpha_f).
+
+    Inlined into its two callers (numba IR): as a call, its arrays' reference counting cost more than the step's
+    own stepping arithmetic. The grouping into tuples keeps the call under 31 arguments, beyond which Python
+    passes them as ``*args``, which numba cannot inline.
 
     Newton-Raphson on the full residual. The factored iteration matrix is kept from step to step
     (``jac_state`` = [valid, dt it was formed for]) while the residual falls at least fourfold per iteration; when
@@ -170,9 +176,11 @@ def _attempt(
     grow, or leaves the freedoms' limits ``u_limit`` (beyond which the model has spurious equilibria, e.g. a
     chassis pitched 90 degrees on slack springs), it is halved (backtracking) before a new direction is taken.
     """
+    beta, gamma, alpha_m, alpha_f = scheme
+    u_new, v_new, a_new, f_new, hist_new = trial
     c_a = 1.0 / (beta * dt * dt)
     c_v = gamma / (beta * dt)
-    _predict(drv0, drv1, frac1, u, v, a, dt, drv, u_new, quasi_static)
+    _predict(drive, row, frac1, u, v, a, dt, drv, u_new, quasi_static)
     rnorm = 0.0
     r_prev = 0.0
     want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
@@ -217,36 +225,43 @@ def _attempt(
 
 @njit(cache=True, inline="always")
 def _copy_state(u, v, a, f, hist, u_from, v_from, a_from, f_from, hist_from):
-    """(u, v, a, f, hist) = (u_from, v_from, a_from, f_from, hist_from), in place."""
-    u[:] = u_from
-    v[:] = v_from
-    a[:] = a_from
-    f[:] = f_from
-    hist[:] = hist_from
+    """(u, v, a, f, hist) = (u_from, v_from, a_from, f_from, hist_from), in place (loops: a slice copy makes views)."""
+    for i in range(u.shape[0]):
+        u[i] = u_from[i]
+        v[i] = v_from[i]
+        a[i] = a_from[i]
+        f[i] = f_from[i]
+    for i in range(hist.shape[0]):
+        hist[i] = hist_from[i]
 
 
 @njit(cache=True, inline="always")
 def _record(uu, vv, aa, rr, row, u, v, a, rec):
-    """Store the state and the model's record in row ``row`` of the histories."""
-    uu[row] = u
-    vv[row] = v
-    aa[row] = a
-    rr[row] = rec
+    """Store the state and the model's record in row ``row`` of the histories (loops: ``uu[row] = u`` makes views)."""
+    for i in range(u.shape[0]):
+        uu[row, i] = u[i]
+        vv[row, i] = v[i]
+        aa[row, i] = a[i]
+    for i in range(rec.shape[0]):
+        rr[row, i] = rec[i]
 
 
 @njit(cache=True)
 def _substeps(
-    model, mass, data_f, data_i, d0, d1, u, v, a, f_old, hist, dt,
+    model, mass, data_f, data_i, drive, row, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
     quasi_static, u_s, v_s, a_s, f_s, h_s, status, rnorm,
 ):  # fmt: skip
-    """Retry a failed step as 2, 4, ... 2^max_halvings sub-steps from its starting state (saved in the *_s arrays).
+    """Retry a failed step (from drive row ``row``) as 2, 4, ... 2^max_halvings sub-steps from its starting state
+    (saved in the *_s arrays).
 
     ``status`` and ``rnorm`` are those of the failed full step, returned as they are if max_halvings is 0.
     Returns (status, |r|, iterations); on success (u, v, a, f_old, hist) hold the state at the step's end.
     """
     jac_state[0] = 0.0
+    scheme = (beta, gamma, alpha_m, alpha_f)
+    trial = (u_new, v_new, a_new, f_new, hist_new)
     _copy_state(u_s, v_s, a_s, f_s, h_s, u, v, a, f_old, hist)
     total = 0
     for level in range(1, max_halvings + 1):
@@ -255,10 +270,8 @@ def _substeps(
         _copy_state(u, v, a, f_old, hist, u_s, v_s, a_s, f_s, h_s)
         for sub in range(n_sub):
             status, rnorm, iters = _attempt(
-                model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist,
-                h, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                u_limit, quasi_static,
+                model, mass, data_f, data_i, drive, row, (sub + 1) / n_sub, u, v, a, f_old, hist, h, scheme,
+                r_tol, max_iter, trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
             )  # fmt: skip
             total += iters
             if status != STATUS_OK:
@@ -292,32 +305,23 @@ def _integrate(
     piv = np.zeros(n, dtype=np.int64)
     rec, work, jac_state, drv = np.zeros(n_rec), np.zeros(work_size), np.zeros(2), drive[0].copy()
     _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-    uu[0] = u
-    vv[0] = v
-    aa[0] = a
-    rr[0] = rec
+    _record(uu, vv, aa, rr, 0, u, v, a, rec)
     u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist0.shape[0])
     total_iter = 0
+    scheme = (beta, gamma, alpha_m, alpha_f)
+    trial = (u_new, v_new, a_new, f_new, hist_new)
     for step in range(n_steps):
-        d0 = drive[step]
-        d1 = drive[step + 1]
         status, rnorm, iters = _attempt(
-            model, mass, data_f, data_i, d0, d1, 0.0, 1.0, u, v, a, f_old, hist, dt,
-            beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-            u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-            u_limit, quasi_static,
+            model, mass, data_f, data_i, drive, step, 1.0, u, v, a, f_old, hist, dt, scheme, r_tol, max_iter,
+            trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
         )  # fmt: skip
         total_iter += iters
         if status == STATUS_OK:
-            u[:] = u_new
-            v[:] = v_new
-            a[:] = a_new
-            f_old[:] = f_new
-            hist[:] = hist_new
+            _copy_state(u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new)
         else:
             status, rnorm, iters = _substeps(
-                model, mass, data_f, data_i, d0, d1, u, v, a, f_old, hist, dt,
+                model, mass, data_f, data_i, drive, step, u, v, a, f_old, hist, dt,
                 beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
                 u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
                 u_limit, quasi_static, u_s, v_s, a_s, f_s, h_s, status, rnorm,
@@ -326,10 +330,7 @@ def _integrate(
             if status != STATUS_OK:
                 return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
         # commit: the last residual evaluation recorded the model's outputs at the converged state
-        uu[step + 1] = u
-        vv[step + 1] = v
-        aa[step + 1] = a
-        rr[step + 1] = rec
+        _record(uu, vv, aa, rr, step + 1, u, v, a, rec)
     return uu, vv, aa, rr, hist, STATUS_OK, n_steps, 0.0, total_iter
 
 
