@@ -54,7 +54,7 @@ def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
                 ct[i, j] = data_f[n * n + i * n + j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     if model == MODEL_LINEAR:
         _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent)

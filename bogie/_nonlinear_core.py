@@ -646,7 +646,7 @@ def _damping_tangent(u, v, drv, data_f, n, ct):
             ct[n + i, n + i] += c_t
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     """Internal force f(u, v) and, if ``want_tangent``, K_T by forward differences and the exact C_T.
 
