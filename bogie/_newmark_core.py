@@ -295,10 +295,11 @@ def _integrate(
     iteration matrix and its factors, and the state saved for sub-stepping (*_s).
     """
     n = u0.shape[0]
-    uu = np.zeros((n_steps + 1, n))
-    vv = np.zeros((n_steps + 1, n))
-    aa = np.zeros((n_steps + 1, n))
-    rr = np.zeros((n_steps + 1, n_rec))
+    # not zeroed: rows are written as steps converge, and the caller keeps only those (``newmark.integrate``)
+    uu = np.empty((n_steps + 1, n))
+    vv = np.empty((n_steps + 1, n))
+    aa = np.empty((n_steps + 1, n))
+    rr = np.empty((n_steps + 1, n_rec))
     u, v, a, hist, hist_new = u0.copy(), v0.copy(), a0.copy(), hist0.copy(), hist0.copy()
     f_old, res, du = np.zeros(n), np.zeros(n), np.zeros(n)
     kt, ct, jac = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
