@@ -38,7 +38,7 @@ STATUS_OUT_OF_RANGE = 4
 
 
 # ---- model forces ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
     """f = C v + K u - R(t); data_f = [K.ravel(), C.ravel()], the drive row is R(t). The tangents are K and C."""
     n = u.shape[0]
