@@ -2,8 +2,8 @@
 
 The iteration matrices of the time-stepping kernel (:mod:`bogie.newmark`) and of the static equilibrium
 (:func:`bogie.nonlinear.equilibrium`) have 4 to 10 rows; factoring them in place in compiled code, without the
-allocation and dispatch of ``numpy.linalg``, keeps a step's cost at a few microseconds. Both are compiled without numba's reference counting (``_nrt=False``):
-they make no array, and their callers hold the arguments.
+allocation and dispatch of ``numpy.linalg``, keeps a step's cost at a few microseconds. Both are compiled
+without numba's reference counting (``_nrt=False``): they make no array, and their callers hold the arguments.
 
 References
 ----------
