@@ -551,9 +551,9 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     """Internal force f = -Q at (u, v) for the drive row ``drv``; writes the new slips and, if asked, the record.
 
     Compiled without numba's reference counting (``_nrt=False``): it makes and keeps no array, and its caller
-    holds every argument, so the 10 atomic increments and decrements of its arrays at each call (20 of the step's
-    two evaluations' cost) are not needed. It stays a call: inlined as well, the kernel took minutes to compile
-    and ran slower.
+    holds every argument, so the atomic increment and decrement of each of its 10 arrays at every call (40 atomic
+    operations in a step's two evaluations) are not needed. It stays a call: inlined as well, the kernel took
+    minutes to compile and ran slower.
     """
     n = data_i[0]
     load_factor = drv[2 * n]
