@@ -283,32 +283,18 @@ def _substeps(
     return status, rnorm, total
 
 
-@njit(cache=True)
-def _integrate(
-    model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit, quasi_static,
+@njit(cache=True, _nrt=False)
+def _step_loop(
+    model, mass, drive, data_f, data_i, dt, n_steps, beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
+    u_limit, quasi_static, uu, vv, aa, rr, u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct,
+    jac, piv, res, rec, work, jac_state, du, u_s, v_s, a_s, f_s, h_s,
 ):  # fmt: skip
-    """Step the model ``n_steps`` times; returns the histories, the final history variables and the status.
+    """The steps of :func:`_integrate` in the arrays it allocated; returns (status, last step, |r|, iterations).
 
-    The arrays are allocated once here and reused by every step: (u, v, a, f, hist) at the step's start, the
-    *_new arrays of an attempt (so that a failed try leaves the starting state untouched), the tangents, the
-    iteration matrix and its factors, and the state saved for sub-stepping (*_s).
+    Compiled without numba's reference counting (``_nrt=False``): it makes no array (the views of the tangent's
+    forward differences borrow ``work``), so the arrays that the step's inlined helpers share need no atomic
+    increments and decrements.
     """
-    n = u0.shape[0]
-    # not zeroed: rows are written as steps converge, and the caller keeps only those (``newmark.integrate``)
-    uu = np.empty((n_steps + 1, n))
-    vv = np.empty((n_steps + 1, n))
-    aa = np.empty((n_steps + 1, n))
-    rr = np.empty((n_steps + 1, n_rec))
-    u, v, a, hist, hist_new = u0.copy(), v0.copy(), a0.copy(), hist0.copy(), hist0.copy()
-    f_old, res, du = np.zeros(n), np.zeros(n), np.zeros(n)
-    kt, ct, jac = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
-    piv = np.zeros(n, dtype=np.int64)
-    rec, work, jac_state, drv = np.zeros(n_rec), np.zeros(work_size), np.zeros(2), drive[0].copy()
-    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-    _record(uu, vv, aa, rr, 0, u, v, a, rec)
-    u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
-    u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist0.shape[0])
     total_iter = 0
     scheme = (beta, gamma, alpha_m, alpha_f)
     trial = (u_new, v_new, a_new, f_new, hist_new)
@@ -329,10 +315,44 @@ def _integrate(
             )  # fmt: skip
             total_iter += iters
             if status != STATUS_OK:
-                return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
+                return status, step, rnorm, total_iter
         # commit: the last residual evaluation recorded the model's outputs at the converged state
         _record(uu, vv, aa, rr, step + 1, u, v, a, rec)
-    return uu, vv, aa, rr, hist, STATUS_OK, n_steps, 0.0, total_iter
+    return STATUS_OK, n_steps, 0.0, total_iter
+
+
+@njit(cache=True)
+def _integrate(
+    model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
+    beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings, n_rec, work_size, u_limit, quasi_static,
+):  # fmt: skip
+    """Step the model ``n_steps`` times; returns the histories, the final history variables and the status.
+
+    The arrays are allocated once here and reused by every step (:func:`_step_loop`): (u, v, a, f, hist) at the
+    step's start, the *_new arrays of an attempt (so that a failed try leaves the starting state untouched), the
+    tangents, the iteration matrix and its factors, and the state saved for sub-stepping (*_s).
+    """
+    n = u0.shape[0]
+    # not zeroed: rows are written as steps converge, and the caller keeps only those (``newmark.integrate``)
+    uu = np.empty((n_steps + 1, n))
+    vv = np.empty((n_steps + 1, n))
+    aa = np.empty((n_steps + 1, n))
+    rr = np.empty((n_steps + 1, n_rec))
+    u, v, a, hist, hist_new = u0.copy(), v0.copy(), a0.copy(), hist0.copy(), hist0.copy()
+    f_old, res, du = np.zeros(n), np.zeros(n), np.zeros(n)
+    kt, ct, jac = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
+    piv = np.zeros(n, dtype=np.int64)
+    rec, work, jac_state, drv = np.zeros(n_rec), np.zeros(work_size), np.zeros(2), drive[0].copy()
+    _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
+    _record(uu, vv, aa, rr, 0, u, v, a, rec)
+    u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
+    u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist0.shape[0])
+    status, last, rnorm, total_iter = _step_loop(
+        model, mass, drive, data_f, data_i, dt, n_steps, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
+        max_halvings, u_limit, quasi_static, uu, vv, aa, rr, u, v, a, f_old, hist, u_new, v_new, a_new, f_new,
+        hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_s, v_s, a_s, f_s, h_s,
+    )  # fmt: skip
+    return uu, vv, aa, rr, hist, status, last, rnorm, total_iter
 
 
 @njit(cache=True)
