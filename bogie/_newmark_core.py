@@ -246,7 +246,7 @@ def _record(uu, vv, aa, rr, row, u, v, a, rec):
         rr[row, i] = rec[i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _substeps(
     model, mass, data_f, data_i, drive, row, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
