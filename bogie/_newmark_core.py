@@ -4,9 +4,13 @@ matrices.
 
 :func:`_integrate` solves M a + f(u, v, t, history) = 0 step by step with Newmark's (beta, gamma) rule [1]_ or
 the generalised-alpha method [2]_: each step by Newton-Raphson on the full residual (:func:`_attempt`), a step that
-fails retried as 2, 4, ... sub-steps (:func:`_substeps`). The model is named by an integer id
-(:data:`MODEL_LINEAR`, :data:`MODEL_NONLINEAR`): numba cannot cache a compiled function that takes another
-compiled function (or a closure) as an argument, and a fresh worker process must start in well under a second.
+fails retried as 2, 4, ... sub-steps (:func:`_substeps`). :func:`_integrate` allocates, :func:`_step_loop` steps;
+the step's helpers and the model force are inlined into it, and the loop and the functions it calls are compiled
+without numba's reference counting (``_nrt=False``; they make no array): the calls and the atomic reference counts
+of their array arguments had cost as much as the arithmetic (issue 15, ``bench/README.md``). The model is named
+by an integer id (:data:`MODEL_LINEAR`, :data:`MODEL_NONLINEAR`): numba cannot cache a compiled function that
+takes another compiled function (or a closure) as an argument, and a fresh worker process must start in well under
+a second.
 Derivation and verification: ``docs/dynamics.md``.
 
 References

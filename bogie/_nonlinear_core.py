@@ -30,9 +30,10 @@ springs with their end friction's return map, pad moments, tyre loads, bushes, b
 were split from a former single routine they kept its arithmetic in the same order, so results were bit-identical
 to it (the radius rods and the equaliser stops, added later, changed the physics). The helpers are inlined into
 :func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
-evaluation. An array passed to an inlined helper still costs reference counting at each call, so the helpers
-used inside loops take and return scalars, and the short loops over pivots, contacts and tyres stay in
-:func:`_internal` (a force evaluation costs about 7 % more than the single routine did).
+evaluation. The helpers used inside loops take and return scalars, and the short loops over pivots, contacts and
+tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`` buffer (:data:`WORK`), not views,
+and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
+touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
 """
 
 from __future__ import annotations
