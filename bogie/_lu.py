@@ -2,7 +2,8 @@
 
 The iteration matrices of the time-stepping kernel (:mod:`bogie.newmark`) and of the static equilibrium
 (:func:`bogie.nonlinear.equilibrium`) have 4 to 10 rows; factoring them in place in compiled code, without the
-allocation and dispatch of ``numpy.linalg``, keeps a step's cost at a few microseconds.
+allocation and dispatch of ``numpy.linalg``, keeps a step's cost at a few microseconds. Both are compiled
+without numba's reference counting (``_nrt=False``): they make no array, and their callers hold the arguments.
 
 References
 ----------
@@ -17,7 +18,7 @@ import math
 from numba import njit
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def lu_factor(a, piv):
     """LU factorisation with partial pivoting, in place. Returns False if a pivot is zero.
 
@@ -54,7 +55,7 @@ def lu_factor(a, piv):
     return True
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def lu_solve(lu, piv, b):
     """Solve with the factors of :func:`lu_factor`; ``b`` is overwritten with the solution."""
     n = lu.shape[0]

@@ -4,9 +4,13 @@ matrices.
 
 :func:`_integrate` solves M a + f(u, v, t, history) = 0 step by step with Newmark's (beta, gamma) rule [1]_ or
 the generalised-alpha method [2]_: each step by Newton-Raphson on the full residual (:func:`_attempt`), a step that
-fails retried as 2, 4, ... sub-steps (:func:`_substeps`). The model is named by an integer id
-(:data:`MODEL_LINEAR`, :data:`MODEL_NONLINEAR`): numba cannot cache a compiled function that takes another
-compiled function (or a closure) as an argument, and a fresh worker process must start in well under a second.
+fails retried as 2, 4, ... sub-steps (:func:`_substeps`). :func:`_integrate` allocates, :func:`_step_loop` steps;
+the step's helpers and the model force are inlined into it, and the loop and the functions it calls are compiled
+without numba's reference counting (``_nrt=False``; they make no array): the calls and the atomic reference counts
+of their array arguments had cost as much as the arithmetic (issue 15, ``bench/README.md``). The model is named
+by an integer id (:data:`MODEL_LINEAR`, :data:`MODEL_NONLINEAR`): numba cannot cache a compiled function that
+takes another compiled function (or a closure) as an argument, and a fresh worker process must start in well under
+a second.
 Derivation and verification: ``docs/dynamics.md``.
 
 References
@@ -38,7 +42,7 @@ STATUS_OUT_OF_RANGE = 4
 
 
 # ---- model forces ----------------------------------------------------------------------------------------------
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
     """f = C v + K u - R(t); data_f = [K.ravel(), C.ravel()], the drive row is R(t). The tangents are K and C."""
     n = u.shape[0]
@@ -54,7 +58,7 @@ def _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent):
                 ct[i, j] = data_f[n * n + i * n + j]
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     if model == MODEL_LINEAR:
         _linear_force(u, v, drv, data_f, data_i, f, kt, ct, want_tangent)
@@ -66,13 +70,15 @@ def _force(model, u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec,
 # The helpers of _attempt run once per Newton iteration; they are inlined (numba IR) so that splitting the
 # iteration into named parts costs no calls and no reference counting of the arrays they share.
 @njit(cache=True, inline="always")
-def _predict(drv0, drv1, frac1, u, v, a, dt, drv, u_new, quasi_static):
-    """Drive row at fraction ``frac1`` of the step and the predictor of u: constant acceleration.
+def _predict(drive, row, frac1, u, v, a, dt, drv, u_new, quasi_static):
+    """Drive at fraction ``frac1`` of the step from drive row ``row`` to the next, and the predictor of u: constant
+    acceleration.
 
     A quasi-static path has no rates and starts from the last equilibrium.
     """
     for k in range(drv.shape[0]):
-        drv[k] = drv0[k] + frac1 * (drv1[k] - drv0[k])
+        d0 = drive[row, k]
+        drv[k] = d0 + frac1 * (drive[row + 1, k] - d0)
     for i in range(u.shape[0]):
         u_new[i] = u[i] if quasi_static else u[i] + dt * v[i] + 0.5 * dt * dt * a[i]
 
@@ -153,14 +159,18 @@ def _update(jac, piv, res, du, u_new, u_limit):
     return False
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def _attempt(
-    model, mass, data_f, data_i, drv0, drv1, frac0, frac1, u, v, a, f_old, hist, dt,
-    beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-    u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
-    quasi_static,
+    model, mass, data_f, data_i, drive, row, frac1, u, v, a, f_old, hist, dt, scheme, r_tol, max_iter,
+    trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
 ):  # fmt: skip
-    """One step of size dt from (u, v, a) between drive fractions frac0 -> frac1. Returns (status, |r|, iters).
+    """One step of size dt from (u, v, a) to fraction frac1 of the drive from row ``row`` to the next (the step
+    starts where the last one ended). Returns (status, |r|, iters); ``trial`` = (u_new, v_new, a_new, f_new,
+    hist_new) receives the state at its end, ``scheme`` = (beta, gamma, alpha_m, alpha_f).
+
+    Inlined into its two callers (numba IR): as a call, its arrays' reference counting cost more than the step's
+    own stepping arithmetic. The grouping into tuples keeps the call under 31 arguments, beyond which Python
+    passes them as ``*args``, which numba cannot inline.
 
     Newton-Raphson on the full residual. The factored iteration matrix is kept from step to step
     (``jac_state`` = [valid, dt it was formed for]) while the residual falls at least fourfold per iteration; when
@@ -170,9 +180,11 @@ def _attempt(
     grow, or leaves the freedoms' limits ``u_limit`` (beyond which the model has spurious equilibria, e.g. a
     chassis pitched 90 degrees on slack springs), it is halved (backtracking) before a new direction is taken.
     """
+    beta, gamma, alpha_m, alpha_f = scheme
+    u_new, v_new, a_new, f_new, hist_new = trial
     c_a = 1.0 / (beta * dt * dt)
     c_v = gamma / (beta * dt)
-    _predict(drv0, drv1, frac1, u, v, a, dt, drv, u_new, quasi_static)
+    _predict(drive, row, frac1, u, v, a, dt, drv, u_new, quasi_static)
     rnorm = 0.0
     r_prev = 0.0
     want = not (jac_state[0] == 1.0 and jac_state[1] == dt)
@@ -217,36 +229,43 @@ def _attempt(
 
 @njit(cache=True, inline="always")
 def _copy_state(u, v, a, f, hist, u_from, v_from, a_from, f_from, hist_from):
-    """(u, v, a, f, hist) = (u_from, v_from, a_from, f_from, hist_from), in place."""
-    u[:] = u_from
-    v[:] = v_from
-    a[:] = a_from
-    f[:] = f_from
-    hist[:] = hist_from
+    """(u, v, a, f, hist) = (u_from, v_from, a_from, f_from, hist_from), in place (loops: a slice copy makes views)."""
+    for i in range(u.shape[0]):
+        u[i] = u_from[i]
+        v[i] = v_from[i]
+        a[i] = a_from[i]
+        f[i] = f_from[i]
+    for i in range(hist.shape[0]):
+        hist[i] = hist_from[i]
 
 
 @njit(cache=True, inline="always")
 def _record(uu, vv, aa, rr, row, u, v, a, rec):
-    """Store the state and the model's record in row ``row`` of the histories."""
-    uu[row] = u
-    vv[row] = v
-    aa[row] = a
-    rr[row] = rec
+    """Store the state and the model's record in row ``row`` of the histories (loops: ``uu[row] = u`` makes views)."""
+    for i in range(u.shape[0]):
+        uu[row, i] = u[i]
+        vv[row, i] = v[i]
+        aa[row, i] = a[i]
+    for i in range(rec.shape[0]):
+        rr[row, i] = rec[i]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _substeps(
-    model, mass, data_f, data_i, d0, d1, u, v, a, f_old, hist, dt,
+    model, mass, data_f, data_i, drive, row, u, v, a, f_old, hist, dt,
     beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
     u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit,
     quasi_static, u_s, v_s, a_s, f_s, h_s, status, rnorm,
 ):  # fmt: skip
-    """Retry a failed step as 2, 4, ... 2^max_halvings sub-steps from its starting state (saved in the *_s arrays).
+    """Retry a failed step (from drive row ``row``) as 2, 4, ... 2^max_halvings sub-steps from its starting state
+    (saved in the *_s arrays).
 
     ``status`` and ``rnorm`` are those of the failed full step, returned as they are if max_halvings is 0.
     Returns (status, |r|, iterations); on success (u, v, a, f_old, hist) hold the state at the step's end.
     """
     jac_state[0] = 0.0
+    scheme = (beta, gamma, alpha_m, alpha_f)
+    trial = (u_new, v_new, a_new, f_new, hist_new)
     _copy_state(u_s, v_s, a_s, f_s, h_s, u, v, a, f_old, hist)
     total = 0
     for level in range(1, max_halvings + 1):
@@ -255,10 +274,8 @@ def _substeps(
         _copy_state(u, v, a, f_old, hist, u_s, v_s, a_s, f_s, h_s)
         for sub in range(n_sub):
             status, rnorm, iters = _attempt(
-                model, mass, data_f, data_i, d0, d1, sub / n_sub, (sub + 1) / n_sub, u, v, a, f_old, hist,
-                h, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-                u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                u_limit, quasi_static,
+                model, mass, data_f, data_i, drive, row, (sub + 1) / n_sub, u, v, a, f_old, hist, h, scheme,
+                r_tol, max_iter, trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
             )  # fmt: skip
             total += iters
             if status != STATUS_OK:
@@ -270,6 +287,44 @@ def _substeps(
     return status, rnorm, total
 
 
+@njit(cache=True, _nrt=False)
+def _step_loop(
+    model, mass, drive, data_f, data_i, dt, n_steps, beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
+    u_limit, quasi_static, uu, vv, aa, rr, u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct,
+    jac, piv, res, rec, work, jac_state, du, u_s, v_s, a_s, f_s, h_s,
+):  # fmt: skip
+    """The steps of :func:`_integrate` in the arrays it allocated; returns (status, last step, |r|, iterations).
+
+    Compiled without numba's reference counting (``_nrt=False``): it makes no array (the views of the tangent's
+    forward differences borrow ``work``), so the arrays that the step's inlined helpers share need no atomic
+    increments and decrements.
+    """
+    total_iter = 0
+    scheme = (beta, gamma, alpha_m, alpha_f)
+    trial = (u_new, v_new, a_new, f_new, hist_new)
+    for step in range(n_steps):
+        status, rnorm, iters = _attempt(
+            model, mass, data_f, data_i, drive, step, 1.0, u, v, a, f_old, hist, dt, scheme, r_tol, max_iter,
+            trial, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_limit, quasi_static,
+        )  # fmt: skip
+        total_iter += iters
+        if status == STATUS_OK:
+            _copy_state(u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new)
+        else:
+            status, rnorm, iters = _substeps(
+                model, mass, data_f, data_i, drive, step, u, v, a, f_old, hist, dt,
+                beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
+                u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
+                u_limit, quasi_static, u_s, v_s, a_s, f_s, h_s, status, rnorm,
+            )  # fmt: skip
+            total_iter += iters
+            if status != STATUS_OK:
+                return status, step, rnorm, total_iter
+        # commit: the last residual evaluation recorded the model's outputs at the converged state
+        _record(uu, vv, aa, rr, step + 1, u, v, a, rec)
+    return STATUS_OK, n_steps, 0.0, total_iter
+
+
 @njit(cache=True)
 def _integrate(
     model, mass, drive, data_f, data_i, u0, v0, a0, hist0, dt, n_steps,
@@ -277,60 +332,31 @@ def _integrate(
 ):  # fmt: skip
     """Step the model ``n_steps`` times; returns the histories, the final history variables and the status.
 
-    The arrays are allocated once here and reused by every step: (u, v, a, f, hist) at the step's start, the
-    *_new arrays of an attempt (so that a failed try leaves the starting state untouched), the tangents, the
-    iteration matrix and its factors, and the state saved for sub-stepping (*_s).
+    The arrays are allocated once here and reused by every step (:func:`_step_loop`): (u, v, a, f, hist) at the
+    step's start, the *_new arrays of an attempt (so that a failed try leaves the starting state untouched), the
+    tangents, the iteration matrix and its factors, and the state saved for sub-stepping (*_s).
     """
     n = u0.shape[0]
-    uu = np.zeros((n_steps + 1, n))
-    vv = np.zeros((n_steps + 1, n))
-    aa = np.zeros((n_steps + 1, n))
-    rr = np.zeros((n_steps + 1, n_rec))
+    # not zeroed: rows are written as steps converge, and the caller keeps only those (``newmark.integrate``)
+    uu = np.empty((n_steps + 1, n))
+    vv = np.empty((n_steps + 1, n))
+    aa = np.empty((n_steps + 1, n))
+    rr = np.empty((n_steps + 1, n_rec))
     u, v, a, hist, hist_new = u0.copy(), v0.copy(), a0.copy(), hist0.copy(), hist0.copy()
     f_old, res, du = np.zeros(n), np.zeros(n), np.zeros(n)
     kt, ct, jac = np.zeros((n, n)), np.zeros((n, n)), np.zeros((n, n))
     piv = np.zeros(n, dtype=np.int64)
     rec, work, jac_state, drv = np.zeros(n_rec), np.zeros(work_size), np.zeros(2), drive[0].copy()
     _force(model, u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-    uu[0] = u
-    vv[0] = v
-    aa[0] = a
-    rr[0] = rec
+    _record(uu, vv, aa, rr, 0, u, v, a, rec)
     u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist0.shape[0])
-    total_iter = 0
-    for step in range(n_steps):
-        d0 = drive[step]
-        d1 = drive[step + 1]
-        status, rnorm, iters = _attempt(
-            model, mass, data_f, data_i, d0, d1, 0.0, 1.0, u, v, a, f_old, hist, dt,
-            beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
-            u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-            u_limit, quasi_static,
-        )  # fmt: skip
-        total_iter += iters
-        if status == STATUS_OK:
-            u[:] = u_new
-            v[:] = v_new
-            a[:] = a_new
-            f_old[:] = f_new
-            hist[:] = hist_new
-        else:
-            status, rnorm, iters = _substeps(
-                model, mass, data_f, data_i, d0, d1, u, v, a, f_old, hist, dt,
-                beta, gamma, alpha_m, alpha_f, r_tol, max_iter, max_halvings,
-                u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du,
-                u_limit, quasi_static, u_s, v_s, a_s, f_s, h_s, status, rnorm,
-            )  # fmt: skip
-            total_iter += iters
-            if status != STATUS_OK:
-                return uu, vv, aa, rr, hist, status, step, rnorm, total_iter
-        # commit: the last residual evaluation recorded the model's outputs at the converged state
-        uu[step + 1] = u
-        vv[step + 1] = v
-        aa[step + 1] = a
-        rr[step + 1] = rec
-    return uu, vv, aa, rr, hist, STATUS_OK, n_steps, 0.0, total_iter
+    status, last, rnorm, total_iter = _step_loop(
+        model, mass, drive, data_f, data_i, dt, n_steps, beta, gamma, alpha_m, alpha_f, r_tol, max_iter,
+        max_halvings, u_limit, quasi_static, uu, vv, aa, rr, u, v, a, f_old, hist, u_new, v_new, a_new, f_new,
+        hist_new, drv, kt, ct, jac, piv, res, rec, work, jac_state, du, u_s, v_s, a_s, f_s, h_s,
+    )  # fmt: skip
+    return uu, vv, aa, rr, hist, status, last, rnorm, total_iter
 
 
 @njit(cache=True)

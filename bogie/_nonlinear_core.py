@@ -30,9 +30,10 @@ springs with their end friction's return map, pad moments, tyre loads, bushes, b
 were split from a former single routine they kept its arithmetic in the same order, so results were bit-identical
 to it (the radius rods and the equaliser stops, added later, changed the physics). The helpers are inlined into
 :func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
-evaluation. An array passed to an inlined helper still costs reference counting at each call, so the helpers
-used inside loops take and return scalars, and the short loops over pivots, contacts and tyres stay in
-:func:`_internal` (a force evaluation costs about 7 % more than the single routine did).
+evaluation. The helpers used inside loops take and return scalars, and the short loops over pivots, contacts and
+tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`` buffer (:data:`WORK`), not views,
+and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
+touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
 """
 
 from __future__ import annotations
@@ -281,34 +282,27 @@ def work_size(n: int) -> int:
     return int(scratch_size(n)) + 4 * n
 
 
-@njit(cache=True, inline="always")
-def _work_view(work, k, n):
-    """Scratch array k of :data:`WORK` as a view into the work buffer."""
-    return work[_work_start(k, n) : _work_start(k + 1, n)]
-
-
-@njit(cache=True, inline="always")
-def _work_views(work, n):
-    """The scratch arrays of :func:`_internal` as views into one buffer: no allocation in the stepping loop."""
-    return (
-        _work_view(work, 0, n),
-        _work_view(work, 1, n),
-        _work_view(work, 2, n),
-        _work_view(work, 3, n),
-        _work_view(work, 4, n),
-        _work_view(work, 5, n),
-        _work_view(work, 6, n),
-        _work_view(work, 7, n),
-        _work_view(work, 8, n),
-        _work_view(work, 9, n),
-        _work_view(work, 10, n),
-        _work_view(work, 11, n),
-        _work_view(work, 12, n),
-        _work_view(work, 13, n),
-        _work_view(work, 14, n),
-        _work_view(work, 15, n),
-        _work_view(work, 16, n),
-    )
+(
+    _W_PIVOT_X,
+    _W_PIVOT_Z,
+    _W_MAT_X,
+    _W_MAT_Z,
+    _W_PAD_SIN,
+    _W_PAD_COS,
+    _W_CONTACT_X,
+    _W_CONTACT_Z,
+    _W_FRICTION,
+    _W_STICK,
+    _W_NORMAL,
+    _W_SPRING,
+    _W_EQ_COS,
+    _W_EQ_SIN,
+    _W_AXLE_X,
+    _W_AXLE_X_PITCH,
+    _W_AXLE_X_RISE,
+) = range(len(WORK))
+# The scratch arrays are read and written as work[_work_start(k, n) + i], not through views: each view of a
+# buffer is a new array object, and its reference counting at every use cost more than the arithmetic it served.
 
 
 # ---- geometry --------------------------------------------------------------------------------------------------
@@ -401,34 +395,45 @@ def _hysteresis(delta, delta_old, h_old, band, decay):
 
 
 @njit(cache=True, inline="always")
-def _springs(
-    u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x
-):  # fmt: skip
+def _springs(u, data_f, n, hist_old, hist_new, work):
     """Every spring: contact points (rolling), deflection, interleaf hysteresis, end friction, seat and end loads.
 
-    ``ax_x`` is each axle's (seat's) x on its radius rod; its leaf ends move with it. Each spring's deflection and
-    hysteretic force go to the new history (and from there to the record).
+    Reads the material points, pad rotations and axle x (each axle's, the seat's, on its radius rod; its leaf ends
+    move with it) from the scratch arrays of ``work`` and writes the contact points, friction forces, stick flags,
+    end loads and spring loads there. Each spring's deflection and hysteretic force go to the new history (and
+    from there to the record).
     """
     o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
     k_r, mu, k_tan = data_f[_KR], data_f[_MU], data_f[_KTAN]
     band, decay = data_f[_BAND], data_f[_BETA]
     o_hd, o_hh = history_start(_HIST_DEFLECTION, n), history_start(_HIST_HYSTERESIS, n)
+    w_mx, w_mz = _work_start(_W_MAT_X, n), _work_start(_W_MAT_Z, n)
+    w_ps, w_pc = _work_start(_W_PAD_SIN, n), _work_start(_W_PAD_COS, n)
+    w_px, w_pz = _work_start(_W_CONTACT_X, n), _work_start(_W_CONTACT_Z, n)
+    w_t, w_st, w_nl = _work_start(_W_FRICTION, n), _work_start(_W_STICK, n), _work_start(_W_NORMAL, n)
+    w_fs, w_ax = _work_start(_W_SPRING, n), _work_start(_W_AXLE_X, n)
     for i in range(n):
         ef = 2 * i
         er = 2 * i + 1
-        xa = ax_x[i]
+        xa = work[w_ax + i]
         moved = xa - data_f[o_xa + i]  # the seat's fore-aft motion on its rod, carried by both leaf ends
         za = u[n + i]
         h0 = data_f[o_h0 + i]
-        p_x[ef], p_z[ef], p_x[er], p_z[er] = _rolled_contacts(
-            m_x[ef], m_z[ef], m_x[er], m_z[er], pad_s[ef], pad_c[ef], pad_s[er], pad_c[er],
-            xa, za, h0, data_f[o_b0 + i], data_f[_KAPPA], data_f[_RHO],
+        mxf = work[w_mx + ef]
+        mxr = work[w_mx + er]
+        pxf, pzf, pxr, pzr = _rolled_contacts(
+            mxf, work[w_mz + ef], mxr, work[w_mz + er], work[w_ps + ef], work[w_pc + ef], work[w_ps + er],
+            work[w_pc + er], xa, za, h0, data_f[o_b0 + i], data_f[_KAPPA], data_f[_RHO],
         )  # fmt: skip
-        span = p_x[er] - p_x[ef]
-        wf = (p_x[er] - xa) / span
+        work[w_px + ef] = pxf
+        work[w_pz + ef] = pzf
+        work[w_px + er] = pxr
+        work[w_pz + er] = pzr
+        span = pxr - pxf
+        wf = (pxr - xa) / span
         wr = 1.0 - wf
-        delta = za - (wf * p_z[ef] + wr * p_z[er] - h0)
+        delta = za - (wf * pzf + wr * pzr - h0)
         # interleaf friction: the leaf pack's force is the elastic line plus its hysteretic part
         h = _hysteresis(delta, hist_old[o_hd + i], hist_old[o_hh + i], band, decay)
         hist_new[o_hd + i] = delta
@@ -438,32 +443,39 @@ def _springs(
         # friction: elastic-plastic return map on the slip of each leaf end over its pad
         lam_f = data_f[o_lf + i]
         lam_r = data_f[o_lr + i]
-        g = moved - lam_f * delta - (m_x[ef] - data_f[o_mx0 + ef])
-        t_fric[ef], hist_new[ef], stick[ef] = _return_map(g, hist_old[ef], mu * wf * n_el, k_tan)
-        g = moved + lam_r * delta - (m_x[er] - data_f[o_mx0 + er])
-        t_fric[er], hist_new[er], stick[er] = _return_map(g, hist_old[er], mu * wr * n_el, k_tan)
+        g = moved - lam_f * delta - (mxf - data_f[o_mx0 + ef])
+        t_f, hist_new[ef], work[w_st + ef] = _return_map(g, hist_old[ef], mu * wf * n_el, k_tan)
+        g = moved + lam_r * delta - (mxr - data_f[o_mx0 + er])
+        t_r, hist_new[er], work[w_st + er] = _return_map(g, hist_old[er], mu * wr * n_el, k_tan)
+        work[w_t + ef] = t_f
+        work[w_t + er] = t_r
         # friction resists the ends' sliding, so it stiffens the spring (arch thrust)
-        fs = f_elastic - lam_f * t_fric[ef] + lam_r * t_fric[er]
+        fs = f_elastic - lam_f * t_f + lam_r * t_r
         if fs < 0.0:
             fs = 0.0
-        f_spring[i] = fs
-        n_load[ef] = wf * fs
-        n_load[er] = wr * fs
+        work[w_fs + i] = fs
+        work[w_nl + ef] = wf * fs
+        work[w_nl + er] = wr * fs
 
 
 # ---- forces on the bodies --------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
-def _pad_moments(data_i, n, dh, piv_x, piv_z, p_x, p_z, t_fric, n_load, f):
+def _pad_moments(data_i, n, dh, work, f):
     """Contact forces (T, N) at P_e on the pads: moments about each body's centre of rotation (f = -Q)."""
+    w_vx, w_vz = _work_start(_W_PIVOT_X, n), _work_start(_W_PIVOT_Z, n)
+    w_px, w_pz = _work_start(_W_CONTACT_X, n), _work_start(_W_CONTACT_Z, n)
+    w_t, w_nl = _work_start(_W_FRICTION, n), _work_start(_W_NORMAL, n)
     for e in range(2 * n):
         body = data_i[1 + e]
-        t = t_fric[e]
-        nn = n_load[e]
+        t = work[w_t + e]
+        nn = work[w_nl + e]
         if body < 0:
-            f[0] -= t * (p_z[e] - dh) - nn * p_x[e]
+            f[0] -= t * (work[w_pz + e] - dh) - nn * work[w_px + e]
         else:
-            f[1 + body] -= t * (p_z[e] - piv_z[body]) - nn * (p_x[e] - piv_x[body])
-            f[0] -= t * (piv_z[body] - dh) - nn * piv_x[body]
+            pvx = work[w_vx + body]
+            pvz = work[w_vz + body]
+            f[1 + body] -= t * (work[w_pz + e] - pvz) - nn * (work[w_px + e] - pvx)
+            f[0] -= t * (pvz - dh) - nn * pvx
 
 
 @njit(cache=True, inline="always")
@@ -507,7 +519,7 @@ def _stop_moment(phi, stop, k_stop):
 
 
 @njit(cache=True, inline="always")
-def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
+def _record_contacts(n, work, hist_new, rec):
     """Spring loads, friction forces, stick flags, contact shifts, plastic slips, axle positions, spring deflections
     and hysteretic forces into the record."""
     o_spring = record_start(_REC_SPRING, n)
@@ -520,21 +532,30 @@ def _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec):
     o_hys = record_start(_REC_HYSTERESIS, n)
     h_def = history_start(_HIST_DEFLECTION, n)
     h_hys = history_start(_HIST_HYSTERESIS, n)
+    w_mx, w_px = _work_start(_W_MAT_X, n), _work_start(_W_CONTACT_X, n)
+    w_t, w_st = _work_start(_W_FRICTION, n), _work_start(_W_STICK, n)
+    w_fs, w_ax = _work_start(_W_SPRING, n), _work_start(_W_AXLE_X, n)
     for i in range(n):
-        rec[o_spring + i] = f_spring[i]
-        rec[o_axle + i] = ax_x[i]
+        rec[o_spring + i] = work[w_fs + i]
+        rec[o_axle + i] = work[w_ax + i]
         rec[o_def + i] = hist_new[h_def + i]
         rec[o_hys + i] = hist_new[h_hys + i]
     for e in range(2 * n):
-        rec[o_fric + e] = t_fric[e]
-        rec[o_stick + e] = stick[e]
-        rec[o_shift + e] = p_x[e] - m_x[e]
+        rec[o_fric + e] = work[w_t + e]
+        rec[o_stick + e] = work[w_st + e]
+        rec[o_shift + e] = work[w_px + e] - work[w_mx + e]
         rec[o_slip + e] = hist_new[e]
 
 
-@njit(cache=True)
+@njit(cache=True, _nrt=False)
 def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work):
-    """Internal force f = -Q at (u, v) for the drive row ``drv``; writes the new slips and, if asked, the record."""
+    """Internal force f = -Q at (u, v) for the drive row ``drv``; writes the new slips and, if asked, the record.
+
+    Compiled without numba's reference counting (``_nrt=False``): it makes and keeps no array, and its caller
+    holds every argument, so the atomic increment and decrement of each of its 10 arrays at every call (40 atomic
+    operations in a step's two evaluations) are not needed. It stays a call: inlined as well, the kernel took
+    minutes to compile and ran slower.
+    """
     n = data_i[0]
     load_factor = drv[2 * n]
     dh = drv[2 * n + 1]
@@ -542,40 +563,43 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     sc = math.sin(u[0])
     for k in range(2 * n):
         f[k] = 0.0
-    piv_x, piv_z, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, eq_c, eq_s, ax_x, ax_dth, ax_dz = (
-        _work_views(work, n)
-    )
+    w_vx, w_vz = _work_start(_W_PIVOT_X, n), _work_start(_W_PIVOT_Z, n)
+    w_mx, w_mz = _work_start(_W_MAT_X, n), _work_start(_W_MAT_Z, n)
+    w_ps, w_pc = _work_start(_W_PAD_SIN, n), _work_start(_W_PAD_COS, n)
+    w_ec, w_es = _work_start(_W_EQ_COS, n), _work_start(_W_EQ_SIN, n)
+    w_t, w_fs = _work_start(_W_FRICTION, n), _work_start(_W_SPRING, n)
+    w_ax, w_adth, w_adz = _work_start(_W_AXLE_X, n), _work_start(_W_AXLE_X_PITCH, n), _work_start(_W_AXLE_X_RISE, n)
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(n - 1):
-        eq_c[j] = math.cos(u[1 + j])
-        eq_s[j] = math.sin(u[1 + j])
-        piv_x[j], piv_z[j] = _chassis_point(data_f[o_vx + j], data_f[o_vz + j], dh, cc, sc)
+        work[w_ec + j] = math.cos(u[1 + j])
+        work[w_es + j] = math.sin(u[1 + j])
+        work[w_vx + j], work[w_vz + j] = _chassis_point(data_f[o_vx + j], data_f[o_vz + j], dh, cc, sc)
     # material design contact points M_e carried with their bodies, and each pad's rotation
     for e in range(2 * n):
         body = data_i[1 + e]
         if body < 0:
             ox, oz, c, s = 0.0, dh, cc, sc
         else:
-            ox, oz, c, s = piv_x[body], piv_z[body], eq_c[body], eq_s[body]
-        m_x[e], m_z[e] = _body_point(ox, oz, c, s, data_f[o_px + e], data_f[o_pz + e])
-        pad_s[e] = s
-        pad_c[e] = c
+            ox, oz, c, s = work[w_vx + body], work[w_vz + body], work[w_ec + body], work[w_es + body]
+        work[w_mx + e], work[w_mz + e] = _body_point(ox, oz, c, s, data_f[o_px + e], data_f[o_pz + e])
+        work[w_ps + e] = s
+        work[w_pc + e] = c
     # each axle's x on its radius rod from its chassis anchor
     o_rax, o_raz, o_rl = array_start(_RAX, n), array_start(_RAZ, n), array_start(_RL, n)
     for i in range(n):
-        ax_x[i], ax_dth[i], ax_dz[i] = _radius_rod(
+        work[w_ax + i], work[w_adth + i], work[w_adz + i] = _radius_rod(
             data_f[o_rax + i], data_f[o_raz + i], data_f[o_rl + i], u[n + i], dh, cc, sc
         )
-    _springs(u, data_f, n, hist_old, hist_new, m_x, m_z, pad_s, pad_c, p_x, p_z, t_fric, stick, n_load, f_spring, ax_x)
+    _springs(u, data_f, n, hist_old, hist_new, work)
     for i in range(n):
         # the spring pushes its axle down: f = -Q
-        f[n + i] += f_spring[i]
+        f[n + i] += work[w_fs + i]
         # the seat pushes the axle by -(T_F + T_R) along x; the rod turns that into Q_k = -(T_F + T_R) dx_i/du_k
-        h = t_fric[2 * i] + t_fric[2 * i + 1]
-        f[0] += h * ax_dth[i]
-        f[n + i] += h * ax_dz[i]
-    _pad_moments(data_i, n, dh, piv_x, piv_z, p_x, p_z, t_fric, n_load, f)
+        h = work[w_t + 2 * i] + work[w_t + 2 * i + 1]
+        f[0] += h * work[w_adth + i]
+        f[n + i] += h * work[w_adz + i]
+    _pad_moments(data_i, n, dh, work, f)
     # tyres: unilateral, with wear lowering the wheel's reach; the axle weights
     o_c0, o_wear, k_t, c_t = array_start(_C0, n), array_start(_WEAR, n), data_f[_KT], data_f[_CT]
     for i in range(n):
@@ -602,7 +626,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     # payload weight on the chassis
     f[0] -= load_factor * data_f[_WPAY] * data_f[_XCG] * cc
     if record:
-        _record_contacts(n, m_x, p_x, t_fric, stick, f_spring, hist_new, ax_x, rec)
+        _record_contacts(n, work, hist_new, rec)
 
 
 @njit(cache=True, inline="always")
@@ -629,7 +653,7 @@ def _damping_tangent(u, v, drv, data_f, n, ct):
             ct[n + i, n + i] += c_t
 
 
-@njit(cache=True)
+@njit(cache=True, inline="always")
 def force(u, v, drv, data_f, data_i, hist_old, hist_new, f, kt, ct, rec, record, want_tangent, work):
     """Internal force f(u, v) and, if ``want_tangent``, K_T by forward differences and the exact C_T.
 

@@ -1,0 +1,186 @@
+"""The time-stepping kernel reproduces stored runs of the code before issue 15's speed-ups bit for bit.
+
+``tests/data/kernel_identity.npz`` was written by this file's ``__main__`` with the kernels of commit 2d6af20
+(``python tests/test_kernel_identity.py tests/data/kernel_identity.npz`` with that tree on ``PYTHONPATH``): the
+tri-axle and tandem presets over an ISO 8608 class B road at 15 m/s (Newmark and generalised-alpha), a load ramp
+and a hold continued from its final state, the quasi-static path, a coarse-step run whose steps fail and are
+retried as sub-steps, one that fails outright, and direct kernel runs (iteration counts, status, the record)
+including the linear model id. Every 10th row and the last are stored (about 200 kB). A change of the kernels'
+arithmetic (operation order included) fails this test: an implementation speed-up must not change one bit.
+"""
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from bogie import _nonlinear_core as core
+from bogie import nonlinear as nl
+from bogie.newmark import MODEL_LINEAR, MODEL_NONLINEAR, consistent_acceleration, integrate
+from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.road import ISO8608Profile
+
+DATA = Path(__file__).parent / "data" / "kernel_identity.npz"
+SCALAR_KEYS = ("status", "n", "n_iterations")
+
+
+def _thin(key, value):
+    """Every 10th row and the last of a history; scalars, final states and history variables as they are."""
+    field = key.split("/")[1]
+    if field in SCALAR_KEYS or field == "history" or field.startswith("final_") or value.shape[0] <= 20:
+        return value
+    rows = np.unique(np.r_[np.arange(0, value.shape[0], 10), value.shape[0] - 1])
+    return value[rows]
+
+
+def _cases():
+    prof = ISO8608Profile("B", length=400, seed=1)
+    tri, tan = triaxle_stage1(), tandem_trrl()
+    rough = ISO8608Profile("D", length=400, seed=2)
+    out = {}
+    out["tri_road"] = nl.simulate(tri, nl.road_inputs(tri, prof, 15.0, 2.0, 1e-3))
+    out["tan_road"] = nl.simulate(tan, nl.road_inputs(tan, prof, 15.0, 2.0, 1e-3))
+    r = nl.simulate(tri, nl.load_ramp(tri, 0.2, 1.0, 1.0, 1e-3))
+    out["tri_ramp"] = r
+    out["tri_hold"] = nl.simulate(tri, nl.hold(tri, 0.5, 1e-3), initial=r.final_state)
+    out["tan_galpha"] = nl.simulate(tan, nl.road_inputs(tan, prof, 15.0, 1.0, 1e-3), rho_inf=0.8)
+    # a coarse step with a tight iteration budget: steps fail and are retried as sub-steps
+    out["tri_substeps"] = nl.simulate(tri, nl.road_inputs(tri, rough, 25.0, 1.0, 4e-3), max_iter=2, max_halvings=5)
+    # one that fails outright (no sub-steps allowed)
+    out["tri_fail"] = nl.simulate(tri, nl.road_inputs(tri, rough, 25.0, 1.0, 4e-3), max_iter=1, max_halvings=0)
+    out["tri_static"] = nl.static_loads(tri, nl.load_ramp(tri, 0.2, 1.0, 0.2, 1e-3))
+    return out
+
+
+def _raw_runs():
+    """Direct kernel runs (iteration counts and status): the non-linear model and the linear model id."""
+    res = {}
+    tri = triaxle_stage1()
+    prof = ISO8608Profile("D", length=400, seed=2)
+    for name, dt, mi, mh in (("k_sub", 4e-3, 2, 5), ("k_fail", 4e-3, 1, 0), ("k_ok", 1e-3, 25, 5)):
+        inputs = nl.road_inputs(tri, prof, 25.0, 1.0, dt)
+        mass, data_f, data_i = nl.pack(tri)
+        drive = inputs.drive(tri)
+        st = nl.equilibrium(tri, drive[0])
+        n_rec = core.record_length(3)
+        f0 = np.zeros(6)
+        hn = st.history.copy()
+        core.force(
+            st.u,
+            st.v,
+            drive[0],
+            data_f,
+            data_i,
+            st.history,
+            hn,
+            f0,
+            np.zeros((6, 6)),
+            np.zeros((6, 6)),
+            np.zeros(n_rec),
+            False,
+            False,
+            np.zeros(nl._work_size(tri)),
+        )
+        a0 = consistent_acceleration(mass, f0)
+        res[name] = integrate(
+            MODEL_NONLINEAR,
+            mass,
+            drive,
+            data_f,
+            data_i,
+            st.u.copy(),
+            st.v.copy(),
+            a0,
+            st.history.copy(),
+            inputs.dt,
+            inputs.n_steps,
+            nl._tolerance(tri),
+            max_iter=mi,
+            max_halvings=mh,
+            n_record=n_rec,
+            work_size=nl._work_size(tri),
+            limits=nl.limits(tri),
+        )
+    rng = np.random.default_rng(3)
+    n = 3
+    M = np.diag([2.0, 1.0, 1.5])
+    K = np.array([[300.0, -100, 0], [-100, 250, -80], [0, -80, 200]])
+    C = 0.01 * K + 0.1 * M
+    loads = rng.normal(size=(501, n))
+    a0 = np.linalg.solve(M, loads[0])
+    res["k_linear"] = integrate(
+        MODEL_LINEAR,
+        M,
+        loads,
+        np.concatenate([K.ravel(), C.ravel()]),
+        np.array([n]),
+        np.zeros(n),
+        np.zeros(n),
+        a0,
+        np.zeros(0),
+        0.01,
+        500,
+        np.full(n, 1e-9),
+        rho_inf=0.7,
+    )
+    return res
+
+
+def arrays():
+    d = {}
+    for name, r in _cases().items():
+        ex = r.extras
+        d[f"{name}/status"] = np.array([r.status == "ok"])
+        d[f"{name}/n"] = np.array([len(r.t)])
+        d[f"{name}/wheel_loads"] = r.wheel_loads
+        for key in (
+            "chassis_pitch",
+            "equaliser_rotation",
+            "axle_displacement",
+            "spring_load",
+            "friction_force",
+            "stick",
+            "plastic_slip",
+            "spring_hysteresis",
+            "stop_moment",
+            "axle_position",
+        ):
+            d[f"{name}/{key}"] = np.asarray(ex[key])
+        if r.final_state is not None:
+            for k in ("u", "v", "a", "history"):
+                d[f"{name}/final_{k}"] = getattr(r.final_state, k)
+    for name, r in _raw_runs().items():
+        d[f"{name}/status"] = np.array([r.status])
+        d[f"{name}/n_iterations"] = np.array([r.n_iterations])
+        d[f"{name}/n"] = np.array([len(r.t)])
+        for k in ("u", "v", "a", "record"):
+            d[f"{name}/{k}"] = getattr(r, k)
+        d[f"{name}/history"] = r.history
+    return d
+
+
+def _computed():
+    return {key: _thin(key, value) for key, value in arrays().items()}
+
+
+@pytest.fixture(scope="module")
+def computed():
+    return _computed()
+
+
+def test_the_stored_runs_are_all_computed(computed):
+    stored = np.load(DATA)
+    assert sorted(stored.files) == sorted(computed)
+
+
+@pytest.mark.parametrize("key", sorted(np.load(DATA).files) if DATA.exists() else [])
+def test_the_kernels_reproduce_the_stored_run_bit_for_bit(computed, key):
+    stored = np.load(DATA)[key]
+    got = computed[key]
+    assert got.shape == stored.shape
+    assert np.array_equal(got, stored), f"{key}: largest difference {np.max(np.abs(got - stored)):.3g}"
+
+
+if __name__ == "__main__":
+    np.savez_compressed(sys.argv[1], **_computed())
