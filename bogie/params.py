@@ -139,6 +139,14 @@ def _show(value: Any) -> str:
 
 
 def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
+    if type(value) is float:
+        # the usual case, without the array round trip below (float(np.asarray(v)) is v itself): a bogie is
+        # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel
+        if math.isfinite(value) and (value >= low if low_inclusive else value > low) and value <= high:
+            return value
+        raise ValueError(
+            f"{name} = {value!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}"
+        )
     # a real number: Python's or numpy's (a 0-d array too); not a bool (True is not 1 N m/rad) nor a numeric text
     arr = None if isinstance(value, str | bytes) else np.asarray(value)
     if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
@@ -155,7 +163,9 @@ def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low
 def _check_vector(
     name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
 ) -> tuple[float, ...]:
-    if isinstance(value, str | bytes) or np.ndim(value) == 0:
+    if type(value) is tuple and all(type(v) is float for v in value):
+        pass  # a tuple of floats (what validation stores): one dimension, no numpy round trip needed
+    elif isinstance(value, str | bytes) or np.ndim(value) == 0:
         raise ValueError(f"{name} = {_show(value)} must be a sequence of {length} values (one per {what}) in {unit}")
     values = tuple(value)
     if len(values) != length:
@@ -308,7 +318,9 @@ class Bogie(AxleGroup):
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
-        if isinstance(axle_x, str | bytes) or np.ndim(axle_x) != 1 or len(tuple(axle_x)) < 2:
+        if type(axle_x) is tuple and len(axle_x) >= 2 and all(type(x) is float for x in axle_x):
+            pass  # the usual case (floats, as validation stores them), without numpy's look at the sequence
+        elif isinstance(axle_x, str | bytes) or np.ndim(axle_x) != 1 or len(tuple(axle_x)) < 2:
             raise ValueError(f"axle_x = {axle_x!r} must list at least 2 axle positions in m (n >= 2)")
         n = len(tuple(axle_x))
         if isinstance(self.tyre_wear, tuple) and not self.tyre_wear:
