@@ -16,6 +16,7 @@ range, and raises ``ValueError`` naming the field, its value, the allowed range 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -488,21 +489,31 @@ def with_equaliser_arms(bogie: Bogie, front: float, rear: float | None = None) -
     designed to share its load equally still does (the lever rule would otherwise load the middle axle of a
     tri-axle more).
     """
+    return bogie.replace(**equaliser_arm_changes(bogie, front, rear))
+
+
+def equaliser_arm_changes(bogie: Any, front: float, rear: float | None = None) -> dict[str, tuple[float, ...]]:
+    """The field changes of :func:`with_equaliser_arms` (arms and spring halves) for ``bogie``: a :class:`Bogie`
+    or a mapping of its fields (``spring_front_half_length``, ``spring_rear_half_length``, ``equaliser_front_arm``
+    and ``equaliser_rear_arm``), so that a caller changing other fields too can validate the bogie once."""
+    get = bogie.__getitem__ if isinstance(bogie, dict) else bogie.__getattribute__
+    s_f, s_r = get("spring_front_half_length"), get("spring_rear_half_length")
+    arm_f, arm_r = get("equaliser_front_arm"), get("equaliser_rear_arm")
     rear = front if rear is None else rear
-    n = bogie.n_axles
-    a_f = list(bogie.spring_front_half_length)
-    a_r = list(bogie.spring_rear_half_length)
+    n = len(s_f)
+    a_f = list(s_f)
+    a_r = list(s_r)
     for j in range(n - 1):
-        a_r[j] -= front - bogie.equaliser_front_arm[j]
-        a_f[j + 1] -= rear - bogie.equaliser_rear_arm[j]
-    a_f[0] += (a_r[0] - bogie.spring_rear_half_length[0]) * (a_f[0] / bogie.spring_rear_half_length[0])
-    a_r[-1] += (a_f[-1] - bogie.spring_front_half_length[-1]) * (a_r[-1] / bogie.spring_front_half_length[-1])
-    return bogie.replace(
-        equaliser_front_arm=(front,) * (n - 1),
-        equaliser_rear_arm=(rear,) * (n - 1),
-        spring_front_half_length=tuple(a_f),
-        spring_rear_half_length=tuple(a_r),
-    )
+        a_r[j] -= front - arm_f[j]
+        a_f[j + 1] -= rear - arm_r[j]
+    a_f[0] += (a_r[0] - s_r[0]) * (a_f[0] / s_r[0])
+    a_r[-1] += (a_f[-1] - s_f[-1]) * (a_r[-1] / s_f[-1])
+    return {
+        "equaliser_front_arm": (front,) * (n - 1),
+        "equaliser_rear_arm": (rear,) * (n - 1),
+        "spring_front_half_length": tuple(a_f),
+        "spring_rear_half_length": tuple(a_r),
+    }
 
 
 # ---- presets --------------------------------------------------------------------------------------------------
@@ -584,6 +595,18 @@ def triaxle_stage1(**changes: Any) -> Bogie:
 
 
 PRESETS = {"tandem_trrl": tandem_trrl, "triaxle_stage1": triaxle_stage1}
+
+
+@functools.lru_cache(maxsize=None)
+def _preset_base(name: str) -> Bogie:
+    return preset(name)
+
+
+def preset_fields(name: str) -> dict[str, Any]:
+    """The fields of the named preset (:func:`preset`, validated once per process and name) as a new dict: change
+    some and build one :class:`Bogie` from it instead of validating a preset and then each changed copy."""
+    base = _preset_base(name)
+    return {f.name: getattr(base, f.name) for f in dataclasses.fields(Bogie)}
 
 
 def preset(name: str, **changes: Any) -> Bogie:
