@@ -312,6 +312,9 @@ class ISO8608Profile:
     def __call__(self, x: ArrayLike) -> np.ndarray:
         """Road height [m] at road distance ``x`` [m] (any real x: the profile repeats every ``length``)."""
         x = _finite_array("x", x, "m")
+        if x.size and 0.0 <= x.min() and x.max() < self.length:
+            # x mod length is x itself on [0, length) (fmod is exact): the approach roads' case (issue 15)
+            return np.interp(x, self._grid_x, self._grid_h)
         return np.interp(np.mod(x, self.length), self._grid_x, self._grid_h)
 
 
