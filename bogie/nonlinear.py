@@ -110,6 +110,14 @@ class Inputs:
             )
         )
 
+    def drive_row(self, bogie: Bogie, row: int) -> NDArray[np.float64]:
+        """Row ``row`` of :meth:`drive`, value for value, without forming the others."""
+        n = bogie.n_axles
+        if self.road_height.shape[1] != n:
+            raise ValueError(f"inputs are for {self.road_height.shape[1]} axles but the bogie has {n}")
+        rest = np.array([self.load_factor[row], bogie.kingpin_height_offset + self.kingpin_rise[row]])
+        return np.concatenate([self.road_height[row], self.road_rate[row], rest])
+
 
 def _steps(duration: float, dt: float) -> int:
     if not (math.isfinite(duration) and duration > 0.0):

@@ -1,0 +1,39 @@
+"""The fast paths of a weighing's set-up (issue 15) give exactly what the general code gives."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bogie import nonlinear as nl
+from bogie.params import preset, preset_fields, with_equaliser_arms, Bogie
+
+
+@pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
+def test_relaxed_pack_and_drive_row(name):
+    bogie = preset(name, chassis_tilt=0.01)
+    relaxed = nl.pack(bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0))
+    mass, data_f, data_i = nl._packed(bogie)
+    data_f[nl._FRICTION_SLOTS] = 0.0
+    assert data_f.tobytes() == relaxed[1].tobytes() and np.array_equal(data_i, relaxed[2])
+    assert nl._packed(bogie)[1].tobytes() == nl.pack(bogie)[1].tobytes()  # the cached copy was not changed
+    t = np.arange(50) * 0.01
+    inputs = nl.Inputs(0.01, np.sin(t)[:, None] * np.ones(bogie.n_axles), np.cos(t)[:, None] * np.ones(bogie.n_axles),
+                       0.5 + 0.1 * t, 0.002 * t)  # fmt: skip
+    drive = inputs.drive(bogie)
+    for row in (0, 7, -1):
+        assert inputs.drive_row(bogie, row).tobytes() == drive[row].tobytes()
+
+
+@pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
+def test_one_validation_builds_the_stepwise_bogie(name):
+    changes = dict(bush_stiffness=800.0, friction_coefficient=0.2, chassis_tilt=-0.01, payload_mass=6000.0)
+    stepwise = with_equaliser_arms(preset(name, **changes), 0.2)
+    fields = preset_fields(name)
+    fields.update(changes)
+    from bogie.params import equaliser_arm_changes
+
+    fields.update(equaliser_arm_changes(fields, 0.2))
+    once = Bogie(**fields)
+    assert repr(once) == repr(stepwise)
+    assert preset_fields(name) == {f: getattr(preset(name), f) for f in fields}  # the cached preset is untouched
