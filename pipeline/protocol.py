@@ -59,10 +59,11 @@ class ApproachRoad:
         if ramp.ndim == 0:
             taper = 0.5 * (1.0 - np.cos(np.pi * ramp))
         else:
-            # 0.5 (1 - cos(pi)) is exactly 1: the cosine only over the blends (issue 15: it took a tenth of a
-            # pass's road), the same taper value for value
+            # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
+            # it took a tenth of a pass's road), the same taper value for value
             taper = np.ones_like(ramp)
-            blend = ~(ramp >= 1.0)
+            taper[ramp <= 0.0] = 0.0
+            blend = ~((ramp <= 0.0) | (ramp >= 1.0))
             taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
         return self.profile(np.clip(xx, 0.0, self.profile.length)) * taper
 
