@@ -37,3 +37,17 @@ def test_one_validation_builds_the_stepwise_bogie(name):
     once = Bogie(**fields)
     assert repr(once) == repr(stepwise)
     assert preset_fields(name) == {f: getattr(preset(name), f) for f in fields}  # the cached preset is untouched
+
+
+def test_iso8608_profile_heights_are_np_interp_bit_for_bit():
+    from bogie.road import ISO8608Profile
+
+    rng = np.random.default_rng(3)
+    for seed in range(20):
+        profile = ISO8608Profile("C", length=float(rng.uniform(50.0, 120.0)), seed=seed)
+        x = rng.uniform(-30.0, 2.0 * profile.length, (int(rng.integers(1, 4000)), 3))
+        x[0, :] = profile._grid_x[rng.integers(0, len(profile._grid_x), 3)]  # on grid points
+        x[1, :] = (0.0, -0.0, profile.length)
+        for points in (x, np.clip(x, 0.0, profile.length), np.clip(x, 0.0, 0.99 * profile.length)):
+            expected = np.interp(np.mod(points, profile.length), profile._grid_x, profile._grid_h)
+            assert profile(points).tobytes() == expected.tobytes()
