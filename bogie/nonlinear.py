@@ -15,6 +15,7 @@ load application, a crawl over a road, settling on a weighbridge, each starting 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -324,6 +325,7 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
 _PACKED: dict[int, tuple[Bogie, tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]]] = {}
 #: how many bogies :data:`_PACKED` keeps
 _PACKED_SIZE = 4
+_PACKED_LOCK = threading.Lock()
 
 
 def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
@@ -332,9 +334,10 @@ def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDA
     hit = _PACKED.get(id(bogie))
     if hit is None or hit[0] is not bogie:
         hit = (bogie, pack(bogie))
-        if len(_PACKED) >= _PACKED_SIZE:
-            del _PACKED[next(iter(_PACKED))]
-        _PACKED[id(bogie)] = hit
+        with _PACKED_LOCK:  # threads weighing side by side: one of them drops the oldest entry
+            while len(_PACKED) >= _PACKED_SIZE:
+                del _PACKED[next(iter(_PACKED))]
+            _PACKED[id(bogie)] = hit
     mass, data_f, data_i = hit[1]
     return mass.copy(), data_f.copy(), data_i.copy()
 
