@@ -597,7 +597,7 @@ def triaxle_stage1(**changes: Any) -> Bogie:
 PRESETS = {"tandem_trrl": tandem_trrl, "triaxle_stage1": triaxle_stage1}
 
 
-@functools.lru_cache(maxsize=None)
+@functools.cache
 def _preset_base(name: str) -> Bogie:
     return preset(name)
 

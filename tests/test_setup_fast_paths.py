@@ -6,7 +6,7 @@ import numpy as np
 import pytest
 
 from bogie import nonlinear as nl
-from bogie.params import preset, preset_fields, with_equaliser_arms, Bogie
+from bogie.params import Bogie, equaliser_arm_changes, preset, preset_fields, with_equaliser_arms
 
 
 @pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
@@ -31,8 +31,6 @@ def test_one_validation_builds_the_stepwise_bogie(name):
     stepwise = with_equaliser_arms(preset(name, **changes), 0.2)
     fields = preset_fields(name)
     fields.update(changes)
-    from bogie.params import equaliser_arm_changes
-
     fields.update(equaliser_arm_changes(fields, 0.2))
     once = Bogie(**fields)
     assert repr(once) == repr(stepwise)
