@@ -15,6 +15,7 @@ load application, a crawl over a road, settling on a weighbridge, each starting 
 from __future__ import annotations
 
 import math
+import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -109,6 +110,14 @@ class Inputs:
                 ]
             )
         )
+
+    def drive_row(self, bogie: Bogie, row: int) -> NDArray[np.float64]:
+        """Row ``row`` of :meth:`drive`, value for value, without forming the others."""
+        n = bogie.n_axles
+        if self.road_height.shape[1] != n:
+            raise ValueError(f"inputs are for {self.road_height.shape[1]} axles but the bogie has {n}")
+        rest = np.array([self.load_factor[row], bogie.kingpin_height_offset + self.kingpin_rise[row]])
+        return np.concatenate([self.road_height[row], self.road_rate[row], rest])
 
 
 def _steps(duration: float, dt: float) -> int:
@@ -312,6 +321,32 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
     return mass, data_f.astype(float), data_i
 
 
+#: the bogies :func:`_packed` packed last, by identity (a frozen Bogie's pack never changes), with their pack
+_PACKED: dict[int, tuple[Bogie, tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]]] = {}
+#: how many bogies :data:`_PACKED` keeps
+_PACKED_SIZE = 4
+_PACKED_LOCK = threading.Lock()
+
+
+def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+    """:func:`pack` of ``bogie``, packed once for the phases and the equilibrium of a weighing (issue 15: a static
+    weighing packed the same bogie four times). Fresh copies: the caller may change them."""
+    hit = _PACKED.get(id(bogie))
+    if hit is None or hit[0] is not bogie:
+        hit = (bogie, pack(bogie))
+        with _PACKED_LOCK:  # threads weighing side by side: one of them drops the oldest entry
+            while len(_PACKED) >= _PACKED_SIZE:
+                del _PACKED[next(iter(_PACKED))]
+            _PACKED[id(bogie)] = hit
+    mass, data_f, data_i = hit[1]
+    return mass.copy(), data_f.copy(), data_i.copy()
+
+
+#: where the relaxed equilibrium zeroes the friction in ``data_f`` (friction_coefficient and spring_friction_band
+#: are scalars of the pack only: nothing else packed depends on them)
+_FRICTION_SLOTS = [core.SCALARS.index("friction_coefficient"), core.SCALARS.index("spring_friction_band")]
+
+
 def _work_size(bogie: Bogie) -> int:
     return core.work_size(bogie.n_axles)
 
@@ -433,7 +468,10 @@ def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, 
     n = bogie.n_axles
     ndof = 2 * n
     relaxed = history is None
-    _, data_f, data_i = pack(bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0) if relaxed else bogie)
+    # relaxed: the pack of bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0), without a new bogie
+    _, data_f, data_i = _packed(bogie)
+    if relaxed:
+        data_f[_FRICTION_SLOTS] = 0.0
     drv = np.asarray(drive_row, dtype=float)
     hist = np.zeros(core.history_length(n)) if relaxed else _history(bogie, history, "history")
     hist_new = hist.copy()
@@ -552,7 +590,7 @@ def simulate(
     J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
     dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
-    mass, data_f, data_i = pack(bogie)
+    mass, data_f, data_i = _packed(bogie)
     drive = inputs.drive(bogie)
     state = equilibrium(bogie, drive[0]) if initial is None else initial
     _history(bogie, state.history, "initial.history")

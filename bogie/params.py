@@ -16,6 +16,7 @@ range, and raises ``ValueError`` naming the field, its value, the allowed range 
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from dataclasses import dataclass, field
 from typing import Any, NamedTuple
@@ -139,6 +140,14 @@ def _show(value: Any) -> str:
 
 
 def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
+    if type(value) is float:
+        # the usual case, without the array round trip below (float(np.asarray(v)) is v itself): a bogie is
+        # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel
+        if math.isfinite(value) and (value >= low if low_inclusive else value > low) and value <= high:
+            return value
+        raise ValueError(
+            f"{name} = {value!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}"
+        )
     # a real number: Python's or numpy's (a 0-d array too); not a bool (True is not 1 N m/rad) nor a numeric text
     arr = None if isinstance(value, str | bytes) else np.asarray(value)
     if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
@@ -155,7 +164,9 @@ def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low
 def _check_vector(
     name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
 ) -> tuple[float, ...]:
-    if isinstance(value, str | bytes) or np.ndim(value) == 0:
+    if type(value) is tuple and all(type(v) is float for v in value):
+        pass  # a tuple of floats (what validation stores): one dimension, no numpy round trip needed
+    elif isinstance(value, str | bytes) or np.ndim(value) == 0:
         raise ValueError(f"{name} = {_show(value)} must be a sequence of {length} values (one per {what}) in {unit}")
     values = tuple(value)
     if len(values) != length:
@@ -308,7 +319,9 @@ class Bogie(AxleGroup):
 
     def __post_init__(self) -> None:
         axle_x = self.axle_x
-        if isinstance(axle_x, str | bytes) or np.ndim(axle_x) != 1 or len(tuple(axle_x)) < 2:
+        if type(axle_x) is tuple and len(axle_x) >= 2 and all(type(x) is float for x in axle_x):
+            pass  # the usual case (floats, as validation stores them), without numpy's look at the sequence
+        elif isinstance(axle_x, str | bytes) or np.ndim(axle_x) != 1 or len(tuple(axle_x)) < 2:
             raise ValueError(f"axle_x = {axle_x!r} must list at least 2 axle positions in m (n >= 2)")
         n = len(tuple(axle_x))
         if isinstance(self.tyre_wear, tuple) and not self.tyre_wear:
@@ -476,21 +489,31 @@ def with_equaliser_arms(bogie: Bogie, front: float, rear: float | None = None) -
     designed to share its load equally still does (the lever rule would otherwise load the middle axle of a
     tri-axle more).
     """
+    return bogie.replace(**equaliser_arm_changes(bogie, front, rear))
+
+
+def equaliser_arm_changes(bogie: Any, front: float, rear: float | None = None) -> dict[str, tuple[float, ...]]:
+    """The field changes of :func:`with_equaliser_arms` (arms and spring halves) for ``bogie``: a :class:`Bogie`
+    or a mapping of its fields (``spring_front_half_length``, ``spring_rear_half_length``, ``equaliser_front_arm``
+    and ``equaliser_rear_arm``), so that a caller changing other fields too can validate the bogie once."""
+    get = bogie.__getitem__ if isinstance(bogie, dict) else bogie.__getattribute__
+    s_f, s_r = get("spring_front_half_length"), get("spring_rear_half_length")
+    arm_f, arm_r = get("equaliser_front_arm"), get("equaliser_rear_arm")
     rear = front if rear is None else rear
-    n = bogie.n_axles
-    a_f = list(bogie.spring_front_half_length)
-    a_r = list(bogie.spring_rear_half_length)
+    n = len(s_f)
+    a_f = list(s_f)
+    a_r = list(s_r)
     for j in range(n - 1):
-        a_r[j] -= front - bogie.equaliser_front_arm[j]
-        a_f[j + 1] -= rear - bogie.equaliser_rear_arm[j]
-    a_f[0] += (a_r[0] - bogie.spring_rear_half_length[0]) * (a_f[0] / bogie.spring_rear_half_length[0])
-    a_r[-1] += (a_f[-1] - bogie.spring_front_half_length[-1]) * (a_r[-1] / bogie.spring_front_half_length[-1])
-    return bogie.replace(
-        equaliser_front_arm=(front,) * (n - 1),
-        equaliser_rear_arm=(rear,) * (n - 1),
-        spring_front_half_length=tuple(a_f),
-        spring_rear_half_length=tuple(a_r),
-    )
+        a_r[j] -= front - arm_f[j]
+        a_f[j + 1] -= rear - arm_r[j]
+    a_f[0] += (a_r[0] - s_r[0]) * (a_f[0] / s_r[0])
+    a_r[-1] += (a_f[-1] - s_f[-1]) * (a_r[-1] / s_f[-1])
+    return {
+        "equaliser_front_arm": (front,) * (n - 1),
+        "equaliser_rear_arm": (rear,) * (n - 1),
+        "spring_front_half_length": tuple(a_f),
+        "spring_rear_half_length": tuple(a_r),
+    }
 
 
 # ---- presets --------------------------------------------------------------------------------------------------
@@ -572,6 +595,18 @@ def triaxle_stage1(**changes: Any) -> Bogie:
 
 
 PRESETS = {"tandem_trrl": tandem_trrl, "triaxle_stage1": triaxle_stage1}
+
+
+@functools.cache
+def _preset_base(name: str) -> Bogie:
+    return preset(name)
+
+
+def preset_fields(name: str) -> dict[str, Any]:
+    """The fields of the named preset (:func:`preset`, validated once per process and name) as a new dict: change
+    some and build one :class:`Bogie` from it instead of validating a preset and then each changed copy."""
+    base = _preset_base(name)
+    return {f.name: getattr(base, f.name) for f in dataclasses.fields(Bogie)}
 
 
 def preset(name: str, **changes: Any) -> Bogie:

@@ -148,7 +148,12 @@ def sensor_reading(
     if t_centre - half < t[0] or t_centre + half > t[-1]:
         return math.nan
     flat = 0.5 * abs(sensor_length - contact_length) / speed
-    inside = t[(t > t_centre - half) & (t < t_centre + half)]
+    # the samples strictly inside the passage, and one more each side: all that interpolation on the passage
+    # reads (issue 15: the whole record was scanned and its force column copied for each interpolation)
+    lo = int(np.searchsorted(t, t_centre - half, side="right"))
+    hi = int(np.searchsorted(t, t_centre + half, side="left"))
+    inside = t[lo:hi]
+    t, f = t[max(lo - 1, 0) : hi + 1], np.ascontiguousarray(f[max(lo - 1, 0) : hi + 1])
     knots = np.unique(np.concatenate([inside, t_centre + np.array([-half, -flat, flat, half])]))
     mid = 0.5 * (knots[:-1] + knots[1:])
     width = np.diff(knots)
@@ -157,7 +162,10 @@ def sensor_reading(
         o = _weight(speed * (tt - t_centre), contact_length, sensor_length)
         return o * np.interp(tt, t, f), o
 
-    (fa, oa), (fm, om), (fb, ob) = weighted(knots[:-1]), weighted(mid), weighted(knots[1:])
+    # the three point sets at once (element for element the same as one by one)
+    m = len(mid)
+    fo, oo = weighted(np.concatenate([knots[:-1], mid, knots[1:]]))
+    (fa, fm, fb), (oa, om, ob) = (fo[:m], fo[m : 2 * m], fo[2 * m :]), (oo[:m], oo[m : 2 * m], oo[2 * m :])
     numerator = np.sum(width * (fa + 4.0 * fm + fb)) / 6.0
     denominator = np.sum(width * (oa + 4.0 * om + ob)) / 6.0
     return float(numerator / denominator)
@@ -263,7 +271,15 @@ class SiteRoad:
             return np.zeros_like(xx)
         outside = np.maximum(self.sensor - self.before - xx, xx - self.sensor - self.after)
         ramp = np.clip(1.0 - outside / SITE_BLEND_LENGTH, 0.0, 1.0)
-        return 0.5 * (1.0 - np.cos(np.pi * ramp))
+        if ramp.ndim == 0:
+            return 0.5 * (1.0 - np.cos(np.pi * ramp))
+        # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the tapers (issue 15),
+        # the same weights value for value
+        weight = np.zeros_like(ramp)
+        weight[ramp >= 1.0] = 1.0
+        blend = ~((ramp <= 0.0) | (ramp >= 1.0))
+        weight[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
+        return weight
 
     def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
         """Road height [m] at distance ``x`` [m]."""

@@ -55,7 +55,16 @@ class ApproachRoad:
         xx = np.asarray(x, dtype=float)
         ramp_in = np.clip(xx / BLEND_LENGTH, 0.0, 1.0)
         ramp_out = np.clip((self.length - xx) / BLEND_LENGTH, 0.0, 1.0)
-        taper = 0.5 * (1.0 - np.cos(np.pi * np.minimum(ramp_in, ramp_out)))
+        ramp = np.minimum(ramp_in, ramp_out)
+        if ramp.ndim == 0:
+            taper = 0.5 * (1.0 - np.cos(np.pi * ramp))
+        else:
+            # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
+            # it took a tenth of a pass's road), the same taper value for value
+            taper = np.ones_like(ramp)
+            taper[ramp <= 0.0] = 0.0
+            blend = ~((ramp <= 0.0) | (ramp >= 1.0))
+            taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
         return self.profile(np.clip(xx, 0.0, self.profile.length)) * taper
 
 
@@ -133,7 +142,7 @@ def wim_pass(
     duration = (sensor + group_length) / spec.speed + half + 0.05
     inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, dt, 0.0, load_factor=payload_fraction)
     # at rest at the first row: a steel group with its friction relaxed, an air group levelled and equalised
-    state = None if isinstance(bogie, AirBogie) else nonlinear.equilibrium(bogie, inputs.drive(bogie)[0])
+    state = None if isinstance(bogie, AirBogie) else nonlinear.equilibrium(bogie, inputs.drive_row(bogie, 0))
     run = _simulate(bogie, inputs, initial=state)
     if run.success:
         crossing = (sensor + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / spec.speed

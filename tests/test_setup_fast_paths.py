@@ -1,0 +1,51 @@
+"""The fast paths of a weighing's set-up (issue 15) give exactly what the general code gives."""
+
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from bogie import nonlinear as nl
+from bogie.params import Bogie, equaliser_arm_changes, preset, preset_fields, with_equaliser_arms
+
+
+@pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
+def test_relaxed_pack_and_drive_row(name):
+    bogie = preset(name, chassis_tilt=0.01)
+    relaxed = nl.pack(bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0))
+    mass, data_f, data_i = nl._packed(bogie)
+    data_f[nl._FRICTION_SLOTS] = 0.0
+    assert data_f.tobytes() == relaxed[1].tobytes() and np.array_equal(data_i, relaxed[2])
+    assert nl._packed(bogie)[1].tobytes() == nl.pack(bogie)[1].tobytes()  # the cached copy was not changed
+    t = np.arange(50) * 0.01
+    inputs = nl.Inputs(0.01, np.sin(t)[:, None] * np.ones(bogie.n_axles), np.cos(t)[:, None] * np.ones(bogie.n_axles),
+                       0.5 + 0.1 * t, 0.002 * t)  # fmt: skip
+    drive = inputs.drive(bogie)
+    for row in (0, 7, -1):
+        assert inputs.drive_row(bogie, row).tobytes() == drive[row].tobytes()
+
+
+@pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
+def test_one_validation_builds_the_stepwise_bogie(name):
+    changes = dict(bush_stiffness=800.0, friction_coefficient=0.2, chassis_tilt=-0.01, payload_mass=6000.0)
+    stepwise = with_equaliser_arms(preset(name, **changes), 0.2)
+    fields = preset_fields(name)
+    fields.update(changes)
+    fields.update(equaliser_arm_changes(fields, 0.2))
+    once = Bogie(**fields)
+    assert repr(once) == repr(stepwise)
+    assert preset_fields(name) == {f: getattr(preset(name), f) for f in fields}  # the cached preset is untouched
+
+
+def test_iso8608_profile_heights_are_np_interp_bit_for_bit():
+    from bogie.road import ISO8608Profile
+
+    rng = np.random.default_rng(3)
+    for seed in range(20):
+        profile = ISO8608Profile("C", length=float(rng.uniform(50.0, 120.0)), seed=seed)
+        x = rng.uniform(-30.0, 2.0 * profile.length, (int(rng.integers(1, 4000)), 3))
+        x[0, :] = profile._grid_x[rng.integers(0, len(profile._grid_x), 3)]  # on grid points
+        x[1, :] = (0.0, -0.0, profile.length)
+        for points in (x, np.clip(x, 0.0, profile.length), np.clip(x, 0.0, 0.99 * profile.length)):
+            expected = np.interp(np.mod(points, profile.length), profile._grid_x, profile._grid_h)
+            assert profile(points).tobytes() == expected.tobytes()
