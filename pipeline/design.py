@@ -237,7 +237,7 @@ def tolerance(fine: np.ndarray, share: np.ndarray, target: float) -> tuple[float
     down = zero
     while down - 1 >= 0 and ok[down - 1]:
         down -= 1
-    return float(fine[up]), float(-fine[down]), float(min(share[up], share[down]))
+    return float(fine[up]), float(abs(fine[down])), float(min(share[up], share[down]))
 
 
 def _pareto(share: np.ndarray, distance: np.ndarray) -> np.ndarray:

@@ -41,6 +41,9 @@ def test_tolerance_is_where_the_share_first_falls_below_the_target_on_each_side(
     share = np.where((fine >= -0.4) & (fine <= 0.6), 1.0, 0.5)
     share[fine > 1.2] = 1.0  # a recovery beyond a gap does not extend the tolerance: it must hold all the way
     assert D.tolerance(fine, share, 0.95) == (0.6, 0.4, 1.0)
+    only_up = np.where((fine >= 0.0) & (fine <= 0.3), 1.0, 0.5)
+    up, down, _ = D.tolerance(fine, only_up, 0.95)
+    assert (up, down) == (0.3, 0.0) and math.copysign(1.0, down) == 1.0  # no nose-down tolerance reads 0, not -0
     level_fails = np.where(np.abs(fine) < 0.2, 0.9, 1.0)
     assert D.tolerance(fine, level_fails, 0.95) == (None, None, 0.9)
 
