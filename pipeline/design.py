@@ -40,16 +40,19 @@ import pandas as pd
 import yaml
 from scipy.stats import qmc
 
+from bogie.metrics import max_deviation
+from bogie.weighings.stats import group_inequality
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import Config, ConfigError, load_config
-from pipeline.constants import GROUP_AXLES, PAIR_TOLERANCE
+from pipeline.constants import GROUP_AXLES
 from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, _frame, design_seed, road_seed, sensor_seed
 from pipeline.simulate import simulate_samples
+from pipeline.survey import rounded
 from pipeline.survey_design import wilson_interval
 
 __all__ = [
     "FACTORS", "DesignError", "analyse", "conditions", "design_points", "design_samples", "main", "run",
-    "tilt_grid", "typical_design",
+    "tilt_grid", "tolerance_width", "typical_design",
 ]  # fmt: skip
 
 #: the design factors, SI sample columns, in the order of ``design.json``'s keys
@@ -208,15 +211,16 @@ def design_samples(config: Config, designs: pd.DataFrame, conds: pd.DataFrame, t
 
 # ---- the analysis ----------------------------------------------------------------------------------------------
 def _within(loads: np.ndarray) -> np.ndarray:
-    """Within 5 % (VSB 11): (max W - min W) / max W <= 0.05, over the last axis (NaN where a load is missing)."""
-    heaviest, lightest = np.max(loads, axis=-1), np.min(loads, axis=-1)
-    return (heaviest - lightest) / heaviest <= PAIR_TOLERANCE
+    """Within 5 % (VSB 11), not ``outside_5pct`` of :func:`bogie.weighings.stats.group_inequality`, for axle loads
+    along the last axis."""
+    flat = loads.reshape(-1, loads.shape[-1])
+    outside = group_inequality(flat, np.full(len(flat), loads.shape[-1]))["outside_5pct"]
+    return ~outside.reshape(loads.shape[:-1])
 
 
-def _deviation(loads: np.ndarray) -> np.ndarray:
-    """max_i |W_i - W_m| / W_m over the last axis (:func:`bogie.metrics.max_deviation`)."""
-    mean = np.mean(loads, axis=-1)
-    return np.max(np.abs(loads - mean[..., None]), axis=-1) / mean
+def tolerance_width(table: pd.DataFrame) -> pd.Series:
+    """Each design's tolerated tilt band, nose down plus nose up [degree]; NaN for a design with no tolerance."""
+    return table["tilt_tolerance_nose_up_deg"].astype(float) + table["tilt_tolerance_nose_down_deg"].astype(float)
 
 
 def tolerance(fine: np.ndarray, share: np.ndarray, target: float) -> tuple[float | None, float | None, float]:
@@ -305,15 +309,14 @@ def analyse(runs: pd.DataFrame, designs: pd.DataFrame, tilts: np.ndarray, target
         )
         # the interpolation check: each condition's own tilt, interpolated on the grid, against its direct run
         direct = fleet.set_index("condition")
-        tilt_of = np.degrees(direct["chassis_tilt"].to_numpy(dtype=float)) if "chassis_tilt" in direct else None
-        for c, t in zip(direct.index.to_numpy(), tilt_of if tilt_of is not None else []):
+        for c, t in zip(direct.index.to_numpy(), np.degrees(direct["chassis_tilt"].to_numpy(dtype=float))):
             if c < n_c and complete[c]:
                 est = np.array([np.interp(t, tilts, loads[c, :, i]) for i in range(n_ax)])
                 run_loads = direct.loc[c, [f"axle_load_{i}" for i in range(n_ax)]].to_numpy(dtype=float)
                 checks.append({
                     "design": d.design, "group": d.group, "condition": int(c), "tilt_deg": float(t),
-                    "max_deviation_direct": float(_deviation(run_loads)),
-                    "max_deviation_interpolated": float(_deviation(est)),
+                    "max_deviation_direct": float(max_deviation(run_loads)),
+                    "max_deviation_interpolated": float(max_deviation(est)),
                     "within_direct": bool(_within(run_loads)), "within_interpolated": bool(_within(est)),
                 })  # fmt: skip
         rows.append({
@@ -351,24 +354,18 @@ def _ordered(table: pd.DataFrame) -> pd.DataFrame:
 
 
 # ---- outputs ---------------------------------------------------------------------------------------------------
-def _round(x: Any, digits: int) -> Any:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return None
-    return round(float(x), digits)
-
-
 def design_entry(row: Mapping[str, Any]) -> dict[str, Any]:
     """One entry of ``design.json``'s ``designs``: exactly the keys of :data:`DESIGN_KEYS` (SI, tilts in degrees)."""
     return {
         "group": row["group"],
-        "bush_stiffness": _round(row["bush_stiffness"], 4),
-        "equaliser_arm": _round(row["equaliser_arm"], 6),
-        "contact_roll_radius": _round(row["contact_roll_radius"], 6),
-        "friction_coefficient": _round(row["friction_coefficient"], 4),
-        "spring_friction_band": _round(row["spring_friction_band"], 2),
-        "tilt_tolerance_nose_up_deg": _round(row["tilt_tolerance_nose_up_deg"], 2),
-        "tilt_tolerance_nose_down_deg": _round(row["tilt_tolerance_nose_down_deg"], 2),
-        "share_within_5pct_at_tolerance": _round(row["share_within_5pct_at_tolerance"], 4),
+        "bush_stiffness": rounded(row["bush_stiffness"], 4),
+        "equaliser_arm": rounded(row["equaliser_arm"], 6),
+        "contact_roll_radius": rounded(row["contact_roll_radius"], 6),
+        "friction_coefficient": rounded(row["friction_coefficient"], 4),
+        "spring_friction_band": rounded(row["spring_friction_band"], 2),
+        "tilt_tolerance_nose_up_deg": rounded(row["tilt_tolerance_nose_up_deg"], 2),
+        "tilt_tolerance_nose_down_deg": rounded(row["tilt_tolerance_nose_down_deg"], 2),
+        "share_within_5pct_at_tolerance": rounded(row["share_within_5pct_at_tolerance"], 4),
     }
 
 
@@ -384,10 +381,10 @@ def metrics(analysis: Analysis, config: Config, tilts: np.ndarray, guidance: Seq
     def summary(row: Mapping[str, Any]) -> dict[str, Any]:
         return {
             "design": row["design"], "kind": row["kind"], "pareto": bool(row["pareto"]),
-            "distance": _round(row["distance"], 4), "share_within_5pct": _round(row["share_within_5pct"], 4),
-            "share_within_5pct_interval": [_round(row[f"share_within_5pct_{e}"], 4) for e in ("low", "high")],
-            "share_within_10pct": _round(row["share_within_10pct"], 4),
-            "share_within_10pct_interval": [_round(row[f"share_within_10pct_{e}"], 4) for e in ("low", "high")],
+            "distance": rounded(row["distance"], 4), "share_within_5pct": rounded(row["share_within_5pct"], 4),
+            "share_within_5pct_interval": [rounded(row[f"share_within_5pct_{e}"], 4) for e in ("low", "high")],
+            "share_within_10pct": rounded(row["share_within_10pct"], 4),
+            "share_within_10pct_interval": [rounded(row[f"share_within_10pct_{e}"], 4) for e in ("low", "high")],
             "n_failed": int(row["n_failed"]),
         }  # fmt: skip
 
@@ -406,7 +403,7 @@ def metrics(analysis: Analysis, config: Config, tilts: np.ndarray, guidance: Seq
         "failed": int(table["n_failed"].sum()),
         "interpolation_check": {
             "pairs": len(check),
-            "largest_max_deviation_difference_pct": _round(
+            "largest_max_deviation_difference_pct": rounded(
                 100.0 * (check["max_deviation_interpolated"] - check["max_deviation_direct"]).abs().max(), 3
             )
             if len(check)
@@ -457,8 +454,7 @@ def guidance(table: pd.DataFrame, tilts: np.ndarray, target: float) -> list[str]
         g = table[(table["group"] == group) & (table["suspension"] == "steel")]
         tol = g[[_has_tolerance(r) for r in g.to_dict("records")]]
         if len(tol):
-            width = tol["tilt_tolerance_nose_up_deg"].astype(float) + tol["tilt_tolerance_nose_down_deg"].astype(float)
-            best = tol.loc[width.idxmax()]
+            best = tol.loc[tolerance_width(tol).idxmax()]
             out.append(
                 f"With {describe(best)}, {pct} of {label} stay within 5 % {_band(best, tilts)}: the widest tilt "
                 f"tolerance of the {len(g)} {name} designs."

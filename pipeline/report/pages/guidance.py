@@ -21,6 +21,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
+from pipeline.design import tolerance_width
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page
 from pipeline.report.style import GROUP_COLOR, GROUP_LABEL
@@ -100,8 +101,7 @@ def _curves(ax, group: str, designs: pd.DataFrame, curves: pd.DataFrame, target:
     if len(typ):
         picks.append((typ["design"].iloc[0], "today's typical", "0.45"))
     if len(steel):
-        width = steel["tilt_tolerance_nose_up_deg"] + steel["tilt_tolerance_nose_down_deg"]
-        picks.append((steel.loc[width.idxmax(), "design"], "widest tolerance", GROUP_COLOR[group]))
+        picks.append((steel.loc[tolerance_width(steel).idxmax(), "design"], "widest tolerance", GROUP_COLOR[group]))
     air = g[g["suspension"] == "air"]
     if len(air):
         picks.append((air["design"].iloc[0], "air-sprung", "0.2"))
@@ -252,8 +252,7 @@ def tolerance_rows(designs: pd.DataFrame, best: int = 4) -> list[list[str]]:
     rows = []
     for group in dict.fromkeys(designs["group"]):
         g = designs[(designs["group"] == group) & (designs["suspension"] == "steel")]
-        width = (g["tilt_tolerance_nose_up_deg"] + g["tilt_tolerance_nose_down_deg"]).fillna(-1.0)
-        top = g.loc[width.sort_values(ascending=False, kind="stable").index[:best]]
+        top = g.loc[tolerance_width(g).fillna(-1.0).sort_values(ascending=False, kind="stable").index[:best]]
         picks = [*g[g["kind"] == "typical"].to_dict("records"), *top[top["kind"] != "typical"].to_dict("records")]
         picks += designs[(designs["group"] == group) & (designs["suspension"] == "air")].to_dict("records")
         for r in picks:
