@@ -34,6 +34,13 @@ evaluation. The helpers used inside loops take and return scalars, and the short
 tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`` buffer (:data:`WORK`), not views,
 and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
 touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
+
+Library sin, cos and atan2 calls were most of an evaluation's cost, so the springs compute the same quantities
+another way (:func:`_rolled_contacts`): the leaf end angles are never formed; their sines and cosines come from the
+chord's unit vector turned back by the design chord angle (packed as its cosine and sine) and the angle-sum
+formulas with the sine and cosine of the flattening angle, which short Taylor series give while it is small
+(:func:`_sin_cos`). The same physics to round-off: ``tests/test_force_formulation.py`` keeps the former formulas
+and compares force, record and history over random states.
 """
 
 from __future__ import annotations
@@ -90,7 +97,8 @@ ARRAYS = (
     ("design_tyre_compression", 1, 0),
     ("tyre_wear", 1, 0),
     ("design_chord_height", 1, 0),
-    ("design_chord_angle", 1, 0),
+    ("design_chord_cos", 1, 0),
+    ("design_chord_sin", 1, 0),
     ("pad_x", 2, 0),
     ("pad_z", 2, 0),
     ("design_contact_x", 2, 0),
@@ -108,7 +116,8 @@ ARRAYS = (
     _C0,
     _WEAR,
     _H0,
-    _B0,
+    _CB0,
+    _SB0,
     _PX,
     _PZ,
     _MX0,
@@ -322,28 +331,68 @@ def _body_point(ox, oz, c, s, dx, dz):
     return ox + dx * c + dz * s, oz - dx * s + dz * c
 
 
+#: [rad] bound of |x| up to which :func:`_sin_cos` sums Taylor series instead of calling the library: there the
+#: first omitted terms, x^15/15! of sin and x^14/14! of cos, are below 1e-17 relative
+#: (``tests/test_force_formulation.py`` checks the error is within the library's round-off)
+SIN_COS_SERIES_BOUND = 0.4
+# the series' coefficients: (-1)^k / (2k + 1)! for sin, (-1)^k / (2k)! for cos, k = 1 .. 6
+_S1, _S2, _S3, _S4, _S5, _S6 = (-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0,
+                                1.0 / 6227020800.0)  # fmt: skip
+_C1, _C2, _C3, _C4, _C5, _C6 = (-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0)
+
+
 @njit(cache=True, inline="always")
-def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0, beta0, kappa, rho):
+def _sin_cos(x):
+    """(sin x, cos x) to double precision: Taylor series for |x| up to :data:`SIN_COS_SERIES_BOUND`, else the library.
+
+    The angles of the model are mostly small, and two inlined series in x^2 (12 multiply-adds that overlap with the
+    rest of the evaluation) cost less than the two library calls. Each series adds a small correction to its first
+    term (x, 1), so its own round-off stays below an ulp.
+    """
+    if abs(x) > SIN_COS_SERIES_BOUND:
+        return math.sin(x), math.cos(x)
+    x2 = x * x
+    s = x + x * x2 * (_S1 + x2 * (_S2 + x2 * (_S3 + x2 * (_S4 + x2 * (_S5 + x2 * _S6)))))
+    c = 1.0 + x2 * (_C1 + x2 * (_C2 + x2 * (_C3 + x2 * (_C4 + x2 * (_C5 + x2 * _C6)))))
+    return s, c
+
+
+@njit(cache=True, inline="always")
+def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0, cos_b0, sin_b0, kappa, rho):
     """Contact points P (x, z) of a spring's front and rear ends, from their material points M (x, z) [m].
 
-    The chord angle and a first deflection from the material points fix the leaf end angles; a leaf end on a
-    convex pad of radius rho touches it where their tangents agree, so the contact point moves along the pad by
-    rho x (pad rotation - leaf end rotation). Returns (x_front, z_front, x_rear, z_rear).
+    The chord's rotation beta from its design angle beta0 (cos_b0, sin_b0) and a first deflection d from the
+    material points fix the leaf end angles g = beta -+ kappa d; a leaf end on a convex pad of radius rho touches it
+    where their tangents agree, so the contact point moves along the pad by rho x (pad rotation - leaf end
+    rotation). Returns (x_front, z_front, x_rear, z_rear).
+
+    The angles are never formed: (cos, sin) of beta is the chord's unit vector turned back by beta0, and those of
+    g follow by the angle-sum formulas with (sin, cos) of kappa d (:func:`_sin_cos`). The same values as
+    atan2, a subtraction and four sin/cos calls to round-off, for a square root, a division and a short series.
     """
+    if rho <= 0.0:
+        return xf, zf, xr, zr
     span = xr - xf
+    rise = zf - zr
     wf = (xr - xa) / span
     d_tilde = za - (wf * zf + (1.0 - wf) * zr - h0)
-    beta = math.atan2(-(zr - zf), span) - beta0
-    g_front = beta - kappa * d_tilde
-    g_rear = beta + kappa * d_tilde
-    if rho > 0.0:
-        return (
-            xf + rho * (pad_sf - math.sin(g_front)),
-            zf + rho * (pad_cf - math.cos(g_front)),
-            xr + rho * (pad_sr - math.sin(g_rear)),
-            zr + rho * (pad_cr - math.cos(g_rear)),
-        )
-    return xf, zf, xr, zr
+    inv_chord = 1.0 / math.sqrt(span * span + rise * rise)
+    cos_chord = span * inv_chord
+    sin_chord = rise * inv_chord
+    cos_beta = cos_chord * cos_b0 + sin_chord * sin_b0
+    sin_beta = sin_chord * cos_b0 - cos_chord * sin_b0
+    sin_k, cos_k = _sin_cos(kappa * d_tilde)
+    sc = sin_beta * cos_k
+    cs = cos_beta * sin_k
+    cc = cos_beta * cos_k
+    ss = sin_beta * sin_k
+    # sin and cos of g_front = beta - kappa d and g_rear = beta + kappa d
+    return (
+        xf + rho * (pad_sf - (sc - cs)),
+        zf + rho * (pad_cf - (cc + ss)),
+        xr + rho * (pad_sr - (sc + cs)),
+        zr + rho * (pad_cr - (cc - ss)),
+    )
 
 
 @njit(cache=True, inline="always")
@@ -403,7 +452,8 @@ def _springs(u, data_f, n, hist_old, hist_new, work):
     end loads and spring loads there. Each spring's deflection and hysteretic force go to the new history (and
     from there to the record).
     """
-    o_xa, o_h0, o_b0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_B0, n), array_start(_WD, n)
+    o_xa, o_h0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_WD, n)
+    o_cb0, o_sb0 = array_start(_CB0, n), array_start(_SB0, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
     k_r, mu, k_tan = data_f[_KR], data_f[_MU], data_f[_KTAN]
     band, decay = data_f[_BAND], data_f[_BETA]
@@ -424,7 +474,7 @@ def _springs(u, data_f, n, hist_old, hist_new, work):
         mxr = work[w_mx + er]
         pxf, pzf, pxr, pzr = _rolled_contacts(
             mxf, work[w_mz + ef], mxr, work[w_mz + er], work[w_ps + ef], work[w_pc + ef], work[w_ps + er],
-            work[w_pc + er], xa, za, h0, data_f[o_b0 + i], data_f[_KAPPA], data_f[_RHO],
+            work[w_pc + er], xa, za, h0, data_f[o_cb0 + i], data_f[o_sb0 + i], data_f[_KAPPA], data_f[_RHO],
         )  # fmt: skip
         work[w_px + ef] = pxf
         work[w_pz + ef] = pzf

@@ -276,8 +276,10 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, NDArray[np.float64]], list[i
     x_a = np.asarray(bogie.axle_x)
     wx, wz = np.asarray(world_x), np.asarray(world_z)
     xf, xr, zf, zr = wx[0::2], wx[1::2], wz[0::2], wz[1::2]
-    # the spring chords through the design contact points: height at the axle and angle
+    # the spring chords through the design contact points: height at the axle and angle (as its cosine and sine,
+    # which the core turns the chord's unit vector back by)
     w_front = (xr - x_a) / (xr - xf)
+    chord_angle = np.arctan2(-(zr - zf), xr - xf)
     loads = np.asarray(design_spring_loads(bogie))
     tyre_loads = loads + bogie.axle_mass * GRAVITY
     arrays = {
@@ -288,7 +290,8 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, NDArray[np.float64]], list[i
         "design_tyre_compression": tyre_loads / bogie.tyre_stiffness,
         "tyre_wear": np.asarray(bogie.tyre_wear),
         "design_chord_height": w_front * zf + (1.0 - w_front) * zr,
-        "design_chord_angle": np.arctan2(-(zr - zf), xr - xf),
+        "design_chord_cos": np.cos(chord_angle),
+        "design_chord_sin": np.sin(chord_angle),
         "pad_x": np.asarray(pad_x),
         "pad_z": np.asarray(pad_z),
         "design_contact_x": wx,
