@@ -35,12 +35,13 @@ tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`
 and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
 touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
 
-Library sin, cos and atan2 calls were most of an evaluation's cost, so the springs compute the same quantities
-another way (:func:`_rolled_contacts`): the leaf end angles are never formed; their sines and cosines come from the
+Library sin, cos and atan2 calls were most of an evaluation's cost, so the same quantities are computed another
+way. The springs never form the leaf end angles (:func:`_rolled_contacts`): their sines and cosines come from the
 chord's unit vector turned back by the design chord angle (packed as its cosine and sine) and the angle-sum
-formulas with the sine and cosine of the flattening angle, which short Taylor series give while it is small
-(:func:`_sin_cos`). The same physics to round-off: ``tests/test_force_formulation.py`` keeps the former formulas
-and compares force, record and history over random states.
+formulas with the sine and cosine of the flattening angle. That angle, the chassis pitch and the equaliser
+rotations are mostly small, and short Taylor series give their sines and cosines there (:func:`_sin_cos`). The
+same physics to round-off: ``tests/test_force_formulation.py`` keeps the former formulas and compares force,
+record and history over random states.
 """
 
 from __future__ import annotations
@@ -609,8 +610,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     n = data_i[0]
     load_factor = drv[2 * n]
     dh = drv[2 * n + 1]
-    cc = math.cos(u[0])
-    sc = math.sin(u[0])
+    sc, cc = _sin_cos(u[0])
     for k in range(2 * n):
         f[k] = 0.0
     w_vx, w_vz = _work_start(_W_PIVOT_X, n), _work_start(_W_PIVOT_Z, n)
@@ -622,8 +622,7 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     o_vx, o_vz, o_px, o_pz = array_start(_VX, n), array_start(_VZ, n), array_start(_PX, n), array_start(_PZ, n)
     # pivots (chassis points) in the world, and each equaliser's rotation
     for j in range(n - 1):
-        work[w_ec + j] = math.cos(u[1 + j])
-        work[w_es + j] = math.sin(u[1 + j])
+        work[w_es + j], work[w_ec + j] = _sin_cos(u[1 + j])
         work[w_vx + j], work[w_vz + j] = _chassis_point(data_f[o_vx + j], data_f[o_vz + j], dh, cc, sc)
     # material design contact points M_e carried with their bodies, and each pad's rotation
     for e in range(2 * n):
