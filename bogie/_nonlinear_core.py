@@ -332,9 +332,11 @@ def _body_point(ox, oz, c, s, dx, dz):
     return ox + dx * c + dz * s, oz - dx * s + dz * c
 
 
-#: [rad] bound of |x| up to which :func:`_sin_cos` sums Taylor series instead of calling the library: there the
-#: first omitted terms, x^15/15! of sin and x^14/14! of cos, are below 1e-17 relative
-#: (``tests/test_force_formulation.py`` checks the error is within the library's round-off)
+#: [rad] bound of |x| up to which :func:`_sin_cos` sums Taylor series instead of calling the library. It covers the
+#: chassis pitch's limit (20 degrees, 0.35 rad) and what the protocols' runs of the sample bogies of
+#: ``bench/profile_protocol.py`` reach: equaliser rotations up to 0.25 rad, flattening angles kappa d up to 0.1 rad.
+#: There the first omitted terms, x^15/15! of sin and x^14/14! of cos, are below 1e-17 relative, and the series are
+#: within an ulp of the exact values (0.55 and 0.82 ulp at most; ``tests/test_force_formulation.py``)
 SIN_COS_SERIES_BOUND = 0.4
 # the series' coefficients: (-1)^k / (2k + 1)! for sin, (-1)^k / (2k)! for cos, k = 1 .. 6
 _S1, _S2, _S3, _S4, _S5, _S6 = (-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0,
@@ -371,29 +373,29 @@ def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0,
     g follow by the angle-sum formulas with (sin, cos) of kappa d (:func:`_sin_cos`). The same values as
     atan2, a subtraction and four sin/cos calls to round-off, for a square root, a division and a short series.
     """
-    if rho <= 0.0:
-        return xf, zf, xr, zr
-    span = xr - xf
-    rise = zf - zr
-    wf = (xr - xa) / span
-    d_tilde = za - (wf * zf + (1.0 - wf) * zr - h0)
-    inv_chord = 1.0 / math.sqrt(span * span + rise * rise)
-    cos_chord = span * inv_chord
-    sin_chord = rise * inv_chord
-    cos_beta = cos_chord * cos_b0 + sin_chord * sin_b0
-    sin_beta = sin_chord * cos_b0 - cos_chord * sin_b0
-    sin_k, cos_k = _sin_cos(kappa * d_tilde)
-    sc = sin_beta * cos_k
-    cs = cos_beta * sin_k
-    cc = cos_beta * cos_k
-    ss = sin_beta * sin_k
-    # sin and cos of g_front = beta - kappa d and g_rear = beta + kappa d
-    return (
-        xf + rho * (pad_sf - (sc - cs)),
-        zf + rho * (pad_cf - (cc + ss)),
-        xr + rho * (pad_sr - (sc + cs)),
-        zr + rho * (pad_cr - (cc - ss)),
-    )
+    if rho > 0.0:
+        span = xr - xf
+        rise = zf - zr
+        wf = (xr - xa) / span
+        d_tilde = za - (wf * zf + (1.0 - wf) * zr - h0)
+        inv_chord = 1.0 / math.sqrt(span * span + rise * rise)
+        cos_chord = span * inv_chord
+        sin_chord = rise * inv_chord
+        cos_beta = cos_chord * cos_b0 + sin_chord * sin_b0
+        sin_beta = sin_chord * cos_b0 - cos_chord * sin_b0
+        sin_k, cos_k = _sin_cos(kappa * d_tilde)
+        sc = sin_beta * cos_k
+        cs = cos_beta * sin_k
+        cc = cos_beta * cos_k
+        ss = sin_beta * sin_k
+        # sin and cos of g_front = beta - kappa d and g_rear = beta + kappa d
+        return (
+            xf + rho * (pad_sf - (sc - cs)),
+            zf + rho * (pad_cf - (cc + ss)),
+            xr + rho * (pad_sr - (sc + cs)),
+            zr + rho * (pad_cr - (cc - ss)),
+        )
+    return xf, zf, xr, zr
 
 
 @njit(cache=True, inline="always")
