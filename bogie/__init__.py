@@ -6,6 +6,7 @@ Modules: :mod:`bogie.params` (the bogie and its presets), :mod:`bogie.static` (S
 
 import hashlib
 import os
+import sys
 from pathlib import Path
 
 
@@ -13,7 +14,9 @@ def _set_numba_cache_dir() -> None:
     """Key numba's on-disk cache by a hash of the compiled sources.
 
     numba invalidates a cached function only when its own file changes, not when a compiled function it calls
-    (in another module) does; a cache directory per source hash rules out running stale machine code.
+    (in another module) does; a cache directory per source hash rules out running stale machine code. numba reads
+    ``NUMBA_CACHE_DIR`` when it is imported, so if a program imported numba before bogie, its configuration is set
+    too (otherwise the kernels would load from beside the sources, where an older build's machine code may lie).
     """
     if "NUMBA_CACHE_DIR" in os.environ:
         return
@@ -23,6 +26,8 @@ def _set_numba_cache_dir() -> None:
         digest.update(path.read_bytes())
     base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
     os.environ["NUMBA_CACHE_DIR"] = str(base / "bogie-numba" / digest.hexdigest()[:16])
+    if "numba" in sys.modules:
+        sys.modules["numba"].core.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
 
 
 _set_numba_cache_dir()

@@ -57,3 +57,22 @@ def test_every_bogie_module_imports_and_runs_with_the_pipeline_packages_missing(
     """)
     result = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, timeout=300)
     assert result.returncode == 0 and result.stdout.strip() == "ok", result.stderr
+
+
+def test_the_compiled_kernels_cache_by_source_hash_even_when_numba_was_imported_first(tmp_path):
+    # numba reads NUMBA_CACHE_DIR when it is imported: a program that imports numba before bogie must still get the
+    # per-source-hash cache, not the machine code an older build left beside the sources
+    script = textwrap.dedent("""
+        import os, numba
+        assert numba.core.config.CACHE_DIR == ""
+        import bogie
+        print(numba.core.config.CACHE_DIR)
+        print(os.environ["NUMBA_CACHE_DIR"])
+    """)
+    env = {k: v for k, v in __import__("os").environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    result = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, env=env,
+                            timeout=300)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    config_dir, env_dir = result.stdout.split()
+    assert config_dir == env_dir and config_dir.startswith(str(tmp_path / "bogie-numba"))
