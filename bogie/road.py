@@ -317,6 +317,11 @@ class ISO8608Profile:
         object.__setattr__(self, "_grid_slope", _read_only((gh[1:] - gh[:-1]) / (gx[1:] - gx[:-1])))
 
     @property
+    def grid_spacing(self) -> float:
+        """Spacing of the grid the profile is synthesised on and interpolated from [m]."""
+        return self.length / (len(self._grid_x) - 1)
+
+    @property
     def psd_n0(self) -> float:
         """Displacement PSD at n0 = 0.1 cycle/m in use, G_d(n0) [m^3]."""
         return self.gd_n0 if self.gd_n0 is not None else ISO8608_CLASSES[self.road_class]
