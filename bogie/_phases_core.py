@@ -673,6 +673,13 @@ def run_phases(
             # the drive may jump between phases (a new road, a new load): the force at the start of this one
             _drive(phase, road_h, offsets, n_axles, 0.0, drv)
             nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
+        # each phase starts afresh (a new tangent, no measured contraction), so that a phase is a function of its
+        # starting state alone: phases run in one call or one by one from each other's final state agree exactly
+        jst[0] = 0.0
+        jst[1] = -1.0
+        jst[2] = 0.0
+        jst[3] = 0.0
+        jst[5] = 0.0
         for k in range(4):
             counts[k] = 0.0
         status, t_end, rnorm, stop = _phase_loop(

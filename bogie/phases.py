@@ -334,7 +334,11 @@ def _first_drive_row(phase: Phase, c: _Constants, n: int) -> NDArray[np.float64]
 
 
 def run(
-    bogie: Bogie, phases: list[Phase] | tuple[Phase, ...], initial: nl.State | None = None, history: bool = False
+    bogie: Bogie,
+    phases: list[Phase] | tuple[Phase, ...],
+    initial: nl.State | None = None,
+    history: bool = False,
+    check_every: int = pc.CHECK_EVERY,
 ) -> PhasesRun:
     """Run ``phases`` in order, each from where the last ended, in one compiled call.
 
@@ -351,6 +355,10 @@ def run(
     history
         Also return the wheel loads and chassis pitch at every accepted step (for plots and checks; the weighings
         need only the readings).
+    check_every
+        A step's first Newton correction is accepted without evaluating its residual where the contraction measured
+        at the last checked step puts it far inside the tolerance, and checked at least every ``check_every`` steps
+        (``docs/phases.md``); 1 checks every step, as :func:`bogie.nonlinear.simulate` does.
 
     Returns
     -------
@@ -361,6 +369,8 @@ def run(
     phases = list(phases)
     if not phases:
         raise ValueError("phases is empty: give at least one Phase")
+    if isinstance(check_every, bool) or not isinstance(check_every, int) or check_every < 1:
+        raise ValueError(f"check_every = {check_every!r} is out of range: must be an integer >= 1 (steps)")
     c = _constants(bogie)
     n = bogie.n_axles
     rows, road_h = _rows(phases, c)
@@ -383,7 +393,7 @@ def run(
         args = (
             c.mass, c.data_f, c.data_i, c.offsets, c.levers, rows, road_h, u, v, a, hist, at_rest, _RELAXED_SLOTS,
             float(bogie.bogie_centre_x), c.r_tol, c.u_limit, MAX_ITER, _SCHEME, core.record_length(n),
-            core.work_size(n), float(pc.CHECK_EVERY), readings, on_stop, stats, trace,
+            core.work_size(n), float(check_every), readings, on_stop, stats, trace,
         )  # fmt: skip
         status, stopped, t_stop, rnorm, traced = pc.run_phases(*args)
         if traced <= rows_needed or not history:
@@ -402,7 +412,7 @@ def run(
             np.zeros(core.record_length(n)), False, False, np.zeros(core.work_size(n)),
         )  # fmt: skip
         initial = nl.State(state.u, state.v, consistent_acceleration(mass, f0), state.history)
-        return run(bogie, phases, initial, history)
+        return run(bogie, phases, initial, history, check_every)
     outcomes = []
     for p in range(min(stopped + 1, len(phases))):
         done = p < stopped

@@ -53,21 +53,36 @@ class ApproachRoad:
     profile: ISO8608Profile
     length: float
 
-    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+    def taper(self, x: ArrayLike) -> NDArray[np.float64]:
+        """The blend [-]: 0 off the road, rising to 1 over its first BLEND_LENGTH and falling over its last."""
         xx = np.asarray(x, dtype=float)
         ramp_in = np.clip(xx / BLEND_LENGTH, 0.0, 1.0)
         ramp_out = np.clip((self.length - xx) / BLEND_LENGTH, 0.0, 1.0)
         ramp = np.minimum(ramp_in, ramp_out)
         if ramp.ndim == 0:
-            taper = 0.5 * (1.0 - np.cos(np.pi * ramp))
-        else:
-            # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
-            # it took a tenth of a pass's road), the same taper value for value
-            taper = np.ones_like(ramp)
-            taper[ramp <= 0.0] = 0.0
-            blend = ~((ramp <= 0.0) | (ramp >= 1.0))
-            taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
-        return self.profile(np.clip(xx, 0.0, self.profile.length)) * taper
+            return 0.5 * (1.0 - np.cos(np.pi * ramp))
+        # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
+        # it took a tenth of a pass's road), the same taper value for value
+        taper = np.ones_like(ramp)
+        taper[ramp <= 0.0] = 0.0
+        blend = ~((ramp <= 0.0) | (ramp >= 1.0))
+        taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
+        return taper
+
+    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+        xx = np.asarray(x, dtype=float)
+        return self.profile(np.clip(xx, 0.0, self.profile.length)) * self.taper(xx)
+
+    def table(self, x_from: float, x_to: float) -> tuple[NDArray[np.float64], phases_mod.RoadTable]:
+        """This road at the profile's grid points that cover [x_from, x_to] [m]: their distances and the table.
+
+        The grid's own heights times the blend, without interpolating (the road is 0 where the blend is, off the
+        road, whatever height the periodic grid has there); the same values as a call at those distances.
+        """
+        dx = self.profile.grid_spacing
+        k0, k1 = math.floor(x_from / dx), math.ceil(x_to / dx)
+        x = np.arange(k0, k1 + 1) * dx
+        return x, phases_mod.RoadTable(k0 * dx, dx, self.profile.grid_heights(k0, k1) * self.taper(x))
 
 
 def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
@@ -135,9 +150,7 @@ def static_phases(
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     road = _approach(road_class, road_seed, spec.approach_length)
     distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
-    table = phases_mod.RoadTable.from_profile(
-        road, -STATIC_LEAD - group_length, distance - STATIC_LEAD, road.profile.grid_spacing
-    )
+    _, table = road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD)
     tol = spec.step_tolerance
 
     def share(k: float) -> float | None:
@@ -238,7 +251,10 @@ def wim_phases(
     steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
     approach, road, duration, crossing, half, flat = _wim_route(bogie, road_class, road_seed, spec)
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    table = phases_mod.RoadTable.from_profile(road, -group_length, spec.speed * duration, approach.profile.grid_spacing)
+    x, table = approach.table(-group_length, spec.speed * duration)
+    # the site's smoothing on the approach's table: the same heights as the site road's at those distances
+    smoothed = table.heights * (1.0 - (1.0 - road.scale) * road.site_weight(x))
+    table = phases_mod.RoadTable(table.x0, table.dx, smoothed)
     reading = phases_mod.SensorReading(crossing, half, flat)
     return [
         phases_mod.Phase(duration, payload_fraction, road=table, speed=spec.speed, dt=spec.dt, reading=reading,
