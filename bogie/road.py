@@ -344,6 +344,8 @@ class ISO8608Profile:
         """Heights [m] at the grid points k_from .. k_to (any integers: the profile repeats every ``length``), at
         road distances k ``grid_spacing`` [m]; exactly the values :meth:`__call__` gives there."""
         n_grid = len(self._grid_h) - 1
+        if 0 <= k_from <= k_to <= n_grid:  # one period: a slice (the grid's last point is its first again)
+            return self._grid_h[k_from : k_to + 1].copy()
         return self._grid_h[np.arange(k_from, k_to + 1) % n_grid]
 
     @property

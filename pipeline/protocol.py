@@ -73,16 +73,40 @@ class ApproachRoad:
         xx = np.asarray(x, dtype=float)
         return self.profile(np.clip(xx, 0.0, self.profile.length)) * self.taper(xx)
 
-    def table(self, x_from: float, x_to: float) -> tuple[NDArray[np.float64], phases_mod.RoadTable]:
-        """This road at the profile's grid points that cover [x_from, x_to] [m]: their distances and the table.
+    def table(self, x_from: float, x_to: float) -> phases_mod.RoadTable:
+        """This road at the profile's grid points that cover [x_from, x_to] [m].
 
         The grid's own heights times the blend, without interpolating (the road is 0 where the blend is, off the
-        road, whatever height the periodic grid has there); the same values as a call at those distances.
+        road, whatever height the periodic grid has there); the same values as a call at those distances. The blend
+        is evaluated only where it is neither 0 nor 1 (:func:`_blended`).
         """
         dx = self.profile.grid_spacing
         k0, k1 = math.floor(x_from / dx), math.ceil(x_to / dx)
-        x = np.arange(k0, k1 + 1) * dx
-        return x, phases_mod.RoadTable(k0 * dx, dx, self.profile.grid_heights(k0, k1) * self.taper(x))
+        blends = ((0.0, BLEND_LENGTH), (self.length - BLEND_LENGTH, self.length))
+        heights = self.profile.grid_heights(k0, k1) * _zoned(self.taper, k0, k1, dx, blends)
+        return phases_mod.RoadTable(k0 * dx, dx, heights)
+
+
+def _zoned(
+    weight: Any, k0: int, k1: int, dx: float, blends: tuple[tuple[float, float], tuple[float, float]]
+) -> NDArray[np.float64]:
+    """``weight`` at the distances k dx, k = k0 .. k1 [m], for a weight that is constant before the first blend
+    interval (start, end) [m], constant between the two and the same constant as before after the second:
+    evaluated only over the blends (and a point either side of each), so value for value ``weight(k dx)``."""
+    (a0, a1), (b0, b1) = blends
+    outside, inside = float(weight(a0 - 1.0)), float(weight(0.5 * (a1 + b0)))
+    x_last = k1 * dx
+
+    def index(x: float) -> int:
+        return min(k1 - k0 + 1, max(0, math.floor(x / dx) - k0))
+
+    values = np.full(k1 - k0 + 1, outside)
+    values[index(a1) : index(b0) + 1] = inside
+    for start, end in blends:
+        lo, hi = index(start - dx), index(min(end + dx, x_last)) + 1
+        if hi > lo:
+            values[lo:hi] = weight((k0 + np.arange(lo, hi)) * dx)
+    return values
 
 
 def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
@@ -150,7 +174,7 @@ def static_phases(
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     road = _approach(road_class, road_seed, spec.approach_length)
     distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
-    _, table = road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD)
+    table = road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD)
     tol = spec.step_tolerance
 
     def share(k: float) -> float | None:
@@ -251,10 +275,18 @@ def wim_phases(
     steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
     approach, road, duration, crossing, half, flat = _wim_route(bogie, road_class, road_seed, spec)
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    x, table = approach.table(-group_length, spec.speed * duration)
+    table = approach.table(-group_length, spec.speed * duration)
     # the site's smoothing on the approach's table: the same heights as the site road's at those distances
-    smoothed = table.heights * (1.0 - (1.0 - road.scale) * road.site_weight(x))
-    table = phases_mod.RoadTable(table.x0, table.dx, smoothed)
+    if road.before > 0.0 or road.after > 0.0:
+        start, end = road.sensor - road.before, road.sensor + road.after
+
+        def factor(x: ArrayLike) -> NDArray[np.float64]:
+            return 1.0 - (1.0 - road.scale) * road.site_weight(x)
+
+        blends = ((start - wim.SITE_BLEND_LENGTH, start), (end, end + wim.SITE_BLEND_LENGTH))
+        k0 = round(table.x0 / table.dx)
+        smoothing = _zoned(factor, k0, k0 + len(table.heights) - 1, table.dx, blends)
+        table = phases_mod.RoadTable(table.x0, table.dx, table.heights * smoothing)
     reading = phases_mod.SensorReading(crossing, half, flat)
     return [
         phases_mod.Phase(duration, payload_fraction, road=table, speed=spec.speed, dt=spec.dt, reading=reading,
