@@ -65,5 +65,5 @@ def test_the_road_tables_are_the_protocols_roads_value_for_value():
             checks.append((protocol.wim_phases(*args, spec)[0].road, road))  # fmt: skip
         for table, road in checks:
             x = (round(table.x0 / table.dx) + np.arange(len(table.heights))) * table.dx
-            assert table.heights.tobytes() == np.asarray(road(x), dtype=float).tobytes()
+            assert np.array_equal(table.heights, road(x))  # (off the road a 0 may carry the other sign)
             assert np.count_nonzero(table.heights) > 0.4 * len(table.heights)  # a real road, not an empty table
