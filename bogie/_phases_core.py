@@ -29,7 +29,7 @@ import numpy as np
 from numba import njit
 
 from bogie import _nonlinear_core as nlc
-from bogie._lu import lu_factor, lu_solve
+from bogie._lu import invert, lu_factor, lu_solve
 from bogie._newmark_core import (
     STATUS_NO_CONVERGENCE,
     STATUS_NOT_FINITE,
@@ -38,8 +38,6 @@ from bogie._newmark_core import (
     STATUS_SINGULAR,
     _halve,
     _kinematics,
-    _residual,
-    _update,
 )
 
 #: a step that could not be made smaller than the smallest step allowed (adaptive stepping)
@@ -165,6 +163,45 @@ def _force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, record, wa
 
 
 @njit(cache=True, inline="always")
+def _residual(mass, a, a_new, f_old, f_new, alpha_m, alpha_f, r_tol, res):
+    """res = -(M a_(1-alpha_m) + f_(1-alpha_f)) for the diagonal ``mass``; returns (largest |residual| / tolerance,
+    all finite)."""
+    rnorm = 0.0
+    finite = True
+    for i in range(a.shape[0]):
+        s = (1.0 - alpha_f) * f_new[i] + alpha_f * f_old[i] + mass[i] * ((1.0 - alpha_m) * a_new[i] + alpha_m * a[i])
+        res[i] = -s
+        if not math.isfinite(s):
+            finite = False
+        r = abs(s) / r_tol[i]
+        if r > rnorm:
+            rnorm = r
+    return rnorm, finite
+
+
+@njit(cache=True, inline="always")
+def _update(inv, res, du, u_new, u_limit):
+    """Newton update u_new += J^-1 res with the inverse ``inv`` of the iteration matrix, halved until inside
+    ``u_limit`` (30 times at most); False if never (:func:`bogie._newmark_core._update`)."""
+    n = du.shape[0]
+    for i in range(n):
+        s = 0.0
+        for j in range(n):
+            s += inv[i, j] * res[j]
+        du[i] = s
+        u_new[i] += s
+    for _ in range(30):
+        inside = True
+        for i in range(n):
+            if abs(u_new[i]) > u_limit[i]:
+                inside = False
+        if inside:
+            return True
+        _halve(du, u_new)
+    return False
+
+
+@njit(cache=True, inline="always")
 def _solve_step(
     mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac, piv, res, rec,
     work, jst, du, u_limit, counts,
@@ -175,8 +212,10 @@ def _solve_step(
     modified Newton with the iteration matrix kept while the residual falls at least fourfold, backtracking when
     it grows. ``jst`` = [tangent valid, step the matrix was factored for]: K_T and C_T are kept from their last
     formation and the matrix is only re-formed and factored from them when the step changes (adaptive steps), a
-    factorisation being far cheaper than a tangent's 2n + 1 force evaluations. ``counts`` = [evaluations,
-    tangents, factorisations] is incremented.
+    factorisation being far cheaper than a tangent's 2n + 1 force evaluations. ``jac`` holds the matrix's inverse
+    (:func:`bogie._lu.invert`): it is solved with at every iteration of many steps and formed rarely, and a solve
+    with the inverse is a matrix-vector product. ``mass`` is the diagonal of the mass matrix. ``counts`` =
+    [evaluations, tangents, factorisations] is incremented.
     """
     beta, gamma, alpha_m, alpha_f = scheme
     u_new, v_new, a_new, f_new, hist_new = trial
@@ -233,17 +272,18 @@ def _solve_step(
         if want or refactor:
             for i in range(n):
                 for j in range(n):
-                    jac[i, j] = (1.0 - alpha_m) * c_a * mass[i, j] + (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+                    jac[i, j] = (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+                jac[i, i] += (1.0 - alpha_m) * c_a * mass[i]
             counts[2] += 1.0
             jst[1] = -1.0
-            if not lu_factor(jac, piv):
+            if not invert(jac, piv):
                 return STATUS_SINGULAR, rnorm
             jst[1] = h
             want = False
             refactor = False
             fresh = True
         r_prev = rnorm
-        if not _update(jac, piv, res, du, u_new, u_limit):
+        if not _update(jac, res, du, u_new, u_limit):
             return STATUS_OUT_OF_RANGE, rnorm
         if it == 0 and may_skip and rho * r_first <= SKIP_LIMIT:
             # the correction's expected residual is far inside the tolerance: accept it unchecked, with the
@@ -388,7 +428,7 @@ def _next_boundary(phase, t):
 def _phase_loop(
     mass, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
     u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jst, du,
-    u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset,
+    u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale,
 ):  # fmt: skip
     """Step one phase from (u, v, a, hist); returns (status, time reached [s], |r|, on_stop).
 
@@ -396,7 +436,8 @@ def _phase_loop(
     4, ... sub-steps (:data:`MAX_HALVINGS`). Adaptive steps: the local error of each step,
     e_i = |beta - 1/6| h^2 |a_(n+1) - a_n| for freedom i, at its lever (``levers``: a displacement at a wheel), over
     the tolerance must be at most 1, else the step is rejected and retried shorter; the PI controller picks the
-    next step. Steps end exactly at the phase's end and at a mean reading's window.
+    next step. Steps end exactly at the phase's end and at a mean reading's window. ``mass`` is the diagonal of
+    the mass matrix; ``err_scale`` (n) is work space.
     """
     n_axles = data_i[0]
     n = u.shape[0]
@@ -404,9 +445,11 @@ def _phase_loop(
     trial = (u_new, v_new, a_new, f_new, hist_new)
     duration = phase[P_DURATION]
     adaptive = phase[P_ADAPTIVE] != 0.0
-    tolerance = phase[P_TOL]
     max_step = phase[P_MAX_STEP]
-    err_coeff = abs(beta - 1.0 / 6.0)
+    if adaptive:
+        # e_i / h^2 / |a_(n+1) - a_n|, the same for every step of the phase
+        for i in range(n):
+            err_scale[i] = abs(beta - 1.0 / 6.0) * levers[i] / phase[P_TOL]
     on_stop = False
     for i in range(acc.shape[0]):
         acc[i] = 0.0
@@ -496,9 +539,10 @@ def _phase_loop(
             continue
         err = 0.0
         for i in range(n):
-            e = err_coeff * hh * hh * abs(a_new[i] - a[i]) * levers[i] / tolerance
+            e = err_scale[i] * abs(a_new[i] - a[i])
             if e > err:
                 err = e
+        err *= hh * hh
         if err > 1.0:
             stats[S_REJECTED] += 1.0
             shrink = SAFETY * err ** (-1.0 / 3.0)
@@ -624,7 +668,8 @@ def run_phases(
     """Run ``phases`` in order from (u, v, a, hist), or with ``at_rest`` from the static equilibrium at the first
     phase's start with the friction relaxed (written into u, hist; v = a = 0 there, then a from M a = -f).
 
-    ``readings`` (n_phases, 2 n_axles) receives each phase's reading (mean tyre loads, or the sensor's integrals of
+    ``mass`` is the mass matrix, diagonal (:func:`bogie.phases._constants` checks). ``readings`` (n_phases,
+    2 n_axles) receives each phase's reading (mean tyre loads, or the sensor's integrals of
     F o and o), ``on_stop`` whether an equaliser bore on its stop in the phase's window, ``stats`` the phase's
     :data:`STAT_COLUMNS`, ``trace`` the rows of :func:`_trace` at the start and after every accepted step while
     it has room (give it no rows for none). (u, v, a, hist) end as the state after the last phase run. Returns
@@ -639,6 +684,9 @@ def run_phases(
     f_old = np.zeros(n)
     kt = np.zeros((n, n))
     ct = np.zeros((n, n))
+    m_diag = np.zeros(n)
+    for i in range(n):
+        m_diag[i] = mass[i, i]
     if at_rest:
         _drive(phases[0], road_h, offsets, n_axles, 0.0, drv)
         if not _equilibrium(data_f, data_i, drv, u, hist, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec, work):
@@ -650,9 +698,9 @@ def run_phases(
     hist_new = hist.copy()
     nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
     if at_rest:
-        # consistent accelerations: M a = -f (the mass matrix is diagonal; a massless freedom gets 0)
+        # consistent accelerations: M a = -f (a massless freedom gets 0)
         for i in range(n):
-            a[i] = -f_old[i] / mass[i, i] if mass[i, i] > 0.0 else 0.0
+            a[i] = -f_old[i] / m_diag[i] if m_diag[i] > 0.0 else 0.0
     u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist.shape[0])
     jac = np.zeros((n, n))
@@ -664,6 +712,7 @@ def run_phases(
     loads0 = np.zeros(n_axles)
     acc = np.zeros(2 * n_axles)
     counts = np.zeros(4)
+    err_scale = np.zeros(n)
     trace_count = np.zeros(1)
     t_offset = 0.0
     _trace(trace, trace_count, 0.0, n_axles, rec, u)
@@ -683,9 +732,9 @@ def run_phases(
         for k in range(4):
             counts[k] = 0.0
         status, t_end, rnorm, stop = _phase_loop(
-            mass, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
+            m_diag, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
             u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jst,
-            du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset,
+            du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset, err_scale,
         )  # fmt: skip
         t_offset += t_end
         stats[p, S_EVALS] = counts[0]

@@ -257,6 +257,9 @@ def _constants(bogie: Bogie) -> _Constants:
     if hit is not None and hit[0] is bogie:
         return hit[1]
     mass, data_f, data_i = nl.pack(bogie)
+    if np.any(mass != np.diag(np.diag(mass))):
+        # the kernel uses only the diagonal (in the residual, the iteration matrix and the consistent accelerations)
+        raise AssertionError("the packed mass matrix is not diagonal: bogie._phases_core assumes it is")
     n = bogie.n_axles
     arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
     constants = _Constants(
