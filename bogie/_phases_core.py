@@ -6,9 +6,13 @@ load factor follows a cosine ramp in closed form, the king pin height is constan
 axle is read from a uniform table of road heights (linear between its points, so its rate is exactly the table's
 slope times the speed). A phase is stepped by the same Newmark / generalised-alpha residual and Newton iteration as
 :mod:`bogie._newmark_core` (its inlined helpers are reused), either with a fixed step, or with steps chosen by the
-local error estimate of Zienkiewicz and Xie [1]_ and a PI step-size controller [2]_. Only what the weighings read is
-kept: the state at the end, the time-mean tyre loads over a window, the tyre loads a WIM sensor reads as the tyres
-pass over it, and whether an equaliser bore on its bump stop in the window. Equations: ``docs/phases.md``.
+local error estimate of Zienkiewicz and Xie [1]_ and a PI step-size controller [2]_, rounded down to a geometric
+ladder of steps. The iteration matrices are kept as inverses, one for each step they were formed for, and dropped
+when the tangent is formed anew: a step that stays on its rung (most do, where the controller's steps change by a
+few percent at every step) reuses its matrix, and a Newton solve is a matrix-vector product. Only what the
+weighings read is kept: the state at the end, the time-mean tyre loads over a window, the tyre loads a WIM sensor
+reads as the tyres pass over it, and whether an equaliser bore on its bump stop in the window. Equations:
+``docs/phases.md``.
 
 Layout of a phase row (``phases[p]``, floats; :data:`PHASE_COLUMNS` names them): see the ``P_*`` constants.
 
@@ -103,6 +107,19 @@ K_P = 0.4 / 3.0
 #: the factor one accepted step may grow or shrink the next by, and the least it shrinks a rejected one by
 MAX_GROWTH = 4.0
 MIN_SHRINK = 0.2
+#: adaptive steps are the controller's step rounded down to a rung 2^(k / RUNGS) s: a step that stays on a rung
+#: keeps its iteration matrix, where a step that changes a little at every step would form it anew at every step.
+#: The controller keeps its own step and moves it by the errors of the rungs' steps, so these average its error
+#: target (as many steps as without the ladder), and no step is longer than the controller asks for
+RUNGS = 8
+#: iteration matrices kept for the rungs, rung k's in matrix k mod RUNG_MATRICES (a phase's steps span fewer rungs),
+#: and one more, the last, for a step off the ladder (one that ends on a boundary); fixed steps of dt / 2^j use
+#: matrix j mod RUNG_MATRICES
+RUNG_MATRICES = 16
+# the controller in base-2 logarithms (one logarithm a step, and the rung at once)
+_LOG2_SAFETY = math.log2(SAFETY)
+_LOG2_MAX_GROWTH = math.log2(MAX_GROWTH)
+_LOG2_MIN_SHRINK = math.log2(MIN_SHRINK)
 #: a relative error below this counts as this (the controller's growth is bounded anyway)
 ERR_FLOOR = 1e-4
 #: a step's first correction is accepted without evaluating its residual when the contraction measured at the last
@@ -113,6 +130,7 @@ CHECK_EVERY = 16
 #: the smallest adaptive step [s], and how many times a fixed step is halved when Newton fails in it
 MIN_STEP = 1e-7
 MAX_HALVINGS = 5
+_LOG2_MIN_STEP = math.log2(MIN_STEP)
 
 
 # ---- drive -----------------------------------------------------------------------------------------------------
@@ -180,14 +198,14 @@ def _residual(mass, a, a_new, f_old, f_new, alpha_m, alpha_f, r_tol, res):
 
 
 @njit(cache=True, inline="always")
-def _update(inv, res, du, u_new, u_limit):
-    """Newton update u_new += J^-1 res with the inverse ``inv`` of the iteration matrix, halved until inside
+def _update(inv, k, res, du, u_new, u_limit):
+    """Newton update u_new += J^-1 res with the inverse ``inv[k]`` of the iteration matrix, halved until inside
     ``u_limit`` (30 times at most); False if never (:func:`bogie._newmark_core._update`)."""
     n = du.shape[0]
     for i in range(n):
         s = 0.0
         for j in range(n):
-            s += inv[i, j] * res[j]
+            s += inv[k, i, j] * res[j]
         du[i] = s
         u_new[i] += s
     for _ in range(30):
@@ -203,19 +221,21 @@ def _update(inv, res, du, u_new, u_limit):
 
 @njit(cache=True, inline="always")
 def _solve_step(
-    mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac, piv, res, rec,
-    work, jst, du, u_limit, counts,
+    mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac, keys, slot, piv,
+    res, rec, work, jst, du, u_limit, counts,
 ):  # fmt: skip
     """Newton-Raphson for one step of size ``h`` from (u, v, a) to the drive ``drv``; returns (status, |r|).
 
     The iteration of :func:`bogie._newmark_core._attempt`: predictor of constant acceleration, the full residual,
     modified Newton with the iteration matrix kept while the residual falls at least fourfold, backtracking when
-    it grows. ``jst`` = [tangent valid, step the matrix was factored for]: K_T and C_T are kept from their last
-    formation and the matrix is only re-formed and factored from them when the step changes (adaptive steps), a
-    factorisation being far cheaper than a tangent's 2n + 1 force evaluations. ``jac`` holds the matrix's inverse
-    (:func:`bogie._lu.invert`): it is solved with at every iteration of many steps and formed rarely, and a solve
-    with the inverse is a matrix-vector product. ``mass`` is the diagonal of the mass matrix. ``counts`` =
-    [evaluations, tangents, factorisations] is incremented.
+    it grows. K_T and C_T are kept from their last formation, and so are the iteration matrices formed from them
+    for several steps (:data:`RUNG_MATRICES`): ``jac[k]`` for the step ``keys[k]`` (0: none); this step's is
+    ``jac[slot]``, formed only when it is missing or for another step, a formation being far cheaper than a
+    tangent's 2n + 1 force evaluations. A new tangent drops them all. ``jac`` holds the matrices' inverses
+    (:func:`bogie._lu.invert`): one is solved with at every iteration of many steps and formed rarely, and a solve
+    with the inverse is a matrix-vector product. ``jst`` = [tangent valid, contraction of the first correction at
+    the last checked step, steps since, check every, that step]. ``mass`` is the diagonal of the mass matrix.
+    ``counts`` = [evaluations, tangents, factorisations] is incremented.
     """
     beta, gamma, alpha_m, alpha_f = scheme
     u_new, v_new, a_new, f_new, hist_new = trial
@@ -228,14 +248,14 @@ def _solve_step(
     r_prev = 0.0
     r_first = 0.0
     want = jst[0] == 0.0
-    refactor = jst[1] != h
+    refactor = keys[slot] != h
     fresh = want
     backtracks = 0
     # the contraction of the first correction measured at the last checked step, scaled to this step (the iteration
     # matrix is about M / (beta h^2): its relative error grows as h^2)
-    ratio = h / jst[5] if jst[5] > 0.0 else 1e30
-    rho = jst[2] * ratio * ratio
-    may_skip = jst[4] > 0.0 and jst[3] + 1.0 < jst[4] and alpha_f == 0.0 and not want
+    ratio = h / jst[4] if jst[4] > 0.0 else 1e30
+    rho = jst[1] * ratio * ratio
+    may_skip = jst[3] > 0.0 and jst[2] + 1.0 < jst[3] and alpha_f == 0.0 and not want
     for it in range(max_iter + 1):
         _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
         _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
@@ -250,9 +270,9 @@ def _solve_step(
         if it == 0:
             r_first = rnorm
         elif it == 1 and r_first > 0.0:
-            jst[2] = rnorm / r_first
-            jst[3] = 0.0
-            jst[5] = h
+            jst[1] = rnorm / r_first
+            jst[2] = 0.0
+            jst[4] = h
         if rnorm <= 1.0 and it > 0:
             if it > 2:
                 jst[0] = 0.0
@@ -270,27 +290,31 @@ def _solve_step(
             counts[1] += 1.0
             want = True
         if want or refactor:
+            if want:
+                # a new tangent: the matrices formed from the last one go
+                for k in range(keys.shape[0]):
+                    keys[k] = 0.0
+            keys[slot] = 0.0
             for i in range(n):
                 for j in range(n):
-                    jac[i, j] = (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
-                jac[i, i] += (1.0 - alpha_m) * c_a * mass[i]
+                    jac[slot, i, j] = (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+                jac[slot, i, i] += (1.0 - alpha_m) * c_a * mass[i]
             counts[2] += 1.0
-            jst[1] = -1.0
-            if not invert(jac, piv):
+            if not invert(jac[slot], piv):
                 return STATUS_SINGULAR, rnorm
-            jst[1] = h
+            keys[slot] = h
             want = False
             refactor = False
             fresh = True
         r_prev = rnorm
-        if not _update(jac, res, du, u_new, u_limit):
+        if not _update(jac, slot, res, du, u_new, u_limit):
             return STATUS_OUT_OF_RANGE, rnorm
         if it == 0 and may_skip and rho * r_first <= SKIP_LIMIT:
             # the correction's expected residual is far inside the tolerance: accept it unchecked, with the
             # history and the record of the predictor's evaluation (they differ from the corrected state's by the
             # correction, far below the tolerance)
             _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
-            jst[3] += 1.0
+            jst[2] += 1.0
             counts[3] += 1.0
             return STATUS_OK, rho * r_first
         fresh = False
@@ -427,8 +451,8 @@ def _next_boundary(phase, t):
 @njit(cache=True, _nrt=False)
 def _phase_loop(
     mass, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
-    u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jst, du,
-    u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale,
+    u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work, jst,
+    du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale,
 ):  # fmt: skip
     """Step one phase from (u, v, a, hist); returns (status, time reached [s], |r|, on_stop).
 
@@ -436,8 +460,10 @@ def _phase_loop(
     4, ... sub-steps (:data:`MAX_HALVINGS`). Adaptive steps: the local error of each step,
     e_i = |beta - 1/6| h^2 |a_(n+1) - a_n| for freedom i, at its lever (``levers``: a displacement at a wheel), over
     the tolerance must be at most 1, else the step is rejected and retried shorter; the PI controller picks the
-    next step. Steps end exactly at the phase's end and at a mean reading's window. ``mass`` is the diagonal of
-    the mass matrix; ``err_scale`` (n) is work space.
+    next step from its own last step (at most the phase's largest step), which is taken rounded down to a rung of
+    the ladder 2^(k / :data:`RUNGS`) s: it stays on a rung, and keeps its iteration matrix, while the controller's
+    step moves inside the rung. Steps end exactly at the phase's end and at a mean reading's window. ``mass`` is the
+    diagonal of the mass matrix; ``err_scale`` (n) is work space.
     """
     n_axles = data_i[0]
     n = u.shape[0]
@@ -466,7 +492,7 @@ def _phase_loop(
             _drive(phase, road_h, offsets, n_axles, t1, drv)
             status, rnorm = _solve_step(
                 mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
-                piv, res, rec, work, jst, du, u_limit, counts,
+                keys, 0, piv, res, rec, work, jst, du, u_limit, counts,
             )  # fmt: skip
             if status == STATUS_OK:
                 _commit(u, v, a, f_old, hist, trial)
@@ -484,7 +510,7 @@ def _phase_loop(
                         _drive(phase, road_h, offsets, n_axles, t0 + (sub + 1) * hs, drv)
                         status, rnorm = _solve_step(
                             mass, data_f, data_i, u, v, a, f_old, hist, hs, scheme, r_tol, max_iter, trial, drv,
-                            kt, ct, jac, piv, res, rec, work, jst, du, u_limit, counts,
+                            kt, ct, jac, keys, level % RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit, counts,
                         )  # fmt: skip
                         if status != STATUS_OK:
                             jst[0] = 0.0
@@ -503,9 +529,14 @@ def _phase_loop(
             _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
         stats[S_END] = n_steps * h
         return STATUS_OK, n_steps * h, rnorm, on_stop
-    h = phase[P_DT]
-    err_prev = 1.0
+    # the controller's next step as lh = log2(h / 1 s), the error of the last accepted step as its log2
+    lh = math.log2(phase[P_DT])
+    l_max = math.log2(max_step)
+    le_prev = 0.0
     grow = True
+    rung = -(1 << 30)
+    natural = 0.0
+    l_natural = 0.0
     while True:
         target = _next_boundary(phase, t)
         remaining = target - t
@@ -514,7 +545,12 @@ def _phase_loop(
                 break
             t = target
             continue
-        natural = min(h, max_step)
+        l_want = lh if lh < l_max else l_max
+        k = int(math.floor(l_want * RUNGS))
+        if k != rung:
+            rung = k
+            l_natural = k / RUNGS
+            natural = min(2.0**l_natural, max_step)
         hh = natural
         last = False
         if hh >= remaining * (1.0 - 1e-9):
@@ -526,14 +562,16 @@ def _phase_loop(
         _drive(phase, road_h, offsets, n_axles, t1, drv)
         status, rnorm = _solve_step(
             mass, data_f, data_i, u, v, a, f_old, hist, hh, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
-            piv, res, rec, work, jst, du, u_limit, counts,
+            keys, rung % RUNG_MATRICES if hh == natural else RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit,
+            counts,
         )  # fmt: skip
+        l_hh = l_natural if hh == natural else math.log2(hh)
         if status != STATUS_OK:
             stats[S_REJECTED] += 1.0
             jst[0] = 0.0
-            h = 0.25 * hh
+            lh = l_hh - 2.0
             grow = False
-            if h < MIN_STEP:
+            if lh < _LOG2_MIN_STEP:
                 stats[S_END] = t
                 return status, t, rnorm, on_stop
             continue
@@ -543,12 +581,13 @@ def _phase_loop(
             if e > err:
                 err = e
         err *= hh * hh
+        l_err = math.log2(err if err > ERR_FLOOR else ERR_FLOOR)
         if err > 1.0:
             stats[S_REJECTED] += 1.0
-            shrink = SAFETY * err ** (-1.0 / 3.0)
-            h = hh * (shrink if shrink > MIN_SHRINK else MIN_SHRINK)
+            shrink = _LOG2_SAFETY - l_err / 3.0
+            lh = l_hh + (shrink if shrink > _LOG2_MIN_SHRINK else _LOG2_MIN_SHRINK)
             grow = False
-            if h < MIN_STEP:
+            if lh < _LOG2_MIN_STEP:
                 stats[S_END] = t
                 return STATUS_STEP_TOO_SMALL, t, err, on_stop
             continue
@@ -560,19 +599,20 @@ def _phase_loop(
         stats[S_STEPS] += 1.0
         _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
         t = t1
-        e_now = err if err > ERR_FLOOR else ERR_FLOOR
-        factor = SAFETY * e_now ** (-(K_I + K_P)) * err_prev ** K_P
-        err_prev = e_now
-        if factor > MAX_GROWTH:
-            factor = MAX_GROWTH
-        if not grow and factor > 1.0:
-            factor = 1.0
+        factor = _LOG2_SAFETY - (K_I + K_P) * l_err + K_P * le_prev
+        le_prev = l_err
+        if factor > _LOG2_MAX_GROWTH:
+            factor = _LOG2_MAX_GROWTH
+        if not grow and factor > 0.0:
+            factor = 0.0
         grow = True
-        if hh < natural * (1.0 - 1e-9) and factor >= 1.0:
+        if hh < natural * (1.0 - 1e-9):
             # a step cut short to meet a boundary, with room to spare: its error does not shorten the next
-            h = max(natural, hh * factor)
+            lh = max(l_want, l_hh + factor) if factor >= 0.0 else l_hh + factor
         else:
-            h = hh * factor
+            # from the controller's own step, not the rung below it: fed the rung, the controller would settle
+            # where its step stops growing past the next rung, up to a rung short of the step the tolerance allows
+            lh = l_want + factor
     stats[S_END] = duration
     return STATUS_OK, duration, rnorm, on_stop
 
@@ -703,12 +743,13 @@ def run_phases(
             a[i] = -f_old[i] / m_diag[i] if m_diag[i] > 0.0 else 0.0
     u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
     u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist.shape[0])
-    jac = np.zeros((n, n))
+    jac = np.zeros((RUNG_MATRICES + 1, n, n))
+    keys = np.zeros(RUNG_MATRICES + 1)
     piv = np.zeros(n, dtype=np.int64)
     res = np.zeros(n)
     du = np.zeros(n)
-    jst = np.zeros(6)
-    jst[4] = check_every
+    jst = np.zeros(5)
+    jst[3] = check_every
     loads0 = np.zeros(n_axles)
     acc = np.zeros(2 * n_axles)
     counts = np.zeros(4)
@@ -722,19 +763,21 @@ def run_phases(
             # the drive may jump between phases (a new road, a new load): the force at the start of this one
             _drive(phase, road_h, offsets, n_axles, 0.0, drv)
             nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-        # each phase starts afresh (a new tangent, no measured contraction), so that a phase is a function of its
-        # starting state alone: phases run in one call or one by one from each other's final state agree exactly
+        # each phase starts afresh (a new tangent, no kept matrices, no measured contraction), so that a phase is a
+        # function of its starting state alone: phases run in one call or one by one from each other's final state
+        # agree exactly
         jst[0] = 0.0
-        jst[1] = -1.0
+        jst[1] = 0.0
         jst[2] = 0.0
-        jst[3] = 0.0
-        jst[5] = 0.0
+        jst[4] = 0.0
+        for k in range(keys.shape[0]):
+            keys[k] = 0.0
         for k in range(4):
             counts[k] = 0.0
         status, t_end, rnorm, stop = _phase_loop(
             m_diag, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
-            u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, piv, res, rec, work, jst,
-            du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset, err_scale,
+            u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work,
+            jst, du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset, err_scale,
         )  # fmt: skip
         t_offset += t_end
         stats[p, S_EVALS] = counts[0]
