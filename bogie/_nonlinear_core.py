@@ -602,7 +602,14 @@ def _record_contacts(n, work, hist_new, rec):
         rec[o_slip + e] = hist_new[e]
 
 
-@njit(cache=True, _nrt=False)
+#: floating-point licences of :func:`_internal`: fused multiply-adds ("contract"), a division by a reciprocal
+#: ("arcp") and no distinction of -0.0 from +0.0 ("nsz"). They change results at rounding level only and make an
+#: evaluation about 7 % cheaper; the licences that let LLVM reorder sums or approximate the library functions are
+#: not given (they moved forces by far more than rounding)
+FASTMATH = {"contract", "arcp", "nsz"}
+
+
+@njit(cache=True, _nrt=False, fastmath=FASTMATH)
 def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, work):
     """Internal force f = -Q at (u, v) for the drive row ``drv``; writes the new slips and, if asked, the record.
 
