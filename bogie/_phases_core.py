@@ -222,7 +222,7 @@ def _update(inv, k, res, du, u_new, u_limit):
 @njit(cache=True, inline="always")
 def _solve_step(
     mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac, keys, slot, piv,
-    res, rec, work, jst, du, u_limit, counts,
+    res, rec, work, jst, du, u_limit, counts, corr,
 ):  # fmt: skip
     """Newton-Raphson for one step of size ``h`` from (u, v, a) to the drive ``drv``; returns (status, |r|).
 
@@ -234,7 +234,8 @@ def _solve_step(
     tangent's 2n + 1 force evaluations. A new tangent drops them all. ``jac`` holds the matrices' inverses
     (:func:`bogie._lu.invert`): one is solved with at every iteration of many steps and formed rarely, and a solve
     with the inverse is a matrix-vector product. ``jst`` = [tangent valid, contraction of the first correction at
-    the last checked step, steps since, check every, that step]. ``mass`` is the diagonal of the mass matrix.
+    the last checked step, steps since, check every, that step, the last accepted step]; ``corr`` = [this step's plain
+    predictor, the last accepted step's correction]. ``mass`` is the diagonal of the mass matrix.
     ``counts`` = [evaluations, tangents, factorisations] is incremented.
     """
     beta, gamma, alpha_m, alpha_f = scheme
@@ -242,8 +243,15 @@ def _solve_step(
     n = u.shape[0]
     c_a = 1.0 / (beta * h * h)
     c_v = gamma / (beta * h)
+    # the predictor: constant acceleration, plus the last accepted step's Newton correction if that step was as
+    # long as this one. The correction is about beta h^2 (a_(n+1) - a_n), which changes little from one step to the
+    # next, so the iteration starts closer and more first corrections are accepted unchecked (a 20 s pass over a
+    # class B road at 15 m/s: 1.15 force evaluations a step instead of 1.67). Scaled to a step of another length
+    # it helped less than it cost: after a change of rung the plain predictor is used
+    scale = 1.0 if jst[5] == h else 0.0
     for i in range(n):
-        u_new[i] = u[i] + h * v[i] + 0.5 * h * h * a[i]
+        u_new[i] = u[i] + h * v[i] + 0.5 * h * h * a[i] + scale * corr[n + i]
+        corr[i] = u[i] + h * v[i] + 0.5 * h * h * a[i]
     rnorm = 0.0
     r_prev = 0.0
     r_first = 0.0
@@ -319,6 +327,16 @@ def _solve_step(
             return STATUS_OK, rho * r_first
         fresh = False
     return STATUS_NO_CONVERGENCE, rnorm
+
+
+@njit(cache=True, inline="always")
+def _keep_correction(corr, u_new, jst, h):
+    """After an accepted step of ``h`` [s]: its Newton correction, the accepted displacements less the plain predictor
+    (kept in ``corr[:n]`` by :func:`_solve_step`), to extrapolate the next step's predictor from."""
+    n = u_new.shape[0]
+    for i in range(n):
+        corr[n + i] = u_new[i] - corr[i]
+    jst[5] = h
 
 
 @njit(cache=True, inline="always")
@@ -452,7 +470,7 @@ def _next_boundary(phase, t):
 def _phase_loop(
     mass, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
     u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work, jst,
-    du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale,
+    du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale, corr,
 ):  # fmt: skip
     """Step one phase from (u, v, a, hist); returns (status, time reached [s], |r|, on_stop).
 
@@ -492,9 +510,10 @@ def _phase_loop(
             _drive(phase, road_h, offsets, n_axles, t1, drv)
             status, rnorm = _solve_step(
                 mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
-                keys, 0, piv, res, rec, work, jst, du, u_limit, counts,
+                keys, 0, piv, res, rec, work, jst, du, u_limit, counts, corr,
             )  # fmt: skip
             if status == STATUS_OK:
+                _keep_correction(corr, u_new, jst, h)
                 _commit(u, v, a, f_old, hist, trial)
             else:
                 # retry as 2, 4, ... sub-steps from the step's start
@@ -511,10 +530,12 @@ def _phase_loop(
                         status, rnorm = _solve_step(
                             mass, data_f, data_i, u, v, a, f_old, hist, hs, scheme, r_tol, max_iter, trial, drv,
                             kt, ct, jac, keys, level % RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit, counts,
+                            corr,
                         )  # fmt: skip
                         if status != STATUS_OK:
                             jst[0] = 0.0
                             break
+                        _keep_correction(corr, u_new, jst, hs)
                         _commit(u, v, a, f_old, hist, trial)
                     if status == STATUS_OK:
                         break
@@ -563,7 +584,7 @@ def _phase_loop(
         status, rnorm = _solve_step(
             mass, data_f, data_i, u, v, a, f_old, hist, hh, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
             keys, rung % RUNG_MATRICES if hh == natural else RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit,
-            counts,
+            counts, corr,
         )  # fmt: skip
         l_hh = l_natural if hh == natural else math.log2(hh)
         if status != STATUS_OK:
@@ -591,6 +612,7 @@ def _phase_loop(
                 stats[S_END] = t
                 return STATUS_STEP_TOO_SMALL, t, err, on_stop
             continue
+        _keep_correction(corr, u_new, jst, hh)
         _commit(u, v, a, f_old, hist, trial)
         _read_step(phase, n_axles, offsets, t, t1, loads0, rec, acc)
         on_stop = on_stop or _stop_in_window(phase, n_axles, t1, hh, rec)
@@ -748,8 +770,9 @@ def run_phases(
     piv = np.zeros(n, dtype=np.int64)
     res = np.zeros(n)
     du = np.zeros(n)
-    jst = np.zeros(5)
+    jst = np.zeros(6)
     jst[3] = check_every
+    corr = np.zeros(2 * n)
     loads0 = np.zeros(n_axles)
     acc = np.zeros(2 * n_axles)
     counts = np.zeros(4)
@@ -770,6 +793,7 @@ def run_phases(
         jst[1] = 0.0
         jst[2] = 0.0
         jst[4] = 0.0
+        jst[5] = 0.0  # no correction to extrapolate
         for k in range(keys.shape[0]):
             keys[k] = 0.0
         for k in range(4):
@@ -778,6 +802,7 @@ def run_phases(
             m_diag, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
             u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work,
             jst, du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset, err_scale,
+            corr,
         )  # fmt: skip
         t_offset += t_end
         stats[p, S_EVALS] = counts[0]
