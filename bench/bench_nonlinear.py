@@ -36,6 +36,7 @@ from scipy.integrate import solve_ivp
 
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
+from bogie import phases
 from bogie.newmark import MODEL_NONLINEAR, IntegrationResult, consistent_acceleration, integrate
 from bogie.params import Bogie, tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
@@ -277,8 +278,22 @@ def main() -> None:
     kernel = call.run()
     if not np.array_equal(kernel.record[:, :n], result.wheel_loads):
         raise RuntimeError("the benchmark's kernel call differs from bogie.nonlinear.simulate")
+    # the weighings' kernel (bogie.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start at rest,
+    # no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it per row
+    profile = ISO8608Profile(**ROAD)
+    table = phases.RoadTable.from_profile(
+        profile, bogie.axle_x[0] - bogie.axle_x[-1] - 0.01, SPEED * DURATION + 0.01, profile.grid_spacing
+    )
+    pass_phase = [phases.Phase(DURATION, 1.0, road=table, speed=SPEED, dt=DT, name="pass")]
+    phased = phases.run(bogie, pass_phase, history=True)
+    if not phased.success or len(phased.t) != n_steps + 1:
+        raise RuntimeError(f"the phases run failed: {phased.message}")
     load_start = os.getloadavg()[0]
-    headline_fns = {"simulate": lambda: nl.simulate(bogie, inputs), "kernel": call.run}
+    headline_fns = {
+        "simulate": lambda: nl.simulate(bogie, inputs),
+        "kernel": call.run,
+        "phases": lambda: phases.run(bogie, pass_phase),
+    }
     # timed in three windows spread over the run (start, after the peer, after the axle scaling), so that
     # a burst of other work on the machine moves the median less
     windows = [interleaved(headline_fns, HEADLINE_REPEATS)]
@@ -339,6 +354,7 @@ def main() -> None:
     t_rhs = med(interleaved({"rhs": lambda: [rhs(0.5, x0) for _ in range(1000)]}, 5)["rhs"]) / 1000
     full_ref = KernelCall.prepare(bogie, refined(inputs, FULL_REFINEMENT)).run().record[::FULL_REFINEMENT, :n]
     e_ours_full = errors(kernel.record[:, :n], full_ref, load)
+    e_phases_full = errors(phased.wheel_loads, full_ref, load)
     if best is not None:
         full_form = FirstOrderForm(call)
         start = time.perf_counter()
@@ -363,7 +379,7 @@ def main() -> None:
     scaling = interleaved(fns, 9)
     windows.append(interleaved(headline_fns, HEADLINE_REPEATS))
     headline = {name: [t for w in windows for t in w[name]] for name in headline_fns}
-    t_sim, t_kernel = med(headline["simulate"]), med(headline["kernel"])
+    t_sim, t_kernel, t_phases = med(headline["simulate"]), med(headline["kernel"]), med(headline["phases"])
 
     # ---- 3. fresh processes ----
     code = (
@@ -392,6 +408,14 @@ def main() -> None:
     print(f"   compiled kernel alone (bogie.newmark.integrate)               {t_kernel * 1e3:6.1f} ms "
           f"({min(headline['kernel']) * 1e3:.1f})  {t_kernel / n_steps * 1e6:.2f} us per step, "
           f"{kernel.n_iterations / n_steps:.2f} Newton iterations per step")  # fmt: skip
+    evals = phased.phases[0].force_evaluations / n_steps
+    verdict = "met" if t_phases < 0.01 else "NOT met"
+    print(f"   bogie.phases.run (the weighings' kernel, readings only)      {t_phases * 1e3:6.1f} ms "
+          f"({min(headline['phases']) * 1e3:.1f})  {t_phases / n_steps * 1e6:.2f} us per step, "
+          f"{evals:.2f} force evaluations per step   target <= 10 ms: {verdict}")  # fmt: skip
+    print(f"   wheel loads W / W_ref against the kernel at dt/{FULL_REFINEMENT}: simulate max {e_ours_full[0]:.2e} "
+          f"RMS {e_ours_full[1]:.2e}, phases max {e_phases_full[0]:.2e} RMS {e_phases_full[1]:.2e} (its road's "
+          "rates are exact, simulate's sampled per row)")  # fmt: skip
     window_text = ", ".join(f"{med(w['simulate']) * 1e3:.1f}" for w in windows)
     print(f"   simulate's median in each of the {len(windows)} windows of {HEADLINE_REPEATS} runs: {window_text} ms")
     print(f"2. Peer: solve_ivp on the first-order form [u, v, s] with the same compiled force, friction regularised "
