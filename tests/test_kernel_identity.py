@@ -1,12 +1,14 @@
-"""The time-stepping kernel reproduces stored runs of the code before issue 15's speed-ups bit for bit.
+"""The time-stepping kernel reproduces stored runs bit for bit: a speed-up of its implementation changes no result.
 
-``tests/data/kernel_identity.npz`` was written by this file's ``__main__`` with the kernels of commit 2d6af20
-(``python tests/test_kernel_identity.py tests/data/kernel_identity.npz`` with that tree on ``PYTHONPATH``): the
-tri-axle and tandem presets over an ISO 8608 class B road at 15 m/s (Newmark and generalised-alpha), a load ramp
+``tests/data/kernel_identity.npz`` was written by this file's ``__main__`` (``python tests/test_kernel_identity.py
+tests/data/kernel_identity.npz``) with the kernels as issue 15 left them (the force without atan2 and library sin/cos,
+with fused multiply-adds; its formulation is checked against the former one in ``tests/test_force_formulation.py``):
+the tri-axle and tandem presets over an ISO 8608 class B road at 15 m/s (Newmark and generalised-alpha), a load ramp
 and a hold continued from its final state, the quasi-static path, a coarse-step run whose steps fail and are
 retried as sub-steps, one that fails outright, and direct kernel runs (iteration counts, status, the record)
 including the linear model id. Every 10th row and the last are stored (about 200 kB). A change of the kernels'
-arithmetic (operation order included) fails this test: an implementation speed-up must not change one bit.
+arithmetic (operation order included) fails this test: an implementation speed-up must not change one bit, and a
+change of the arithmetic rewrites the file on purpose, with the reason in its commit.
 """
 
 import sys

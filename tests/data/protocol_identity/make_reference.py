@@ -1,6 +1,6 @@
 """Writes reference.json: weigh() rows of a few fleet bogies by both protocols (params.yaml as committed).
 
-Run once on the code before a change meant to keep results bit-identical (issue 15), then
+Run on the code before a change meant to keep results bit-identical (or after one meant to change them), then
 tests/pipeline/test_protocol_identity.py checks the code against it. Floats are stored as float.hex() so the
 comparison is bit-for-bit. ``python tests/data/protocol_identity/make_reference.py`` from the repository root.
 """
