@@ -29,7 +29,7 @@ import scipy
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
-from pipeline.schema import verify_file, write_runs_file
+from pipeline.schema import verify_file, write_runs_table
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -241,8 +241,9 @@ class RunsLockedError(RuntimeError):
     """Another process is writing the runs dataset."""
 
 
-def write_part(frame: pd.DataFrame, chunk_hash_: str, path: Path) -> None:
-    """Write a part file in the runs schema with its hash in the Parquet metadata, atomically (temporary dot-name,
-    then rename). Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover temporary file.
+def write_part(table: pa.Table, chunk_hash_: str, path: Path) -> None:
+    """Write a part file (:func:`pipeline.simulate.chunk_table`) with its hash in the Parquet metadata, atomically
+    (temporary dot-name, then rename). Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover
+    temporary file.
     """
-    write_runs_file(frame, path, {HASH_KEY: chunk_hash_.encode()})
+    write_runs_table(table, path, {HASH_KEY: chunk_hash_.encode()})
