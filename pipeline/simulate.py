@@ -29,9 +29,11 @@ from __future__ import annotations
 
 import argparse
 import dataclasses
+import functools
 import math
 import os
 import sys
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
@@ -134,7 +136,34 @@ def chunk_table(rows: pd.DataFrame, protocols: Protocols) -> pa.Table:
     return table_from_rows(_weighed_rows(rows, protocols))
 
 
-def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> tuple[str, int, pa.Table]:
+#: how often a loky worker looks whether the main process that started it still runs [s]
+MAIN_PROCESS_POLL = 1.0
+
+
+@functools.cache
+def _watch_main_process(main_pid: int) -> None:
+    """In a loky worker, end the process within :data:`MAIN_PROCESS_POLL` of the end of its main process.
+
+    Once the main process is killed nothing reads the pipe the results go back through, and a worker blocks for
+    ever writing its chunk's result as soon as the pipe's 64 KiB buffer is full (two chunks of 64 samples fill it),
+    whatever WORKER_IDLE_TIMEOUT says. Started once per process (cached), and only in a child of ``main_pid``: not
+    in the main process itself (n_jobs = 1) nor in a dask worker, whose parent is its nanny.
+    """
+    if os.getppid() != main_pid:
+        return
+
+    def watch() -> None:
+        while os.getppid() == main_pid:
+            time.sleep(MAIN_PROCESS_POLL)
+        os._exit(1)  # the chunk in hand is lost with the main process that would have written it
+
+    threading.Thread(target=watch, name="watch-main-process", daemon=True).start()
+
+
+def _task(
+    study: str, index: int, rows: pd.DataFrame, protocols: Protocols, main_pid: int
+) -> tuple[str, int, pa.Table]:
+    _watch_main_process(main_pid)
     # results arrive unordered: carry the chunk's identity back with its rows
     return study, index, chunk_table(rows, protocols)
 
@@ -142,7 +171,8 @@ def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> t
 # ---- running ---------------------------------------------------------------------------------------------------
 #: how long an idle loky worker waits for work before it ends [s]: long enough that a worker never times out
 #: while chunks are still coming (10 s did, once, on a loaded machine: loky then restarts it with a warning),
-#: short enough that killing the main process does not leave its workers for loky's default 300 s
+#: short enough that an idle worker does not outlive its main process by loky's default 300 s (a killed main process's
+#: workers end sooner: :func:`_watch_main_process`)
 WORKER_IDLE_TIMEOUT = 30.0
 
 #: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
@@ -174,7 +204,7 @@ def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | 
 
 def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, pa.Table]]:
     """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols) for c in chunks)
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, os.getpid()) for c in chunks)
     # a chunk is seconds of work: joblib's automatic batching would only coarsen the progress and the resumption
     options = {"return_as": "generator_unordered", "batch_size": 1}
     if execution.backend == "dask":
@@ -186,8 +216,7 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tu
             yield from Parallel(**options)(tasks)
     else:
         # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers. A
-        # worker waits at most WORKER_IDLE_TIMEOUT for its next chunk: if the main process is killed, its workers
-        # finish the chunk in hand and end, instead of idling on for loky's default 300 s
+        # worker waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main process is killed
         with parallel_config(backend="loky", inner_max_num_threads=1, idle_worker_timeout=WORKER_IDLE_TIMEOUT):
             yield from Parallel(n_jobs=execution.n_jobs, **options)(tasks)
 
@@ -378,4 +407,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # run as the module pipeline.simulate, not as __main__: the workers then import the task by name, with the state
+    # of its module (the cached watch of the main process), instead of receiving a copy of its code with every chunk
+    from pipeline.simulate import main as module_main
+
+    sys.exit(module_main())
