@@ -12,8 +12,9 @@ the base revision (its ``pipeline`` and ``bogie`` exported with ``git archive``)
 What the lines mean:
 
 * ``n_jobs=1``: in-process (joblib's sequential backend), each part timed: ``plan`` (the code version, the chunks'
-  slices and hashes), ``bogie_from_sample``, ``weigh (stub)``, ``rows -> table`` (the rest of a task: the sample
-  rows read, the result rows built and typed), ``write`` (checked, written with page checksums, renamed).
+  slices and hashes), ``bogie_from_sample``, ``weigh (stub)``, ``the rest of a task`` (the sample rows read, the
+  result rows built and typed; the new code checks and encodes the part file here, in the worker), ``write_part``
+  (the main process; the base code checked and encoded the file there), ``the rest`` (reconcile, progress, counts).
 * ``rerun``: a second run on the complete dataset: every file's hash read and its pages verified, nothing computed.
 * ``n_jobs=2``: loky, as the stage runs: wall time, the main process's CPU time and the workers' (start-up
   included: interpreter, imports; the stub loads no compiled kernel).
@@ -232,8 +233,8 @@ def main() -> None:
             "plan (code version, slices, hashes)": first["plan_chunks"],
             "bogie_from_sample": first["bogie_from_sample"],
             "weigh (stub)": first["weigh"],
-            "rows -> table (rest of the task)": task,
-            "write (check, Parquet, rename)": first["write_part"],
+            "the rest of a task": task,
+            "write_part (main process)": first["write_part"],
             "the rest (reconcile, progress, counts)": first["cpu"] - first["plan_chunks"] - first["_task"]
             - first["write_part"],
             "**total**": first["cpu"],

@@ -3,8 +3,9 @@
 :func:`plan_chunks` splits each study into chunks and hashes each (:func:`chunk_hash`: the sample rows, the
 protocols and the code, :func:`code_version`); :func:`reconcile` keeps the part files whose stored hash matches and
 that read back whole (page checksums), deletes the rest and quarantines files that are not ours; :func:`runs_lock`
-keeps a second process off the dataset; :func:`write_part` writes a part atomically. The work itself, weighing a
-chunk's samples, is :func:`pipeline.simulate.run_chunk`.
+keeps a second process off the dataset; :func:`part_content` makes a part file's bytes (in the worker that weighed
+the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a chunk's samples, is
+:func:`pipeline.simulate.chunk_table`.
 """
 
 from __future__ import annotations
@@ -29,7 +30,7 @@ import scipy
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
-from pipeline.schema import verify_file, write_runs_table
+from pipeline.schema import runs_file_content, verify_file, write_file
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -241,9 +242,14 @@ class RunsLockedError(RuntimeError):
     """Another process is writing the runs dataset."""
 
 
-def write_part(table: pa.Table, chunk_hash_: str, path: Path) -> None:
-    """Write a part file (:func:`pipeline.simulate.chunk_table`) with its hash in the Parquet metadata, atomically
-    (temporary dot-name, then rename). Readers (pyarrow datasets) skip dot-files, and a rerun deletes a leftover
-    temporary file.
+def part_content(table: pa.Table, chunk_hash_: str) -> bytes:
+    """A part file's bytes: the chunk's runs (:func:`pipeline.simulate.chunk_table`) with its hash in the Parquet
+    metadata (:func:`pipeline.schema.runs_file_content`)."""
+    return runs_file_content(table, {HASH_KEY: chunk_hash_.encode()})
+
+
+def write_part(content: bytes, path: Path) -> None:
+    """Write a part file (:func:`part_content`) atomically: temporary dot-name, then rename. Readers (pyarrow
+    datasets) skip dot-files, and a rerun deletes a leftover temporary file.
     """
-    write_runs_table(table, path, {HASH_KEY: chunk_hash_.encode()})
+    write_file(content, path)

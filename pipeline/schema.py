@@ -39,11 +39,12 @@ __all__ = [
     "check_table",
     "conform",
     "runs_frame",
+    "runs_file_content",
     "runs_table",
     "table_from_rows",
     "verify_file",
+    "write_file",
     "write_runs_file",
-    "write_runs_table",
 ]
 
 #: text columns stored dictionary-encoded, each with every value it can take in a fixed order: every part file has
@@ -227,20 +228,28 @@ def check_table(table: pa.Table, where: str = "the runs") -> None:
         raise SchemaError(f"{where} break the runs schema: {'; '.join(problems)}")
 
 
-def write_runs_table(table: pa.Table, path: str | Path, metadata: Mapping[bytes, bytes] | None = None) -> None:
-    """Write an Arrow table of run rows (:func:`runs_table`, :func:`table_from_rows`) to the Parquet file ``path``,
-    checked (:func:`check_table`), atomically, with extra schema metadata."""
+def runs_file_content(table: pa.Table, metadata: Mapping[bytes, bytes] | None = None) -> bytes:
+    """The Parquet file of an Arrow table of run rows (:func:`runs_table`, :func:`table_from_rows`), checked
+    (:func:`check_table`), with extra schema metadata: what :func:`write_runs_file` writes, as bytes a process can
+    pass to the one that writes the file."""
     check_table(table)
     if metadata:
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **metadata})
+    sink = pa.BufferOutputStream()
+    # CRC32 of every page: a changed byte in a data page is detected on read (see :func:`verify_file`)
+    pq.write_table(table, sink, write_page_checksum=True)
+    return sink.getvalue().to_pybytes()
+
+
+def write_file(content: bytes, path: str | Path) -> None:
+    """Write ``content`` to ``path`` atomically (:func:`pipeline.atomic.atomic_file`)."""
     with atomic_file(path) as tmp:
-        # CRC32 of every page: a changed byte in a data page is detected on read (see :func:`verify_file`)
-        pq.write_table(table, tmp, write_page_checksum=True)
+        tmp.write_bytes(content)
 
 
 def write_runs_file(frame: pd.DataFrame, path: str | Path, metadata: Mapping[bytes, bytes] | None = None) -> None:
     """Write run rows to the Parquet file ``path`` in the runs schema, atomically, with extra schema metadata."""
-    write_runs_table(runs_table(frame), path, metadata)
+    write_file(runs_file_content(runs_table(frame), metadata), path)
 
 
 def verify_file(path: str | Path) -> str | None:

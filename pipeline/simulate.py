@@ -12,7 +12,8 @@ results, in the one schema of :mod:`pipeline.schema` (types and units). A failed
 ``status = "failed"``, the reason in ``message`` and nulls in every result column; the stage never stops for one.
 
 Parallel: the chunks run with joblib (``loky`` processes, one thread each, or a dask.distributed cluster through
-joblib's ``dask`` backend); the main process writes each chunk's file as soon as the chunk completes.
+joblib's ``dask`` backend); a worker returns its chunk's file as bytes and the main process writes it as soon as the
+chunk completes.
 
 Resumable: each file carries in its Parquet metadata (key :data:`HASH_KEY`) a hash of everything that determines its
 content: the chunk's sample rows, the protocols and their settings, and the code (the sources of ``bogie`` and of
@@ -52,6 +53,7 @@ from pipeline.chunks import (
     Protocols,
     RunsLockedError,
     _print,
+    part_content,
     plan_chunks,
     reconcile,
     runs_lock,
@@ -161,11 +163,15 @@ def _watch_main_process(main_pid: int) -> None:
 
 
 def _task(
-    study: str, index: int, rows: pd.DataFrame, protocols: Protocols, main_pid: int
-) -> tuple[str, int, pa.Table]:
+    study: str, index: int, rows: pd.DataFrame, protocols: Protocols, chunk_hash_: str, main_pid: int
+) -> tuple[str, int, bytes, int, int]:
+    """One chunk's part file as bytes, its runs and failed runs. The worker encodes the file: the main process only
+    writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
     _watch_main_process(main_pid)
-    # results arrive unordered: carry the chunk's identity back with its rows
-    return study, index, chunk_table(rows, protocols)
+    table = chunk_table(rows, protocols)
+    failed = int((table.column("status").to_numpy(zero_copy_only=False) != "ok").sum())
+    # results arrive unordered: carry the chunk's identity back with its file
+    return study, index, part_content(table, chunk_hash_), len(table), failed
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
@@ -202,9 +208,9 @@ def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | 
     return limit
 
 
-def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, pa.Table]]:
+def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, bytes, int, int]]:
     """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, os.getpid()) for c in chunks)
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash, os.getpid()) for c in chunks)
     # a chunk is seconds of work: joblib's automatic batching would only coarsen the progress and the resumption
     options = {"return_as": "generator_unordered", "batch_size": 1}
     if execution.backend == "dask":
@@ -344,11 +350,10 @@ def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: in
     failed = 0
     progress = Progress(total, log)
     try:
-        for study, index, table in _results(pending, execution) if pending else ():
-            chunk = by_key[(study, index)]
-            write_part(table, chunk.hash, chunk.path)
-            failed += int((table.column("status").to_numpy(zero_copy_only=False) != "ok").sum())
-            progress.update(len(table))
+        for study, index, content, runs, failed_runs in _results(pending, execution) if pending else ():
+            write_part(content, by_key[(study, index)].path)
+            failed += failed_runs
+            progress.update(runs)
     finally:
         progress.close()
     return failed
