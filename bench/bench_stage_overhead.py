@@ -92,7 +92,7 @@ def _child_serial(out: Path) -> dict:
 
         return wrapper
 
-    for name in ("plan_chunks", "reconcile", "_task", "write_part", "bogie_from_sample", "weigh", "_count_failed"):
+    for name in ("plan_chunks", "reconcile", "_task", "write_part", "bogie_from_sample", "weigh"):
         setattr(sim, name, timed(name, getattr(sim, name)))
     execution = dataclasses.replace(config.execution, n_jobs=1)
     start, cpu = time.perf_counter(), time.process_time()

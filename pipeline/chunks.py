@@ -2,7 +2,8 @@
 
 :func:`plan_chunks` splits each study into chunks and hashes each (:func:`chunk_hash`: the sample rows, the
 protocols and the code, :func:`code_version`); :func:`reconcile` keeps the part files whose stored hash matches and
-that read back whole (page checksums), deletes the rest and quarantines files that are not ours; :func:`runs_lock`
+that read back whole (page checksums), counting their failed runs, deletes the rest and quarantines files that are
+not ours; :func:`runs_lock`
 keeps a second process off the dataset; :func:`part_content` makes a part file's bytes (in the worker that weighed
 the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a chunk's samples, is
 :func:`pipeline.simulate.chunk_table`.
@@ -30,7 +31,7 @@ import scipy
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
-from pipeline.schema import runs_file_content, verify_file, write_file
+from pipeline.schema import SchemaError, check_file_schema, failed_runs, runs_file_content, write_file
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -142,43 +143,59 @@ def plan_chunks(
     return chunks
 
 
-def stored_hash(path: Path) -> str | None:
-    """The content hash in a part file's metadata, or None if the file is unreadable or has none."""
-    try:
-        metadata = pq.read_schema(path).metadata or {}
-    except (OSError, pa.ArrowException):
-        return None
-    value = metadata.get(HASH_KEY)
-    return value.decode() if value is not None else None
-
-
 def reconcile(
     chunks: Sequence[Chunk], out: Path, log: Log = _print
-) -> tuple[list[Chunk], list[Chunk], list[Path]]:
+) -> tuple[list[Chunk], list[Chunk], list[Path], int]:
     """Compare the plan with the files in ``out``; delete every part that does not belong to it.
 
     A part is kept only if its stored hash matches its chunk's and it reads back whole: every page's CRC32 checksum
-    verified and the runs schema's fields (:func:`pipeline.schema.verify_file`); a part with a changed byte is
+    verified and the runs schema's fields (:func:`pipeline.schema.check_file_schema`); a part with a changed byte is
     recomputed, with a log line. Any other file in ``out`` (a user's ``notes.txt``, which would stop pandas from
     reading the dataset) is moved to ``<out parent>/.quarantine/<out name>/`` with a log line, never deleted.
 
     Returns
     -------
-    pending, done, removed
-        Chunks to compute, chunks whose file is up to date, and the files deleted: parts of chunks that no longer
+    pending, done, removed, failed
+        Chunks to compute, chunks whose file is up to date, the files deleted (parts of chunks that no longer
         exist or whose hash differs, damaged parts, temporary files of interrupted writes, and the parts of
-        studies that are no longer simulated.
+        studies that are no longer simulated), and the failed runs in the files kept.
     """
-    pending, done = [], []
+    pending, done, failed = [], [], 0
     for chunk in chunks:
-        intact = chunk.path.exists() and stored_hash(chunk.path) == chunk.hash
-        problem = verify_file(chunk.path) if intact else None
-        if problem:
-            log(f"simulate: {chunk.path} is damaged ({problem}); recomputing it")
-        (done if intact and not problem else pending).append(chunk)
+        kept = _kept_failures(chunk, log)
+        if kept is None:
+            pending.append(chunk)
+        else:
+            done.append(chunk)
+            failed += kept
     keep = {c.path for c in done}
     removed = _sweep(out, keep, log) if out.is_dir() else []
-    return pending, done, removed
+    return pending, done, removed, failed
+
+
+def _kept_failures(chunk: Chunk, log: Log) -> int | None:
+    """The failed runs in ``chunk``'s part file if the file is up to date (see :func:`reconcile`), else None.
+
+    One open and one read of the file give its hash, its check and its failures (a read of the hash, one of the
+    whole file and one of its status column cost three times as much on a rerun).
+    """
+    if not chunk.path.exists():
+        return None
+    try:
+        file = pq.ParquetFile(chunk.path, page_checksum_verification=True)
+        stored = (file.schema_arrow.metadata or {}).get(HASH_KEY)
+    except (OSError, pa.ArrowException):
+        return None  # no readable footer: another chunk's leftover or garbage, recomputed without a word
+    with file:
+        if stored != chunk.hash.encode():
+            return None
+        try:
+            table = file.read()
+            check_file_schema(table.schema, str(chunk.path))
+        except (OSError, pa.ArrowException, SchemaError) as exc:
+            log(f"simulate: {chunk.path} is damaged ({type(exc).__name__}: {exc}); recomputing it")
+            return None
+    return failed_runs(table)
 
 
 def _sweep(out: Path, keep: set[Path], log: Log) -> list[Path]:

@@ -42,7 +42,6 @@ from pathlib import Path
 
 import pandas as pd
 import pyarrow as pa
-import pyarrow.parquet as pq
 import yaml
 from joblib import Parallel, delayed, parallel_config
 from tqdm import tqdm
@@ -63,7 +62,7 @@ from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.protocol import result_row, weigh
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, runs_frame, table_from_rows
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame, table_from_rows
 
 #: the numerical result columns: a successful row with a non-finite one is a failed run
 _NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
@@ -169,9 +168,8 @@ def _task(
     writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
     _watch_main_process(main_pid)
     table = chunk_table(rows, protocols)
-    failed = int((table.column("status").to_numpy(zero_copy_only=False) != "ok").sum())
     # results arrive unordered: carry the chunk's identity back with its file
-    return study, index, part_content(table, chunk_hash_), len(table), failed
+    return study, index, part_content(table, chunk_hash_), len(table), failed_runs(table)
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
@@ -320,7 +318,7 @@ def simulate_samples(
     out = Path(out)
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
     with runs_lock(out):
-        pending, done, removed = reconcile(chunks, out, log)
+        pending, done, removed, failed_done = reconcile(chunks, out, log)
         total = sum(c.n_runs for c in pending)
         log(
             f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
@@ -329,8 +327,7 @@ def simulate_samples(
         )
         if execution.backend == "loky" and pending:
             execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log))
-        failed = _run_pending(pending, execution, total, log)
-        failed += sum(_count_failed(chunk.path) for chunk in done)
+        failed = failed_done + _run_pending(pending, execution, total, log)
     summary = Summary(
         runs=sum(c.n_runs for c in chunks),
         failed=failed,
@@ -357,12 +354,6 @@ def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: in
     finally:
         progress.close()
     return failed
-
-
-def _count_failed(path: Path) -> int:
-    """Number of rows of a part file whose status is not ``ok`` (reads only that column)."""
-    status = pq.read_table(path, columns=["status"]).column("status").to_pylist()
-    return len(status) - status.count("ok")
 
 
 def read_samples(samples_dir: str | Path, studies: Sequence[str] = STUDIES) -> dict[str, pd.DataFrame]:
