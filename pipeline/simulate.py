@@ -44,7 +44,6 @@ import pandas as pd
 import pyarrow as pa
 import yaml
 from joblib import Parallel, delayed, parallel_config
-from tqdm import tqdm
 
 from pipeline.chunks import (
     Chunk,
@@ -236,7 +235,12 @@ class Progress:
         self.done = 0
         self.start = self.last_time = time.perf_counter()
         self.last_fraction = 0.0
-        self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr) if sys.stderr.isatty() else None
+        self.bar = None
+        if sys.stderr.isatty():
+            # imported here: a worker imports this module for its task, and tqdm would add 50 ms to its start-up
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr)
 
     def update(self, runs: int) -> None:
         self.done += runs
