@@ -11,9 +11,9 @@ One row per (sample, protocol), with every column of the sample (except ``study`
 results, in the one schema of :mod:`pipeline.schema` (types and units). A failed weighing is a row with
 ``status = "failed"``, the reason in ``message`` and nulls in every result column; the stage never stops for one.
 
-Parallel: the chunks run with joblib (``loky`` processes, one thread each, or a dask.distributed cluster through
-joblib's ``dask`` backend); a worker returns its chunk's file as bytes and the main process writes it as soon as the
-chunk completes.
+Parallel: on this machine (``execution.backend`` ``loky``) the main process and ``n_jobs - 1`` loky worker processes
+(one thread each) weigh the chunks; on a dask.distributed cluster, joblib's ``dask`` backend. A worker returns its
+chunk's file as bytes and the main process writes each file as soon as its chunk completes.
 
 Resumable: each file carries in its Parquet metadata (key :data:`HASH_KEY`) a hash of everything that determines its
 content: the chunk's sample rows, the protocols and their settings, and the code (the sources of ``bogie`` and of
@@ -29,14 +29,17 @@ and ``bench/`` measures the cost per run.)
 from __future__ import annotations
 
 import argparse
+import collections
 import dataclasses
 import functools
 import math
 import os
+import queue
 import sys
 import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -44,6 +47,7 @@ import pandas as pd
 import pyarrow as pa
 import yaml
 from joblib import Parallel, delayed, parallel_config
+from joblib.externals.loky import get_reusable_executor
 
 from pipeline.chunks import (
     Chunk,
@@ -205,23 +209,99 @@ def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | 
     return limit
 
 
-def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, bytes, int, int]]:
-    """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash, os.getpid()) for c in chunks)
-    # a chunk is seconds of work: joblib's automatic batching would only coarsen the progress and the resumption
-    options = {"return_as": "generator_unordered", "batch_size": 1}
-    if execution.backend == "dask":
-        from dask.distributed import Client
+#: what a part's task returns: study, chunk index, the part file's bytes, its runs and its failed runs
+Result = tuple[str, int, bytes, int, int]
 
-        # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts
-        # its workers with OMP/MKL/OPENBLAS_NUM_THREADS=1
-        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
-            yield from Parallel(**options)(tasks)
-    else:
-        # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers. A
-        # worker waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main process is killed
-        with parallel_config(backend="loky", inner_max_num_threads=1, idle_worker_timeout=WORKER_IDLE_TIMEOUT):
-            yield from Parallel(n_jobs=execution.n_jobs, **options)(tasks)
+#: the environment of a loky worker: one thread in every threaded library (what joblib's loky backend sets with
+#: inner_max_num_threads=1), so that n_jobs processes keep n_jobs cores busy and no more
+ONE_THREAD_ENV: dict[str, str] = dict.fromkeys(
+    ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS",
+     "NUMBA_NUM_THREADS", "NUMEXPR_NUM_THREADS"), "1"
+)  # fmt: skip
+
+
+def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Result]:
+    """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
+    if execution.backend != "dask":
+        yield from _local_results(chunks, execution.n_jobs)
+        return
+    from dask.distributed import Client
+
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash, os.getpid()) for c in chunks)
+    # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts its
+    # workers with OMP/MKL/OPENBLAS_NUM_THREADS=1. A chunk is seconds of work: joblib's automatic batching would
+    # only coarsen the progress and the resumption
+    with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+        yield from Parallel(return_as="generator_unordered", batch_size=1)(tasks)
+
+
+def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
+    """The chunks on this machine, ``n_jobs - 1`` loky worker processes and this one, each result as it is done.
+
+    The main process weighs chunks too, between writing the files (a ms a chunk): one worker fewer saves a worker's
+    start-up, its imports and its compiled kernels' load (about 2 s of CPU), which the main process has paid
+    already, and the main process weighs from the start while the workers start. Each worker holds one chunk at a
+    time and gets its next one from loky's result thread the moment it returns one, so that it never waits for the
+    main process's chunk. A worker waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main
+    process is killed (:func:`_watch_main_process`).
+    """
+    todo = collections.deque(chunks)
+    main_pid = os.getpid()
+
+    def arguments(chunk: Chunk) -> tuple:
+        return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash, main_pid
+
+    if n_jobs <= 1:
+        while todo:
+            yield _task(*arguments(todo.popleft()))
+        return
+    executor = get_reusable_executor(max_workers=n_jobs - 1, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV)
+    returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or an error of a submission
+    lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
+    in_flight = 0
+
+    def send_next(done: Future | None = None) -> None:
+        nonlocal in_flight
+        if done is not None:
+            returned.put(done)
+        with lock:
+            if not todo:
+                return
+            chunk = todo.popleft()
+            in_flight += 1
+        try:
+            executor.submit(_task, *arguments(chunk)).add_done_callback(send_next)
+        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread raises it
+            returned.put(exc)
+
+    def take(item: Future | BaseException) -> Result:
+        nonlocal in_flight
+        with lock:
+            in_flight -= 1
+        if isinstance(item, BaseException):
+            raise item
+        return item.result()
+
+    try:
+        for _ in range(n_jobs - 1):
+            send_next()
+        while True:
+            while not returned.empty():
+                yield take(returned.get())
+            with lock:
+                chunk = todo.popleft() if todo else None
+            if chunk is None:
+                break
+            yield _task(*arguments(chunk))
+        while True:
+            with lock:
+                if not in_flight:
+                    break
+            yield take(returned.get())
+    except BaseException:
+        # an error, an interrupt or a consumer gone: no chunk of the workers would be written, stop them now
+        executor.shutdown(wait=False, kill_workers=True)
+        raise
 
 
 class Progress:
