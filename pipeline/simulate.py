@@ -85,12 +85,12 @@ def _failed_row(protocol: str, n_axles: int, message: str) -> dict:
     return row
 
 
-def _weighed_rows(rows: pd.DataFrame, protocols: Protocols) -> list[dict]:
-    """Weigh every sample of ``rows`` by every protocol: one dict of run columns per (sample, protocol)."""
+def _weighed_rows(rows: Mapping[str, Sequence], protocols: Protocols) -> list[dict]:
+    """Weigh every sample of ``rows`` (column name -> the samples' Python values) by every protocol: one dict of
+    run columns per (sample, protocol)."""
     out = []
-    # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
-    names, columns = list(rows.columns), [rows[c].tolist() for c in rows.columns]
-    for values in zip(*columns):
+    names = list(rows)
+    for values in zip(*rows.values()):
         sample = dict(zip(names, values))
         try:
             bogie_ = bogie_from_sample(sample)
@@ -129,14 +129,13 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
         A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
         reason in ``message`` and nulls in every result column.
     """
-    return runs_frame(_weighed_rows(rows, protocols))
+    # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
+    return runs_frame(_weighed_rows({c: rows[c].tolist() for c in rows.columns}, protocols))
 
 
-def chunk_table(rows: pd.DataFrame, protocols: Protocols) -> pa.Table:
-    """:func:`run_chunk`'s rows as the Arrow table its part file holds (:func:`pipeline.schema.table_from_rows`).
-
-    What a task returns: built without pandas, and passed between processes as Arrow buffers.
-    """
+def chunk_table(rows: Mapping[str, Sequence], protocols: Protocols) -> pa.Table:
+    """:func:`run_chunk`'s rows as the Arrow table a part file holds (:func:`pipeline.schema.table_from_rows`),
+    built without pandas from the samples column by column (a :class:`pipeline.chunks.Chunk`'s ``rows``)."""
     return table_from_rows(_weighed_rows(rows, protocols))
 
 
@@ -165,7 +164,7 @@ def _watch_main_process(main_pid: int) -> None:
 
 
 def _task(
-    study: str, index: int, rows: pd.DataFrame, protocols: Protocols, chunk_hash_: str, main_pid: int
+    study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str, main_pid: int
 ) -> tuple[str, int, bytes, int, int]:
     """One chunk's part file as bytes, its runs and failed runs. The worker encodes the file: the main process only
     writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
