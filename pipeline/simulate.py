@@ -31,7 +31,6 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import functools
 import math
 import os
 import queue
@@ -143,17 +142,14 @@ def chunk_table(rows: Mapping[str, Sequence], protocols: Protocols) -> pa.Table:
 MAIN_PROCESS_POLL = 1.0
 
 
-@functools.cache
 def _watch_main_process(main_pid: int) -> None:
-    """In a loky worker, end the process within :data:`MAIN_PROCESS_POLL` of the end of its main process.
+    """A local loky worker's initializer: end the worker within :data:`MAIN_PROCESS_POLL` of the end of its parent,
+    the main process ``main_pid`` (at once if it ended while the worker started).
 
     Once the main process is killed nothing reads the pipe the results go back through, and a worker blocks for
     ever writing its chunk's result as soon as the pipe's 64 KiB buffer is full (two chunks of 64 samples fill it),
-    whatever WORKER_IDLE_TIMEOUT says. Started once per process (cached), and only in a child of ``main_pid``: not
-    in the main process itself (n_jobs = 1) nor in a dask worker, whose parent is its nanny.
+    whatever WORKER_IDLE_TIMEOUT says; a worker still starting would weigh the chunks queued for it first.
     """
-    if os.getppid() != main_pid:
-        return
 
     def watch() -> None:
         while os.getppid() == main_pid:
@@ -164,11 +160,10 @@ def _watch_main_process(main_pid: int) -> None:
 
 
 def _task(
-    study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str, main_pid: int
+    study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str
 ) -> tuple[str, int, bytes, int, int]:
     """One chunk's part file as bytes, its runs and failed runs. The worker encodes the file: the main process only
     writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
-    _watch_main_process(main_pid)
     table = chunk_table(rows, protocols)
     # results arrive unordered: carry the chunk's identity back with its file
     return study, index, part_content(table, chunk_hash_), len(table), failed_runs(table)
@@ -226,7 +221,7 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Re
         return
     from dask.distributed import Client
 
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash, os.getpid()) for c in chunks)
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash) for c in chunks)
     # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts its
     # workers with OMP/MKL/OPENBLAS_NUM_THREADS=1. A chunk is seconds of work: joblib's automatic batching would
     # only coarsen the progress and the resumption
@@ -240,21 +235,22 @@ def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
     The main process weighs chunks too, between writing the files (a ms a chunk): one worker fewer saves a worker's
     start-up, its imports and its compiled kernels' load (about 2 s of CPU), which the main process has paid
     already, and the main process weighs from the start while the workers start. Each worker holds one chunk at a
-    time and gets its next one from loky's result thread the moment it returns one, so that it never waits for the
-    main process's chunk. A worker waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main
-    process is killed (:func:`_watch_main_process`).
+    time and gets the next one from loky's result thread as soon as it returns one. A worker waits at most
+    WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main process is killed (:func:`_watch_main_process`).
     """
     todo = collections.deque(chunks)
-    main_pid = os.getpid()
 
     def arguments(chunk: Chunk) -> tuple:
-        return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash, main_pid
+        return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash
 
     if n_jobs <= 1:
         while todo:
             yield _task(*arguments(todo.popleft()))
         return
-    executor = get_reusable_executor(max_workers=n_jobs - 1, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV)
+    executor = get_reusable_executor(
+        max_workers=n_jobs - 1, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
+        initializer=_watch_main_process, initargs=(os.getpid(),),
+    )  # fmt: skip
     returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or an error of a submission
     lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
     in_flight = 0
@@ -486,8 +482,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    # run as the module pipeline.simulate, not as __main__: the workers then import the task by name, with the state
-    # of its module (the cached watch of the main process), instead of receiving a copy of its code with every chunk
+    # run as the module pipeline.simulate, not as __main__: the workers then import the task and their initializer by
+    # name, instead of receiving a copy of their code with every chunk
     from pipeline.simulate import main as module_main
 
     sys.exit(module_main())
