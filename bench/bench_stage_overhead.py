@@ -16,8 +16,9 @@ What the lines mean:
   result rows built and typed; the new code checks and encodes the part file here, in the worker), ``write_part``
   (the main process; the base code checked and encoded the file there), ``the rest`` (reconcile, progress, counts).
 * ``rerun``: a second run on the complete dataset: every file's hash read and its pages verified, nothing computed.
-* ``n_jobs=2``: loky, as the stage runs: wall time, the main process's CPU time and the workers' (start-up
-  included: interpreter, imports; the stub loads no compiled kernel).
+* ``n_jobs=2``: as the stage runs on this machine: wall time, the main process's CPU time and the loky workers'
+  (start-up included: interpreter, imports; the stub loads no compiled kernel). The base runs two workers beside an
+  idle main process, the new code one worker beside a main process that weighs chunks too.
 * ``worker start-up`` (this checkout only: the base's copy would compile the kernels anew): a fresh process's
   import of ``pipeline.simulate`` and its first weighing of each group and protocol beyond a second one (the
   cached compiled kernels loaded), real weighings.

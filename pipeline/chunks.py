@@ -3,10 +3,9 @@
 :func:`plan_chunks` splits each study into chunks and hashes each (:func:`chunk_hash`: the sample rows, the
 protocols and the code, :func:`code_version`); :func:`reconcile` keeps the part files whose stored hash matches and
 that read back whole (page checksums), counting their failed runs, deletes the rest and quarantines files that are
-not ours; :func:`runs_lock`
-keeps a second process off the dataset; :func:`part_content` makes a part file's bytes (in the worker that weighed
-the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a chunk's samples, is
-:func:`pipeline.simulate.chunk_table`.
+not ours; :func:`runs_lock` keeps a second process off the dataset; :func:`part_content` makes a part file's bytes
+(in the worker that weighed the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a
+chunk's samples, is :func:`pipeline.simulate.chunk_table`.
 """
 
 from __future__ import annotations
@@ -193,10 +192,13 @@ def _kept_failures(chunk: Chunk, log: Log) -> int | None:
         return None
     try:
         file = pq.ParquetFile(chunk.path, page_checksum_verification=True)
-        stored = (file.schema_arrow.metadata or {}).get(HASH_KEY)
     except (OSError, pa.ArrowException):
         return None  # no readable footer: another chunk's leftover or garbage, recomputed without a word
     with file:
+        try:
+            stored = (file.schema_arrow.metadata or {}).get(HASH_KEY)
+        except (OSError, pa.ArrowException):
+            return None
         if stored != chunk.hash.encode():
             return None
         try:
