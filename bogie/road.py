@@ -307,14 +307,15 @@ class ISO8608Profile:
             )
         k = np.arange(k_lo, k_hi + 1)
         freqs = k / length
-        amps = np.sqrt(2.0 * self.psd(freqs) / length)
+        # self.psd(freqs), without its checks of a frequency array the harmonics make positive and finite
+        amps = np.sqrt(2.0 * (self.psd_n0 * (freqs / ISO8608_N0) ** (-self.waviness)) / length)
         phases = np.random.default_rng(self.seed).uniform(0.0, 2.0 * np.pi, size=k_hi)[k_lo - 1 :]
         n_grid = 2 ** math.ceil(math.log2(_GRID_POINTS_PER_WAVELENGTH * k_hi))
         spectrum = np.zeros(n_grid // 2 + 1, dtype=complex)
         # irfft(X)[j] = (2 / N) Re sum_k X_k e^(2 pi i k j / N) for 0 < k < N / 2
         spectrum[k] = 0.5 * n_grid * amps * np.exp(1j * phases)
         grid_h = np.empty(n_grid + 1)
-        grid_h[:n_grid] = np.fft.irfft(spectrum, n=n_grid)
+        np.fft.irfft(spectrum, n=n_grid, out=grid_h[:n_grid])
         grid_h[n_grid] = grid_h[0]
         object.__setattr__(self, "frequencies", _frozen(freqs))
         object.__setattr__(self, "amplitudes", _frozen(amps))
@@ -344,9 +345,12 @@ class ISO8608Profile:
         """Heights [m] at the grid points k_from .. k_to (any integers: the profile repeats every ``length``), at
         road distances k ``grid_spacing`` [m]; exactly the values :meth:`__call__` gives there."""
         n_grid = len(self._grid_h) - 1
+        grid = self._grid_h
         if 0 <= k_from <= k_to <= n_grid:  # one period: a slice (the grid's last point is its first again)
-            return self._grid_h[k_from : k_to + 1].copy()
-        return self._grid_h[np.arange(k_from, k_to + 1) % n_grid]
+            return grid[k_from : k_to + 1].copy()
+        if -n_grid <= k_from < 0 <= k_to <= n_grid:  # the end of the period before, then this one: two slices
+            return np.concatenate((grid[n_grid + k_from : n_grid], grid[: k_to + 1]))
+        return grid[np.arange(k_from, k_to + 1) % n_grid]
 
     @property
     def psd_n0(self) -> float:

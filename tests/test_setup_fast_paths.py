@@ -60,4 +60,7 @@ def test_iso8608_grid_heights_are_the_profiles_own_at_the_grid_points():
     k = np.arange(-40, 3 * 16384 // 2)
     # every index, wrapped into the period, is the height a call gives at that grid point (also past the period)
     assert np.array_equal(profile.grid_heights(int(k[0]), int(k[-1])), profile(np.mod(k, 16384) * dx))
+    for k_from, k_to in ((-40, 1000), (0, 16384), (5, 9), (-16384, 16384)):  # two slices, one, and the full period
+        k = np.arange(k_from, k_to + 1)
+        assert np.array_equal(profile.grid_heights(k_from, k_to), profile(np.mod(k, 16384) * dx))
     assert dx == 50.0 / 16384
