@@ -357,7 +357,9 @@ def test_design_caption_names_the_cells_that_reach_the_target_or_the_best():
         "From the lowest to the highest bin, the share within 5 % goes: bush stiffness (tandem 90 % to 20 %, "
         "tri-axle 80 % to 10 %); equaliser arm (tandem 50 % to 60 %)."
     )
-    assert paras[4].startswith("Not design guidance: these are the fleet's runs as sampled, not a controlled experiment")
+    assert paras[4].startswith(
+        "Not design guidance: these are the fleet's runs as sampled, not a controlled experiment"
+    )
     paras = text.render("design.j2", protocol="wim", target=0.95, min_cell=10, groups={"tandem": None}, trends={})
     assert paras[1] == "Tandem: no cell holds 10 bogies; too few runs for guidance."
     assert paras[2].startswith("Not design guidance")
