@@ -266,7 +266,7 @@ def _solve_step(
     may_skip = jst[3] > 0.0 and jst[2] + 1.0 < jst[3] and alpha_f == 0.0 and not want
     for it in range(max_iter + 1):
         _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
-        _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
+        _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, want, work)
         counts[0] += 1.0
         if want:
             counts[0] += n
@@ -542,6 +542,7 @@ def _phase_loop(
                 if status != STATUS_OK:
                     stats[S_END] = step * h
                     return status, step * h, rnorm, on_stop
+            nlc.readings(u, v, drv, data_f, n_axles, rec)
             _read_step(phase, n_axles, offsets, step * h, t1, loads0, rec, acc)
             on_stop = on_stop or _stop_in_window(phase, n_axles, t1, h, rec)
             for i in range(n_axles):
@@ -614,6 +615,7 @@ def _phase_loop(
             continue
         _keep_correction(corr, u_new, jst, hh)
         _commit(u, v, a, f_old, hist, trial)
+        nlc.readings(u, v, drv, data_f, n_axles, rec)
         _read_step(phase, n_axles, offsets, t, t1, loads0, rec, acc)
         on_stop = on_stop or _stop_in_window(phase, n_axles, t1, hh, rec)
         for i in range(n_axles):
