@@ -11,6 +11,7 @@ import json
 import subprocess
 from pathlib import Path
 
+from bogie._fingerprint import fingerprint
 from pipeline.config import load_config
 from pipeline.protocol import weigh
 from pipeline.sample import bogie_from_sample, sample_fleet
@@ -37,7 +38,7 @@ def main() -> None:
             out.append({"index": index, "protocol": protocol, "row": {k: encode(v) for k, v in row.items()}})
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     path = Path(__file__).with_name("reference.json")
-    path.write_text(json.dumps({"commit": commit, "rows": out}, indent=1) + "\n")
+    path.write_text(json.dumps({"commit": commit, "machine": fingerprint(), "rows": out}, indent=1) + "\n")
     print(path, len(out), "rows")
 
 
