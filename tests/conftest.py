@@ -1,6 +1,6 @@
 """Test session set-up shared by all tests."""
 
-from bogie._fingerprint import fingerprint
+from _fingerprint import fingerprint
 
 
 def pytest_report_header(config):

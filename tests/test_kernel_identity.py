@@ -12,11 +12,11 @@ change of the arithmetic rewrites the file on purpose, with the reason in its co
 
 Bits are defined on the machine that wrote the file: numba compiles for the host CPU (where fused multiply-adds
 contract is the instruction set's choice), numpy and BLAS dispatch by the CPU's features. The machine and library
-facts (``bogie._fingerprint``) are stored beside the runs in ``kernel_identity.machine.json``; where they differ, each
-stored array must instead agree within ``FOREIGN_RTOL`` of its largest magnitude, integers (status, step and iteration
-counts) and the NaN pattern exactly. Measured: numba compiling for Haswell with numpy's AVX-512 loops disabled moved
-the arrays by at most 1.7e-9 of their scale, another CI machine by 3.5e-8 (the run that fails, whose last state is
-an unconverged iterate); a change of a formula moves them by orders of magnitude more.
+facts (``tests/_fingerprint.py``) are stored beside the runs in ``kernel_identity.machine.json``; where they differ,
+each stored array must instead agree within ``FOREIGN_RTOL`` of its largest magnitude, integers (status, step and
+iteration counts) and the NaN pattern exactly. Measured: numba compiling for Haswell with numpy's AVX-512 loops
+disabled moved the arrays by at most 1.7e-9 of their scale, another CI machine by 3.5e-8 (the run that fails, whose
+last state is an unconverged iterate); a change of a formula moves them by orders of magnitude more.
 """
 
 import json
@@ -25,10 +25,10 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from _fingerprint import describe, fingerprint
 
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
-from bogie._fingerprint import describe, fingerprint
 from bogie.newmark import MODEL_LINEAR, MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.params import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile

@@ -6,7 +6,7 @@ protocols as issue 15 left them (phases in one compiled call, adaptive steps in 
 the WIM protocol. Floats are stored as ``float.hex()`` and compared with ``==`` (NaN with NaN), every other field
 (flags, status, message) as is. A change meant to change results rewrites the file on purpose.
 
-Bits are defined on the machine that wrote the file (its CPU and library facts, ``bogie._fingerprint``, are stored
+Bits are defined on the machine that wrote the file (its CPU and library facts, ``tests/_fingerprint.py``, are stored
 in it): on another, every float must agree within ``FOREIGN_RTOL`` of its scale (loads of the group load, the rest
 of 1: shares, fractions, radians) and everything else exactly. Measured: numba compiling for Haswell with numpy's
 AVX-512 loops disabled moved the rows by at most 6e-11 of their values, another CI machine by 1e-12.
@@ -19,8 +19,8 @@ import math
 from pathlib import Path
 
 import pytest
+from _fingerprint import describe, fingerprint
 
-from bogie._fingerprint import describe, fingerprint
 from pipeline.config import load_config
 from pipeline.protocol import weigh
 from pipeline.sample import bogie_from_sample, sample_fleet

@@ -9,14 +9,18 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
 from pathlib import Path
 
-from bogie._fingerprint import fingerprint
-from pipeline.config import load_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet
-
 ROOT = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from _fingerprint import fingerprint  # noqa: E402
+
+from pipeline.config import load_config  # noqa: E402
+from pipeline.protocol import weigh  # noqa: E402
+from pipeline.sample import bogie_from_sample, sample_fleet  # noqa: E402
+
 #: fleet sample indices (params.yaml): three tandem, three tri-axle
 INDICES = (3, 8, 11, 0, 1, 2)
 

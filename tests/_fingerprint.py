@@ -5,7 +5,8 @@ where fused multiply-adds replace a multiply and an add), numpy dispatches its o
 BLAS/LAPACK pick kernels per CPU. So the same code, parameters and seed give the same bits on one machine and may
 differ in the last bits on another (measured: 1e-12 of a group load on a different CPU, amplified by a run that
 fails). Tests that compare stored runs bit for bit store this fingerprint beside them and compare bits only where it
-matches (``tests/test_kernel_identity.py``, ``tests/pipeline/test_protocol_identity.py``).
+matches (``tests/test_kernel_identity.py``, ``tests/pipeline/test_protocol_identity.py``). Test code, not the
+library's: it imports llvmlite, which the library does not declare.
 """
 
 from __future__ import annotations
