@@ -36,6 +36,7 @@ from scipy.integrate import solve_ivp
 
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
+from bogie import phases
 from bogie.newmark import MODEL_NONLINEAR, IntegrationResult, consistent_acceleration, integrate
 from bogie.params import Bogie, tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
@@ -131,8 +132,8 @@ class KernelCall:
         n = bogie.n_axles
         f0 = np.zeros(2 * n)
         core.force(
-            state.u, state.v, drive[0], data_f, data_i, state.slip, state.slip.copy(), f0, np.zeros((2 * n, 2 * n)),
-            np.zeros((2 * n, 2 * n)), np.zeros(core.RECORD_PER_AXLE * n), False, False,
+            state.u, state.v, drive[0], data_f, data_i, state.history, state.history.copy(), f0,
+            np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(core.RECORD_PER_AXLE * n), False, False,
             np.zeros(nl._work_size(bogie)),
         )  # fmt: skip
         return cls(bogie, inputs, mass, data_f, data_i, drive, state, consistent_acceleration(mass, f0))
@@ -142,7 +143,7 @@ class KernelCall:
         b, s = self.bogie, self.state
         return integrate(
             MODEL_NONLINEAR, self.mass, self.drive, self.data_f, self.data_i, s.u.copy(), s.v.copy(), self.a0,
-            s.slip.copy(), self.inputs.dt, self.inputs.n_steps, nl._tolerance(b), max_iter=25, max_halvings=5,
+            s.history.copy(), self.inputs.dt, self.inputs.n_steps, nl._tolerance(b), max_iter=25, max_halvings=5,
             n_record=core.RECORD_PER_AXLE * b.n_axles, work_size=nl._work_size(b), limits=nl.limits(b),
         )  # fmt: skip
 
@@ -162,13 +163,16 @@ class FirstOrderForm:
         self.m_inv = np.linalg.inv(call.mass)
         n = call.bogie.n_axles
         self.n_axles = n
+        if call.bogie.spring_friction_band != 0.0:
+            raise ValueError("the first-order form carries the end slips only: give a bogie without a friction band")
+        self._rest = np.zeros(core.history_length(n) - 2 * n)
         self._scratch = (
             np.zeros(self.n_dof),
             np.zeros((self.n_dof, self.n_dof)),
             np.zeros((self.n_dof, self.n_dof)),
             np.zeros(core.RECORD_PER_AXLE * n),
             np.zeros(nl._work_size(call.bogie)),
-            np.zeros(self.n_dof),
+            np.zeros(core.history_length(n)),
             call.drive[0].copy(),
         )
 
@@ -176,21 +180,26 @@ class FirstOrderForm:
         s = self.call.state
         return np.concatenate([s.u, s.v, s.slip])
 
+    def _history(self, s: NDArray[np.float64]) -> NDArray[np.float64]:
+        """The force's history for slips ``s``: the springs' deflections and hysteretic forces after them, which
+        the peer's bogie (no interleaf friction band) never reads."""
+        return np.concatenate([s, self._rest])
+
     def rhs(self, tau: float):
         """dx/dt(t, x) for relaxation time ``tau`` [s]; the drive is linear between the 1 ms rows."""
         nd, m_inv, drive = self.n_dof, self.m_inv, self.call.drive
         dt, last = self.call.inputs.dt, self.call.inputs.n_steps - 1
         data_f, data_i = self.call.data_f, self.call.data_i
         f, kt, ct, rec, work, s_rm, drv = self._scratch
-        force = core.force
+        force, history = core.force, self._history
 
         def rhs(t: float, x: NDArray[np.float64]) -> NDArray[np.float64]:
             x = np.ascontiguousarray(x)  # solve_ivp's finite-difference Jacobian passes columns
             k = min(int(t / dt), last)
             np.add(drive[k], (t / dt - k) * (drive[k + 1] - drive[k]), out=drv)
             s = x[2 * nd :]
-            force(x[:nd], x[nd : 2 * nd], drv, data_f, data_i, s, s_rm, f, kt, ct, rec, False, False, work)
-            return np.concatenate([x[nd : 2 * nd], -(m_inv @ f), (s_rm - s) / tau])
+            force(x[:nd], x[nd : 2 * nd], drv, data_f, data_i, history(s), s_rm, f, kt, ct, rec, False, False, work)
+            return np.concatenate([x[nd : 2 * nd], -(m_inv @ f), (s_rm[: s.shape[0]] - s) / tau])
 
         return rhs
 
@@ -202,8 +211,8 @@ class FirstOrderForm:
         for k, row in enumerate(x):
             u, v, s = (np.ascontiguousarray(row[j * nd : (j + 1) * nd]) for j in range(3))
             core.force(
-                u, v, self.call.drive[k], self.call.data_f, self.call.data_i, s, s_rm, f, kt, ct, rec, True, False,
-                work,
+                u, v, self.call.drive[k], self.call.data_f, self.call.data_i, self._history(s), s_rm, f, kt, ct, rec,
+                True, False, work,
             )  # fmt: skip
             out[k] = rec[:n]
         return out
@@ -277,8 +286,22 @@ def main() -> None:
     kernel = call.run()
     if not np.array_equal(kernel.record[:, :n], result.wheel_loads):
         raise RuntimeError("the benchmark's kernel call differs from bogie.nonlinear.simulate")
+    # the weighings' kernel (bogie.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start at rest,
+    # no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it per row
+    profile = ISO8608Profile(**ROAD)
+    table = phases.RoadTable.from_profile(
+        profile, bogie.axle_x[0] - bogie.axle_x[-1] - 0.01, SPEED * DURATION + 0.01, profile.grid_spacing
+    )
+    pass_phase = [phases.Phase(DURATION, 1.0, road=table, speed=SPEED, dt=DT, name="pass")]
+    phased = phases.run(bogie, pass_phase, history=True)
+    if not phased.success or len(phased.t) != n_steps + 1:
+        raise RuntimeError(f"the phases run failed: {phased.message}")
     load_start = os.getloadavg()[0]
-    headline_fns = {"simulate": lambda: nl.simulate(bogie, inputs), "kernel": call.run}
+    headline_fns = {
+        "simulate": lambda: nl.simulate(bogie, inputs),
+        "kernel": call.run,
+        "phases": lambda: phases.run(bogie, pass_phase),
+    }
     # timed in three windows spread over the run (start, after the peer, after the axle scaling), so that
     # a burst of other work on the machine moves the median less
     windows = [interleaved(headline_fns, HEADLINE_REPEATS)]
@@ -287,13 +310,16 @@ def main() -> None:
     changes = int(np.sum(np.abs(np.diff(stick, axis=0))))
 
     # ---- 2. the peer on the first PEER_HORIZON seconds ----
-    short = road_inputs(bogie, PEER_HORIZON)
+    # the peer's first-order form carries the end slips as its friction state; the springs' interleaf friction
+    # (a Fancher hysteresis with its own history) is not in it, so the comparison runs the preset without the band
+    peer_bogie = bogie.replace(spring_friction_band=0.0)
+    short = road_inputs(peer_bogie, PEER_HORIZON)
     load = result.reference_load
-    fine = KernelCall.prepare(bogie, refined(short, REFINEMENT)).run()
-    half = KernelCall.prepare(bogie, refined(short, REFINEMENT // 2)).run()
+    fine = KernelCall.prepare(peer_bogie, refined(short, REFINEMENT)).run()
+    half = KernelCall.prepare(peer_bogie, refined(short, REFINEMENT // 2)).run()
     w_ref = fine.record[::REFINEMENT, :n]
     e_ref = errors(half.record[:: REFINEMENT // 2, :n], w_ref, load)
-    short_call = KernelCall.prepare(bogie, short)
+    short_call = KernelCall.prepare(peer_bogie, short)
     e_ours = errors(short_call.run().record[:, :n], w_ref, load)
     form = FirstOrderForm(short_call)
     slip_ref = fine.record[:, 8 * n : 10 * n]
@@ -306,7 +332,7 @@ def main() -> None:
 
     def ours_short() -> None:
         for _ in range(PEER_OURS_BATCH):
-            nl.simulate(bogie, short)
+            nl.simulate(peer_bogie, short)
 
     floors = {tau: peer_run("Radau", tau, FLOOR_RTOL)[0] for tau in TAUS}
     rows: list[PeerRow] = []
@@ -332,19 +358,23 @@ def main() -> None:
                     break
     timed = [r for r in rows if r.t_peer is not None]
     best = min(timed, key=lambda r: r.t_peer / r.t_ours) if timed else None
-    t_short = interleaved({"simulate": lambda: nl.simulate(bogie, short), "kernel": short_call.run}, 31)
+    t_short = interleaved({"simulate": lambda: nl.simulate(peer_bogie, short), "kernel": short_call.run}, 31)
     # cost of one right-hand side call, and the whole 20 s with the cheapest setting
     rhs = form.rhs(TAUS[1])
     x0 = form.initial_state()
     t_rhs = med(interleaved({"rhs": lambda: [rhs(0.5, x0) for _ in range(1000)]}, 5)["rhs"]) / 1000
     full_ref = KernelCall.prepare(bogie, refined(inputs, FULL_REFINEMENT)).run().record[::FULL_REFINEMENT, :n]
     e_ours_full = errors(kernel.record[:, :n], full_ref, load)
+    e_phases_full = errors(phased.wheel_loads, full_ref, load)
     if best is not None:
-        full_form = FirstOrderForm(call)
+        peer_call = KernelCall.prepare(peer_bogie, inputs)
+        peer_ref = KernelCall.prepare(peer_bogie, refined(inputs, FULL_REFINEMENT)).run().record[::FULL_REFINEMENT, :n]
+        e_peer_ours_full = errors(peer_call.run().record[:, :n], peer_ref, load)
+        full_form = FirstOrderForm(peer_call)
         start = time.perf_counter()
         full = peer(full_form, best.method, best.tau, best.rtol, best.rtol * x_scale)
         t_full = time.perf_counter() - start
-        e_full = errors(full_form.wheel_loads(full.y.T), full_ref, load) if full.success else None
+        e_full = errors(full_form.wheel_loads(full.y.T), peer_ref, load) if full.success else None
     windows.append(interleaved(headline_fns, HEADLINE_REPEATS))  # also the time beside the peer's 20 s run
     t_sim_full = med(windows[-1]["simulate"])
 
@@ -363,7 +393,7 @@ def main() -> None:
     scaling = interleaved(fns, 9)
     windows.append(interleaved(headline_fns, HEADLINE_REPEATS))
     headline = {name: [t for w in windows for t in w[name]] for name in headline_fns}
-    t_sim, t_kernel = med(headline["simulate"]), med(headline["kernel"])
+    t_sim, t_kernel, t_phases = med(headline["simulate"]), med(headline["kernel"]), med(headline["phases"])
 
     # ---- 3. fresh processes ----
     code = (
@@ -392,10 +422,19 @@ def main() -> None:
     print(f"   compiled kernel alone (bogie.newmark.integrate)               {t_kernel * 1e3:6.1f} ms "
           f"({min(headline['kernel']) * 1e3:.1f})  {t_kernel / n_steps * 1e6:.2f} us per step, "
           f"{kernel.n_iterations / n_steps:.2f} Newton iterations per step")  # fmt: skip
+    evals = phased.phases[0].force_evaluations / n_steps
+    verdict = "met" if t_phases < 0.01 else "NOT met"
+    print(f"   bogie.phases.run (the weighings' kernel, readings only)      {t_phases * 1e3:6.1f} ms "
+          f"({min(headline['phases']) * 1e3:.1f})  {t_phases / n_steps * 1e6:.2f} us per step, "
+          f"{evals:.2f} force evaluations per step   target <= 10 ms: {verdict}")  # fmt: skip
+    print(f"   wheel loads W / W_ref against the kernel at dt/{FULL_REFINEMENT}: simulate max {e_ours_full[0]:.2e} "
+          f"RMS {e_ours_full[1]:.2e}, phases max {e_phases_full[0]:.2e} RMS {e_phases_full[1]:.2e} (its road's "
+          "rates are exact, simulate's sampled per row)")  # fmt: skip
     window_text = ", ".join(f"{med(w['simulate']) * 1e3:.1f}" for w in windows)
     print(f"   simulate's median in each of the {len(windows)} windows of {HEADLINE_REPEATS} runs: {window_text} ms")
     print(f"2. Peer: solve_ivp on the first-order form [u, v, s] with the same compiled force, friction regularised "
-          f"(the slip s relaxes to the return map's in tau); the first {PEER_HORIZON:g} s of the run")  # fmt: skip
+          f"(the slip s relaxes to the return map's in tau); the first {PEER_HORIZON:g} s of the run, the preset "
+          "without its springs' interleaf friction band (the form has no hysteresis state)")  # fmt: skip
     print(f"   accuracy: W / W_ref against our kernel at dt/{REFINEMENT} on the same drive (dt/{REFINEMENT // 2} "
           f"differs from it by max {e_ref[0]:.1e}, RMS {e_ref[1]:.1e})")  # fmt: skip
     print(f"   ours at dt = {DT * 1e3:g} ms: max {e_ours[0]:.2e}, RMS {e_ours[1]:.2e}; simulate "
@@ -421,7 +460,7 @@ def main() -> None:
         e_text = "failed" if e_full is None else f"max {e_full[0]:.1e} RMS {e_full[1]:.1e}"
         print(
             f"   The same setting over the whole {DURATION:g} s (one run): {t_full:.2f} s, {full.nfev} rhs calls, "
-            f"error {e_text} (ours: max {e_ours_full[0]:.1e} RMS {e_ours_full[1]:.1e}, against our kernel at "
+            f"error {e_text} (ours: max {e_peer_ours_full[0]:.1e} RMS {e_peer_ours_full[1]:.1e}, against our kernel at "
             f"dt/{FULL_REFINEMENT}); {t_full / t_sim_full:.0f} x our simulate ({t_sim_full * 1e3:.1f} ms)"
         )
     print(f"3. Fresh process, `python -c` importing bogie and running {1.0:g} s of the tri-axle model (median of 3):")

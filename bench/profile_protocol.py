@@ -1,18 +1,16 @@
-"""Where the time of one weighing goes: per phase of each protocol, steps, Newton work and time, and unit costs.
+"""Where the time of one weighing goes: per phase of each protocol, the steps and force evaluations, and unit costs.
 
-Three measurements on the first tandem and the first tri-axle bogie of a fixed fleet sample (``params.yaml``,
+Measured on the first tandem and the first tri-axle bogie of a fixed fleet sample (``params.yaml``,
 ``fleet.n_bogies`` = 50, as ``bench_protocol``):
 
-1. **Work per step** (counts, exact): each protocol run once in a subprocess with ``NUMBA_DISABLE_JIT=1``, the
-   kernels' Python source, with the model force wrapped by counters: per phase (the ``simulate`` calls and the
-   static equilibrium) its steps, Newton iterations (``IntegrationResult.n_iterations``), tangent formations
-   (``force`` calls with ``want_tangent``) and internal-force evaluations (``_internal`` calls: 2n + 1 per
-   tangent, one per residual). The numbers are those of the compiled run up to round-off in the last bits.
-2. **Time per phase** (compiled, warm cache): each protocol :data:`REPEATS` times per bogie, the time in the
-   compiled kernel (``newmark.integrate``) of each phase, the equilibrium, and everything else of ``weigh`` (road
-   and inputs, packing, results, the reading): the Python overhead between phases.
-3. **Unit costs** (compiled loops, no Python in between): one internal-force evaluation with and without the
-   record, one tangent (force with ``want_tangent``), one LU factorisation of the 2n x 2n iteration matrix.
+1. **Work per phase** (counts from the kernel, exact): accepted and rejected steps, force evaluations (the 2n + 1
+   of each tangent included), tangents formed, factorisations of the iteration matrix and steps whose first
+   correction was accepted unchecked (``bogie.phases.PhaseOutcome``), and the evaluations per step.
+2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``pipeline.protocol.weigh``, the compiled
+   call (``bogie._phases_core.run_phases``) within it, and so the Python around it (the road tables, the phases,
+   the result row); the time per step and per force evaluation of the compiled call.
+3. **Unit costs** (compiled loops, no Python in between, best of 5): one force evaluation with the record (the
+   hysteresis' exponential running), forming and factoring the 2n x 2n iteration matrix, one solve with its factors.
 
 Run alone: ``python -m bench.profile_protocol``. Prints the load average; compare shares and ratios, not times.
 """
@@ -20,10 +18,7 @@ Run alone: ``python -m bench.profile_protocol``. Prints the load average; compar
 from __future__ import annotations
 
 import dataclasses
-import json
 import os
-import subprocess
-import sys
 import time
 from pathlib import Path
 
@@ -47,211 +42,142 @@ def _sample() -> tuple[list[dict], dict]:
     return chosen, {name: getattr(config.protocol, name) for name in PROTOCOLS}
 
 
-class _Phases:
-    """Wraps ``nonlinear.simulate``, ``nonlinear.integrate`` and ``nonlinear.equilibrium`` to label phases."""
-
-    def __init__(self) -> None:
-        from bogie import nonlinear
-
-        self.nonlinear = nonlinear
-        self.log: list[dict] = []
-        self.current: dict | None = None
-        self._simulate, self._integrate, self._equilibrium = (
-            nonlinear.simulate,
-            nonlinear.integrate,
-            nonlinear.equilibrium,
-        )
-
-        def simulate(bogie, inputs, initial=None, **kw):
-            self.current = {"phase": f"simulate {len(self.log)}", "steps": inputs.n_steps, "kernel": 0.0,
-                            "iterations": 0, "tangents": 0, "evaluations": 0}  # fmt: skip
-            self.log.append(self.current)
-            return self._simulate(bogie, inputs, initial, **kw)
-
-        def integrate(*args, **kw):
-            start = time.perf_counter()
-            run = self._integrate(*args, **kw)
-            self.current["kernel"] += time.perf_counter() - start
-            self.current["iterations"] += run.n_iterations
-            return run
-
-        def equilibrium(*args, **kw):
-            outer = self.current
-            self.current = {"phase": "equilibrium", "steps": 0, "kernel": 0.0, "iterations": 0, "tangents": 0,
-                            "evaluations": 0}  # fmt: skip
-            self.log.append(self.current)
-            start = time.perf_counter()
-            try:
-                return self._equilibrium(*args, **kw)
-            finally:
-                self.current["kernel"] += time.perf_counter() - start
-                self.current = outer
-
-        nonlinear.simulate, nonlinear.integrate, nonlinear.equilibrium = simulate, integrate, equilibrium
-
-
-def _names(protocol: str, log: list[dict]) -> list[str]:
-    """Phase names in call order: static = equilibrium (start of the ramp), ramp, crawl, settle; wim = eq., pass."""
-    sims = iter(("load ramp", "crawl", "settle") if protocol == "static" else ("pass",))
-    return ["equilibrium" if p["phase"] == "equilibrium" else next(sims) for p in log]
-
-
-def count_worker(out: str) -> None:
-    """Part 1, inside a NUMBA_DISABLE_JIT process: the counts per phase of each protocol and bogie."""
-    from bogie import _nonlinear_core as core
-    from pipeline.protocol import weigh
+def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
+    """Best-of-REPEATS time of ``weigh`` and of its compiled call [s], and the phases' outcomes."""
+    from bogie import _phases_core as pc
+    from bogie import phases
+    from pipeline import protocol
     from pipeline.sample import bogie_from_sample
 
-    phases = _Phases()
-    force, internal = core.force, core._internal
+    bogie = bogie_from_sample(record)
+    inner = {"t": 0.0}
+    kernel = pc.run_phases
 
-    def counted_force(*args):
-        if args[12] and phases.current is not None:  # want_tangent
-            phases.current["tangents"] += 1
-        return force(*args)
+    def wrapped(*args):
+        start = time.perf_counter()
+        out = kernel(*args)
+        inner["t"] += time.perf_counter() - start
+        return out
 
-    def counted_internal(*args):
-        if phases.current is not None:
-            phases.current["evaluations"] += 1
-        return internal(*args)
-
-    core.force, core._internal = counted_force, counted_internal
-    records, specs = _sample()
-    answer = {}
-    for record in records:
-        for name in PROTOCOLS:
-            phases.log = []
-            weigh(bogie_from_sample(record), record, name, specs[name])
-            for p, label in zip(phases.log, _names(name, phases.log)):
-                p["phase"] = label
-            answer[f"{record['group']} {name}"] = phases.log
-    Path(out).write_text(json.dumps(answer))
-
-
-def counts() -> dict:
-    env = dict(os.environ, NUMBA_DISABLE_JIT="1", PYTHONPATH=str(ROOT))
-    out = Path(os.environ.get("TMPDIR", "/tmp")) / f"profile_counts_{os.getpid()}.json"
-    subprocess.run([sys.executable, "-m", "bench.profile_protocol", "--count", str(out)], cwd=ROOT, env=env, check=True)
-    answer = json.loads(out.read_text())
-    out.unlink()
-    return answer
+    args = (bogie, float(record["payload_fraction"]), str(record["road_class"]), int(record["road_seed"]), spec)
+    if name == "static":
+        run = protocol.static_weighbridge(*args)
+    else:
+        run = protocol.wim_pass(*args, sensor_seed=int(record["sensor_seed"]))
+    best_total = best_kernel = float("inf")
+    phases.pc.run_phases = wrapped
+    try:
+        for _ in range(REPEATS):
+            inner["t"] = 0.0
+            start = time.perf_counter()
+            protocol.weigh(bogie, record, name, spec)
+            best_total = min(best_total, time.perf_counter() - start)
+            best_kernel = min(best_kernel, inner["t"])
+    finally:
+        phases.pc.run_phases = kernel
+    return best_total, best_kernel, list(run.run.phases)
 
 
-def timings() -> dict:
-    """Part 2: compiled, the time per phase and the rest of ``weigh``, medians over REPEATS."""
-    from pipeline.protocol import weigh
-    from pipeline.sample import bogie_from_sample
-
-    records, specs = _sample()
-    phases = _Phases()
-    answer = {}
-    for record in records:
-        bogie = bogie_from_sample(record)
-        for name in PROTOCOLS:
-            weigh(bogie, record, name, specs[name])  # warm
-            runs = []
-            for _ in range(REPEATS):
-                phases.log = []
-                start = time.perf_counter()
-                weigh(bogie, record, name, specs[name])
-                total = time.perf_counter() - start
-                runs.append((total, [dict(p) for p in phases.log]))
-            totals = [t for t, _ in runs]
-            median = sorted(range(REPEATS), key=lambda k: totals[k])[REPEATS // 2]
-            total, log = runs[median]
-            for k, (p, label) in enumerate(zip(log, _names(name, log))):
-                p["phase"] = label
-                p["kernel"] = float(np.median([r[1][k]["kernel"] for r in runs]))
-            answer[f"{record['group']} {name}"] = {"total": float(np.median(totals)), "phases": log}
-    return answer
-
-
-def unit_costs() -> dict:
-    """Part 3: compiled loops of one force evaluation, one tangent and one LU factorisation per bogie [s]."""
+def _unit_costs(record: dict) -> dict[str, float]:
+    """Compiled-loop costs [us] of one force evaluation, one factorisation and one solve, for ``record``'s bogie."""
     from numba import njit
 
-    from bogie import _nonlinear_core as core
-    from bogie import nonlinear
-    from bogie._lu import lu_factor
+    from bogie import _nonlinear_core as nlc
+    from bogie import nonlinear as nl
+    from bogie._lu import lu_factor, lu_solve
     from pipeline.sample import bogie_from_sample
 
     @njit
-    def force_loop(calls, u, v, drv, data_f, data_i, h0, h1, f, kt, ct, rec, record, tangent, work):
-        for _ in range(calls):
-            core.force(u, v, drv, data_f, data_i, h0, h1, f, kt, ct, rec, record, tangent, work)
+    def force_loop(count, u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, work):
+        total = 0.0
+        for k in range(count):
+            u[-1] += 1e-9 * (2 * (k & 1) - 1)  # the last axle moves: its spring's hysteresis exponential runs
+            nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, True, False, work)
+            total += f[0]
+        return total
 
     @njit
-    def lu_loop(calls, jac, a, piv):
-        for _ in range(calls):
-            a[:] = jac
-            lu_factor(a, piv)
+    def factor_loop(count, mass, kt, ct, jac, piv):
+        total = 0.0
+        for k in range(count):
+            for i in range(mass.shape[0]):
+                for j in range(mass.shape[0]):
+                    jac[i, j] = 4e6 * mass[i, j] + kt[i, j] + 2e3 * ct[i, j] + k * 1e-9
+            lu_factor(jac, piv)
+            total += jac[0, 0]
+        return total
 
-    records, _ = _sample()
-    answer = {}
-    for record in records:
-        bogie = bogie_from_sample(record)
-        n = bogie.n_axles
-        mass, data_f, data_i = nonlinear.pack(bogie)
-        drive = nonlinear.hold(bogie, 0.01, 0.001).drive(bogie)
-        state = nonlinear.equilibrium(bogie, drive[0])
-        ndof = 2 * n
-        args = [state.u, state.v, drive[0], data_f, data_i, state.history, state.history.copy(), np.zeros(ndof),
-                np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(core.record_length(n))]  # fmt: skip
-        work = np.zeros(core.work_size(n))
-        costs = {}
-        for label, rec_flag, tangent, calls in (("force, no record", False, False, 200_000),
-                                                ("force + record", True, False, 200_000),
-                                                ("tangent (2n + 1 forces)", True, True, 20_000)):  # fmt: skip
-            force_loop(10, *args, rec_flag, tangent, work)
-            best = float("inf")
-            for _ in range(5):
-                start = time.perf_counter()
-                force_loop(calls, *args, rec_flag, tangent, work)
-                best = min(best, (time.perf_counter() - start) / calls)
-            costs[label] = best
-        force_loop(1, *args, True, True, work)
-        jac = args[8] + 1e6 * mass
-        piv = np.zeros(ndof, dtype=np.int64)
-        lu_loop(10, jac, jac.copy(), piv)
-        start = time.perf_counter()
-        lu_loop(200_000, jac, jac.copy(), piv)
-        costs["LU factorisation"] = (time.perf_counter() - start) / 200_000
-        answer[f"{record['group']} ({ndof} freedoms)"] = costs
-    return answer
+    @njit
+    def solve_loop(count, jac, piv, res):
+        total = 0.0
+        for k in range(count):
+            for i in range(res.shape[0]):
+                res[i] = 1.0 + k * 1e-9
+            lu_solve(jac, piv, res)
+            total += res[0]
+        return total
+
+    bogie = bogie_from_sample(record)
+    n = bogie.n_axles
+    mass, data_f, data_i = nl.pack(bogie)
+    drv = np.r_[np.zeros(2 * n), 1.0, bogie.kingpin_height_offset]
+    state = nl.equilibrium(bogie, drv)
+    u, v, hist = state.u.copy(), np.zeros(2 * n), state.history.copy()
+    f, kt, ct = np.zeros(2 * n), np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n))
+    rec, work = np.zeros(nlc.record_length(n)), np.zeros(nlc.work_size(n))
+    nlc.force(u, v, drv, data_f, data_i, hist, hist.copy(), f, kt, ct, rec, True, True, work)
+    jac, piv, res = np.zeros((2 * n, 2 * n)), np.zeros(2 * n, dtype=np.int64), np.zeros(2 * n)
+    loops = {
+        "force + record": (force_loop, (u, v, drv, data_f, data_i, hist, hist.copy(), f, kt, ct, rec, work)),
+        "form + factor": (factor_loop, (mass, kt, ct, jac, piv)),
+        "solve": (solve_loop, (jac, piv, res)),
+    }
+    count = 100_000
+    out = {}
+    for label, (loop, args) in loops.items():
+        loop(10, *args)
+        best = float("inf")
+        for _ in range(5):
+            start = time.perf_counter()
+            loop(count, *args)
+            best = min(best, time.perf_counter() - start)
+        out[label] = 1e6 * best / count
+    return out
 
 
 def main() -> None:
-    load = os.getloadavg()
-    print(f"load average at start: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f} on {os.cpu_count()} cores")
-    work = counts()
-    times = timings()
-    costs = unit_costs()
-    print("\n1-2. per phase: steps, Newton work per step (counts, uncompiled run), compiled kernel time (median)")
-    print("| run | phase | steps | iterations/step | tangents/step | force evals/step | kernel ms | us/step |")
-    print("|---|---|---|---|---|---|---|---|")
-    for key, timed in times.items():
-        for p, t in zip(work[key], timed["phases"]):
-            steps = max(p["steps"], 1)
-            per = f"{1e6 * t['kernel'] / p['steps']:.2f}" if p["steps"] else ""
-            its = f"{p['iterations'] / steps:.3f}" if p["steps"] else f"{p['evaluations']} evals"
-            print(f"| {key} | {p['phase']} | {p['steps']} | {its} | {p['tangents'] / steps:.4f} | "
-                  f"{p['evaluations'] / steps:.3f} | {1e3 * t['kernel']:.2f} | {per} |")  # fmt: skip
-        kernel = sum(t["kernel"] for t in timed["phases"])
-        print(f"| {key} | **weigh total** | | | | | {1e3 * timed['total']:.2f} | "
-              f"(Python outside the kernels: {1e3 * (timed['total'] - kernel):.2f} ms, "
-              f"{100 * (1 - kernel / timed['total']):.0f} %) |")  # fmt: skip
-    print("\n3. unit costs (compiled loops, best of 5) [us]")
-    labels = list(next(iter(costs.values())))
-    print("| bogie | " + " | ".join(labels) + " |")
-    print("|---|" + "---|" * len(labels))
-    for key, c in costs.items():
-        print(f"| {key} | " + " | ".join(f"{1e6 * c[k]:.3f}" for k in labels) + " |")
-    load = os.getloadavg()
-    print(f"\nload average at end: {load[0]:.2f} {load[1]:.2f} {load[2]:.2f}")
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"load average at start: {load} on {os.cpu_count()} cores\n")
+    records, specs = _sample()
+    print("| bogie | protocol | phase | steps | rejected | unchecked | force evaluations | per step | tangents | "
+          "factorisations |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|---|---|---|")
+    times = []
+    for record in records:
+        for name in PROTOCOLS:
+            total, kernel, outcomes = _timed(record, name, specs[name])
+            steps = evals = 0
+            for o in outcomes:
+                per = o.force_evaluations / max(1, o.steps + o.rejected)
+                print(f"| {record['group']} | {name} | {o.name} | {o.steps} | {o.rejected} | {o.unchecked} | "
+                      f"{o.force_evaluations} | {per:.2f} | {o.tangents} | {o.factorisations} |")  # fmt: skip
+                steps += o.steps + o.rejected
+                evals += o.force_evaluations
+            times.append((record["group"], name, total, kernel, steps, evals))
+    print("\n| bogie | protocol | weigh [ms] | compiled call [ms] | Python around it [ms] | per step attempt [us] | "
+          "per force evaluation [us] |")  # fmt: skip
+    print("|---|---|---|---|---|---|---|")
+    for group, name, total, kernel, steps, evals in times:
+        print(f"| {group} | {name} | {1e3 * total:.2f} | {1e3 * kernel:.2f} | {1e3 * (total - kernel):.2f} | "
+              f"{1e6 * kernel / steps:.2f} | {1e6 * kernel / evals:.2f} |")  # fmt: skip
+    print("\n| bogie | " + " | ".join(f"{k} [us]" for k in ("force + record", "form + factor", "solve")) + " |")
+    print("|---|---|---|---|")
+    for record in records:
+        costs = _unit_costs(record)
+        print(f"| {record['group']} | " + " | ".join(f"{v:.3f}" for v in costs.values()) + " |")
+    load = " ".join(f"{x:.2f}" for x in os.getloadavg())
+    print(f"\nload average at end: {load}")
 
 
 if __name__ == "__main__":
-    if len(sys.argv) == 3 and sys.argv[1] == "--count":
-        count_worker(sys.argv[2])
-    else:
-        main()
+    main()

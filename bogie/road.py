@@ -81,6 +81,12 @@ def _read_only(arr: np.ndarray) -> np.ndarray:
     return arr
 
 
+def _frozen(arr: np.ndarray) -> np.ndarray:
+    """``arr`` itself (a float array made here, referenced nowhere else), made read-only without a copy."""
+    arr.flags.writeable = False
+    return arr
+
+
 def _uniform_interp(
     x: np.ndarray, grid_x: np.ndarray, grid_h: np.ndarray, slope: np.ndarray, points_per_m: float
 ) -> np.ndarray | None:
@@ -301,20 +307,50 @@ class ISO8608Profile:
             )
         k = np.arange(k_lo, k_hi + 1)
         freqs = k / length
-        amps = np.sqrt(2.0 * self.psd(freqs) / length)
+        # self.psd(freqs), without its checks of a frequency array the harmonics make positive and finite
+        amps = np.sqrt(2.0 * (self.psd_n0 * (freqs / ISO8608_N0) ** (-self.waviness)) / length)
         phases = np.random.default_rng(self.seed).uniform(0.0, 2.0 * np.pi, size=k_hi)[k_lo - 1 :]
         n_grid = 2 ** math.ceil(math.log2(_GRID_POINTS_PER_WAVELENGTH * k_hi))
         spectrum = np.zeros(n_grid // 2 + 1, dtype=complex)
         # irfft(X)[j] = (2 / N) Re sum_k X_k e^(2 pi i k j / N) for 0 < k < N / 2
         spectrum[k] = 0.5 * n_grid * amps * np.exp(1j * phases)
-        h = np.fft.irfft(spectrum, n=n_grid)
-        object.__setattr__(self, "frequencies", _read_only(freqs))
-        object.__setattr__(self, "amplitudes", _read_only(amps))
-        object.__setattr__(self, "phases", _read_only(phases))
-        object.__setattr__(self, "_grid_x", _read_only(length * np.arange(n_grid + 1) / n_grid))
-        object.__setattr__(self, "_grid_h", _read_only(np.append(h, h[0])))
-        gx, gh = self._grid_x, self._grid_h
-        object.__setattr__(self, "_grid_slope", _read_only((gh[1:] - gh[:-1]) / (gx[1:] - gx[:-1])))
+        grid_h = np.empty(n_grid + 1)
+        np.fft.irfft(spectrum, n=n_grid, out=grid_h[:n_grid])
+        grid_h[n_grid] = grid_h[0]
+        object.__setattr__(self, "frequencies", _frozen(freqs))
+        object.__setattr__(self, "amplitudes", _frozen(amps))
+        object.__setattr__(self, "phases", _frozen(phases))
+        object.__setattr__(self, "_grid_h", _frozen(grid_h))
+        # the grid's distances and slopes are made when a call first needs them: a weighing's road table reads the
+        # grid's heights only (:meth:`grid_heights`), and each full-length array cost as much as a tenth of the FFT
+        object.__setattr__(self, "_grid_x", None)
+        object.__setattr__(self, "_grid_slope", None)
+
+    def _interpolation_grid(self) -> tuple[np.ndarray, np.ndarray]:
+        """The grid's distances [m] and the slopes between its points [-], made on first use."""
+        if self._grid_x is None:
+            n_grid = len(self._grid_h) - 1
+            gx = _frozen(self.length * np.arange(n_grid + 1) / n_grid)
+            gh = self._grid_h
+            object.__setattr__(self, "_grid_slope", _frozen((gh[1:] - gh[:-1]) / (gx[1:] - gx[:-1])))
+            object.__setattr__(self, "_grid_x", gx)
+        return self._grid_x, self._grid_slope
+
+    @property
+    def grid_spacing(self) -> float:
+        """Spacing of the grid the profile is synthesised on and interpolated from [m]: length / points."""
+        return self.length / (len(self._grid_h) - 1)
+
+    def grid_heights(self, k_from: int, k_to: int) -> np.ndarray:
+        """Heights [m] at the grid points k_from .. k_to (any integers: the profile repeats every ``length``), at
+        road distances k ``grid_spacing`` [m]; exactly the values :meth:`__call__` gives there."""
+        n_grid = len(self._grid_h) - 1
+        grid = self._grid_h
+        if 0 <= k_from <= k_to <= n_grid:  # one period: a slice (the grid's last point is its first again)
+            return grid[k_from : k_to + 1].copy()
+        if -n_grid <= k_from < 0 <= k_to <= n_grid:  # the end of the period before, then this one: two slices
+            return np.concatenate((grid[n_grid + k_from : n_grid], grid[: k_to + 1]))
+        return grid[np.arange(k_from, k_to + 1) % n_grid]
 
     @property
     def psd_n0(self) -> float:
@@ -342,12 +378,13 @@ class ISO8608Profile:
         if not (x.size and 0.0 <= x.min() and x.max() < self.length):
             x = np.mod(x, self.length)
         # else x mod length is x itself on [0, length) (fmod is exact): the approach roads' case (issue 15)
+        grid_x, grid_slope = self._interpolation_grid()
         if x.ndim:
             # a road's thousands of points: the grid's interval by arithmetic, a fifth of np.interp's binary search
-            h = _uniform_interp(x, self._grid_x, self._grid_h, self._grid_slope, (len(self._grid_x) - 1) / self.length)
+            h = _uniform_interp(x, grid_x, self._grid_h, grid_slope, (len(grid_x) - 1) / self.length)
             if h is not None:
                 return h
-        return np.interp(x, self._grid_x, self._grid_h)
+        return np.interp(x, grid_x, self._grid_h)
 
 
 @dataclass(frozen=True, eq=False)

@@ -152,13 +152,18 @@ class FleetConfig:
 
 @dataclass(frozen=True)
 class StaticProtocol:
-    """Static weighbridge: load [s], crawl over an approach [m] at walking pace [m/s], settle [s]; time step [s]."""
+    """Static weighbridge: load [s], crawl over an approach [m] at walking pace [m/s], settle [s]; time step [s].
+
+    ``step_tolerance`` [m]: the local error allowed per adaptive step on the approach (the load ramp and the settle
+    take a share of it, :mod:`pipeline.protocol`); None: fixed steps of ``dt``, which is also the first adaptive step.
+    """
 
     load_time: float
     approach_length: float
     crawl_speed: float
     settle_time: float
     dt: float
+    step_tolerance: float | None = None
 
 
 @dataclass(frozen=True)
@@ -388,6 +393,7 @@ def _protocol(protocol: Any) -> ProtocolConfig:
             crawl_speed=st.crawl_speed_m_s,
             settle_time=st.settle_time_s,
             dt=st.dt_s,
+            step_tolerance=st.step_tolerance_m,
         ),
         wim=WimProtocol(
             speed=wim.speed_m_s,

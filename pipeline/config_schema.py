@@ -355,6 +355,8 @@ class Static(Strict):
     # the reading is the mean over the last READ_TIME of the settle: a shorter settle has nothing to read
     settle_time_s: float = number("s", ge=READ_TIME, le=600.0)
     dt_s: float = number("s", gt=0.0, le=0.01)
+    # null: fixed steps of dt_s; 1e-4 m per step is already a tenth of a millimetre, far coarser than a reading needs
+    step_tolerance_m: float | None = Field(default=None, gt=0.0, le=1e-4, json_schema_extra={"unit": "m"})
 
     @model_validator(mode="after")
     def _phases_fit(self) -> Static:

@@ -22,6 +22,7 @@ failed simulation: the row then has ``status = "failed"`` and the solver's messa
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -31,6 +32,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import air_dynamics, metrics, nonlinear, wim
+from bogie import phases as phases_mod
 from bogie.air import AirBogie
 from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile
@@ -51,21 +53,65 @@ class ApproachRoad:
     profile: ISO8608Profile
     length: float
 
-    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+    def taper(self, x: ArrayLike) -> NDArray[np.float64]:
+        """The blend [-]: 0 off the road, rising to 1 over its first BLEND_LENGTH and falling over its last."""
         xx = np.asarray(x, dtype=float)
         ramp_in = np.clip(xx / BLEND_LENGTH, 0.0, 1.0)
         ramp_out = np.clip((self.length - xx) / BLEND_LENGTH, 0.0, 1.0)
         ramp = np.minimum(ramp_in, ramp_out)
         if ramp.ndim == 0:
-            taper = 0.5 * (1.0 - np.cos(np.pi * ramp))
-        else:
-            # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
-            # it took a tenth of a pass's road), the same taper value for value
-            taper = np.ones_like(ramp)
-            taper[ramp <= 0.0] = 0.0
-            blend = ~((ramp <= 0.0) | (ramp >= 1.0))
-            taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
-        return self.profile(np.clip(xx, 0.0, self.profile.length)) * taper
+            return 0.5 * (1.0 - np.cos(np.pi * ramp))
+        # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
+        # it took a tenth of a pass's road), the same taper value for value
+        taper = np.ones_like(ramp)
+        taper[ramp <= 0.0] = 0.0
+        blend = ~((ramp <= 0.0) | (ramp >= 1.0))
+        taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
+        return taper
+
+    def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
+        xx = np.asarray(x, dtype=float)
+        return self.profile(np.clip(xx, 0.0, self.profile.length)) * self.taper(xx)
+
+    def table(self, x_from: float, x_to: float) -> phases_mod.RoadTable:
+        """This road at the profile's grid points that cover [x_from, x_to] [m].
+
+        The grid's own heights times the blend, without interpolating (the road is 0 where the blend is, off the
+        road, whatever height the periodic grid has there); the same values as a call at those distances. The blend
+        is evaluated only where it is neither 0 nor 1 (:func:`_blended`).
+        """
+        dx = self.profile.grid_spacing
+        k0, k1 = math.floor(x_from / dx), math.ceil(x_to / dx)
+        heights = self.profile.grid_heights(k0, k1)
+        if self.length < 2.0 * BLEND_LENGTH + 2.0 * dx:  # the two blends meet: the taper's own arithmetic
+            return phases_mod.RoadTable(k0 * dx, dx, heights * self.taper(np.arange(k0, k1 + 1) * dx))
+        blends = ((0.0, BLEND_LENGTH, lambda x: x / BLEND_LENGTH),
+                  (self.length - BLEND_LENGTH, self.length, lambda x: (self.length - x) / BLEND_LENGTH))  # fmt: skip
+        return phases_mod.RoadTable(k0 * dx, dx, heights * _zoned(k0, k1, dx, blends, lambda b: b))
+
+
+def _zoned(
+    k0: int, k1: int, dx: float, blends: tuple[tuple[float, float, Any], ...], weight: Any
+) -> NDArray[np.float64]:
+    """A cosine-blended weight at the distances k dx, k = k0 .. k1 [m]: ``weight(b)`` of the blend
+    b = (1 - cos(pi r)) / 2, r the ramp clipped to [0, 1] that ``ramp(x)`` gives over each blend interval (start,
+    end, ramp) [m], b = 0 before the first interval and after the last and 1 between. The cosine only over the
+    intervals (and a point either side): the arithmetic of :meth:`ApproachRoad.taper` and
+    :meth:`bogie.wim.SiteRoad.site_weight`, value for value, on a table of thousands of points at the cost of a few
+    hundred."""
+    n = k1 - k0 + 1
+
+    def index(x: float) -> int:
+        return min(n, max(0, math.floor(x / dx) - k0))
+
+    b = np.zeros(n)
+    b[index(blends[0][1]) : index(blends[-1][0]) + 1] = 1.0
+    for start, end, ramp in blends:
+        lo, hi = index(start - dx), min(n, index(end + dx) + 1)
+        if hi > lo:
+            r = np.clip(ramp((k0 + np.arange(lo, hi)) * dx), 0.0, 1.0)
+            b[lo:hi] = 0.5 * (1.0 - np.cos(np.pi * r))
+    return weight(b)
 
 
 def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
@@ -73,39 +119,130 @@ def _approach(road_class: str, seed: int, length: float) -> ApproachRoad:
     return ApproachRoad(profile, length)
 
 
-def _simulate(bogie: Bogie | AirBogie, inputs: nonlinear.Inputs, initial: Any = None) -> Any:
-    """The group's time simulation over ``inputs`` from ``initial`` (None: at rest at the first input row)."""
-    if isinstance(bogie, AirBogie):
-        return air_dynamics.simulate(bogie, inputs, initial=initial)
-    return nonlinear.simulate(bogie, inputs, initial=initial)
+def _simulate(bogie: AirBogie, inputs: nonlinear.Inputs, initial: Any = None) -> Any:
+    """An air-sprung group's time simulation over ``inputs`` from ``initial`` (None: at rest at the first row)."""
+    return air_dynamics.simulate(bogie, inputs, initial=initial)
+
+
+@dataclass(frozen=True)
+class Weighing:
+    """What one weighing gives.
+
+    Attributes
+    ----------
+    status, message
+        "ok" and "ok", or "failed" and the solver's message (the readings are then None).
+    reading
+        Each wheel's load as the protocol reads it [N] (WIM: with the sensor's error).
+    reading_error_free
+        WIM: each tyre's force averaged over its passage across the sensor, before the sensor's error [N]; static:
+        the same as ``reading``.
+    on_stop
+        An equaliser bore on its bump stop while the protocol read.
+    chassis_pitch
+        Chassis pitch at the end [rad], nose up positive.
+    run
+        A steel group's run of :func:`bogie.phases.run`: each phase's work (steps, force evaluations, ...) and, if
+        asked for, the history of the wheel loads; None for an air-sprung group, which :mod:`bogie.air_dynamics`
+        steps.
+    """
+
+    status: str
+    message: str
+    reading: NDArray[np.float64] | None = None
+    reading_error_free: NDArray[np.float64] | None = None
+    on_stop: bool = False
+    chassis_pitch: float = math.nan
+    run: phases_mod.PhasesRun | None = None
+
+    @property
+    def success(self) -> bool:
+        """True if the weighing ran to its reading."""
+        return self.status == "ok"
+
+
+#: share of ``StaticProtocol.step_tolerance`` (the crawl's) that the load ramp and the settle take: the ramp's slips
+#: and hysteresis lock in with little to reset them, and the settle's reading averages its slow pitch oscillation,
+#: whose phase error accumulates over the run (docs/phases.md, "Tolerances")
+RAMP_TOLERANCE_SHARE = 1.0 / 3.0
+SETTLE_TOLERANCE_SHARE = 0.2
+#: the front axle starts this far before the random road of the static protocol [m]
+STATIC_LEAD = 0.5
+
+
+def static_phases(
+    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
+) -> list[phases_mod.Phase]:
+    """The static protocol's phases (:mod:`bogie.phases`): the load ramp from the tare, the crawl over the approach
+    road onto the weighbridge, the settle with its reading over the last :data:`READ_TIME`."""
+    dt = spec.dt
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    road = _approach(road_class, road_seed, spec.approach_length)
+    distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
+    table = road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD)
+    tol = spec.step_tolerance
+
+    def share(k: float) -> float | None:
+        return None if tol is None else k * tol
+
+    settle = phases_mod.MeanReading(spec.settle_time - READ_TIME, spec.settle_time)
+    return [
+        phases_mod.Phase(spec.load_time, (TARE_FRACTION, payload_fraction), dt=dt,
+                         tolerance=share(RAMP_TOLERANCE_SHARE), name="load ramp"),
+        phases_mod.Phase(distance / spec.crawl_speed, payload_fraction, road=table, speed=spec.crawl_speed,
+                         front_axle_start=-STATIC_LEAD, dt=dt, tolerance=share(1.0), name="crawl"),
+        phases_mod.Phase(spec.settle_time, payload_fraction, dt=dt, tolerance=share(SETTLE_TOLERANCE_SHARE),
+                         reading=settle, name="settle"),
+    ]  # fmt: skip
 
 
 def static_weighbridge(
-    bogie: Bogie | AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
-) -> nonlinear.NonlinearResult:
-    """Run the static protocol; the result's ``extras["reading"]`` holds the weighbridge's wheel loads [N]."""
+    bogie: Bogie | AirBogie,
+    payload_fraction: float,
+    road_class: str,
+    road_seed: int,
+    spec: StaticProtocol,
+    history: bool = False,
+) -> Weighing:
+    """Run the static protocol; the reading is each wheel's mean load over the last :data:`READ_TIME` [N].
+
+    ``history``: keep a steel group's wheel loads at every step in ``Weighing.run`` (:func:`bogie.phases.run`).
+    """
+    if isinstance(bogie, AirBogie):
+        return _air_static(bogie, payload_fraction, road_class, road_seed, spec)
+    run = phases_mod.run(bogie, static_phases(bogie, payload_fraction, road_class, road_seed, spec), history=history)
+    if not run.success:
+        return Weighing("failed", run.message, run=run)
+    settled = run.phases[-1]
+    assert run.final_state is not None and settled.reading is not None
+    return Weighing("ok", "ok", settled.reading, settled.reading, settled.on_stop, float(run.final_state.u[0]), run)
+
+
+def _air_static(
+    bogie: AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
+) -> Weighing:
+    """The static protocol of an air-sprung group (:mod:`bogie.air_dynamics`, fixed steps of ``spec.dt``)."""
     dt = spec.dt
-    lead = 0.5  # the front axle starts this far before the random road [m]
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     load = nonlinear.load_ramp(bogie, TARE_FRACTION, payload_fraction, spec.load_time, dt)
     loaded = _simulate(bogie, load)
     if not loaded.success:
-        return loaded
+        return Weighing("failed", loaded.message)
     road = _approach(road_class, road_seed, spec.approach_length)
-    distance = lead + spec.approach_length + group_length + 0.5
+    distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
     crawl = nonlinear.road_inputs(
-        bogie, road, spec.crawl_speed, distance / spec.crawl_speed, dt, -lead, load_factor=payload_fraction
+        bogie, road, spec.crawl_speed, distance / spec.crawl_speed, dt, -STATIC_LEAD, load_factor=payload_fraction
     )
     crawled = _simulate(bogie, crawl, initial=loaded.final_state)
     if not crawled.success:
-        return crawled
-    settle = nonlinear.hold(bogie, spec.settle_time, dt, load_factor=payload_fraction)
-    settled = _simulate(bogie, settle, initial=crawled.final_state)
-    if settled.success:
-        window = settled.t >= settled.t[-1] - READ_TIME
-        settled.extras["reading"] = np.mean(settled.wheel_loads[window], axis=0)
-        settled.extras["on_stop"] = _on_stop(settled, window)
-    return settled
+        return Weighing("failed", crawled.message)
+    settled = _simulate(bogie, nonlinear.hold(bogie, spec.settle_time, dt, load_factor=payload_fraction),
+                        initial=crawled.final_state)  # fmt: skip
+    if not settled.success:
+        return Weighing("failed", settled.message)
+    window = settled.t >= settled.t[-1] - READ_TIME
+    reading = np.mean(settled.wheel_loads[window], axis=0)
+    return Weighing("ok", "ok", reading, reading, False, float(settled.extras["chassis_pitch"][-1]))
 
 
 def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.SiteRoad:
@@ -119,6 +256,47 @@ def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.Site
     return wim.SiteRoad(road, spec.approach_length, spec.site_before, spec.site_after, scale)
 
 
+def _wim_route(
+    bogie: Bogie | AirBogie, road_class: str, road_seed: int, spec: WimProtocol
+) -> tuple[ApproachRoad, wim.SiteRoad, float, float, float, float]:
+    """The WIM pass's approach road, that road with the site, the pass's duration [s], and the sensor's passage:
+    the time the front tyre's patch centre is over the sensor [s], half the time a patch takes to cross it,
+    (S + L) / 2v, and half the time of full overlap, |S - L| / 2v [s]."""
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    approach = _approach(road_class, road_seed, spec.approach_length + group_length + 5.0)
+    # the site lies on the random road (WIM sites are on ordinary road, made smooth), not on the level run-out
+    road = wim_site(approach, road_class, spec)
+    sensor = spec.approach_length
+    half = 0.5 * (spec.sensor_length + spec.contact_length) / spec.speed
+    flat = 0.5 * abs(spec.sensor_length - spec.contact_length) / spec.speed
+    duration = (sensor + group_length) / spec.speed + half + 0.05
+    return approach, road, duration, sensor / spec.speed, half, flat
+
+
+def wim_phases(
+    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
+) -> list[phases_mod.Phase]:
+    """The WIM protocol's one phase (:mod:`bogie.phases`): the pass over the approach road and the site at fixed
+    steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
+    approach, road, duration, crossing, half, flat = _wim_route(bogie, road_class, road_seed, spec)
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    table = approach.table(-group_length, spec.speed * duration)
+    # the site's smoothing on the approach's table: the same heights as the site road's at those distances
+    if road.before > 0.0 or road.after > 0.0:
+        blend = wim.SITE_BLEND_LENGTH
+        start, end = road.sensor - road.before, road.sensor + road.after
+        blends = ((start - blend, start, lambda x: 1.0 - (road.sensor - road.before - x) / blend),
+                  (end, end + blend, lambda x: 1.0 - (x - road.sensor - road.after) / blend))  # fmt: skip
+        k0 = round(table.x0 / table.dx)
+        smoothing = _zoned(k0, k0 + len(table.heights) - 1, table.dx, blends, lambda b: 1.0 - (1.0 - road.scale) * b)
+        table = phases_mod.RoadTable(table.x0, table.dx, table.heights * smoothing)
+    reading = phases_mod.SensorReading(crossing, half, flat)
+    return [
+        phases_mod.Phase(duration, payload_fraction, road=table, speed=spec.speed, dt=spec.dt, reading=reading,
+                         name="WIM pass")
+    ]  # fmt: skip
+
+
 def wim_pass(
     bogie: Bogie | AirBogie,
     payload_fraction: float,
@@ -126,51 +304,49 @@ def wim_pass(
     road_seed: int,
     spec: WimProtocol,
     sensor_seed: int | None = None,
-) -> nonlinear.NonlinearResult:
-    """Run the WIM protocol; ``extras["reading"]`` holds each wheel's load read by the sensor [N].
+    history: bool = False,
+) -> Weighing:
+    """Run the WIM protocol; the reading is each wheel's load read by the sensor [N].
 
-    ``extras["reading_error_free"]`` is the same before the sensor's error, each tyre's force averaged over its
-    passage across the sensor (:func:`bogie.wim.sensor_reading`). ``sensor_seed`` seeds the errors of
-    ``spec.accuracy_class``; it may be None only for class ``none``.
+    ``reading_error_free`` is the same before the sensor's error, each tyre's force averaged over its passage across
+    the sensor (:func:`bogie.wim.sensor_reading`). ``sensor_seed`` seeds the errors of ``spec.accuracy_class``; it
+    may be None only for class ``none``. ``history``: as :func:`static_weighbridge`.
     """
-    dt = spec.dt
-    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    road = wim_site(_approach(road_class, road_seed, spec.approach_length + group_length + 5.0), road_class, spec)
-    # the site lies on the random road (WIM sites are on ordinary road, made smooth), not on the level run-out
-    sensor = spec.approach_length
-    half = 0.5 * (spec.sensor_length + spec.contact_length) / spec.speed  # half a tyre's passage over it [s]
-    duration = (sensor + group_length) / spec.speed + half + 0.05
-    inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, dt, 0.0, load_factor=payload_fraction)
-    # at rest at the first row: a steel group with its friction relaxed, an air group levelled and equalised
-    state = None if isinstance(bogie, AirBogie) else nonlinear.equilibrium(bogie, inputs.drive_row(bogie, 0))
-    run = _simulate(bogie, inputs, initial=state)
-    if run.success:
-        crossing = (sensor + (np.asarray(bogie.axle_x) - bogie.axle_x[0])) / spec.speed
-        passage = [
-            wim.sensor_reading(run.t, run.wheel_loads[:, i], crossing[i], spec.speed, spec.sensor_length,
-                               spec.contact_length)
-            for i in range(bogie.n_axles)
-        ]  # fmt: skip
-        run.extras["reading_error_free"] = np.array(passage)
-        if spec.accuracy_class == "none":
-            error = np.zeros(bogie.n_axles)
-        elif sensor_seed is None:
-            raise ValueError(f"accuracy_class {spec.accuracy_class} needs a sensor_seed (a non-negative integer)")
-        else:
-            error = wim.axle_errors(spec.accuracy_class, spec.confidence_level, sensor_seed, bogie.n_axles)
-        run.extras["reading"] = run.extras["reading_error_free"] * (1.0 + error)
-        window = (run.t >= crossing[0] - half - 0.5 * dt) & (run.t <= crossing[-1] + half + 0.5 * dt)
-        run.extras["on_stop"] = _on_stop(run, window)
-    return run
+    if spec.accuracy_class == "none":
+        error = np.zeros(bogie.n_axles)
+    elif sensor_seed is None:
+        raise ValueError(f"accuracy_class {spec.accuracy_class} needs a sensor_seed (a non-negative integer)")
+    else:
+        error = wim.axle_errors(spec.accuracy_class, spec.confidence_level, sensor_seed, bogie.n_axles)
+    if isinstance(bogie, AirBogie):
+        weighing = _air_wim(bogie, payload_fraction, road_class, road_seed, spec)
+    else:
+        run = phases_mod.run(bogie, wim_phases(bogie, payload_fraction, road_class, road_seed, spec), history=history)
+        if not run.success:
+            return Weighing("failed", run.message, run=run)
+        passed = run.phases[-1]
+        assert run.final_state is not None and passed.reading is not None
+        weighing = Weighing("ok", "ok", passed.reading, passed.reading, passed.on_stop, float(run.final_state.u[0]),
+                            run)  # fmt: skip
+    if not weighing.success or weighing.reading_error_free is None:
+        return weighing
+    return dataclasses.replace(weighing, reading=weighing.reading_error_free * (1.0 + error))
 
 
-def _on_stop(run: nonlinear.NonlinearResult, window: NDArray[np.bool_]) -> bool:
-    """Whether an equaliser bears on its bump stop (a non-zero stop moment) at any step of ``window``; an
-    air-sprung group has no equaliser (False)."""
-    if "stop_moment" not in run.extras:
-        return False
-    moment = np.asarray(run.extras["stop_moment"])
-    return bool(np.any(moment[window] != 0.0))
+def _air_wim(bogie: AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol) -> Weighing:
+    """The WIM pass of an air-sprung group (:mod:`bogie.air_dynamics`, fixed steps of ``spec.dt``), error free."""
+    _, road, duration, crossing, half, _ = _wim_route(bogie, road_class, road_seed, spec)
+    inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, spec.dt, 0.0, load_factor=payload_fraction)
+    run = _simulate(bogie, inputs)  # at rest at the first row: the bags levelled and equalised
+    if not run.success:
+        return Weighing("failed", run.message)
+    centres = crossing + (np.asarray(bogie.axle_x) - bogie.axle_x[0]) / spec.speed
+    passage = np.array([
+        wim.sensor_reading(run.t, run.wheel_loads[:, i], centres[i], spec.speed, spec.sensor_length,
+                           spec.contact_length)
+        for i in range(bogie.n_axles)
+    ])  # fmt: skip
+    return Weighing("ok", "ok", passage, passage, False, float(run.extras["chassis_pitch"][-1]))
 
 
 def result_row(
@@ -232,16 +408,16 @@ def weigh(
             run = static_weighbridge(*args)
         else:
             run = wim_pass(*args, sensor_seed=int(sample["sensor_seed"]))
-        if run.success and np.all(np.isfinite(run.extras["reading"])):
-            reading = run.extras["reading"]
-            pitch = float(run.extras["chassis_pitch"][-1])
-            on_stop = bool(run.extras["on_stop"])
+        if run.success and run.reading is not None and np.all(np.isfinite(run.reading)):
+            reading = run.reading
+            pitch = run.chassis_pitch
+            on_stop = run.on_stop
             # a wheel in the air as it crosses a WIM sensor is a real reading (zero load), not a failure
             if np.sum(reading) <= 0.0:
                 status, message = "failed", "the group carries no load at the reading"
                 reading = None
         else:
-            status, message = "failed", run.message
+            status, message = "failed", run.message if not run.success else "the reading is not finite"
     except Exception as exc:  # noqa: BLE001 - any error of one bogie (MemoryError included) fails its row only
         status, message = "failed", f"{type(exc).__name__}: {exc}"
         reading = None

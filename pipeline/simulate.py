@@ -11,8 +11,9 @@ One row per (sample, protocol), with every column of the sample (except ``study`
 results, in the one schema of :mod:`pipeline.schema` (types and units). A failed weighing is a row with
 ``status = "failed"``, the reason in ``message`` and nulls in every result column; the stage never stops for one.
 
-Parallel: the chunks run with joblib (``loky`` processes, one thread each, or a dask.distributed cluster through
-joblib's ``dask`` backend); the main process writes each chunk's file as soon as the chunk completes.
+Parallel: on this machine (``execution.backend`` ``loky``) the main process and ``n_jobs - 1`` loky worker processes
+(one thread each) weigh the chunks; on a dask.distributed cluster, joblib's ``dask`` backend. A worker returns its
+chunk's file as bytes and the main process writes each file as soon as its chunk completes.
 
 Resumable: each file carries in its Parquet metadata (key :data:`HASH_KEY`) a hash of everything that determines its
 content: the chunk's sample rows, the protocols and their settings, and the code (the sources of ``bogie`` and of
@@ -28,21 +29,24 @@ and ``bench/`` measures the cost per run.)
 from __future__ import annotations
 
 import argparse
+import collections
 import dataclasses
 import math
 import os
+import queue
 import sys
+import threading
 import time
 from collections.abc import Iterator, Mapping, Sequence
+from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
 
-import numpy as np
 import pandas as pd
-import pyarrow.parquet as pq
+import pyarrow as pa
 import yaml
 from joblib import Parallel, delayed, parallel_config
-from tqdm import tqdm
+from joblib.externals.loky import get_reusable_executor
 
 from pipeline.chunks import (
     Chunk,
@@ -50,6 +54,7 @@ from pipeline.chunks import (
     Protocols,
     RunsLockedError,
     _print,
+    part_content,
     plan_chunks,
     reconcile,
     runs_lock,
@@ -59,7 +64,7 @@ from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.protocol import result_row, weigh
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, runs_frame
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame, table_from_rows
 
 #: the numerical result columns: a successful row with a non-finite one is a failed run
 _NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
@@ -79,8 +84,35 @@ def _failed_row(protocol: str, n_axles: int, message: str) -> dict:
     return row
 
 
+def _weighed_rows(rows: Mapping[str, Sequence], protocols: Protocols) -> list[dict]:
+    """Weigh every sample of ``rows`` (column name -> the samples' Python values) by every protocol: one dict of
+    run columns per (sample, protocol)."""
+    out = []
+    names = list(rows)
+    for values in zip(*rows.values()):
+        sample = dict(zip(names, values))
+        try:
+            bogie_ = bogie_from_sample(sample)
+            invalid = None
+        except (ValueError, TypeError) as exc:
+            bogie_, invalid = None, f"invalid bogie: {type(exc).__name__}: {exc}"
+        tilt_deg = math.degrees(float(sample["chassis_tilt"]))
+        for name, spec in protocols:
+            if bogie_ is None:
+                result = _failed_row(name, int(sample["n_axles"]), invalid)
+            else:
+                result = weigh(bogie_, sample, name, spec)
+            # math.isfinite: np.isfinite's ufunc call on each of the ~40 numbers cost a tenth of a ms a row
+            bad = [c for c in _NUMBERS if not math.isfinite(result[c])] if result["status"] == "ok" else []
+            if bad:
+                # a successful row has no null: a non-finite metric is a failed run, not a number
+                result = _failed_row(name, int(sample["n_axles"]), f"non-finite result in {', '.join(bad)}")
+            out.append({**sample, "chassis_tilt_deg": tilt_deg, **result})
+    return out
+
+
 def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
-    """Weigh every sample of ``rows`` by every protocol: the content of one part file.
+    """Weigh every sample of ``rows`` by every protocol: the rows of one part file as a typed DataFrame.
 
     Parameters
     ----------
@@ -96,36 +128,52 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
         A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
         reason in ``message`` and nulls in every result column.
     """
-    out = []
-    for sample in rows.to_dict("records"):
-        try:
-            bogie_ = bogie_from_sample(sample)
-            invalid = None
-        except (ValueError, TypeError) as exc:
-            bogie_, invalid = None, f"invalid bogie: {type(exc).__name__}: {exc}"
-        for name, spec in protocols:
-            if bogie_ is None:
-                result = _failed_row(name, int(sample["n_axles"]), invalid)
-            else:
-                result = weigh(bogie_, sample, name, spec)
-            bad = [c for c in _NUMBERS if not np.isfinite(result[c])] if result["status"] == "ok" else []
-            if bad:
-                # a successful row has no null: a non-finite metric is a failed run, not a number
-                result = _failed_row(name, int(sample["n_axles"]), f"non-finite result in {', '.join(bad)}")
-            tilt_deg = math.degrees(float(sample["chassis_tilt"]))
-            out.append({**{c: sample[c] for c in SAMPLE_COLUMNS}, "chassis_tilt_deg": tilt_deg, **result})
-    return runs_frame(out)
+    # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
+    return runs_frame(_weighed_rows({c: rows[c].tolist() for c in rows.columns}, protocols))
 
 
-def _task(study: str, index: int, rows: pd.DataFrame, protocols: Protocols) -> tuple[str, int, pd.DataFrame]:
-    # results arrive unordered: carry the chunk's identity back with its rows
-    return study, index, run_chunk(rows, protocols)
+def chunk_table(rows: Mapping[str, Sequence], protocols: Protocols) -> pa.Table:
+    """:func:`run_chunk`'s rows as the Arrow table a part file holds (:func:`pipeline.schema.table_from_rows`),
+    built without pandas from the samples column by column (a :class:`pipeline.chunks.Chunk`'s ``rows``)."""
+    return table_from_rows(_weighed_rows(rows, protocols))
+
+
+#: how often a loky worker looks whether the main process that started it still runs [s]
+MAIN_PROCESS_POLL = 1.0
+
+
+def _watch_main_process(main_pid: int) -> None:
+    """A local loky worker's initializer: end the worker within :data:`MAIN_PROCESS_POLL` of the end of its parent,
+    the main process ``main_pid`` (at once if it ended while the worker started).
+
+    Once the main process is killed nothing reads the pipe the results go back through, and a worker blocks for
+    ever writing its chunk's result as soon as the pipe's 64 KiB buffer is full (two chunks of 64 samples fill it),
+    whatever WORKER_IDLE_TIMEOUT says; a worker still starting would weigh the chunks queued for it first.
+    """
+
+    def watch() -> None:
+        while os.getppid() == main_pid:
+            time.sleep(MAIN_PROCESS_POLL)
+        os._exit(1)  # the chunk in hand is lost with the main process that would have written it
+
+    threading.Thread(target=watch, name="watch-main-process", daemon=True).start()
+
+
+def _task(
+    study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str
+) -> tuple[str, int, bytes, int, int]:
+    """One chunk's part file as bytes, its runs and failed runs. The worker encodes the file: the main process only
+    writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
+    table = chunk_table(rows, protocols)
+    # results arrive unordered: carry the chunk's identity back with its file
+    return study, index, part_content(table, chunk_hash_), len(table), failed_runs(table)
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
 #: how long an idle loky worker waits for work before it ends [s]: long enough that a worker never times out
 #: while chunks are still coming (10 s did, once, on a loaded machine: loky then restarts it with a warning),
-#: short enough that killing the main process does not leave its workers for loky's default 300 s
+#: short enough that an idle worker does not outlive its main process by loky's default 300 s (a killed main process's
+#: workers end sooner: :func:`_watch_main_process`)
 WORKER_IDLE_TIMEOUT = 30.0
 
 #: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
@@ -155,24 +203,106 @@ def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | 
     return limit
 
 
-def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[tuple[str, int, pd.DataFrame]]:
-    """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols) for c in chunks)
-    # a chunk is seconds of work: joblib's automatic batching would only coarsen the progress and the resumption
-    options = {"return_as": "generator_unordered", "batch_size": 1}
-    if execution.backend == "dask":
-        from dask.distributed import Client
+#: chunks a local loky worker holds at a time, the one it weighs and the next: each result and each next chunk pass
+#: through threads of the main process, which wait up to 5 ms for the interpreter lock each while the main process
+#: weighs, so that a worker holding one chunk waited 12 ms for the next, 4 % of its time [-]
+WORKER_CHUNKS = 2
 
-        # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts
-        # its workers with OMP/MKL/OPENBLAS_NUM_THREADS=1
-        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
-            yield from Parallel(**options)(tasks)
-    else:
-        # one thread per worker process: joblib sets OMP/MKL/OPENBLAS/NUMBA_NUM_THREADS=1 in the loky workers. A
-        # worker waits at most WORKER_IDLE_TIMEOUT for its next chunk: if the main process is killed, its workers
-        # finish the chunk in hand and end, instead of idling on for loky's default 300 s
-        with parallel_config(backend="loky", inner_max_num_threads=1, idle_worker_timeout=WORKER_IDLE_TIMEOUT):
-            yield from Parallel(n_jobs=execution.n_jobs, **options)(tasks)
+#: what a part's task returns: study, chunk index, the part file's bytes, its runs and its failed runs
+Result = tuple[str, int, bytes, int, int]
+
+#: the environment of a loky worker: one thread in every threaded library (what joblib's loky backend sets with
+#: inner_max_num_threads=1), so that n_jobs processes keep n_jobs cores busy and no more
+ONE_THREAD_ENV: dict[str, str] = dict.fromkeys(
+    ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS",
+     "NUMBA_NUM_THREADS", "NUMEXPR_NUM_THREADS"), "1"
+)  # fmt: skip
+
+
+def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Result]:
+    """Run the chunks in parallel and yield each result as soon as it is done (completion order)."""
+    if execution.backend != "dask":
+        yield from _local_results(chunks, execution.n_jobs)
+        return
+    from dask.distributed import Client
+
+    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash) for c in chunks)
+    # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts its
+    # workers with OMP/MKL/OPENBLAS_NUM_THREADS=1. A chunk is seconds of work: joblib's automatic batching would
+    # only coarsen the progress and the resumption
+    with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+        yield from Parallel(return_as="generator_unordered", batch_size=1)(tasks)
+
+
+def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
+    """The chunks on this machine, ``n_jobs - 1`` loky worker processes and this one, each result as it is done.
+
+    The main process weighs chunks too, between writing the files (a ms a chunk): one worker fewer saves a worker's
+    start-up, its imports and its compiled kernels' load (about 2 s of CPU), which the main process has paid
+    already, and the main process weighs from the start while the workers start. Each worker holds
+    :data:`WORKER_CHUNKS` chunks and gets the next one from loky's result thread as soon as it returns one. A worker
+    waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main process is killed
+    (:func:`_watch_main_process`).
+    """
+    todo = collections.deque(chunks)
+
+    def arguments(chunk: Chunk) -> tuple:
+        return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash
+
+    if n_jobs <= 1:
+        while todo:
+            yield _task(*arguments(todo.popleft()))
+        return
+    executor = get_reusable_executor(
+        max_workers=n_jobs - 1, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
+        initializer=_watch_main_process, initargs=(os.getpid(),),
+    )  # fmt: skip
+    returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or an error of a submission
+    lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
+    in_flight = 0
+
+    def send_next(done: Future | None = None) -> None:
+        nonlocal in_flight
+        if done is not None:
+            returned.put(done)
+        with lock:
+            if not todo:
+                return
+            chunk = todo.popleft()
+            in_flight += 1
+        try:
+            executor.submit(_task, *arguments(chunk)).add_done_callback(send_next)
+        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread raises it
+            returned.put(exc)
+
+    def take(item: Future | BaseException) -> Result:
+        nonlocal in_flight
+        with lock:
+            in_flight -= 1
+        if isinstance(item, BaseException):
+            raise item
+        return item.result()
+
+    try:
+        for _ in range(WORKER_CHUNKS * (n_jobs - 1)):
+            send_next()
+        while True:
+            while not returned.empty():
+                yield take(returned.get())
+            with lock:
+                chunk = todo.popleft() if todo else None
+            if chunk is None:
+                break
+            yield _task(*arguments(chunk))
+        while True:
+            with lock:
+                if not in_flight:
+                    break
+            yield take(returned.get())
+    except BaseException:
+        # an error, an interrupt or a consumer gone: no chunk of the workers would be written, stop them now
+        executor.shutdown(wait=False, kill_workers=True)
+        raise
 
 
 class Progress:
@@ -186,7 +316,12 @@ class Progress:
         self.done = 0
         self.start = self.last_time = time.perf_counter()
         self.last_fraction = 0.0
-        self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr) if sys.stderr.isatty() else None
+        self.bar = None
+        if sys.stderr.isatty():
+            # imported here: a worker imports this module for its task, and tqdm would add 50 ms to its start-up
+            from tqdm import tqdm
+
+            self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr)
 
     def update(self, runs: int) -> None:
         self.done += runs
@@ -268,7 +403,7 @@ def simulate_samples(
     out = Path(out)
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
     with runs_lock(out):
-        pending, done, removed = reconcile(chunks, out, log)
+        pending, done, removed, failed_done = reconcile(chunks, out, log)
         total = sum(c.n_runs for c in pending)
         log(
             f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
@@ -277,8 +412,7 @@ def simulate_samples(
         )
         if execution.backend == "loky" and pending:
             execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log))
-        failed = _run_pending(pending, execution, total, log)
-        failed += sum(_count_failed(chunk.path) for chunk in done)
+        failed = failed_done + _run_pending(pending, execution, total, log)
     summary = Summary(
         runs=sum(c.n_runs for c in chunks),
         failed=failed,
@@ -298,20 +432,13 @@ def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: in
     failed = 0
     progress = Progress(total, log)
     try:
-        for study, index, frame in _results(pending, execution) if pending else ():
-            chunk = by_key[(study, index)]
-            write_part(frame, chunk.hash, chunk.path)
-            failed += int((frame["status"] != "ok").sum())
-            progress.update(len(frame))
+        for study, index, content, runs, failed_runs in _results(pending, execution) if pending else ():
+            write_part(content, by_key[(study, index)].path)
+            failed += failed_runs
+            progress.update(runs)
     finally:
         progress.close()
     return failed
-
-
-def _count_failed(path: Path) -> int:
-    """Number of rows of a part file whose status is not ``ok`` (reads only that column)."""
-    status = pq.read_table(path, columns=["status"]).column("status").to_pylist()
-    return len(status) - status.count("ok")
 
 
 def read_samples(samples_dir: str | Path, studies: Sequence[str] = STUDIES) -> dict[str, pd.DataFrame]:
@@ -361,4 +488,8 @@ def main(argv: list[str] | None = None) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main())
+    # run as the module pipeline.simulate, not as __main__: the workers then import the task and their initializer by
+    # name, instead of receiving a copy of their code with every chunk
+    from pipeline.simulate import main as module_main
+
+    sys.exit(module_main())

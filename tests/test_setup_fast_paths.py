@@ -44,8 +44,23 @@ def test_iso8608_profile_heights_are_np_interp_bit_for_bit():
     for seed in range(20):
         profile = ISO8608Profile("C", length=float(rng.uniform(50.0, 120.0)), seed=seed)
         x = rng.uniform(-30.0, 2.0 * profile.length, (int(rng.integers(1, 4000)), 3))
-        x[0, :] = profile._grid_x[rng.integers(0, len(profile._grid_x), 3)]  # on grid points
+        grid_x, _ = profile._interpolation_grid()
+        x[0, :] = grid_x[rng.integers(0, len(grid_x), 3)]  # on grid points
         x[1, :] = (0.0, -0.0, profile.length)
         for points in (x, np.clip(x, 0.0, profile.length), np.clip(x, 0.0, 0.99 * profile.length)):
-            expected = np.interp(np.mod(points, profile.length), profile._grid_x, profile._grid_h)
+            expected = np.interp(np.mod(points, profile.length), grid_x, profile._grid_h)
             assert profile(points).tobytes() == expected.tobytes()
+
+
+def test_iso8608_grid_heights_are_the_profiles_own_at_the_grid_points():
+    from bogie.road import ISO8608Profile
+
+    profile = ISO8608Profile("B", length=50.0, seed=4)
+    dx = profile.grid_spacing
+    k = np.arange(-40, 3 * 16384 // 2)
+    # every index, wrapped into the period, is the height a call gives at that grid point (also past the period)
+    assert np.array_equal(profile.grid_heights(int(k[0]), int(k[-1])), profile(np.mod(k, 16384) * dx))
+    for k_from, k_to in ((-40, 1000), (0, 16384), (5, 9), (-16384, 16384)):  # two slices, one, and the full period
+        k = np.arange(k_from, k_to + 1)
+        assert np.array_equal(profile.grid_heights(k_from, k_to), profile(np.mod(k, 16384) * dx))
+    assert dx == 50.0 / 16384

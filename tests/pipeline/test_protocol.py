@@ -41,3 +41,29 @@ def test_a_level_bogie_reads_off_its_stops():
     bogie, sample, config = tilted_triaxle()
     row = weigh(bogie.replace(chassis_tilt=0.0), sample, "static", config.protocol.static)
     assert row["status"] == "ok" and row["equaliser_on_stop"] is False
+
+
+def test_the_road_tables_are_the_protocols_roads_value_for_value():
+    # the tables read the ISO 8608 grid's own heights and evaluate the blends only where they are neither 0 nor 1:
+    # the same numbers as calling the approach road (and the WIM site road) at the table's distances
+    import dataclasses
+
+    from pipeline import protocol
+
+    config = load_config(ROOT / "params.yaml")
+    fleet = sample_fleet(config)
+    wims = [config.protocol.wim, dataclasses.replace(config.protocol.wim, site_before=3.0, site_after=0.0),
+            dataclasses.replace(config.protocol.wim, site_before=0.0, site_after=0.0)]  # fmt: skip
+    for i in range(4):
+        sample = fleet.iloc[i].to_dict()
+        bogie = bogie_from_sample(sample)
+        args = (bogie, sample["payload_fraction"], sample["road_class"], sample["road_seed"])
+        approach = protocol._approach(sample["road_class"], sample["road_seed"], config.protocol.static.approach_length)
+        checks = [(protocol.static_phases(*args, config.protocol.static)[1].road, approach)]
+        for spec in wims:
+            _, road, *_ = protocol._wim_route(bogie, sample["road_class"], sample["road_seed"], spec)
+            checks.append((protocol.wim_phases(*args, spec)[0].road, road))  # fmt: skip
+        for table, road in checks:
+            x = (round(table.x0 / table.dx) + np.arange(len(table.heights))) * table.dx
+            assert np.array_equal(table.heights, road(x))  # (off the road a 0 may carry the other sign)
+            assert np.count_nonzero(table.heights) > 0.4 * len(table.heights)  # a real road, not an empty table

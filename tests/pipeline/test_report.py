@@ -106,8 +106,9 @@ def project(tmp_path_factory):
     # no observed survey: the calibrate stage writes its skipped metrics (and no tables) at once
     out = ["--out", str(path / "data/calibration"), "--metrics", str(path / "metrics/calibration.json")]
     assert calibrate.main(["--params", str(path / "params.yaml"), *out]) == 0
-    out = ["--runs", str(path / "data/design_runs"), "--out", str(path / "data/design")]
-    assert design.main(["--params", str(path / "params.yaml"), *out, "--metrics", str(path / "metrics/design.json")]) == 0
+    out = ["--runs", str(path / "data/design_runs"), "--out", str(path / "data/design"), "--metrics",
+           str(path / "metrics/design.json")]  # fmt: skip
+    assert design.main(["--params", str(path / "params.yaml"), *out]) == 0
     return path
 
 

@@ -1,5 +1,6 @@
 """The report's words (pipeline.report.text): the number filters and every template, from small hand-made dicts."""
 
+import dataclasses
 import math
 from pathlib import Path
 
@@ -356,7 +357,9 @@ def test_design_caption_names_the_cells_that_reach_the_target_or_the_best():
         "From the lowest to the highest bin, the share within 5 % goes: bush stiffness (tandem 90 % to 20 %, "
         "tri-axle 80 % to 10 %); equaliser arm (tandem 50 % to 60 %)."
     )
-    assert paras[4].startswith("Not design guidance: these are the fleet's runs as sampled, not a controlled experiment")
+    assert paras[4].startswith(
+        "Not design guidance: these are the fleet's runs as sampled, not a controlled experiment"
+    )
     paras = text.render("design.j2", protocol="wim", target=0.95, min_cell=10, groups={"tandem": None}, trends={})
     assert paras[1] == "Tandem: no cell holds 10 bogies; too few runs for guidance."
     assert paras[2].startswith("Not design guidance")
@@ -412,7 +415,15 @@ def test_definitions_take_the_protocols_from_params():
     static, wim = config.protocol.static, config.protocol.wim
     assert "the empty trailer (25 % of the design payload weight)" in paras[1]
     assert f"crawls at {static.crawl_speed:g} m/s" in paras[1]
-    assert f"mean load over the last 0.5 s. Time step {1e3 * static.dt:g} ms." in paras[1]
+    assert (
+        f"mean load over the last 0.5 s. Adaptive time steps from {1e3 * static.dt:g} ms, each step's local error "
+        f"within {1e9 * static.step_tolerance:g} nm on the road" in paras[1]
+    )
+    fixed = dataclasses.replace(config, protocol=dataclasses.replace(
+        config.protocol, static=dataclasses.replace(static, step_tolerance=None)))  # fmt: skip
+    fixed_paras = text.render("definitions.j2", config=fixed, tare=0.25, read_time=0.5, pair_tolerance=0.05,
+                              share_tolerance=0.1, nose_up_deg=0.5, n_airborne=0)  # fmt: skip
+    assert f"mean load over the last 0.5 s. Time step {1e3 * static.dt:g} ms." in fixed_paras[1]
     assert f"passes at {wim.speed:g} m/s ({3.6 * wim.speed:.0f} km/h)" in paras[2]
     # the WIM site and sensor as params.yaml sets them
     assert (

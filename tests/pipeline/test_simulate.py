@@ -20,11 +20,11 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
-from pipeline.chunks import HASH_KEY, RunsLockedError, part_name, runs_lock
+from pipeline.chunks import HASH_KEY, RunsLockedError, part_content, part_name, runs_lock
 from pipeline.config import load_params, parse_config
-from pipeline.sample import sample_studies, write_parquet_atomic
-from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS
-from pipeline.simulate import simulate_samples, study_protocols, worker_count
+from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
+from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, write_runs_file
+from pipeline.simulate import chunk_table, run_chunk, simulate_samples, study_protocols, worker_count
 
 ROOT = Path(__file__).resolve().parents[2]
 KEYS = ["study", "sample_id", "protocol"]
@@ -104,6 +104,20 @@ def test_each_part_file_has_the_run_schema_and_no_missing_values(config, samples
     assert set(fleet["study"].astype(str)) == {"fleet"}
     assert len(fleet) == 12 * len(config.protocol.run)
     assert summary.runs == len(reference) and summary.failed == int((reference["status"] != "ok").sum())
+
+
+def test_a_part_file_is_byte_for_byte_the_file_its_rows_give_through_pandas(config, samples, tmp_path):
+    # the stage builds a part's Arrow table from the rows directly (pipeline.schema.table_from_rows), with the pandas
+    # metadata Table.from_pandas writes: the file must not tell the two paths apart, failed runs included
+    rows = samples["fleet"].iloc[:4].copy()
+    rows.loc[1, "payload_fraction"] = 3.0  # the protocol's run fails
+    rows.loc[2, "bush_stiffness"] = -1.0  # not a bogie
+    protocols = study_protocols(config, "fleet")
+    content = part_content(chunk_table({c: rows[c].tolist() for c in COLUMNS}, protocols), "0" * 64)
+    through_pandas = tmp_path / "pandas.parquet"
+    write_runs_file(run_chunk(rows, protocols), through_pandas, {HASH_KEY: b"0" * 64})
+    assert pq.read_table(through_pandas).column("status").to_pylist().count("failed") == 4
+    assert content == through_pandas.read_bytes()
 
 
 def test_one_row_per_sample_and_protocol_carrying_the_sample_columns(config, samples, reference):

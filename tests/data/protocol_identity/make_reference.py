@@ -1,6 +1,6 @@
 """Writes reference.json: weigh() rows of a few fleet bogies by both protocols (params.yaml as committed).
 
-Run once on the code before a change meant to keep results bit-identical (issue 15), then
+Run on the code before a change meant to keep results bit-identical (or after one meant to change them), then
 tests/pipeline/test_protocol_identity.py checks the code against it. Floats are stored as float.hex() so the
 comparison is bit-for-bit. ``python tests/data/protocol_identity/make_reference.py`` from the repository root.
 """
@@ -9,13 +9,18 @@ from __future__ import annotations
 
 import json
 import subprocess
+import sys
 from pathlib import Path
 
-from pipeline.config import load_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet
-
 ROOT = Path(__file__).resolve().parents[3]
+sys.path.insert(0, str(ROOT / "tests"))
+
+from _fingerprint import fingerprint  # noqa: E402
+
+from pipeline.config import load_config  # noqa: E402
+from pipeline.protocol import weigh  # noqa: E402
+from pipeline.sample import bogie_from_sample, sample_fleet  # noqa: E402
+
 #: fleet sample indices (params.yaml): three tandem, three tri-axle
 INDICES = (3, 8, 11, 0, 1, 2)
 
@@ -37,7 +42,7 @@ def main() -> None:
             out.append({"index": index, "protocol": protocol, "row": {k: encode(v) for k, v in row.items()}})
     commit = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True, text=True).stdout.strip()
     path = Path(__file__).with_name("reference.json")
-    path.write_text(json.dumps({"commit": commit, "rows": out}, indent=1) + "\n")
+    path.write_text(json.dumps({"commit": commit, "machine": fingerprint(), "rows": out}, indent=1) + "\n")
     print(path, len(out), "rows")
 
 

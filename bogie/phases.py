@@ -1,0 +1,453 @@
+"""A weighing as a sequence of phases of the Stage 4 model, run in one compiled call.
+
+A weighbridge or a weigh-in-motion (WIM) reading needs a few numbers from a simulation, not its history: the
+state at the end, the mean tyre loads over a window, the loads a WIM sensor reads as the tyres pass. :func:`run`
+steps a list of :class:`Phase` (a load ramp, a pass over a road, a hold) from rest or from a given state in one
+call of :func:`bogie._phases_core.run_phases`, which computes each phase's drive at any time (the load ramp in
+closed form, the road from a :class:`RoadTable`) and keeps only those readings. A phase is stepped with fixed steps
+of ``dt`` (the scheme of :func:`bogie.nonlinear.simulate`) or, given a ``tolerance``, with adaptive steps under
+control of their local error: long where nothing changes fast, short where the road or a friction contact does.
+Equations, the controller and the accuracy record: ``docs/phases.md``. :func:`bogie.nonlinear.simulate` remains
+the tool for time histories.
+"""
+
+from __future__ import annotations
+
+import math
+import threading
+from dataclasses import dataclass
+
+import numpy as np
+from numpy.typing import NDArray
+
+from bogie import _nonlinear_core as core
+from bogie import _phases_core as pc
+from bogie import nonlinear as nl
+from bogie.newmark import _STATUS_TEXT, consistent_acceleration
+from bogie.params import Bogie
+from bogie.results import Profile
+
+__all__ = ["MeanReading", "Phase", "PhaseOutcome", "PhasesRun", "RoadTable", "SensorReading", "run"]
+
+#: Newton iterations per step and the residual tolerance are those of :func:`bogie.nonlinear.simulate`
+MAX_ITER = 25
+_STATUS_TEXT = {
+    **_STATUS_TEXT,
+    pc.STATUS_STEP_TOO_SMALL: f"the adaptive step fell below {pc.MIN_STEP:g} s",
+    pc.STATUS_NO_EQUILIBRIUM: "no static equilibrium to start from",
+}
+
+
+def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> float:
+    v = float(value)
+    ok = v >= 0.0 if allow_zero else v > 0.0
+    if not (math.isfinite(v) and ok):
+        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
+    return v
+
+
+@dataclass(frozen=True, eq=False)
+class RoadTable:
+    """Road heights at the distances ``x0 + k dx``, k = 0 .. len(heights) - 1 [m], linear between them.
+
+    The table a phase reads the road under each axle from: its rate is the table's slope times the speed, exactly.
+    """
+
+    x0: float
+    dx: float
+    heights: NDArray[np.float64]
+
+    def __post_init__(self) -> None:
+        object.__setattr__(self, "dx", _positive("dx", self.dx, "m"))
+        h = np.ascontiguousarray(self.heights, dtype=float)
+        if h.ndim != 1 or h.size < 2:
+            raise ValueError(f"heights has shape {h.shape}: a road table needs at least 2 heights [m] in a 1-D array")
+        if not np.all(np.isfinite(h)):
+            raise ValueError("heights contains NaN or infinity: road heights must be finite [m]")
+        if not math.isfinite(self.x0):
+            raise ValueError(f"x0 = {self.x0!r} is not finite: the table's first distance [m]")
+        object.__setattr__(self, "heights", h)
+
+    @property
+    def x_end(self) -> float:
+        """Road distance of the table's last point [m]."""
+        return self.x0 + (len(self.heights) - 1) * self.dx
+
+    @classmethod
+    def from_profile(cls, profile: Profile, x_from: float, x_to: float, dx: float) -> RoadTable:
+        """``profile`` at the multiples of ``dx`` [m] that cover [x_from, x_to] [m].
+
+        With ``dx`` the spacing of a profile's own grid (:class:`bogie.road.ISO8608Profile`: length / points) the
+        table holds that grid's heights and reproduces the profile's linear interpolation exactly.
+        """
+        dx = _positive("dx", dx, "m")
+        if not (math.isfinite(x_from) and math.isfinite(x_to) and x_to > x_from):
+            raise ValueError(f"x_from = {x_from!r}, x_to = {x_to!r}: need finite distances [m] with x_to > x_from")
+        k0 = math.floor(x_from / dx)
+        k1 = math.ceil(x_to / dx)
+        x = np.arange(k0, k1 + 1) * dx
+        return cls(k0 * dx, dx, np.asarray(profile(x), dtype=float))
+
+
+@dataclass(frozen=True)
+class MeanReading:
+    """A weighbridge's reading: each tyre's load averaged over [start, end] [s] from the phase's start."""
+
+    start: float
+    end: float
+
+
+@dataclass(frozen=True)
+class SensorReading:
+    """A WIM sensor's reading of each tyre's passage (:func:`bogie.wim.sensor_reading`).
+
+    ``front_centre`` [s] from the phase's start: the front tyre's patch centre is over the sensor's centre; each
+    trailing axle passes its spacing / speed later. ``half`` = (S + L) / 2v and ``flat`` = |S - L| / 2v [s] for
+    sensor length S, patch length L and speed v. The stop flag looks at the passage of all the tyres.
+    """
+
+    front_centre: float
+    half: float
+    flat: float
+
+
+@dataclass(frozen=True)
+class Phase:
+    """One phase of a weighing.
+
+    Attributes
+    ----------
+    duration
+        [s].
+    load_factor
+        Payload load factor [-], constant, or (start, end) for a cosine ramp over the phase (as
+        :func:`bogie.nonlinear.load_ramp`).
+    road
+        Road under the axles (a :class:`RoadTable`), or None for a level road.
+    speed
+        Road speed [m/s] (0 for a standstill).
+    front_axle_start
+        Road distance of the front axle at the phase's start [m]; trailing axles are their spacing behind.
+    kingpin_rise
+        Rise of the king pin above the height that makes the bogie's chassis tilt [m].
+    dt
+        Fixed time step; with ``tolerance``, the first adaptive step [s].
+    tolerance
+        None: fixed steps of ``dt``. Else the local error allowed per step, a displacement at a wheel, spring end or
+        king pin lever [m]: adaptive steps (``docs/phases.md``).
+    max_step
+        Largest adaptive step [s].
+    reading
+        :class:`MeanReading`, :class:`SensorReading` or None.
+    name
+        For messages.
+    """
+
+    duration: float
+    load_factor: float | tuple[float, float] = 1.0
+    road: RoadTable | None = None
+    speed: float = 0.0
+    front_axle_start: float = 0.0
+    kingpin_rise: float = 0.0
+    dt: float = 1e-3
+    tolerance: float | None = None
+    max_step: float = 0.05
+    reading: MeanReading | SensorReading | None = None
+    name: str = "phase"
+
+    def __post_init__(self) -> None:
+        _positive("duration", self.duration, "s")
+        _positive("dt", self.dt, "s")
+        if self.dt > self.duration:
+            raise ValueError(f"dt = {self.dt!r} is out of range: must be in (0, duration = {self.duration:g}] s")
+        if self.tolerance is not None:
+            _positive("tolerance", self.tolerance, "m")
+            _positive("max_step", self.max_step, "s")
+        _positive("speed", self.speed, "m/s", allow_zero=True)
+        lf = self.load_factor if isinstance(self.load_factor, tuple) else (self.load_factor, self.load_factor)
+        for value in lf:
+            if not (math.isfinite(value) and 0.0 < value <= 2.0):
+                raise ValueError(
+                    f"load_factor = {value!r} is out of range: must be in (0, 2] (fraction of the design payload, -)"
+                )
+        if isinstance(self.reading, MeanReading):
+            if not (0.0 <= self.reading.start < self.reading.end <= self.duration):
+                raise ValueError(
+                    f"reading window [{self.reading.start!r}, {self.reading.end!r}] s must lie in [0, duration = "
+                    f"{self.duration:g}] s and have start < end"
+                )
+        elif isinstance(self.reading, SensorReading):
+            if self.speed <= 0.0:
+                raise ValueError(f"a sensor reading needs a speed > 0 m/s, got speed = {self.speed!r}")
+            _positive("reading.half", self.reading.half, "s", allow_zero=True)
+
+    @property
+    def load_factors(self) -> tuple[float, float]:
+        """(start, end) of the load factor [-]."""
+        if isinstance(self.load_factor, tuple):
+            return float(self.load_factor[0]), float(self.load_factor[1])
+        return float(self.load_factor), float(self.load_factor)
+
+
+@dataclass(frozen=True)
+class PhaseOutcome:
+    """What one phase gave: its reading per axle (wheel loads [N]; None if it has none or did not finish), the stop
+    flag, and the work: accepted and rejected steps, force evaluations (those of the tangents included), tangents,
+    factorisations of the iteration matrix, and the time it reached [s]."""
+
+    name: str
+    reading: NDArray[np.float64] | None
+    on_stop: bool
+    steps: int
+    rejected: int
+    force_evaluations: int
+    tangents: int
+    factorisations: int
+    end_time: float
+    unchecked: int = 0
+
+
+@dataclass(frozen=True)
+class PhasesRun:
+    """The result of :func:`run`: ``status`` "ok" or "failed" with the ``message``; the state after the last phase
+    run (None if a phase failed) and each phase's outcome (the phases after a failure are left out).
+
+    With ``history`` asked for, ``t`` [s] from the first phase's start, ``wheel_loads`` [N] (n_t, n_axles) and
+    ``chassis_pitch`` [rad] at the start and after every accepted step (up to a failure); else None.
+    """
+
+    status: str
+    message: str
+    final_state: nl.State | None
+    phases: tuple[PhaseOutcome, ...]
+    t: NDArray[np.float64] | None = None
+    wheel_loads: NDArray[np.float64] | None = None
+    chassis_pitch: NDArray[np.float64] | None = None
+
+    @property
+    def success(self) -> bool:
+        """True if every phase ran."""
+        return self.status == "ok"
+
+
+@dataclass(frozen=True)
+class _Constants:
+    """What the kernel needs of a bogie that no phase changes."""
+
+    mass: NDArray[np.float64]
+    data_f: NDArray[np.float64]
+    data_i: NDArray[np.int64]
+    offsets: NDArray[np.float64]
+    levers: NDArray[np.float64]
+    r_tol: NDArray[np.float64]
+    u_limit: NDArray[np.float64]
+    kingpin: float
+
+
+_CONSTANTS: dict[int, tuple[Bogie, _Constants]] = {}
+_CONSTANTS_SIZE = 4
+_CONSTANTS_LOCK = threading.Lock()
+_RELAXED_SLOTS = np.asarray(nl._FRICTION_SLOTS, dtype=np.int64)
+_SCHEME = (0.25, 0.5, 0.0, 0.0)  # Newmark's average acceleration: (beta, gamma, alpha_m, alpha_f)
+
+
+def _constants(bogie: Bogie) -> _Constants:
+    """The bogie's packed parameters and tolerances, computed once for the phases of its weighings."""
+    hit = _CONSTANTS.get(id(bogie))
+    if hit is not None and hit[0] is bogie:
+        return hit[1]
+    mass, data_f, data_i = nl.pack(bogie)
+    if np.any(mass != np.diag(np.diag(mass))):
+        # the kernel uses only the diagonal (in the residual, the iteration matrix and the consistent accelerations)
+        raise AssertionError("the packed mass matrix is not diagonal: bogie._phases_core assumes it is")
+    n = bogie.n_axles
+    arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
+    constants = _Constants(
+        mass=mass,
+        data_f=data_f,
+        data_i=data_i,
+        offsets=np.asarray(bogie.axle_x, dtype=float) - bogie.axle_x[0],
+        levers=np.asarray([bogie.bogie_centre_x] + [arm] * (n - 1) + [1.0] * n, dtype=float),
+        r_tol=nl._tolerance(bogie),
+        u_limit=nl.limits(bogie),
+        kingpin=float(bogie.kingpin_height_offset),
+    )
+    with _CONSTANTS_LOCK:
+        while len(_CONSTANTS) >= _CONSTANTS_SIZE:
+            del _CONSTANTS[next(iter(_CONSTANTS))]
+        _CONSTANTS[id(bogie)] = (bogie, constants)
+    return constants
+
+
+def _rows(phases: list[Phase], c: _Constants) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+    """The kernel's phase rows and the concatenated road tables."""
+    rows = np.zeros((len(phases), len(pc.PHASE_COLUMNS)))
+    tables = []
+    start = 0
+    for p, phase in enumerate(phases):
+        r = rows[p]
+        r[pc.P_DURATION] = phase.duration
+        r[pc.P_LF0], r[pc.P_LF1] = phase.load_factors
+        r[pc.P_KINGPIN] = c.kingpin + phase.kingpin_rise
+        r[pc.P_SPEED] = phase.speed
+        r[pc.P_X0] = phase.front_axle_start
+        r[pc.P_ROAD_START] = -1.0
+        if phase.road is not None:
+            road = phase.road
+            reach_lo = phase.front_axle_start - c.offsets[-1]
+            reach_hi = phase.front_axle_start + phase.speed * phase.duration
+            slack = 1e-9 * max(1.0, abs(reach_lo), abs(reach_hi))
+            if reach_lo < road.x0 - slack or reach_hi > road.x_end + slack:
+                raise ValueError(
+                    f"phase {phase.name!r}: the axles cover road distances [{reach_lo:g}, {reach_hi:g}] m but its "
+                    f"road table covers [{road.x0:g}, {road.x_end:g}] m"
+                )
+            r[pc.P_ROAD_START] = start
+            r[pc.P_ROAD_LENGTH] = len(road.heights)
+            r[pc.P_ROAD_X0] = road.x0
+            r[pc.P_ROAD_DX] = road.dx
+            tables.append(road.heights)
+            start += len(road.heights)
+        r[pc.P_ADAPTIVE] = 0.0 if phase.tolerance is None else 1.0
+        r[pc.P_DT] = phase.dt
+        r[pc.P_TOL] = 0.0 if phase.tolerance is None else phase.tolerance
+        r[pc.P_MAX_STEP] = phase.max_step
+        reading = phase.reading
+        if isinstance(reading, MeanReading):
+            r[pc.P_READING] = pc.READING_MEAN
+            r[pc.P_WINDOW_START], r[pc.P_WINDOW_END] = reading.start, reading.end
+        elif isinstance(reading, SensorReading):
+            r[pc.P_READING] = pc.READING_SENSOR
+            r[pc.P_SENSOR_CENTRE] = reading.front_centre
+            r[pc.P_SENSOR_HALF] = reading.half
+            r[pc.P_SENSOR_FLAT] = reading.flat
+            r[pc.P_WINDOW_START] = reading.front_centre - reading.half
+            r[pc.P_WINDOW_END] = reading.front_centre + c.offsets[-1] / phase.speed + reading.half
+    road_h = np.concatenate(tables) if tables else np.zeros(1)
+    return rows, road_h
+
+
+def _first_drive_row(phase: Phase, c: _Constants, n: int) -> NDArray[np.float64]:
+    """The drive row at a phase's start, as :func:`bogie._phases_core._drive` computes it (for the Python
+    equilibrium the kernel falls back on)."""
+    drv = np.zeros(2 * n + 2)
+    rows, road_h = _rows([phase], c)
+    pc._drive(rows[0], road_h, c.offsets, n, 0.0, drv)
+    return drv
+
+
+def run(
+    bogie: Bogie,
+    phases: list[Phase] | tuple[Phase, ...],
+    initial: nl.State | None = None,
+    history: bool = False,
+    check_every: int = pc.CHECK_EVERY,
+) -> PhasesRun:
+    """Run ``phases`` in order, each from where the last ended, in one compiled call.
+
+    Parameters
+    ----------
+    bogie
+        The steel bogie.
+    phases
+        The phases, at least one.
+    initial
+        The state to start from; None: at rest, in the static equilibrium at the first phase's start with the
+        friction relaxed (:func:`bogie.nonlinear.equilibrium`; its continuation from the design state if Newton
+        alone does not reach one).
+    history
+        Also return the wheel loads and chassis pitch at every accepted step (for plots and checks; the weighings
+        need only the readings).
+    check_every
+        A step's first Newton correction is accepted without evaluating its residual where the contraction measured
+        at the last checked step puts it far inside the tolerance, and checked at least every ``check_every`` steps
+        (``docs/phases.md``); 1 checks every step, as :func:`bogie.nonlinear.simulate` does.
+
+    Returns
+    -------
+    PhasesRun
+        "failed" with the solver's message (the phase, its time and the residual) if a step could not be solved;
+        never NaN. Raises what :func:`bogie.nonlinear.equilibrium` raises if there is no equilibrium to start from.
+    """
+    phases = list(phases)
+    if not phases:
+        raise ValueError("phases is empty: give at least one Phase")
+    if isinstance(check_every, bool) or not isinstance(check_every, int) or check_every < 1:
+        raise ValueError(f"check_every = {check_every!r} is out of range: must be an integer >= 1 (steps)")
+    c = _constants(bogie)
+    n = bogie.n_axles
+    rows, road_h = _rows(phases, c)
+    ndof = 2 * n
+    at_rest = initial is None
+    if at_rest:
+        u, v, a = np.zeros(ndof), np.zeros(ndof), np.zeros(ndof)
+        hist = np.zeros(core.history_length(n))
+    else:
+        hist = nl._history(bogie, initial.history, "initial.history")
+        u, v, a = (np.array(x, dtype=float) for x in (initial.u, initial.v, initial.a))
+    readings = np.zeros((len(phases), 2 * n))
+    on_stop = np.zeros(len(phases), dtype=np.bool_)
+    stats = np.zeros((len(phases), len(pc.STAT_COLUMNS)))
+    # room for the trace: twice the fixed steps of dt (adaptive steps are mostly longer), more if it needs more
+    rows_needed = int(2 * sum(p.duration / p.dt for p in phases)) + 16 if history else 0
+    start = (u.copy(), v.copy(), a.copy(), hist.copy())
+    while True:
+        trace = np.zeros((rows_needed, n + 2))
+        args = (
+            c.mass, c.data_f, c.data_i, c.offsets, c.levers, rows, road_h, u, v, a, hist, at_rest, _RELAXED_SLOTS,
+            float(bogie.bogie_centre_x), c.r_tol, c.u_limit, MAX_ITER, _SCHEME, core.record_length(n),
+            core.work_size(n), float(check_every), readings, on_stop, stats, trace,
+        )  # fmt: skip
+        status, stopped, t_stop, rnorm, traced = pc.run_phases(*args)
+        if traced <= rows_needed or not history:
+            break
+        rows_needed = traced  # a run is a pure function of its inputs: the same again, with room for its trace
+        u, v, a, hist = (x.copy() for x in start)
+    if status == pc.STATUS_NO_EQUILIBRIUM:
+        # Newton alone did not reach an equilibrium inside the limits: the Python one follows it from the design
+        # state (and raises, naming why, if there is none)
+        state = nl.equilibrium(bogie, _first_drive_row(phases[0], c, n))
+        mass, data_f, data_i = c.mass, c.data_f, c.data_i
+        f0 = np.zeros(ndof)
+        core.force(
+            state.u, state.v, _first_drive_row(phases[0], c, n), data_f, data_i, state.history,
+            state.history.copy(), f0, np.zeros((ndof, ndof)), np.zeros((ndof, ndof)),
+            np.zeros(core.record_length(n)), False, False, np.zeros(core.work_size(n)),
+        )  # fmt: skip
+        initial = nl.State(state.u, state.v, consistent_acceleration(mass, f0), state.history)
+        return run(bogie, phases, initial, history, check_every)
+    outcomes = []
+    for p in range(min(stopped + 1, len(phases))):
+        done = p < stopped
+        phase = phases[p]
+        reading = None
+        if done and phase.reading is not None:
+            if isinstance(phase.reading, MeanReading):
+                reading = readings[p, :n] / (phase.reading.end - phase.reading.start)
+            else:
+                weight = readings[p, n:]
+                reading = np.where(weight > 0.0, readings[p, :n] / np.where(weight > 0.0, weight, 1.0), np.nan)
+        s = stats[p]
+        outcomes.append(
+            PhaseOutcome(
+                name=phase.name,
+                reading=reading,
+                on_stop=bool(on_stop[p]),
+                steps=int(s[pc.S_STEPS]),
+                rejected=int(s[pc.S_REJECTED]),
+                force_evaluations=int(s[pc.S_EVALS]),
+                tangents=int(s[pc.S_TANGENTS]),
+                factorisations=int(s[pc.S_FACTORS]),
+                end_time=float(s[pc.S_END]),
+                unchecked=int(s[pc.S_UNCHECKED]),
+            )
+        )
+    traces = (trace[:traced, 0], trace[:traced, 1 : n + 1], trace[:traced, n + 1]) if history else (None,) * 3
+    if status != pc.STATUS_OK:
+        phase = phases[stopped]
+        message = (
+            f"{_STATUS_TEXT[int(status)]} at t = {t_stop:.6g} s of phase {phase.name!r} ({stopped + 1} of "
+            f"{len(phases)}); scaled residual {rnorm:.3g} (1 = tolerance)"
+        )
+        return PhasesRun("failed", message, None, tuple(outcomes), *traces)
+    return PhasesRun("ok", "ok", nl.State(u=u, v=v, a=a, history=hist), tuple(outcomes), *traces)
