@@ -22,7 +22,7 @@ from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
-from pipeline.report.layout import contents, number_pages
+from pipeline.report.layout import contents, freeze_layout, number_pages
 from pipeline.report.pages import (
     appendix,
     calibration,
@@ -104,6 +104,8 @@ def write_report(
     the same pages give the same bytes.
     """
     number_pages([p.figure for p in pages], f"{front.TITLE} · code {code[:12]}")
+    for page in pages:
+        freeze_layout(page.figure)
     with atomic_outputs(files=[pdf_path], dirs=[png_dir, plots_dir]) as ((tmp_pdf,), (tmp_png, tmp_plots)):
         metadata = {"Title": front.TITLE, "Subject": front.SUBTITLE, "Creator": "bogie pipeline.report"}
         with PdfPages(tmp_pdf, metadata={**metadata, "CreationDate": None}) as pdf:

@@ -13,6 +13,7 @@ from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
+from matplotlib.axes import Axes
 from matplotlib.figure import Figure
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
@@ -25,6 +26,7 @@ __all__ = [
     "Block",
     "adopt_page",
     "contents",
+    "freeze_layout",
     "new_page",
     "number_pages",
     "page_header",
@@ -234,6 +236,28 @@ def table_pages(
 
 
 # ---- the whole document -------------------------------------------------------------------------------------------
+#: digits of a page fraction an axes' position is rounded to when frozen (1e-6 of a page: under 0.001 pt)
+FROZEN_DIGITS = 6
+
+
+def freeze_layout(fig: Figure) -> None:
+    """Lay the page out once and fix every axes (colour bars and those in subfigures included) where the layout put
+    it, rounded to :data:`FROZEN_DIGITS` digits of the page, with the layout engine then switched off.
+
+    matplotlib's constrained layout solves its constraints with kiwisolver, whose solution can differ in the last
+    bits from one process to the next (measured: one design-guidance page came out three ways in four runs, an axes
+    width of 105.9239164062 or ...4063 pt): the PDF's bytes, and so ``dvc.lock``, followed. Rounded positions are
+    the same every run, and the PDF and the PNG pages, each drawn afterwards, share them.
+    """
+    if fig.get_layout_engine() is None:
+        return
+    fig.draw_without_rendering()
+    boxes = [(ax, ax.get_position(original=False).bounds) for ax in fig.findobj(lambda a: isinstance(a, Axes))]
+    fig.set_layout_engine("none")
+    for ax, bounds in boxes:
+        ax.set_position([round(v, FROZEN_DIGITS) for v in bounds])
+
+
 def number_pages(pages: Sequence[Figure], footer: str) -> None:
     """Write ``page n of N`` and the ``footer`` text at the foot of every page."""
     for n, fig in enumerate(pages, start=1):

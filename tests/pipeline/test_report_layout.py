@@ -112,3 +112,41 @@ def test_table_axes_returns_its_bottom_and_sizes_rows_by_their_lines():
     line = 7.5 * 1.3 / 72.0 / layout.A4[1]
     assert bottom == pytest.approx(0.8 - (1.8 * line + 1.8 * line + 2.8 * line))
     assert bottom == pytest.approx(0.8 - sum(layout.row_height(r, 7.5) for r in (["h"], ["one"], ["two\nlines"])))
+
+
+def test_a_frozen_page_keeps_its_layout_rounded_and_draws_without_the_engine():
+    """freeze_layout: every axes (a subfigure's and a colour bar's included) stays where constrained layout put it,
+    to 1e-6 of the page, on a 10^-6 grid, and later draws no longer run the layout (whose solver may differ in the
+    last bits between processes)."""
+    import io
+
+    import numpy as np
+    from matplotlib.axes import Axes
+
+    def page():
+        fig = layout.new_page("Frozen")
+        top, bottom = fig.subfigures(2, 1)
+        maps = top.subplots(1, 2)
+        mesh = maps[0].pcolormesh(np.arange(12.0).reshape(3, 4))
+        top.colorbar(mesh, ax=list(maps), label="a colour bar")
+        bottom.add_subplot().plot([0, 1], [0, 1])
+        return fig, fig.findobj(lambda a: isinstance(a, Axes))
+
+    # the layout of a page drawn once, as the report's pages are when frozen
+    twin, twin_axes = page()
+    twin.draw_without_rendering()
+    laid_out = [ax.get_position(original=False).bounds for ax in twin_axes]
+    fig, axes = page()
+    assert len(axes) == 4
+    layout.freeze_layout(fig)
+    assert not isinstance(fig.get_layout_engine(), matplotlib.layout_engine.ConstrainedLayoutEngine)
+    frozen = [ax.get_position(original=False).bounds for ax in axes]
+    assert np.allclose(frozen, laid_out, rtol=0.0, atol=5.1e-7)
+    scaled = np.asarray(frozen) * 10**layout.FROZEN_DIGITS
+    assert np.allclose(scaled, np.round(scaled), rtol=0.0, atol=1e-6)
+    first, second = io.BytesIO(), io.BytesIO()
+    fig.savefig(first, format="pdf", metadata={"CreationDate": None})
+    fig.savefig(second, format="pdf", metadata={"CreationDate": None})
+    assert first.getvalue() == second.getvalue()
+    # a colour bar's axes keeps its aspect inside the frozen box (a draw's apply_aspect), to well under 1e-6
+    assert np.allclose([ax.get_position(original=False).bounds for ax in axes], frozen, rtol=0.0, atol=1e-6)
