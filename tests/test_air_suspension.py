@@ -181,13 +181,17 @@ def test_energy_dissipated_is_never_negative_and_the_balance_closes(make, method
     w = run.extras
     dissipations = ("damper_dissipation", "tyre_dissipation", "pipe_dissipation", "valve_dissipation")
     assert np.all(w["dissipation_rate"] >= 0.0)  # at every recorded state, by construction of each term
+    dissipated = sum(w[name][-1] for name in dissipations)
     for name in dissipations:
-        # the running totals between rows are the integrator's interpolation: non-decreasing to its accuracy
-        assert np.all(np.diff(w[name]) >= -1e-5 * w[name][-1]), name
+        # The running totals between rows are the integrator's interpolation, so non-decreasing only to its
+        # accuracy: the same 1e-6 of the energy dissipated to which the balance below closes. (Each term's own total
+        # is no yardstick: LSODA controls a total's error in joules, atol 1e-9 of the design bag load, and its
+        # interpolant dips where the valve switches: 1.1e-4 J of the air tandem's 17.5 J of valve work here, 2.3e-4
+        # J with numba compiling for Haswell, 5.6 and 12 atol, against 1.35e-3 J allowed.)
+        assert np.all(np.diff(w[name]) >= -1e-6 * dissipated), name
         assert w[name][-1] > 0.0, name
     start = air_dynamics.stored_energy(b, air_static.equilibrium(b))
     end = air_dynamics.stored_energy(b, run.final_state)
-    dissipated = sum(w[name][-1] for name in dissipations)
     supplied = w["road_work"][-1] + w["supply_energy"][-1] - w["vent_energy"][-1]
     assert end - start == pytest.approx(supplied - dissipated, abs=1e-6 * dissipated)
     assert dissipated > 10.0  # a real event: tens of joules through the dampers and the pipe
