@@ -22,6 +22,28 @@ import math
 from numba import njit
 
 
+@njit(cache=True, inline="always")
+def _pivot(a, piv, k):
+    """Partial pivoting at column k: the row of the largest |a[i, k]|, i >= k, swapped into row k and recorded in
+    ``piv[k]``. False if that pivot is zero or not finite."""
+    n = a.shape[0]
+    p = k
+    big = abs(a[k, k])
+    for i in range(k + 1, n):
+        if abs(a[i, k]) > big:
+            big = abs(a[i, k])
+            p = i
+    piv[k] = p
+    if big == 0.0 or not math.isfinite(big):
+        return False
+    if p != k:
+        for j in range(n):
+            tmp = a[k, j]
+            a[k, j] = a[p, j]
+            a[p, j] = tmp
+    return True
+
+
 @njit(cache=True, _nrt=False)
 def lu_factor(a, piv):
     """LU factorisation with partial pivoting, in place. Returns False if a pivot is zero.
@@ -35,20 +57,8 @@ def lu_factor(a, piv):
     """
     n = a.shape[0]
     for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        piv[k] = p
-        if big == 0.0 or not math.isfinite(big):
+        if not _pivot(a, piv, k):
             return False
-        if p != k:
-            for j in range(n):
-                tmp = a[k, j]
-                a[k, j] = a[p, j]
-                a[p, j] = tmp
         inv = 1.0 / a[k, k]
         for i in range(k + 1, n):
             a[i, k] *= inv
@@ -100,20 +110,8 @@ def invert(a, piv):
     """
     n = a.shape[0]
     for k in range(n):
-        p = k
-        big = abs(a[k, k])
-        for i in range(k + 1, n):
-            if abs(a[i, k]) > big:
-                big = abs(a[i, k])
-                p = i
-        piv[k] = p
-        if big == 0.0 or not math.isfinite(big):
+        if not _pivot(a, piv, k):
             return False
-        if p != k:
-            for j in range(n):
-                tmp = a[k, j]
-                a[k, j] = a[p, j]
-                a[p, j] = tmp
         inv = 1.0 / a[k, k]
         a[k, k] = 1.0
         for j in range(n):

@@ -141,13 +141,10 @@ def _halve(du, u_new):
 
 
 @njit(cache=True, inline="always")
-def _update(jac, piv, res, du, u_new, u_limit):
-    """Newton update u_new += J^-1 res, halved until inside ``u_limit`` (30 times at most); False if never."""
-    lu_solve(jac, piv, res)
+def _pull_inside(du, u_new, u_limit):
+    """After an update ``du`` to ``u_new``: halve it back until |u_new| is inside ``u_limit`` (30 times at most);
+    False if never."""
     n = du.shape[0]
-    for i in range(n):
-        du[i] = res[i]
-        u_new[i] += res[i]
     for _ in range(30):
         inside = True
         for i in range(n):
@@ -157,6 +154,17 @@ def _update(jac, piv, res, du, u_new, u_limit):
             return True
         _halve(du, u_new)
     return False
+
+
+@njit(cache=True, inline="always")
+def _update(jac, piv, res, du, u_new, u_limit):
+    """Newton update u_new += J^-1 res, halved until inside ``u_limit`` (30 times at most); False if never."""
+    lu_solve(jac, piv, res)
+    n = du.shape[0]
+    for i in range(n):
+        du[i] = res[i]
+        u_new[i] += res[i]
+    return _pull_inside(du, u_new, u_limit)
 
 
 @njit(cache=True, inline="always")

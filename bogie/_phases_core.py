@@ -42,6 +42,7 @@ from bogie._newmark_core import (
     STATUS_SINGULAR,
     _halve,
     _kinematics,
+    _pull_inside,
 )
 
 #: a step that could not be made smaller than the smallest step allowed (adaptive stepping)
@@ -208,15 +209,7 @@ def _update(inv, k, res, du, u_new, u_limit):
             s += inv[k, i, j] * res[j]
         du[i] = s
         u_new[i] += s
-    for _ in range(30):
-        inside = True
-        for i in range(n):
-            if abs(u_new[i]) > u_limit[i]:
-                inside = False
-        if inside:
-            return True
-        _halve(du, u_new)
-    return False
+    return _pull_inside(du, u_new, u_limit)
 
 
 @njit(cache=True, inline="always")
@@ -319,8 +312,8 @@ def _solve_step(
             return STATUS_OUT_OF_RANGE, rnorm
         if it == 0 and may_skip and rho * r_first <= SKIP_LIMIT:
             # the correction's expected residual is far inside the tolerance: accept it unchecked, with the
-            # history and the record of the predictor's evaluation (they differ from the corrected state's by the
-            # correction, far below the tolerance)
+            # history of the predictor's evaluation (it differs from the corrected state's by the correction, far
+            # below the tolerance); the readings are taken at the accepted state by the caller
             _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
             jst[2] += 1.0
             counts[3] += 1.0
