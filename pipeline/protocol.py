@@ -23,6 +23,7 @@ failed simulation: the row then has ``status = "failed"`` and the solver's messa
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -170,6 +171,29 @@ SETTLE_TOLERANCE_SHARE = 0.2
 STATIC_LEAD = 0.5
 
 
+#: road tables kept per process, most recent first: a table is a pure function of the road's class and seed, the
+#: protocol's geometry and the group's length, and the default study weighs many bogies on one road (the ablation's
+#: seven variants of a fleet bogie share its roads, consecutive in a chunk; the Sobol' design runs all its samples on
+#: one road), where synthesising the ISO 8608 profile (an inverse FFT of 16,384 points) and tabulating it was about
+#: a tenth of a weighing. Fleet bogies each have their own road and miss; a miss costs what the table always cost.
+ROAD_TABLE_CACHE = 16
+
+
+def _read_only(table: phases_mod.RoadTable) -> phases_mod.RoadTable:
+    """``table`` with its heights made read-only: a cached table is shared by every weighing on its road."""
+    table.heights.flags.writeable = False
+    return table
+
+
+@functools.lru_cache(maxsize=ROAD_TABLE_CACHE)
+def _static_table(road_class: str, road_seed: int, approach_length: float, group_length: float) -> phases_mod.RoadTable:
+    """The static protocol's crawl road: the approach road at its grid points from the rear axle's start to the
+    front axle's stop (:meth:`ApproachRoad.table`); cached (:data:`ROAD_TABLE_CACHE`), read-only."""
+    road = _approach(road_class, road_seed, approach_length)
+    distance = STATIC_LEAD + approach_length + group_length + 0.5
+    return _read_only(road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD))
+
+
 def static_phases(
     bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
 ) -> list[phases_mod.Phase]:
@@ -177,9 +201,8 @@ def static_phases(
     road onto the weighbridge, the settle with its reading over the last :data:`READ_TIME`."""
     dt = spec.dt
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    road = _approach(road_class, road_seed, spec.approach_length)
     distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
-    table = road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD)
+    table = _static_table(road_class, road_seed, spec.approach_length, group_length)
     tol = spec.step_tolerance
 
     def share(k: float) -> float | None:
@@ -262,7 +285,13 @@ def _wim_route(
     """The WIM pass's approach road, that road with the site, the pass's duration [s], and the sensor's passage:
     the time the front tyre's patch centre is over the sensor [s], half the time a patch takes to cross it,
     (S + L) / 2v, and half the time of full overlap, |S - L| / 2v [s]."""
-    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    return _route(bogie.axle_x[-1] - bogie.axle_x[0], road_class, road_seed, spec)
+
+
+def _route(
+    group_length: float, road_class: str, road_seed: int, spec: WimProtocol
+) -> tuple[ApproachRoad, wim.SiteRoad, float, float, float, float]:
+    """:func:`_wim_route` for a group of ``group_length`` [m], front to rear axle."""
     approach = _approach(road_class, road_seed, spec.approach_length + group_length + 5.0)
     # the site lies on the random road (WIM sites are on ordinary road, made smooth), not on the level run-out
     road = wim_site(approach, road_class, spec)
@@ -273,13 +302,13 @@ def _wim_route(
     return approach, road, duration, sensor / spec.speed, half, flat
 
 
-def wim_phases(
-    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
-) -> list[phases_mod.Phase]:
-    """The WIM protocol's one phase (:mod:`bogie.phases`): the pass over the approach road and the site at fixed
-    steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
-    approach, road, duration, crossing, half, flat = _wim_route(bogie, road_class, road_seed, spec)
-    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+@functools.lru_cache(maxsize=ROAD_TABLE_CACHE)
+def _wim_table(
+    road_class: str, road_seed: int, spec: WimProtocol, group_length: float
+) -> tuple[phases_mod.RoadTable, float, float, float, float]:
+    """The WIM pass's road (the approach road with the site's smoothing, at its grid points over the pass) and
+    :func:`_wim_route`'s duration and sensor passage; cached (:data:`ROAD_TABLE_CACHE`), the table read-only."""
+    approach, road, duration, crossing, half, flat = _route(group_length, road_class, road_seed, spec)
     table = approach.table(-group_length, spec.speed * duration)
     # the site's smoothing on the approach's table: the same heights as the site road's at those distances
     if road.before > 0.0 or road.after > 0.0:
@@ -290,6 +319,16 @@ def wim_phases(
         k0 = round(table.x0 / table.dx)
         smoothing = _zoned(k0, k0 + len(table.heights) - 1, table.dx, blends, lambda b: 1.0 - (1.0 - road.scale) * b)
         table = phases_mod.RoadTable(table.x0, table.dx, table.heights * smoothing)
+    return _read_only(table), duration, crossing, half, flat
+
+
+def wim_phases(
+    bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
+) -> list[phases_mod.Phase]:
+    """The WIM protocol's one phase (:mod:`bogie.phases`): the pass over the approach road and the site at fixed
+    steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
+    group_length = bogie.axle_x[-1] - bogie.axle_x[0]
+    table, duration, crossing, half, flat = _wim_table(road_class, road_seed, spec, group_length)
     reading = phases_mod.SensorReading(crossing, half, flat)
     return [
         phases_mod.Phase(duration, payload_fraction, road=table, speed=spec.speed, dt=spec.dt, reading=reading,
