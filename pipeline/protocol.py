@@ -176,7 +176,9 @@ STATIC_LEAD = 0.5
 #: seven variants of a fleet bogie share its roads, consecutive in a chunk; the Sobol' design runs all its samples on
 #: one road), where synthesising the ISO 8608 profile (an inverse FFT of 16,384 points) and tabulating it was about
 #: a tenth of a weighing. Fleet bogies each have their own road and miss; a miss costs what the table always cost.
-ROAD_TABLE_CACHE = 16
+#: Four covers a bogie's static and WIM tables and the design stage's conditions (each a run of consecutive samples
+#: on one road); a table is up to 130 kB, so more would only hold memory
+ROAD_TABLE_CACHE = 4
 
 
 def _read_only(table: phases_mod.RoadTable) -> phases_mod.RoadTable:
