@@ -11,6 +11,7 @@ BENCHMARKS = (
     "bench.bench_nonlinear",
     "bench.bench_pipeline",
     "bench.bench_protocol",
+    "bench.bench_stage",
     "bench.bench_air",
     "bench.bench_calibrate",
     "bench.profile_protocol",
