@@ -105,10 +105,23 @@ def reference_tree(rev: str) -> tuple[str, Path]:
     return sha, tree
 
 
-def run_worker(tree: Path, divisor: int = 1, passes: int = PASSES) -> dict:
-    """One worker process importing ``tree`` with the tree's own params.yaml; its JSON answer."""
+def merge_base() -> str:
+    """The commit this branch started from (the merge base of HEAD and ``main``; HEAD itself on main)."""
+    return subprocess.run(
+        ["git", "merge-base", "HEAD", "main"], cwd=ROOT, check=True, capture_output=True, text=True
+    ).stdout.strip()
+
+
+def tree_env(tree: Path) -> dict[str, str]:
+    """The environment of a process that imports ``tree``'s code (and its own numba cache beside it)."""
     env = dict(os.environ, PYTHONPATH=str(tree))
     env.pop("NUMBA_CACHE_DIR", None)
+    return env
+
+
+def run_worker(tree: Path, divisor: int = 1, passes: int = PASSES) -> dict:
+    """One worker process importing ``tree`` with the tree's own params.yaml; its JSON answer."""
+    env = tree_env(tree)
     with tempfile.TemporaryDirectory() as tmp:
         out = Path(tmp) / "out.json"
         command = [sys.executable, str(Path(__file__).resolve()), "--worker", str(out), "--params",
@@ -145,9 +158,7 @@ def largest_differences(rows: list[dict], reference: list[dict]) -> dict[str, fl
 
 def main(reference: str | None = None) -> None:
     if reference is None:  # the commit this branch started from: the code before its changes
-        reference = subprocess.run(
-            ["git", "merge-base", "HEAD", "main"], cwd=ROOT, check=True, capture_output=True, text=True
-        ).stdout.strip()
+        reference = merge_base()
     sha, ref_tree = reference_tree(reference)
     load_before = os.getloadavg()
     print(f"{N_BOGIES} fleet bogies, this tree {ROOT} against {reference} = {sha[:10]} ({ref_tree})")

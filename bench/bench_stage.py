@@ -37,7 +37,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
-from bench.bench_protocol import reference_tree
+from bench.bench_protocol import merge_base, reference_tree, tree_env
 
 ROOT = Path(__file__).resolve().parent.parent
 #: rounds of the full stage per tree [-]
@@ -52,23 +52,10 @@ ISSUE_BASELINE = 95.0
 ORDER = ["study", "sample_id", "protocol"]
 
 
-def merge_base() -> str:
-    """The merge base of HEAD and ``main`` (HEAD itself on main)."""
-    return subprocess.run(
-        ["git", "merge-base", "HEAD", "main"], cwd=ROOT, check=True, capture_output=True, text=True
-    ).stdout.strip()
-
-
-def _env(tree: Path) -> dict[str, str]:
-    env = dict(os.environ, PYTHONPATH=str(tree))
-    env.pop("NUMBA_CACHE_DIR", None)
-    return env
-
-
 def check_imports(tree: Path, cwd: Path) -> None:
     """Refuse a tree whose processes would import ``bogie`` or ``pipeline`` from elsewhere."""
     code = "import bogie, pipeline; print(bogie.__file__); print(pipeline.__file__)"
-    found = subprocess.run([sys.executable, "-c", code], cwd=cwd, env=_env(tree), check=True, capture_output=True,
+    found = subprocess.run([sys.executable, "-c", code], cwd=cwd, env=tree_env(tree), check=True, capture_output=True,
                            text=True).stdout.split()  # fmt: skip
     for path in found:
         if Path(path).resolve().parent.parent != tree.resolve():
@@ -77,7 +64,7 @@ def check_imports(tree: Path, cwd: Path) -> None:
 
 def run_stage(tree: Path, samples: Path, out: Path) -> tuple[int, float, float]:
     """``python -m pipeline.simulate`` importing ``tree`` with its params.yaml: (runs, stage time [s], wall [s])."""
-    env = _env(tree)
+    env = tree_env(tree)
     command = [sys.executable, "-m", "pipeline.simulate", "--params", str(tree / "params.yaml"),
                "--samples", str(samples), "--out", str(out)]  # fmt: skip
     start = time.perf_counter()

@@ -187,12 +187,18 @@ def _read_only(table: phases_mod.RoadTable) -> phases_mod.RoadTable:
     return table
 
 
+def _crawl_distance(approach_length: float, group_length: float) -> float:
+    """How far the static protocol's front axle crawls [m]: from :data:`STATIC_LEAD` before the approach road to
+    half a metre onto the weighbridge with the whole group."""
+    return STATIC_LEAD + approach_length + group_length + 0.5
+
+
 @functools.lru_cache(maxsize=ROAD_TABLE_CACHE)
 def _static_table(road_class: str, road_seed: int, approach_length: float, group_length: float) -> phases_mod.RoadTable:
     """The static protocol's crawl road: the approach road at its grid points from the rear axle's start to the
     front axle's stop (:meth:`ApproachRoad.table`); cached (:data:`ROAD_TABLE_CACHE`), read-only."""
     road = _approach(road_class, road_seed, approach_length)
-    distance = STATIC_LEAD + approach_length + group_length + 0.5
+    distance = _crawl_distance(approach_length, group_length)
     return _read_only(road.table(-STATIC_LEAD - group_length, distance - STATIC_LEAD))
 
 
@@ -203,7 +209,7 @@ def static_phases(
     road onto the weighbridge, the settle with its reading over the last :data:`READ_TIME`."""
     dt = spec.dt
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
-    distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
+    distance = _crawl_distance(spec.approach_length, group_length)
     table = _static_table(road_class, road_seed, spec.approach_length, group_length)
     tol = spec.step_tolerance
 
@@ -254,7 +260,7 @@ def _air_static(
     if not loaded.success:
         return Weighing("failed", loaded.message)
     road = _approach(road_class, road_seed, spec.approach_length)
-    distance = STATIC_LEAD + spec.approach_length + group_length + 0.5
+    distance = _crawl_distance(spec.approach_length, group_length)
     crawl = nonlinear.road_inputs(
         bogie, road, spec.crawl_speed, distance / spec.crawl_speed, dt, -STATIC_LEAD, load_factor=payload_fraction
     )
