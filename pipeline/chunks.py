@@ -29,6 +29,7 @@ import scipy
 
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
+from pipeline.portable import PINNED
 from pipeline.sample import COLUMNS
 from pipeline.schema import SchemaError, check_file_schema, failed_runs, runs_file_content, write_file
 
@@ -53,7 +54,8 @@ def code_version() -> str:
 
     The sources of every project module the simulate stage imports (:func:`pipeline.deps.project_files`, the same
     list as the stage's code dependencies in ``dvc.yaml``), plus the versions of numpy, scipy, numba, pandas and
-    pyarrow. Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
+    pyarrow, and the instruction sets numpy and numba are pinned to (:mod:`pipeline.portable`: their last bits depend
+    on them). Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
     change would cost a wrong dataset. An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
     """
     digest = hashlib.sha256()
@@ -62,6 +64,8 @@ def code_version() -> str:
         digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
     for module in (np, scipy, numba, pd, pa):
         digest.update(f"{module.__name__}={module.__version__}\0".encode())
+    for variable in PINNED:
+        digest.update(f"{variable}={os.environ.get(variable)}\0".encode())
     return digest.hexdigest()
 
 

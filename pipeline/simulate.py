@@ -61,6 +61,7 @@ from pipeline.chunks import (
     write_part,
 )
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
+from pipeline.portable import warn_unpinned
 from pipeline.protocol import result_row, weigh
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
@@ -68,7 +69,6 @@ from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame
 
 #: the numerical result columns: a successful row with a non-finite one is a failed run
 _NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
-
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -468,6 +468,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--out", default="data/runs", help="runs dataset directory (default: data/runs)")
     args = parser.parse_args(argv)
+    warn_unpinned("simulate")
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
