@@ -15,6 +15,7 @@ BENCHMARKS = (
     "bench.bench_air",
     "bench.bench_calibrate",
     "bench.profile_protocol",
+    "bench.profile_stage",
 )
 
 
