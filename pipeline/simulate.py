@@ -62,7 +62,7 @@ from pipeline.chunks import (
 )
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.portable import warn_unpinned
-from pipeline.protocol import result_row, weigh
+from pipeline.protocol import Outcome, result_rows, weighing
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
 from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame, table_from_rows
@@ -78,17 +78,12 @@ def study_protocols(config: Config, study: str) -> Protocols:
 
 
 # ---- one chunk: the work of one task ---------------------------------------------------------------------------
-def _failed_row(protocol: str, n_axles: int, message: str) -> dict:
-    row = result_row(protocol, n_axles, None, 0.0)
-    row.update(status="failed", message=message)
-    return row
-
-
 def _weighed_rows(rows: Mapping[str, Sequence], protocols: Protocols) -> list[dict]:
     """Weigh every sample of ``rows`` (column name -> the samples' Python values) by every protocol: one dict of
-    run columns per (sample, protocol)."""
-    out = []
+    run columns per (sample, protocol). The result columns of the whole chunk come from one
+    :func:`pipeline.protocol.result_rows`."""
     names = list(rows)
+    samples, outcomes = [], []
     for values in zip(*rows.values()):
         sample = dict(zip(names, values))
         try:
@@ -96,18 +91,23 @@ def _weighed_rows(rows: Mapping[str, Sequence], protocols: Protocols) -> list[di
             invalid = None
         except (ValueError, TypeError) as exc:
             bogie_, invalid = None, f"invalid bogie: {type(exc).__name__}: {exc}"
-        tilt_deg = math.degrees(float(sample["chassis_tilt"]))
+        sample["chassis_tilt_deg"] = math.degrees(float(sample["chassis_tilt"]))
         for name, spec in protocols:
             if bogie_ is None:
-                result = _failed_row(name, int(sample["n_axles"]), invalid)
+                outcomes.append(Outcome(name, int(sample["n_axles"]), None, status="failed", message=invalid))
             else:
-                result = weigh(bogie_, sample, name, spec)
-            # math.isfinite: np.isfinite's ufunc call on each of the ~40 numbers cost a tenth of a ms a row
-            bad = [c for c in _NUMBERS if not math.isfinite(result[c])] if result["status"] == "ok" else []
-            if bad:
-                # a successful row has no null: a non-finite metric is a failed run, not a number
-                result = _failed_row(name, int(sample["n_axles"]), f"non-finite result in {', '.join(bad)}")
-            out.append({**sample, "chassis_tilt_deg": tilt_deg, **result})
+                outcomes.append(weighing(bogie_, sample, name, spec))
+            samples.append(sample)
+    out = []
+    for sample, outcome, result in zip(samples, outcomes, result_rows(outcomes)):
+        # math.isfinite: np.isfinite's ufunc call on each of the ~40 numbers cost a tenth of a ms a row
+        bad = [c for c in _NUMBERS if not math.isfinite(result[c])] if result["status"] == "ok" else []
+        if bad:
+            # a successful row has no null: a non-finite metric is a failed run, not a number
+            failed = Outcome(outcome.protocol, outcome.n_axles, None, status="failed",
+                             message=f"non-finite result in {', '.join(bad)}")  # fmt: skip
+            result = result_rows([failed])[0]
+        out.append({**sample, **result})
     return out
 
 

@@ -1,13 +1,15 @@
-"""The weighing protocols on the full model: the flags a reading carries."""
+"""The weighing protocols on the full model: the flags a reading carries, and the result rows of a chunk."""
 
 import math
 from pathlib import Path
 
 import numpy as np
 
+from bogie import metrics
 from bogie.params import NO_STOP
 from pipeline.config import load_config
-from pipeline.protocol import weigh
+from pipeline.constants import MAX_AXLES
+from pipeline.protocol import Outcome, result_rows, weigh
 from pipeline.sample import bogie_from_sample, sample_fleet
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -107,3 +109,43 @@ def test_weighings_that_share_a_cached_road_give_what_a_fresh_road_gives():
         protocol.wim_phases(*args, specs["wim"])[0].road,
     ):
         assert not table.heights.flags.writeable
+
+
+def test_a_chunks_result_rows_are_each_weighings_own_metrics_bit_for_bit():
+    """result_rows computes a chunk's metrics in one numpy pass per group size: each row must hold what
+    bogie.metrics gives for that weighing alone, to the last bit, and the hand-worked values of a simple one."""
+    rng = np.random.default_rng(7)
+    outcomes = []
+    for k in range(40):
+        n = 2 + k % 2
+        loads = rng.uniform(2e4, 6e4, n)
+        if k == 5:
+            loads[1] = 0.0  # a wheel in the air over the sensor: a valid reading, flagged
+        outcomes.append(Outcome("wim" if k % 3 else "static", n, loads, 1e-3 * k, k % 7 == 0))
+    outcomes.insert(9, Outcome("static", 3, None, status="failed", message="no equilibrium"))
+    outcomes.append(Outcome("static", 3, np.array([1e4, 2e4, 3e4])))
+    rows = result_rows(outcomes)
+    assert len(rows) == len(outcomes)
+    for outcome, row in zip(outcomes, rows):
+        assert (row["protocol"], row["n_axles"], row["status"]) == (outcome.protocol, outcome.n_axles, outcome.status)
+        if outcome.wheel_loads is None:
+            assert row["message"] == "no equilibrium" and math.isnan(row["p"]) and row["over_10pct"] is None
+            continue
+        n, w = outcome.n_axles, 2.0 * outcome.wheel_loads
+        expected = {
+            "group_load": w.sum(), "p": metrics.p(w / w.mean()), "p1": metrics.p1(w / w.mean()),
+            "max_deviation": metrics.max_deviation(w), "spread": metrics.spread(w),
+            "road_wear_factor": metrics.road_wear_factor(w), "chassis_pitch": outcome.pitch,
+            **{f"axle_load_{i}": w[i] if i < n else 0.0 for i in range(MAX_AXLES)},
+            **{f"load_share_{i}": metrics.lsc(w)[i] if i < n else 0.0 for i in range(MAX_AXLES)},
+        }  # fmt: skip
+        for column, value in expected.items():
+            assert row[column] == float(value), column  # exact: the same arithmetic, row by row
+        assert row["wheel_airborne"] is bool(w.min() <= 0.0) and row["equaliser_on_stop"] is outcome.on_stop
+    # by hand: axle loads 20, 40, 60 kN (mean 40): max deviation 0.5, spread 40 kN, shares 0.5/1/1.5, p = sqrt(2)/2
+    last = rows[-1]
+    assert last["group_load"] == 1.2e5 and last["spread"] == 4e4 and last["max_deviation"] == 0.5
+    assert [last[f"load_share_{i}"] for i in range(3)] == [0.5, 1.0, 1.5]
+    assert math.isclose(last["p"], math.sqrt(0.5**2 + 0.5**2), rel_tol=1e-15)
+    assert last["outside_5pct"] is True and last["over_10pct"] is True and last["wheel_airborne"] is False
+    assert rows[5]["wheel_airborne"] is True and rows[5]["status"] == "ok"  # the failed row went in at 9, after it
