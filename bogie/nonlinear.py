@@ -14,6 +14,7 @@ load application, a crawl over a road, settling on a weighbridge, each starting 
 
 from __future__ import annotations
 
+import functools
 import math
 import threading
 from dataclasses import dataclass
@@ -268,42 +269,54 @@ def _packed_scalars(bogie: Bogie) -> dict[str, float]:
     }
 
 
-def _packed_arrays(bogie: Bogie) -> tuple[dict[str, NDArray[np.float64]], list[int]]:
-    """The arrays of ``data_f`` by name (:data:`bogie._nonlinear_core.ARRAYS`), SI, and the contacts' bodies."""
+def _packed_arrays(bogie: Bogie) -> tuple[dict[str, list[float]], list[int]]:
+    """The arrays of ``data_f`` by name (:data:`bogie._nonlinear_core.ARRAYS`), SI, and the contacts' bodies.
+
+    Element by element in Python floats (issue 15: numpy's calls on arrays of two or three entries cost more than
+    their arithmetic; the same IEEE operations in the same order give the same bits), numpy only for the chord
+    angles' arctan2, cos and sin.
+    """
     bodies, pad_x, pad_z, world_x, world_z, pivot_z = _contacts(bogie)
-    a_f = np.asarray(bogie.spring_front_half_length)
-    a_r = np.asarray(bogie.spring_rear_half_length)
-    x_a = np.asarray(bogie.axle_x)
-    wx, wz = np.asarray(world_x), np.asarray(world_z)
-    xf, xr, zf, zr = wx[0::2], wx[1::2], wz[0::2], wz[1::2]
+    a_f, a_r = bogie.spring_front_half_length, bogie.spring_rear_half_length
+    x_a = [float(x) for x in bogie.axle_x]
+    n = len(x_a)
+    rate = bogie.spring_length_rate
+    xf, xr, zf, zr = world_x[0::2], world_x[1::2], world_z[0::2], world_z[1::2]
     # the spring chords through the design contact points: height at the axle and angle (as its cosine and sine,
     # which the core turns the chord's unit vector back by)
-    w_front = (xr - x_a) / (xr - xf)
-    chord_angle = np.arctan2(-(zr - zf), xr - xf)
-    loads = np.asarray(design_spring_loads(bogie))
-    tyre_loads = loads + bogie.axle_mass * GRAVITY
+    w_front = [(xr[i] - x_a[i]) / (xr[i] - xf[i]) for i in range(n)]
+    chord_height = [w_front[i] * zf[i] + (1.0 - w_front[i]) * zr[i] for i in range(n)]
+    chord_angle = np.arctan2([-(zr[i] - zf[i]) for i in range(n)], [xr[i] - xf[i] for i in range(n)])
+    loads = list(design_spring_loads(bogie))
+    axle_weight = bogie.axle_mass * GRAVITY
     arrays = {
         "axle_x": x_a,
-        "elongation_front": bogie.spring_length_rate * a_f / (a_f + a_r),
-        "elongation_rear": bogie.spring_length_rate * a_r / (a_f + a_r),
+        "elongation_front": [rate * a_f[i] / (a_f[i] + a_r[i]) for i in range(n)],
+        "elongation_rear": [rate * a_r[i] / (a_f[i] + a_r[i]) for i in range(n)],
         "design_spring_load": loads,
-        "design_tyre_compression": tyre_loads / bogie.tyre_stiffness,
-        "tyre_wear": np.asarray(bogie.tyre_wear),
-        "design_chord_height": w_front * zf + (1.0 - w_front) * zr,
-        "design_chord_cos": np.cos(chord_angle),
-        "design_chord_sin": np.sin(chord_angle),
-        "pad_x": np.asarray(pad_x),
-        "pad_z": np.asarray(pad_z),
-        "design_contact_x": wx,
-        "pivot_x": np.asarray(bogie.equaliser_pivot_x, dtype=float),
-        "pivot_z": np.asarray(pivot_z, dtype=float),
+        "design_tyre_compression": [(load + axle_weight) / bogie.tyre_stiffness for load in loads],
+        "tyre_wear": [float(w) for w in bogie.tyre_wear],
+        "design_chord_height": chord_height,
+        "design_chord_cos": np.cos(chord_angle).tolist(),
+        "design_chord_sin": np.sin(chord_angle).tolist(),
+        "pad_x": pad_x,
+        "pad_z": pad_z,
+        "design_contact_x": world_x,
+        "pivot_x": [float(x) for x in bogie.equaliser_pivot_x],
+        "pivot_z": [float(z) for z in pivot_z],
         # radius rods: level in the design position, the line radius_rod_drop below each seat's chord height,
         # the anchor on the chassis ahead of the axle
-        "rod_anchor_x": np.asarray(bogie.radius_rod_anchor_x, dtype=float),
-        "rod_anchor_z": w_front * zf + (1.0 - w_front) * zr - bogie.radius_rod_drop,
-        "rod_length": np.asarray(bogie.radius_rod_lengths, dtype=float),
+        "rod_anchor_x": [float(x) for x in bogie.radius_rod_anchor_x],
+        "rod_anchor_z": [h - bogie.radius_rod_drop for h in chord_height],
+        "rod_length": [float(x) for x in bogie.radius_rod_lengths],
     }
     return arrays, bodies
+
+
+@functools.cache
+def _array_lengths(n: int) -> tuple[int, ...]:
+    """Each packed array's length for ``n`` axles (:func:`bogie._nonlinear_core.array_length`, a compiled call)."""
+    return tuple(core.array_length(k, n) for k in range(len(core.ARRAYS)))
 
 
 def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
@@ -311,17 +324,20 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
 
     The layout is the core's: its :data:`~bogie._nonlinear_core.SCALARS`, then its
     :data:`~bogie._nonlinear_core.ARRAYS`, each as long as :func:`~bogie._nonlinear_core.array_length` says.
+    The mass matrix is diagonal (the kernels use only its diagonal).
     """
     n = bogie.n_axles
     scalars = _packed_scalars(bogie)
     arrays, bodies = _packed_arrays(bogie)
-    for k, (name, _, _) in enumerate(core.ARRAYS):
-        if arrays[name].shape != (core.array_length(k, n),):
-            raise AssertionError(f"packed array {name} has shape {arrays[name].shape}: the core's layout differs")
-    data_f = np.concatenate([[scalars[k] for k in core.SCALARS]] + [arrays[name] for name, _, _ in core.ARRAYS])
+    values = [scalars[k] for k in core.SCALARS]
+    for (name, _, _), length in zip(core.ARRAYS, _array_lengths(n)):
+        if len(arrays[name]) != length:
+            raise AssertionError(f"packed array {name} has {len(arrays[name])} entries: the core's layout has {length}")
+        values += arrays[name]
+    data_f = np.array(values, dtype=float)
     data_i = np.asarray([n, *bodies], dtype=np.int64)
     mass = np.diag([bogie.chassis_pitch_inertia] + [bogie.equaliser_inertia] * (n - 1) + [bogie.axle_mass] * n)
-    return mass, data_f.astype(float), data_i
+    return mass, data_f, data_i
 
 
 #: the bogies :func:`_packed` packed last, by identity (a frozen Bogie's pack never changes), with their pack
@@ -383,12 +399,26 @@ def _check_limits(bogie: Bogie, u: NDArray[np.float64]) -> None:
             )
 
 
-def _tolerance(bogie: Bogie) -> NDArray[np.float64]:
-    """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]."""
-    w = float(np.mean(design_wheel_loads(bogie)))
-    arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
-    levers = [bogie.bogie_centre_x] + [arm] * (bogie.n_axles - 1) + [1.0] * bogie.n_axles
-    return 1e-5 * w * np.asarray(levers)
+def _mean(values: ArrayLike) -> float:
+    """``float(np.mean(values))`` of a few numbers, bit for bit (numpy's sum, then the division), at a quarter of
+    its cost: np.mean's dispatch cost more than its sum of two or three numbers (issue 15)."""
+    array = np.asarray(values, dtype=float)
+    return float(np.add.reduce(array)) / array.size
+
+
+def _levers(bogie: Bogie) -> NDArray[np.float64]:
+    """Each freedom's lever [m, -]: the bogie centre's distance behind the king pin for the chassis pitch, the mean
+    equaliser arm for an equaliser, 1 for an axle: a force of one wheel's size times the lever is each freedom's
+    scale of generalised force."""
+    arm = 0.5 * (_mean(bogie.equaliser_front_arm) + _mean(bogie.equaliser_rear_arm))
+    return np.asarray([bogie.bogie_centre_x] + [arm] * (bogie.n_axles - 1) + [1.0] * bogie.n_axles, dtype=float)
+
+
+def _tolerance(bogie: Bogie, levers: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+    """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]
+    (:func:`_levers`, given or computed)."""
+    w = _mean(design_wheel_loads(bogie))
+    return 1e-5 * w * (_levers(bogie) if levers is None else levers)
 
 
 def _history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]:

@@ -256,19 +256,15 @@ def _constants(bogie: Bogie) -> _Constants:
     hit = _CONSTANTS.get(id(bogie))
     if hit is not None and hit[0] is bogie:
         return hit[1]
-    mass, data_f, data_i = nl.pack(bogie)
-    if np.any(mass != np.diag(np.diag(mass))):
-        # the kernel uses only the diagonal (in the residual, the iteration matrix and the consistent accelerations)
-        raise AssertionError("the packed mass matrix is not diagonal: bogie._phases_core assumes it is")
-    n = bogie.n_axles
-    arm = 0.5 * (np.mean(bogie.equaliser_front_arm) + np.mean(bogie.equaliser_rear_arm))
+    mass, data_f, data_i = nl.pack(bogie)  # its mass matrix is diagonal: the kernel uses only the diagonal
+    levers = nl._levers(bogie)
     constants = _Constants(
         mass=mass,
         data_f=data_f,
         data_i=data_i,
         offsets=np.asarray(bogie.axle_x, dtype=float) - bogie.axle_x[0],
-        levers=np.asarray([bogie.bogie_centre_x] + [arm] * (n - 1) + [1.0] * n, dtype=float),
-        r_tol=nl._tolerance(bogie),
+        levers=levers,
+        r_tol=nl._tolerance(bogie, levers),
         u_limit=nl.limits(bogie),
         kingpin=float(bogie.kingpin_height_offset),
     )
