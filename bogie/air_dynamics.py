@@ -13,7 +13,6 @@ from dataclasses import dataclass
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.integrate import solve_ivp
 
 from bogie import _air_core, air, air_static
 from bogie.nonlinear import Inputs
@@ -272,6 +271,8 @@ def simulate(
         [1e-9], np.full(n, 1e-9), [1e-8], np.full(n, 1e-8), np.full(n, 1e-10 * bogie.design_gas_mass),
         np.full(len(WORK_TERMS), 1e-9 * w_d),
     ])  # fmt: skip
+    from scipy.integrate import solve_ivp  # here: the default RK4 does not need it, and it takes 0.2 s to import
+
     t = inputs.t
     try:
         sol = solve_ivp(

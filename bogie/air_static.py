@@ -12,7 +12,6 @@ from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
-from scipy.optimize import root
 
 from bogie import air
 from bogie.params import GRAVITY, _check_scalar
@@ -106,6 +105,8 @@ def equilibrium(
     r = np.zeros(n) if road is None else np.asarray(road, dtype=float).reshape(n)
     rise = bogie.kingpin_height_offset + float(kingpin_rise)
     y0 = np.concatenate([[rise / bogie.bogie_centre_x], r - np.asarray(bogie.tyre_wear), np.ones(n) * load_factor])
+    from scipy.optimize import root  # here: 0.2 s to import, which a steel group's weighings need not pay
+
     sol = root(_static_residual, y0, args=(bogie, load_factor, rise, r, gas_mass), method="hybr", tol=1e-13)
     residual = np.max(np.abs(_static_residual(sol.x, bogie, load_factor, rise, r, gas_mass)))
     if residual > 1e-9:

@@ -18,7 +18,6 @@ from typing import Any, ClassVar
 
 import numpy as np
 from scipy.special import ndtri
-from scipy.stats import truncnorm
 
 #: an unbounded inverse CDF is infinite at u = 0; a design point there is read as this tail probability instead
 #: (about 8.2 standard deviations), which no finite design of fewer than 2^53 points can resolve anyway
@@ -56,6 +55,14 @@ def _ordered(low: float, high: float) -> None:
     _finite("high", high)
     if not low < high:
         raise ParameterError("high", high, f"must be greater than low = {low!r}")
+
+
+def _truncnorm() -> Any:
+    """scipy.stats' truncated normal, imported when first needed: scipy.stats takes half a second to import, and
+    the simulate stage's workers import this module (through the configuration) without drawing a sample."""
+    from scipy.stats import truncnorm
+
+    return truncnorm
 
 
 def _unit_points(u: Any) -> np.ndarray:
@@ -212,7 +219,7 @@ class TruncNormal(Distribution):
     def ppf(self, u: Any) -> np.ndarray:
         u = _unit_points(u)
         a, b = (self.low - self.mean) / self.sd, (self.high - self.mean) / self.sd
-        x = truncnorm.ppf(u, a, b, loc=self.mean, scale=self.sd)
+        x = _truncnorm().ppf(u, a, b, loc=self.mean, scale=self.sd)
         # the standardised bounds round-trip to low/high only to an ulp; a physical limit must hold exactly
         return np.clip(x, self.low, self.high)
 
@@ -264,7 +271,7 @@ class LogNormal(Distribution):
         u = _unit_points(u)
         if self._truncated:
             a, b = self._standard_bounds()
-            z = truncnorm.ppf(np.clip(u, _U_TINY, 1.0 - _U_TINY), a, b)
+            z = _truncnorm().ppf(np.clip(u, _U_TINY, 1.0 - _U_TINY), a, b)
         else:
             z = ndtri(np.clip(u, _U_TINY, 1.0 - _U_TINY))
         return np.clip(self.median * np.exp(self.sigma * z), self.low, self.high)

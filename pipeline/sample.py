@@ -23,8 +23,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import yaml
-from SALib.sample import sobol
-from scipy.stats import qmc
 
 from bogie import air
 from bogie.air import AirBogie
@@ -263,6 +261,9 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
 # ---- studies ---------------------------------------------------------------------------------------------------
 def _unit_design(n: int, d: int, method: str, seed: int) -> np.ndarray:
     """``n`` points of a seeded, scrambled design of the d-dimensional unit hypercube [0, 1)^d."""
+    from scipy.stats import qmc  # here: scipy.stats takes half a second to import, and the simulate stage's workers
+    # import this module for bogie_from_sample only
+
     rng = np.random.default_rng(seed)
     if method == "lhs":
         return qmc.LatinHypercube(d, rng=rng).random(n)
@@ -393,6 +394,8 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
         Rows in SALib's order (``sample_id``), the columns of :data:`COLUMNS`, SI; ``base_id`` is the Saltelli
         base row a row belongs to.
     """
+    from SALib.sample import sobol  # here, as scipy.stats in _unit_design
+
     sens = config.sensitivity
     problem = sensitivity_problem(config)
     u = sobol.sample(
