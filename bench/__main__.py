@@ -9,6 +9,7 @@ import time
 BENCHMARKS = (
     "bench.bench_linear",
     "bench.bench_nonlinear",
+    "bench.bench_single_run",
     "bench.bench_pipeline",
     "bench.bench_protocol",
     "bench.bench_stage",
