@@ -14,6 +14,10 @@ times :data:`REPEATS` runs. Printed: each round's median per kind, the median of
 step, the ratio host / pinned, whether the two builds give the same wheel loads (bit for bit) and the 10 ms verdict,
 with the load average at the start and the end. ``bench_nonlinear`` times the same run in its own (unpinned)
 process beside ``simulate`` and the solve_ivp peer.
+
+``--reference REV`` adds a third kind, ``reference``: the commit REV's code (extracted as :mod:`bench.bench_protocol`
+does), pinned, in the same alternation: the speed-up of this tree's kernel over REV's, and whether their wheel loads
+are the same bits.
 """
 
 from __future__ import annotations
@@ -26,6 +30,9 @@ import subprocess
 import sys
 from pathlib import Path
 
+from bench.bench_nonlinear import DT, DURATION, ROAD, SPEED
+from bench.bench_protocol import reference_tree, tree_env
+
 ROOT = Path(__file__).resolve().parent.parent
 #: timed runs per child process [-]
 REPEATS = 25
@@ -36,14 +43,13 @@ TARGET = 0.010
 
 CHILD = """
 import sys, time, json
-if sys.argv[1] == "pinned":
-    import pipeline  # noqa: F401 - first: pins numpy's and numba's instruction sets, as a stage does
 import numba
 import numpy as np
-from bench.bench_nonlinear import DT, DURATION, ROAD, SPEED
 from bogie import phases
 from bogie.params import triaxle_stage1
 from bogie.road import ISO8608Profile
+SPEED, DURATION, DT = float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])
+ROAD = json.loads(sys.argv[6])
 bogie = triaxle_stage1()
 profile = ISO8608Profile(**ROAD)
 table = phases.RoadTable.from_profile(
@@ -65,32 +71,45 @@ print(json.dumps({"times": times, "cpu": cpu, "steps": len(first.t) - 1,
 """
 
 
-def child(kind: str, repeats: int) -> dict:
-    """One child process of ``kind`` (``pinned`` or ``host``): its run times [s], numba's CPU and the loads."""
+def child(kind: str, repeats: int, tree: Path = ROOT) -> dict:
+    """One child process of ``kind`` importing ``tree``'s code: its run times [s], numba's CPU and the loads.
+
+    ``host``: the pinning variables removed from its environment; any other kind: set as this process set them
+    (:mod:`pipeline.portable`, which :mod:`pipeline` ran on import), whatever the tree's own code does.
+    """
+    import pipeline  # noqa: F401 - pins this process's environment, which the pinned children inherit
     from pipeline.portable import PINNED
 
-    env = {k: v for k, v in os.environ.items() if k not in PINNED}
-    env["PYTHONPATH"] = str(ROOT)
-    done = subprocess.run([sys.executable, "-c", CHILD, kind, str(repeats)], cwd=ROOT, env=env, check=True,
+    env = tree_env(tree)
+    if kind == "host":
+        env = {k: v for k, v in env.items() if k not in PINNED}
+    arguments = [str(repeats), str(SPEED), str(DURATION), str(DT), json.dumps(ROAD)]
+    done = subprocess.run([sys.executable, "-c", CHILD, kind, *arguments], cwd=tree, env=env, check=True,
                           capture_output=True, text=True)  # fmt: skip
     return json.loads(done.stdout.strip().splitlines()[-1])
 
 
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m bench.bench_single_run", description=__doc__.splitlines()[0])
-    parser.add_argument("--rounds", type=int, default=ROUNDS, help=f"rounds of both kinds (default {ROUNDS})")
+    parser.add_argument("--rounds", type=int, default=ROUNDS, help=f"rounds of every kind (default {ROUNDS})")
+    parser.add_argument("--reference", default=None, help="also time this commit's code, pinned (default: none)")
     args = parser.parse_args(argv)
     if args.rounds < 1:
         raise SystemExit(f"--rounds = {args.rounds} is out of range: must be an integer >= 1")
+    trees = {"pinned": ROOT, "host": ROOT}
+    if args.reference is not None:
+        sha, trees["reference"] = reference_tree(args.reference)
+        print(f"reference {args.reference} = {sha[:10]} ({trees['reference']})")
     load_start = os.getloadavg()
-    for kind in ("pinned", "host"):  # untimed: loads or compiles each build's kernels
-        child(kind, 1)
-    results: dict[str, list[dict]] = {"pinned": [], "host": []}
+    for kind, tree in trees.items():  # untimed: loads or compiles each build's kernels
+        child(kind, 1, tree)
+    results: dict[str, list[dict]] = {kind: [] for kind in trees}
     for r in range(args.rounds):
-        for kind in ("pinned", "host") if r % 2 == 0 else ("host", "pinned"):
-            out = child(kind, REPEATS)
+        order = list(trees) if r % 2 == 0 else list(reversed(trees))
+        for kind in order:
+            out = child(kind, REPEATS, trees[kind])
             results[kind].append(out)
-            print(f"  round {r + 1} {kind:6s} ({out['cpu']}): median {statistics.median(out['times']) * 1e3:5.2f} ms, "
+            print(f"  round {r + 1} {kind:9s} ({out['cpu']}): median {statistics.median(out['times']) * 1e3:5.2f} ms, "
                   f"least {min(out['times']) * 1e3:5.2f} ms", flush=True)  # fmt: skip
     load_end = os.getloadavg()
     medians = {}
@@ -99,12 +118,13 @@ def main(argv: list[str] | None = None) -> None:
         steps = outs[0]["steps"]
         medians[kind] = statistics.median(times)
         verdict = "met" if medians[kind] <= TARGET else "NOT met"
-        print(f"{kind:6s} ({outs[0]['cpu']}): median {medians[kind] * 1e3:5.2f} ms, least {min(times) * 1e3:5.2f} ms "
+        print(f"{kind:9s} ({outs[0]['cpu']}): median {medians[kind] * 1e3:5.2f} ms, least {min(times) * 1e3:5.2f} ms "
               f"over {len(times)} runs; {medians[kind] / steps * 1e6:.3f} us a step ({steps} steps); "
               f"target <= {TARGET * 1e3:g} ms: {verdict}")  # fmt: skip
-    same = results["pinned"][0]["loads"] == results["host"][0]["loads"]
-    print(f"host / pinned: {medians['host'] / medians['pinned']:.2f} x; wheel loads at every step "
-          f"{'identical' if same else 'DIFFERENT'} between the builds")  # fmt: skip
+    for other in [k for k in results if k != "pinned"]:
+        same = results["pinned"][0]["loads"] == results[other][0]["loads"]
+        print(f"{other} / pinned: {medians[other] / medians['pinned']:.3f} x; wheel loads at every step "
+              f"{'identical' if same else 'DIFFERENT'}")  # fmt: skip
     print(f"load average (1, 5, 15 min): start {', '.join(f'{x:.2f}' for x in load_start)}; end "
           f"{', '.join(f'{x:.2f}' for x in load_end)}  ({os.cpu_count()} cores)")  # fmt: skip
 

@@ -432,6 +432,21 @@ def _stop_in_window(phase, n, t, h, rec):
 
 
 @njit(cache=True, inline="always")
+def _reads_at(phase, t1, margin, tracing):
+    """Whether the accepted step ending at ``t1`` [s] must take the readings (tyre loads and stop moments): while a
+    trace is kept, and from ``margin`` [s] (at least the next step's length) before the reading's window to a step
+    past its end. Elsewhere nothing reads them: a step's reading needs the loads at its start and end only where
+    it overlaps the window (:func:`_read_step`), the stop flag only near it (:func:`_stop_in_window`), and each
+    phase takes its first loads from the force at its start (:func:`run_phases`). Skipping them outside is the same
+    result, bit for bit, at a twentieth less per step (issue 15)."""
+    if tracing:
+        return True
+    if int(phase[P_READING]) == READING_NONE:
+        return False
+    return phase[P_WINDOW_START] - margin <= t1 <= phase[P_WINDOW_END] + margin
+
+
+@njit(cache=True, inline="always")
 def _trace(trace, count, t, n_axles, rec, u):
     """Row ``count[0]`` of ``trace`` = [time [s], tyre loads [N], chassis pitch [rad]] while it has room."""
     k = int(count[0])
@@ -488,6 +503,7 @@ def _phase_loop(
         for i in range(n):
             err_scale[i] = abs(beta - 1.0 / 6.0) * levers[i] / phase[P_TOL]
     on_stop = False
+    tracing = trace.shape[0] > 0
     for i in range(acc.shape[0]):
         acc[i] = 0.0
     for i in range(n_axles):
@@ -535,11 +551,12 @@ def _phase_loop(
                 if status != STATUS_OK:
                     stats[S_END] = step * h
                     return status, step * h, rnorm, on_stop
-            nlc.readings(u, v, drv, data_f, n_axles, rec)
-            _read_step(phase, n_axles, offsets, step * h, t1, loads0, rec, acc)
-            on_stop = on_stop or _stop_in_window(phase, n_axles, t1, h, rec)
-            for i in range(n_axles):
-                loads0[i] = rec[i]
+            if _reads_at(phase, t1, 2.0 * h, tracing):
+                nlc.readings(u, v, drv, data_f, n_axles, rec)
+                _read_step(phase, n_axles, offsets, step * h, t1, loads0, rec, acc)
+                on_stop = on_stop or _stop_in_window(phase, n_axles, t1, h, rec)
+                for i in range(n_axles):
+                    loads0[i] = rec[i]
             stats[S_STEPS] += 1.0
             _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
         stats[S_END] = n_steps * h
@@ -608,11 +625,13 @@ def _phase_loop(
             continue
         _keep_correction(corr, u_new, jst, hh)
         _commit(u, v, a, f_old, hist, trial)
-        nlc.readings(u, v, drv, data_f, n_axles, rec)
-        _read_step(phase, n_axles, offsets, t, t1, loads0, rec, acc)
-        on_stop = on_stop or _stop_in_window(phase, n_axles, t1, hh, rec)
-        for i in range(n_axles):
-            loads0[i] = rec[i]
+        # the next step is at most max_step long (and ends on the window's start where it reaches it)
+        if _reads_at(phase, t1, max(2.0 * hh, max_step), tracing):
+            nlc.readings(u, v, drv, data_f, n_axles, rec)
+            _read_step(phase, n_axles, offsets, t, t1, loads0, rec, acc)
+            on_stop = on_stop or _stop_in_window(phase, n_axles, t1, hh, rec)
+            for i in range(n_axles):
+                loads0[i] = rec[i]
         stats[S_STEPS] += 1.0
         _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
         t = t1
