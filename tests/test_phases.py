@@ -101,6 +101,35 @@ def test_a_sensor_reads_the_patch_weighted_mean_of_the_history(bogie):
     assert np.max(np.abs(np.subtract(expected, at_centre))) > 10.0
 
 
+def test_readings_taken_only_near_their_window_are_the_bits_of_readings_taken_at_every_step(bogie, road):
+    # without a history the kernel takes the tyre loads and stop moments only from a margin before a reading's window
+    # to a step past it; with one, at every step. Both must give the same readings, flags and states, bit for bit:
+    # fixed steps with a sensor mid-pass, adaptive steps with a mean reading after a crawl, and adaptive steps with a
+    # sensor (its window is no step boundary: the margin is the phase's largest step)
+    speed = 15.0
+    half, flat = 0.35 / speed, 0.15 / speed
+    cases = [
+        [ph.Phase(2.5, 1.0, road=road, speed=speed, dt=1e-3, reading=ph.SensorReading(1.2, half, flat))],
+        [
+            ph.Phase(1.0, (0.4, 1.0), dt=1e-3, tolerance=1e-7),
+            ph.Phase(3.0, 1.0, road=road, speed=1.4, front_axle_start=0.0, dt=1e-3, tolerance=3e-7),
+            ph.Phase(1.5, 1.0, dt=1e-3, tolerance=1e-7, reading=ph.MeanReading(1.0, 1.5)),
+        ],
+        [ph.Phase(2.5, 1.0, road=road, speed=speed, dt=1e-3, tolerance=3e-7, max_step=0.01,
+                  reading=ph.SensorReading(1.2, half, flat))],
+    ]  # fmt: skip
+    for phases in cases:
+        quick, traced = ph.run(bogie, phases), ph.run(bogie, phases, history=True)
+        assert quick.success and traced.success
+        for a, b in zip(quick.phases, traced.phases):
+            assert (a.reading is None) == (b.reading is None)
+            if a.reading is not None:
+                assert a.reading.tobytes() == b.reading.tobytes(), a.name
+            assert (a.on_stop, a.steps, a.rejected) == (b.on_stop, b.steps, b.rejected)
+        assert quick.final_state.u.tobytes() == traced.final_state.u.tobytes()
+        assert np.all(np.isfinite(quick.phases[-1].reading)) and np.min(quick.phases[-1].reading) > 1e4
+
+
 def test_results_are_a_pure_function_of_the_inputs(bogie, road):
     phases = [
         ph.Phase(2.0, (0.3, 0.9), dt=1e-3, tolerance=1e-7),
