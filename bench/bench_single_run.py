@@ -30,8 +30,10 @@ import subprocess
 import sys
 from pathlib import Path
 
+import pipeline  # noqa: F401 - first: pins this process's environment, which the pinned children inherit
 from bench.bench_nonlinear import DT, DURATION, ROAD, SPEED
 from bench.bench_protocol import reference_tree, tree_env
+from pipeline.portable import PINNED
 
 ROOT = Path(__file__).resolve().parent.parent
 #: timed runs per child process [-]
@@ -44,7 +46,6 @@ TARGET = 0.010
 CHILD = """
 import sys, time, json
 import numba
-import numpy as np
 from bogie import phases
 from bogie.params import triaxle_stage1
 from bogie.road import ISO8608Profile
@@ -77,9 +78,6 @@ def child(kind: str, repeats: int, tree: Path = ROOT) -> dict:
     ``host``: the pinning variables removed from its environment; any other kind: set as this process set them
     (:mod:`pipeline.portable`, which :mod:`pipeline` ran on import), whatever the tree's own code does.
     """
-    import pipeline  # noqa: F401 - pins this process's environment, which the pinned children inherit
-    from pipeline.portable import PINNED
-
     env = tree_env(tree)
     if kind == "host":
         env = {k: v for k, v in env.items() if k not in PINNED}

@@ -39,7 +39,7 @@ from bogie.params import GRAVITY, Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
-from pipeline.schema import RESULT_COLUMNS
+from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS
 
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
@@ -409,6 +409,7 @@ def result_row(
     (the tyres are unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping
     it; the row stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
     ``equaliser_on_stop``: an equaliser bears on its bump stop while the protocol reads (a valid reading).
+    The row also has ``status`` and ``message``, "ok" both (:func:`result_rows` of one :class:`Outcome`).
     """
     return result_rows([Outcome(protocol, int(n_axles), wheel_loads, pitch, on_stop)])[0]
 
@@ -475,10 +476,7 @@ def result_rows(outcomes: Sequence[Outcome]) -> list[dict[str, Any]]:
 
 
 #: a failed weighing's results: NaN for the numbers, None for the flags
-_NULL_RESULTS: dict[str, Any] = {
-    **dict.fromkeys(RESULT_COLUMNS, math.nan),
-    **dict.fromkeys(("outside_5pct", "over_10pct", "wheel_airborne", "equaliser_on_stop"), None),
-}
+_NULL_RESULTS: dict[str, Any] = {c: None if RUN_COLUMNS[c] == "boolean" else math.nan for c in RESULT_COLUMNS}
 
 
 def weighing(
