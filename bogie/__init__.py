@@ -32,6 +32,11 @@ def _set_numba_cache_dir() -> None:
 
 _set_numba_cache_dir()
 
+# before any kernel is compiled or loaded: the same compiled arithmetic on every x86-64-v3 machine (bogie/numerics.py)
+from bogie.numerics import fix_compile_target as _fix_compile_target  # noqa: E402
+
+_fix_compile_target()
+
 from bogie.params import INHIBITORS, Bogie, preset, tandem_trrl, triaxle_stage1  # noqa: E402
 
 __all__ = ["INHIBITORS", "Bogie", "preset", "tandem_trrl", "triaxle_stage1"]

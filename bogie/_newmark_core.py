@@ -391,7 +391,15 @@ def _integrate_linear_kernel(mass, damping, stiffness, loads, u0, v0, a0, dt, n_
     u = u0.copy()
     v = v0.copy()
     a = a0.copy()
-    f_old = stiffness @ u + damping @ v - loads[0]
+    # the sums in index order (numba's @ is BLAS's dgemv, whose kernel OpenBLAS picks by the CPU)
+    f_old = np.zeros(n)
+    for i in range(n):
+        ku = 0.0
+        cv = 0.0
+        for j in range(n):
+            ku += stiffness[i, j] * u[j]
+            cv += damping[i, j] * v[j]
+        f_old[i] = ku + cv - loads[0, i]
     u_new = np.zeros(n)
     v_new = np.zeros(n)
     a_new = np.zeros(n)

@@ -20,6 +20,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import numerics
 from bogie.params import GRAVITY, AxleGroup, FieldRange, _check_scalar, _check_vector, tandem_trrl, triaxle_stage1
 
 GAS_CONSTANT_AIR = 287.05
@@ -194,25 +195,25 @@ def bag_volume(bogie: AirBogie, extension: ArrayLike) -> NDArray[np.float64]:
 
 def absolute_pressure(bogie: AirBogie, gas_mass: ArrayLike, volume: ArrayLike) -> NDArray[np.float64]:
     """p = K (m / V)^n [Pa]."""
-    return bogie.gas_constant * (np.asarray(gas_mass, dtype=float) / np.asarray(volume, dtype=float)) ** (
-        bogie.polytropic_index
+    return bogie.gas_constant * numerics.power(
+        np.asarray(gas_mass, dtype=float) / np.asarray(volume, dtype=float), bogie.polytropic_index
     )
 
 
 def specific_enthalpy(bogie: AirBogie, pressure: ArrayLike) -> NDArray[np.float64]:
     """eta(p) = n p / ((n - 1) rho) of the barotropic gas, K (ln rho + 1) for n = 1 [J/kg]."""
     n, k = bogie.polytropic_index, bogie.gas_constant
-    rho = (np.asarray(pressure, dtype=float) / k) ** (1.0 / n)
+    rho = numerics.power(np.asarray(pressure, dtype=float) / k, 1.0 / n)
     if n == 1.0:
-        return k * (np.log(rho) + 1.0)
-    return n * k * rho ** (n - 1.0) / (n - 1.0)
+        return k * (numerics.log(rho) + 1.0)
+    return n * k * numerics.power(rho, n - 1.0) / (n - 1.0)
 
 
 def gas_internal_energy(bogie: AirBogie, gas_mass: NDArray[np.float64], volume: NDArray[np.float64]) -> float:
     """Internal energy of the bags' air, sum m epsilon(m / V) [J]."""
     n, k = bogie.polytropic_index, bogie.gas_constant
     rho = gas_mass / volume
-    eps = k * np.log(rho) if n == 1.0 else k * rho ** (n - 1.0) / (n - 1.0)
+    eps = k * numerics.log(rho) if n == 1.0 else k * numerics.power(rho, n - 1.0) / (n - 1.0)
     return float(np.sum(gas_mass * eps))
 
 

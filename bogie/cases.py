@@ -19,7 +19,7 @@ from typing import Any
 
 import numpy as np
 
-from bogie import linear, metrics, nonlinear
+from bogie import linear, metrics, nonlinear, numerics
 from bogie.params import TARE_FRACTION, Bogie, design_spring_loads, tandem_trrl, with_equaliser_arms
 from bogie.results import DynamicResult
 from bogie.road import ISO8608Profile, RampedStep
@@ -109,7 +109,9 @@ def _static_history(load_factors: np.ndarray) -> Callable[[Bogie], DynamicResult
 
 
 _APPLY = np.concatenate([np.linspace(TARE_FRACTION, 1.0, 41), np.linspace(1.0, TARE_FRACTION, 41)[1:]])
-_SINE = np.concatenate([np.linspace(TARE_FRACTION, 1.0, 41), 0.8 + 0.2 * np.cos(np.linspace(0.0, 4.0 * np.pi, 81))[1:]])
+_SINE = np.concatenate(
+    [np.linspace(TARE_FRACTION, 1.0, 41), 0.8 + 0.2 * numerics.cos(np.linspace(0.0, 4.0 * np.pi, 81))[1:]]
+)
 
 
 def _road_run(speed: float) -> Callable[[Bogie], DynamicResult]:

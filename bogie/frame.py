@@ -22,8 +22,10 @@ from dataclasses import dataclass, field
 import numpy as np
 import scipy.sparse as sp
 import scipy.sparse.csgraph as csgraph
-import scipy.sparse.linalg as spla
 from numpy.typing import NDArray
+
+from bogie import numerics
+from bogie._lu import lu_factor, lu_solve
 
 DOF_NAMES = ("u", "w", "theta")
 #: smallest pivot of the Jacobi-scaled stiffness (unit diagonal) accepted as non-singular [-]
@@ -88,7 +90,7 @@ def beam_local_stiffness(
         kept = [c for c in range(6) if c not in released]
         k_rr = k[np.ix_(released, released)]
         k_kr = k[np.ix_(kept, released)]
-        condensed = k[np.ix_(kept, kept)] - k_kr @ np.linalg.solve(k_rr, k_kr.T)
+        condensed = k[np.ix_(kept, kept)] - numerics.matmul(k_kr, numerics.solve(k_rr, k_kr.T))
         k = np.zeros((6, 6))
         k[np.ix_(kept, kept)] = condensed
     return k
@@ -217,8 +219,8 @@ class FrameModel:
             raise ValueError(f"beam from node {self.node_names[i]!r} to {self.node_names[j]!r} has zero length (m)")
         k_local = beam_local_stiffness(ea, ei, length, release_i, release_j)
         t = _rotation((xj - xi) / length, (zj - zi) / length)
-        recover = k_local @ t
-        return self._add(name, _Element("beam", (i, j), t.T @ recover, recover))
+        recover = numerics.matmul(k_local, t)
+        return self._add(name, _Element("beam", (i, j), numerics.matmul(t.T, recover), recover))
 
     def add_spring(
         self, i: int, j: int, stiffness: float, direction: Sequence[float] | None = None, name: str | None = None
@@ -361,7 +363,7 @@ class FrameModel:
         forces = {}
         for name, el in self.elements.items():
             idx = np.concatenate([np.arange(3 * n, 3 * n + 3) for n in el.nodes])
-            forces[name] = el.recover @ u_exp[idx]
+            forces[name] = numerics.matmul(el.recover, u_exp[idx])
         return FrameSolution(
             displacements=u_exp.reshape(-1, 3),
             reactions=reactions.reshape(-1, 3),
@@ -378,15 +380,17 @@ class FrameModel:
         # Jacobi scaling puts translations and rotations on one footing for the singularity test
         scale = 1.0 / np.sqrt(diag)
         k_scaled = sp.diags(scale) @ k_ff @ sp.diags(scale)
-        try:
-            lu = spla.splu(sp.csc_matrix(k_scaled))
-            pivots = np.abs(lu.U.diagonal())
-            singular = bool(np.min(pivots) < _PIVOT_TOL)
-        except RuntimeError:
-            singular = True
+        # dense LU with partial pivoting in compiled code (bogie._lu), every sum in index order: SuperLU's dense
+        # blocks go through BLAS, whose kernel, and so the last bits, OpenBLAS picks by the CPU (bogie/numerics.py).
+        # The models have tens to a few hundred free DOFs, where this costs milliseconds.
+        lu = np.ascontiguousarray(k_scaled.toarray())
+        piv = np.zeros(lu.shape[0], dtype=np.int64)
+        singular = not lu_factor(lu, piv) or bool(np.min(np.abs(np.diagonal(lu))) < _PIVOT_TOL)
         if singular:
             self._raise_mechanism(None, free, numbering, k_scaled)
-        return scale * lu.solve(scale * rhs)
+        x = np.ascontiguousarray(scale * rhs, dtype=float)
+        lu_solve(lu, piv, x)
+        return scale * x
 
     def _raise_mechanism(
         self,

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
+from bogie import numerics
 from bogie.newmark import consistent_acceleration, linear_steps
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
@@ -166,7 +167,7 @@ def wheel_loads_from_state(
 def static_state(bogie: Bogie, mats: LinearMatrices | None = None) -> NDArray[np.float64]:
     """Static equilibrium on a level road with the chassis tilt, from the design position [m, rad]."""
     mats = matrices(bogie) if mats is None else mats
-    return np.linalg.solve(mats.K, mats.kingpin * bogie.kingpin_height_offset)
+    return numerics.solve(mats.K, mats.kingpin * bogie.kingpin_height_offset)
 
 
 def design_deflection(bogie: Bogie, mats: LinearMatrices | None = None) -> float:
@@ -222,9 +223,9 @@ def simulate(
     rates = np.gradient(heights, t, axis=0) if len(t) > 1 else np.zeros_like(heights)
     loads = _loads(bogie, mats, heights, rates)
     # start at rest in equilibrium with the road under the wheels at t = 0
-    u0 = np.linalg.solve(mats.K, loads[0] - mats.C @ np.zeros(len(mats.dofs)))
+    u0 = numerics.solve(mats.K, loads[0])  # at rest: no damping force
     v0 = np.zeros_like(u0)
-    a0 = consistent_acceleration(mats.M, mats.K @ u0 - loads[0])
+    a0 = consistent_acceleration(mats.M, numerics.matmul(mats.K, u0) - loads[0])
     u, v, _ = linear_steps(mats.M, mats.C, mats.K, loads, u0, v0, a0, dt, n_steps, beta, gamma, rho_inf)
     wheel = wheel_loads_from_state(bogie, mats, u, v, rates)
     return DynamicResult(
@@ -243,8 +244,8 @@ def _loads(
     """Load history R(t) [N, N m] of the king pin rise and the road heights [m] and rates [m/s] under the axles."""
     return (
         (mats.kingpin * bogie.kingpin_height_offset)[None, :]
-        + heights @ mats.road_stiffness.T
-        + rates @ mats.road_damping.T
+        + numerics.matmul(heights, mats.road_stiffness.T)
+        + numerics.matmul(rates, mats.road_damping.T)
     )
 
 

@@ -32,6 +32,7 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import numerics
 from bogie._lu import lu_factor, lu_solve
 from bogie._newmark_core import (
     MODEL_LINEAR,
@@ -262,7 +263,7 @@ def consistent_acceleration(
     a0 = np.zeros(mass.shape[0])
     m = ~massless
     if np.any(m):
-        a0[m] = np.linalg.solve(mass[np.ix_(m, m)], -force[m])
+        a0[m] = numerics.solve(mass[np.ix_(m, m)], -force[m])
     return a0
 
 
@@ -324,7 +325,7 @@ def integrate_linear(
     loads = _load_history(R, t, n)
     u_init = np.array(u0, dtype=float).reshape(n)
     v_init = np.array(v0, dtype=float).reshape(n)
-    f0 = stiffness @ u_init + damping @ v_init - loads[0]
+    f0 = numerics.matmul(stiffness, u_init) + numerics.matmul(damping, v_init) - loads[0]
     a_init = consistent_acceleration(mass, f0)
     return linear_steps(mass, damping, stiffness, loads, u_init, v_init, a_init, dt, n_steps, beta, gamma, rho_inf)
 

@@ -23,6 +23,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import _nonlinear_core as core
+from bogie import numerics
 from bogie._lu import lu_factor, lu_solve
 from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.params import GRAVITY, Bogie, design_spring_loads
@@ -159,7 +160,7 @@ def load_ramp(bogie: Bogie, start: float, end: float, duration: float, dt: float
     """
     n_steps = _steps(duration, dt)
     s = np.linspace(0.0, 1.0, n_steps + 1)
-    factor = start + (end - start) * 0.5 * (1.0 - np.cos(np.pi * s))
+    factor = start + (end - start) * 0.5 * (1.0 - numerics.cos(np.pi * s))
     zeros = np.zeros((n_steps + 1, bogie.n_axles))
     return Inputs(dt, zeros, zeros.copy(), factor, np.zeros(n_steps + 1))
 
@@ -286,7 +287,7 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, list[float]], list[int]]:
     # which the core turns the chord's unit vector back by)
     w_front = [(xr[i] - x_a[i]) / (xr[i] - xf[i]) for i in range(n)]
     chord_height = [w_front[i] * zf[i] + (1.0 - w_front[i]) * zr[i] for i in range(n)]
-    chord_angle = np.arctan2([-(zr[i] - zf[i]) for i in range(n)], [xr[i] - xf[i] for i in range(n)])
+    chord_angle = [math.atan2(-(zr[i] - zf[i]), xr[i] - xf[i]) for i in range(n)]
     loads = list(design_spring_loads(bogie))
     axle_weight = bogie.axle_mass * GRAVITY
     arrays = {
@@ -297,8 +298,8 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, list[float]], list[int]]:
         "design_tyre_compression": [(load + axle_weight) / bogie.tyre_stiffness for load in loads],
         "tyre_wear": [float(w) for w in bogie.tyre_wear],
         "design_chord_height": chord_height,
-        "design_chord_cos": np.cos(chord_angle).tolist(),
-        "design_chord_sin": np.sin(chord_angle).tolist(),
+        "design_chord_cos": [math.cos(angle) for angle in chord_angle],
+        "design_chord_sin": [math.sin(angle) for angle in chord_angle],
         "pad_x": pad_x,
         "pad_z": pad_z,
         "design_contact_x": world_x,
@@ -434,6 +435,12 @@ def _history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]
 
 
 # ---- static equilibrium ----------------------------------------------------------------------------------------
+def _norm(x: NDArray[np.float64]) -> float:
+    """The Euclidean norm with its sum in numpy's fixed (pairwise) order: ``numpy.linalg.norm`` takes it from BLAS,
+    whose kernel, and so the last bit, OpenBLAS chooses by the CPU (``bogie/numerics.py``)."""
+    return math.sqrt(float(np.sum(x * x)))
+
+
 def equilibrium(
     bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None = None, u0: ArrayLike | None = None
 ) -> State:
@@ -544,10 +551,10 @@ def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, 
         step /= scale
         # backtrack while the step raises the residual: a free equaliser is unstable inside its stops and stiff on
         # them, where the full Newton step can cycle across a stop's onset
-        norm = np.linalg.norm(f / tol)
+        norm = _norm(f / tol)
         for _ in range(12):
             core.force(u + step, v, drv, data_f, data_i, hist, hist_new, f_try, kt, ct, rec, False, False, work)
-            if np.linalg.norm(f_try / tol) < norm:
+            if _norm(f_try / tol) < norm:
                 break
             step *= 0.5
         u += step

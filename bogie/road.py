@@ -23,6 +23,8 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike
 
+from bogie import numerics
+
 #: ISO 8608 reference spatial frequency n0 [cycle/m]
 ISO8608_N0 = 0.1
 
@@ -210,7 +212,7 @@ class Sinusoid:
     def __call__(self, x: ArrayLike) -> np.ndarray:
         """Road height [m] at road distance ``x`` [m]."""
         s = _finite_array("x", x, "m") - self.start
-        h = self.amplitude * np.sin(2.0 * np.pi * s / self.wavelength + self.phase)
+        h = self.amplitude * numerics.sin(2.0 * np.pi * s / self.wavelength + self.phase)
         return np.where(s >= 0.0, h, 0.0)
 
 
@@ -308,12 +310,12 @@ class ISO8608Profile:
         k = np.arange(k_lo, k_hi + 1)
         freqs = k / length
         # self.psd(freqs), without its checks of a frequency array the harmonics make positive and finite
-        amps = np.sqrt(2.0 * (self.psd_n0 * (freqs / ISO8608_N0) ** (-self.waviness)) / length)
+        amps = np.sqrt(2.0 * (self.psd_n0 * numerics.power(freqs / ISO8608_N0, -self.waviness)) / length)
         phases = np.random.default_rng(self.seed).uniform(0.0, 2.0 * np.pi, size=k_hi)[k_lo - 1 :]
         n_grid = 2 ** math.ceil(math.log2(_GRID_POINTS_PER_WAVELENGTH * k_hi))
         spectrum = np.zeros(n_grid // 2 + 1, dtype=complex)
         # irfft(X)[j] = (2 / N) Re sum_k X_k e^(2 pi i k j / N) for 0 < k < N / 2
-        spectrum[k] = 0.5 * n_grid * amps * np.exp(1j * phases)
+        spectrum[k] = 0.5 * n_grid * amps * (numerics.cos(phases) + 1j * numerics.sin(phases))
         grid_h = np.empty(n_grid + 1)
         np.fft.irfft(spectrum, n=n_grid, out=grid_h[:n_grid])
         grid_h[n_grid] = grid_h[0]
@@ -370,7 +372,7 @@ class ISO8608Profile:
         n = _finite_array("n", n, "cycle/m")
         if (n <= 0.0).any():
             raise ValueError(f"n = {float(n[n <= 0.0].flat[0])!r} is out of range: must be in (0, inf) cycle/m")
-        return self.psd_n0 * (n / ISO8608_N0) ** (-self.waviness)
+        return self.psd_n0 * numerics.power(n / ISO8608_N0, -self.waviness)
 
     def __call__(self, x: ArrayLike) -> np.ndarray:
         """Road height [m] at road distance ``x`` [m] (any real x: the profile repeats every ``length``)."""

@@ -10,25 +10,28 @@ Two forms, both derived in ``docs/static-model.md``:
 
 from __future__ import annotations
 
+import math
 from dataclasses import dataclass
 from functools import lru_cache
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import numerics
 from bogie.params import Bogie
 
 
 @lru_cache(maxsize=16)
 def _path_laplacian_eig(n_axles: int) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
-    lap = np.zeros((n_axles, n_axles))
-    for j in range(n_axles - 1):
-        lap[j, j] += 1.0
-        lap[j + 1, j + 1] += 1.0
-        lap[j, j + 1] -= 1.0
-        lap[j + 1, j] -= 1.0
-    lam, vec = np.linalg.eigh(lap)
-    lam[np.abs(lam) < 1e-12] = 0.0
+    """Eigenvalues (ascending) and orthonormal eigenvectors (columns) of the path graph's Laplacian L, in closed form:
+    lambda_k = 2 - 2 cos(k pi / n), v_k(l) = c_k cos(k pi (l + 1/2) / n), c_0 = sqrt(1 / n), c_k = sqrt(2 / n) (the
+    DCT-II basis, Strang 1999). LAPACK's eigensolver would give the same to rounding, in bits that depend on the BLAS
+    kernel OpenBLAS picks for the CPU (``bogie/numerics.py``)."""
+    k = np.arange(n_axles, dtype=float)
+    lam = 2.0 - 2.0 * numerics.cos(k * math.pi / n_axles)
+    lam[0] = 0.0
+    vec = numerics.cos(np.outer(np.arange(n_axles) + 0.5, k) * (math.pi / n_axles)) * math.sqrt(2.0 / n_axles)
+    vec[:, 0] = math.sqrt(1.0 / n_axles)
     lam.setflags(write=False)
     vec.setflags(write=False)
     return lam, vec
@@ -75,11 +78,11 @@ def nondimensional_loads(q: ArrayLike, d: ArrayLike, n_axles: int = 3) -> NDArra
     lam, vec = _path_laplacian_eig(int(n_axles))
     offsets = 0.5 * (n_axles - 1) - np.arange(n_axles)
     rhs = 1.0 + d_arr[..., None] * offsets
-    modal = rhs @ vec
+    modal = numerics.matmul(rhs, vec)
     with np.errstate(invalid="ignore"):
         gain = 1.0 / (1.0 + q_arr[..., None] * lam)
     gain = np.where(lam == 0.0, 1.0, gain)
-    return (modal * gain) @ vec.T
+    return numerics.matmul(modal * gain, vec.T)
 
 
 @dataclass(frozen=True)
@@ -168,9 +171,9 @@ def solve_static(
     g = c_f * chassis(x_front) + c_r * chassis(x_rear) - wear
     coupling = coupling_matrix(bogie)
     k_s = bogie.combined_stiffness
-    lhs = bogie.bush_stiffness * np.eye(n - 1) + k_s * coupling.T @ coupling
-    phi = np.linalg.solve(lhs, -k_s * coupling.T @ g)
-    loads = k_s * (g + coupling @ phi)
+    lhs = bogie.bush_stiffness * np.eye(n - 1) + k_s * numerics.matmul(coupling.T, coupling)
+    phi = numerics.solve(lhs, -k_s * numerics.matmul(coupling.T, g))
+    loads = k_s * (g + numerics.matmul(coupling, phi))
     return StaticSolution(wheel_loads=loads, equaliser_rotation=phi)
 
 

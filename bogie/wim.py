@@ -31,6 +31,8 @@ from statistics import NormalDist
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import numerics
+
 __all__ = [
     "ACCURACY_CLASSES", "COST323_TOLERANCES", "SITE_BLEND_LENGTH", "SiteRoad", "axle_error_sd", "axle_errors",
     "gd_n0_for_iri", "iri_of_iso8608", "sensor_reading",
@@ -272,13 +274,13 @@ class SiteRoad:
         outside = np.maximum(self.sensor - self.before - xx, xx - self.sensor - self.after)
         ramp = np.clip(1.0 - outside / SITE_BLEND_LENGTH, 0.0, 1.0)
         if ramp.ndim == 0:
-            return 0.5 * (1.0 - np.cos(np.pi * ramp))
+            return 0.5 * (1.0 - numerics.cos(np.pi * ramp))
         # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the tapers (issue 15),
         # the same weights value for value
         weight = np.zeros_like(ramp)
         weight[ramp >= 1.0] = 1.0
         blend = ~((ramp <= 0.0) | (ramp >= 1.0))
-        weight[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
+        weight[blend] = 0.5 * (1.0 - numerics.cos(np.pi * ramp[blend]))
         return weight
 
     def __call__(self, x: ArrayLike) -> NDArray[np.float64]:

@@ -61,7 +61,6 @@ from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, o
 from pipeline.config_schema import CALIBRATION_QUANTITIES
 from pipeline.distributions import TruncNormal
 from pipeline.observed import _by_size
-from pipeline.portable import warn_unpinned
 from pipeline.protocol import weigh
 from pipeline.sample import bogie_from_sample, sample_fleet, suspension_draw
 
@@ -778,7 +777,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/calibration", help="output directory (default: data/calibration)")
     parser.add_argument("--metrics", default="metrics/calibration.json", help="default: metrics/calibration.json")
     args = parser.parse_args(argv)
-    warn_unpinned("calibrate")
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
     try:
         config = load_config(args.params)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import dataclasses
 import fcntl
+import functools
 import hashlib
 import json
 import os
@@ -27,9 +28,9 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import scipy
 
+from bogie.numerics import compile_target, numerics_digest
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
-from pipeline.portable import PINNED
 from pipeline.sample import COLUMNS
 from pipeline.schema import SchemaError, check_file_schema, failed_runs, runs_file_content, write_file
 
@@ -39,6 +40,8 @@ Protocols = tuple[tuple[str, Spec], ...]
 
 #: Parquet metadata key of a part file's content hash
 HASH_KEY = b"bogie.simulate.hash"
+#: Parquet metadata key of what computed a part file (:func:`process_numerics` of the process that weighed it)
+NUMERICS_KEY = b"bogie.simulate.numerics"
 
 #: a summary or progress line goes here; tests pass their own
 Log = Callable[[str], None]
@@ -54,8 +57,8 @@ def code_version() -> str:
 
     The sources of every project module the simulate stage imports (:func:`pipeline.deps.project_files`, the same
     list as the stage's code dependencies in ``dvc.yaml``), plus the versions of numpy, scipy, numba, pandas and
-    pyarrow, and the instruction sets numpy and numba are pinned to (:mod:`pipeline.portable`: their last bits depend
-    on them). Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
+    pyarrow, and the numerics digest of this process (:func:`bogie.numerics.numerics_digest`: a machine that computes
+    other last bits has another, and recomputes every part; :func:`process_numerics`). Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
     change would cost a wrong dataset. An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
     """
     digest = hashlib.sha256()
@@ -64,9 +67,17 @@ def code_version() -> str:
         digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
     for module in (np, scipy, numba, pd, pa):
         digest.update(f"{module.__name__}={module.__version__}\0".encode())
-    for variable in PINNED:
-        digest.update(f"{variable}={os.environ.get(variable)}\0".encode())
+    digest.update(f"numerics={process_numerics()}\0".encode())
     return digest.hexdigest()
+
+
+@functools.lru_cache(maxsize=1)
+def process_numerics() -> str:
+    """What this process computes the runs with: its numerics digest (:func:`bogie.numerics.numerics_digest`) and the
+    CPU numba compiles for, as ``"<digest> <target>"``. A part file records the one of the process that computed it
+    (:data:`NUMERICS_KEY`); the same on every x86-64 machine with AVX2 and FMA, so it keeps the files the same bytes.
+    """
+    return f"{numerics_digest()} {compile_target()}"
 
 
 def _rows_digest(columns: Mapping[str, np.ndarray]) -> bytes:
@@ -275,10 +286,11 @@ class RunsLockedError(RuntimeError):
     """Another process is writing the runs dataset."""
 
 
-def part_content(table: pa.Table, chunk_hash_: str) -> bytes:
-    """A part file's bytes: the chunk's runs (:func:`pipeline.simulate.chunk_table`) with its hash in the Parquet
-    metadata (:func:`pipeline.schema.runs_file_content`)."""
-    return runs_file_content(table, {HASH_KEY: chunk_hash_.encode()})
+def part_content(table: pa.Table, chunk_hash_: str, numerics: str) -> bytes:
+    """A part file's bytes: the chunk's runs (:func:`pipeline.simulate.chunk_table`) with its hash and what computed
+    it (``numerics``, :func:`process_numerics` of the weighing process) in the Parquet metadata
+    (:func:`pipeline.schema.runs_file_content`)."""
+    return runs_file_content(table, {HASH_KEY: chunk_hash_.encode(), NUMERICS_KEY: numerics.encode()})
 
 
 def write_part(content: bytes, path: Path) -> None:

@@ -45,7 +45,6 @@ from bogie.weighings.stats import group_inequality
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES
-from pipeline.portable import warn_unpinned
 from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, _frame, design_seed, road_seed, sensor_seed
 from pipeline.simulate import simulate_samples
 from pipeline.survey import rounded
@@ -559,7 +558,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/design", help="tables directory (default: data/design)")
     parser.add_argument("--metrics", default="metrics/design.json", help="metrics file (default: metrics/design.json)")
     args = parser.parse_args(argv)
-    warn_unpinned("design")
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:

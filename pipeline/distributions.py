@@ -17,7 +17,9 @@ from dataclasses import MISSING, dataclass, fields, replace
 from typing import Any, ClassVar
 
 import numpy as np
-from scipy.special import ndtri
+from scipy.special import ndtr, ndtri
+
+from bogie import numerics
 
 #: an unbounded inverse CDF is infinite at u = 0; a design point there is read as this tail probability instead
 #: (about 8.2 standard deviations), which no finite design of fewer than 2^53 points can resolve anyway
@@ -57,12 +59,20 @@ def _ordered(low: float, high: float) -> None:
         raise ParameterError("high", high, f"must be greater than low = {low!r}")
 
 
-def _truncnorm() -> Any:
-    """scipy.stats' truncated normal, imported when first needed: scipy.stats takes half a second to import, and
-    the simulate stage's workers import this module (through the configuration) without drawing a sample."""
-    from scipy.stats import truncnorm
+def truncated_standard_normal_ppf(u: Any, a: float, b: float) -> np.ndarray:
+    """Inverse CDF of the standard normal truncated to [a, b] (a < b, either may be infinite) at ``u`` in [0, 1].
 
-    return truncnorm
+    x = Phi^-1(Phi(a) + u (Phi(b) - Phi(a))), with the interval reflected to the left of 0 where it lies right of it
+    (Phi near 1 would lose digits there). scipy.special's ``ndtr`` and ``ndtri`` are scalar C functions;
+    ``scipy.stats.truncnorm.ppf`` works in logarithms with numpy's ``log`` and ``log1p``, whose last bits depend on
+    the loops numpy dispatches to on the CPU (``bogie/numerics.py``), so the samples did too. The two agree to 2e-14
+    standard deviations for the bounds params.yaml can give (``tests/pipeline/test_portable.py``).
+    """
+    u = np.asarray(u, dtype=float)
+    if a > 0.0:
+        return -truncated_standard_normal_ppf(1.0 - u, -b, -a)
+    low, high = ndtr(a), ndtr(b)
+    return np.clip(ndtri(low + u * (high - low)), a, b)
 
 
 def _unit_points(u: Any) -> np.ndarray:
@@ -166,7 +176,7 @@ class LogUniform(Distribution):
 
     def ppf(self, u: Any) -> np.ndarray:
         u = _unit_points(u)
-        x = self.low * np.exp(u * math.log(self.high / self.low))
+        x = self.low * numerics.exp(u * math.log(self.high / self.low))
         return np.clip(x, self.low, self.high)
 
     @property
@@ -219,7 +229,7 @@ class TruncNormal(Distribution):
     def ppf(self, u: Any) -> np.ndarray:
         u = _unit_points(u)
         a, b = (self.low - self.mean) / self.sd, (self.high - self.mean) / self.sd
-        x = _truncnorm().ppf(u, a, b, loc=self.mean, scale=self.sd)
+        x = self.mean + self.sd * truncated_standard_normal_ppf(u, a, b)
         # the standardised bounds round-trip to low/high only to an ulp; a physical limit must hold exactly
         return np.clip(x, self.low, self.high)
 
@@ -271,10 +281,10 @@ class LogNormal(Distribution):
         u = _unit_points(u)
         if self._truncated:
             a, b = self._standard_bounds()
-            z = _truncnorm().ppf(np.clip(u, _U_TINY, 1.0 - _U_TINY), a, b)
+            z = truncated_standard_normal_ppf(np.clip(u, _U_TINY, 1.0 - _U_TINY), a, b)
         else:
             z = ndtri(np.clip(u, _U_TINY, 1.0 - _U_TINY))
-        return np.clip(self.median * np.exp(self.sigma * z), self.low, self.high)
+        return np.clip(self.median * numerics.exp(self.sigma * z), self.low, self.high)
 
     @property
     def support(self) -> tuple[float, float]:

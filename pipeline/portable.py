@@ -1,107 +1,80 @@
-"""The same bits on every x86-64 machine: numpy's and numba's instruction sets pinned before either is imported.
+"""The same bits on every x86-64 machine: what a process computes with, and what could make its last bits differ.
 
-The same code, parameters and seed gave different last bits on two of this project's machines, both AMD EPYC:
-one with AVX-512 (numpy dispatching its ``X86_V4`` loops, numba compiling for ``znver4``) and one without
-(``X86_V3``, ``znver3``). numpy's AVX-512 loops of the float64 exp, log, power, sin and cos (Intel's SVML) round
-differently in the last bit from its AVX2 and baseline loops, which agree with each other: the sampled bush
-stiffnesses, the ISO 8608 roads and so every run moved by an ulp, and the committed ``dvc.lock`` did not reproduce
-on the other machine (``docs/architecture.md``, "Reproducible on any machine").
+The outputs are the same bits on every x86-64 machine with AVX2 and FMA by construction, not by the environment a
+process was started with (``docs/architecture.md``, "The same bits on every machine"):
 
-:func:`pin` sets, for this process and the processes it starts (the loky workers inherit its environment):
+* the elementary functions that feed results (samples, roads, tapers) are :mod:`bogie.numerics`'s, which call the C
+  library's scalar functions whatever SIMD loops numpy dispatches to on the CPU (AVX-512 or AVX2);
+* the small matrix products and solves are :mod:`bogie.numerics`'s and :mod:`bogie._lu`'s, with their sums in index
+  order, not BLAS's, whose kernel OpenBLAS picks by the CPU;
+* ``import bogie`` fixes the CPU numba compiles the kernels for (x86-64-v3) before anything is compiled
+  (:func:`bogie.numerics.fix_compile_target`).
 
-* ``NPY_DISABLE_CPU_FEATURES`` = :data:`NUMPY_DISABLED`: numpy dispatches at most its AVX2 (``X86_V3``) loops;
-* ``NUMBA_CPU_NAME`` = :data:`NUMBA_CPU` and ``NUMBA_CPU_FEATURES`` = :data:`NUMBA_FEATURES`: numba compiles for
-  the x86-64-v3 level (AVX2 and FMA, which the kernels' ``fastmath`` contraction uses) whatever the host, only on a
-  host that has every instruction of that level (:data:`V3_FLAGS`; elsewhere numba compiles for the host and the
-  last bits may differ from an x86-64-v3 machine's).
-
-A variable already set is left as it is (a deliberate choice of the user's). It works only if numpy and numba are
-not yet imported: ``pipeline/__init__.py`` calls it first thing, so every ``python -m pipeline.<stage>`` and every
-loky worker gets it. A dask.distributed worker imports numpy before it runs a task: start the workers with these
-variables set (``docs/architecture.md``). :func:`check` tells whether the pin took effect in this process.
-
-Measured on the second machine: the x86-64-v3 kernels give the same rows as the host's ``znver3`` ones, bit for
-bit, and no slower (``bench/README.md``); numpy's baseline and AVX2 loops give the same samples, bit for bit.
+So it does not matter whether pytest, a notebook or a dask worker imported numpy first, nor what numpy dispatches
+(:func:`numpy_dispatch` says what it does, for the record). What can still make the bits differ is a property of the
+machine or of the process, and :func:`check` reports it: another architecture (aarch64: another C library's
+functions, no x86-64-v3 target), an x86-64 machine without the x86-64-v3 level, numba compiling for another target
+in this process (a kernel compiled before bogie was imported, or ``NUMBA_CPU_NAME`` set), numba using Intel's SVML.
+Its last word is :func:`bogie.numerics.numerics_digest` against :data:`REFERENCE_DIGEST`, the digest of the machines
+that made the committed results: whatever the cause, a process whose digest differs computes other last bits.
 """
 
 from __future__ import annotations
 
-import os
-import platform
 import sys
-from collections.abc import MutableMapping
 
-#: the environment variables :func:`pin` sets
-PINNED = ("NPY_DISABLE_CPU_FEATURES", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")
-#: numpy's dispatch targets above AVX2, by numpy 2.4's names (``numpy.show_runtime()``)
-NUMPY_DISABLED = "X86_V4 AVX512_ICL AVX512_SPR"
-#: the CPU numba compiles for on an x86-64 host that has all of :data:`V3_FLAGS`
-NUMBA_CPU = "x86-64-v3"
-#: the features numba compiles with there (implied by the level; given so that none of the host's is added)
-NUMBA_FEATURES = "+avx2,+fma"
-#: the /proc/cpuinfo flags of the x86-64-v3 level (``abm`` is LZCNT)
-V3_FLAGS = frozenset({"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
+from bogie import numerics
+
+#: :func:`bogie.numerics.numerics_digest` on the x86-64 machines (AVX2 and FMA, with or without AVX-512) that made the
+#: committed dvc.lock, with the library versions of constraints.txt
+REFERENCE_DIGEST = "0000000000000000"
 
 
-def _cpu_flags() -> frozenset[str]:
+def numpy_dispatch() -> list[str]:
+    """The SIMD targets numpy dispatches its loops to in this process (what ``numpy.show_runtime()`` calls found):
+    the targets numpy was built for that this CPU has and the environment did not disable when numpy was imported.
+    """
     try:
-        with open("/proc/cpuinfo", encoding="utf-8") as fh:
-            for line in fh:
-                if line.startswith("flags"):
-                    return frozenset(line.split(":", 1)[1].split())
-    except OSError:
-        pass
-    return frozenset()
-
-
-def _numpy_version() -> tuple[int, ...]:
-    from importlib.metadata import PackageNotFoundError, version
-
-    try:
-        return tuple(int(part) for part in version("numpy").split(".")[:2])
-    except (PackageNotFoundError, ValueError):
-        return (0, 0)
-
-
-def pin(environ: MutableMapping[str, str] | None = None, flags: frozenset[str] | None = None) -> dict[str, str]:
-    """Set the variables of the module text in ``environ`` (default ``os.environ``) where they are not set; return
-    those it set. ``flags``: the CPU's flags (default: this machine's)."""
-    env = os.environ if environ is None else environ
-    wanted: dict[str, str] = {}
-    # numpy 2.4 named its x86 targets by level; an older numpy does not know these names (and warns)
-    if platform.machine().lower() in ("x86_64", "amd64") and _numpy_version() >= (2, 4):
-        wanted["NPY_DISABLE_CPU_FEATURES"] = NUMPY_DISABLED
-    if V3_FLAGS <= (_cpu_flags() if flags is None else flags):
-        wanted["NUMBA_CPU_NAME"] = NUMBA_CPU
-        wanted["NUMBA_CPU_FEATURES"] = NUMBA_FEATURES
-    if "NUMBA_CPU_NAME" in env:  # a user's own CPU name comes with the user's own features, or the host's
-        wanted.pop("NUMBA_CPU_FEATURES", None)
-    done = {k: v for k, v in wanted.items() if k not in env}
-    env.update(done)
-    return done
+        from numpy._core import _multiarray_umath as umath
+    except ImportError:  # numpy < 2
+        from numpy.core import _multiarray_umath as umath
+    features = umath.__cpu_features__
+    return [name for name in umath.__cpu_dispatch__ if features.get(name)]
 
 
 def check() -> list[str]:
-    """What keeps this process from the pinned numerics: empty if numpy dispatches no AVX-512 loop and numba
-    compiles for :data:`NUMBA_CPU` (or, on a host without the x86-64-v3 level, for the host); else one line each."""
+    """What may make this process's last bits differ from the committed results': empty if nothing; else one line
+    each. Independent of what numpy dispatches to (see the module text)."""
+    from numba.core import config
+
     problems = []
-    try:
-        from numpy._core._multiarray_umath import __cpu_features__ as features
-    except ImportError:  # numpy < 2
-        from numpy.core._multiarray_umath import __cpu_features__ as features
-    on = sorted(name for name, enabled in features.items() if enabled and name.startswith(("AVX512", "X86_V4")))
-    if on:
-        problems.append(f"numpy dispatches AVX-512 loops ({' '.join(on)}): NPY_DISABLE_CPU_FEATURES was not "
-                        f"{NUMPY_DISABLED!r} when numpy was imported")  # fmt: skip
-    config = sys.modules.get("numba.core.config")  # numba not imported: nothing compiled here, nothing to check
-    if config is not None and V3_FLAGS <= _cpu_flags() and config.CPU_NAME != NUMBA_CPU:
-        problems.append(f"numba compiles for {config.CPU_NAME or 'the host CPU'}, not {NUMBA_CPU}: NUMBA_CPU_NAME "
-                        "was not set when numba was imported")  # fmt: skip
+    if not numerics.is_x86_64():
+        import platform
+
+        problems.append(f"this is a {platform.machine()} machine, not x86-64: its C library's functions and its "
+                        "compiled kernels round differently in the last bit")  # fmt: skip
+    elif not numerics.V3_FLAGS <= numerics.cpu_flags():
+        missing = " ".join(sorted(numerics.V3_FLAGS - numerics.cpu_flags()))
+        problems.append(f"this CPU lacks the x86-64-v3 level ({missing}): numba compiles for it, without the fused "
+                        "multiply-adds the kernels use elsewhere")  # fmt: skip
+    elif numerics.compile_target() != " ".join(numerics.COMPILE_TARGET):
+        problems.append(f"numba compiles for {numerics.compile_target()}, not {numerics.COMPILE_TARGET[0]}: a kernel "
+                        "was compiled before bogie was imported, or NUMBA_CPU_NAME is set")  # fmt: skip
+    if getattr(config, "USING_SVML", False):
+        problems.append("numba uses Intel's SVML (icc_rt is installed), whose vector functions round differently")
+    digest = numerics.numerics_digest()
+    if digest != REFERENCE_DIGEST:
+        problems.append(f"its numerics digest is {digest}, not the reference machines' {REFERENCE_DIGEST}")
     return problems
 
 
-def warn_unpinned(stage: str) -> None:
-    """Print a warning line on stderr for each of :func:`check`'s problems, for the stage ``stage``."""
-    for problem in check():
-        print(f"{stage}: warning: {problem}; the outputs may differ in the last bits from another machine's "
-              "(pipeline/portable.py)", file=sys.stderr)  # fmt: skip
+def warn_if_unportable(stage: str) -> list[str]:
+    """Print, once, on stderr, what may make this process's results differ in the last bits from the committed ones
+    (:func:`check`) and what to do; return the problems (empty: nothing printed)."""
+    problems = check()
+    if problems:
+        print(f"{stage}: note: the results computed here may differ in the last bits from those of the x86-64 "
+              f"machines that made dvc.lock ({'; '.join(problems)}). They are still deterministic on this machine; "
+              "to reproduce dvc.lock byte for byte, run on an x86-64 machine with AVX2 and FMA with the versions of "
+              "constraints.txt (docs/architecture.md, 'The same bits on every machine')", file=sys.stderr)  # fmt: skip
+    return problems

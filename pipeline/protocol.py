@@ -32,7 +32,7 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import air_dynamics, metrics, nonlinear, wim
+from bogie import air_dynamics, metrics, nonlinear, numerics, wim
 from bogie import phases as phases_mod
 from bogie.air import AirBogie
 from bogie.params import GRAVITY, Bogie
@@ -61,13 +61,13 @@ class ApproachRoad:
         ramp_out = np.clip((self.length - xx) / BLEND_LENGTH, 0.0, 1.0)
         ramp = np.minimum(ramp_in, ramp_out)
         if ramp.ndim == 0:
-            return 0.5 * (1.0 - np.cos(np.pi * ramp))
+            return 0.5 * (1.0 - numerics.cos(np.pi * ramp))
         # 0.5 (1 - cos 0) is exactly 0 and 0.5 (1 - cos pi) exactly 1: the cosine only over the blends (issue 15:
         # it took a tenth of a pass's road), the same taper value for value
         taper = np.ones_like(ramp)
         taper[ramp <= 0.0] = 0.0
         blend = ~((ramp <= 0.0) | (ramp >= 1.0))
-        taper[blend] = 0.5 * (1.0 - np.cos(np.pi * ramp[blend]))
+        taper[blend] = 0.5 * (1.0 - numerics.cos(np.pi * ramp[blend]))
         return taper
 
     def __call__(self, x: ArrayLike) -> NDArray[np.float64]:
@@ -111,7 +111,7 @@ def _zoned(
         lo, hi = index(start - dx), min(n, index(end + dx) + 1)
         if hi > lo:
             r = np.clip(ramp((k0 + np.arange(lo, hi)) * dx), 0.0, 1.0)
-            b[lo:hi] = 0.5 * (1.0 - np.cos(np.pi * r))
+            b[lo:hi] = 0.5 * (1.0 - numerics.cos(np.pi * r))
     return weight(b)
 
 

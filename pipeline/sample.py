@@ -40,7 +40,6 @@ from pipeline.atomic import atomic_file, io_error
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES
 from pipeline.distributions import Choice
-from pipeline.portable import warn_unpinned
 from pipeline.resources import available_memory
 
 STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
@@ -510,7 +509,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--out", default="data/samples", help="output directory (default: data/samples)")
     args = parser.parse_args(argv)
-    warn_unpinned("sample")
     try:
         config = load_config(args.params)
         check_memory(config, available_memory())

@@ -56,12 +56,13 @@ from pipeline.chunks import (
     _print,
     part_content,
     plan_chunks,
+    process_numerics,
     reconcile,
     runs_lock,
     write_part,
 )
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
-from pipeline.portable import warn_unpinned
+from pipeline.portable import warn_if_unportable
 from pipeline.protocol import Outcome, result_rows, weighing
 from pipeline.resources import available_memory
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
@@ -161,12 +162,35 @@ def _watch_main_process(main_pid: int) -> None:
 
 def _task(
     study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str
-) -> tuple[str, int, bytes, int, int]:
-    """One chunk's part file as bytes, its runs and failed runs. The worker encodes the file: the main process only
-    writes it, and bytes pass between processes at the cost of a copy (a table's pickle cost 1 ms a chunk)."""
+) -> tuple[str, int, bytes, int, int, str]:
+    """One chunk's part file as bytes, its runs and failed runs, and what computed it (:func:`process_numerics`).
+    The worker encodes the file: the main process only writes it, and bytes pass between processes at the cost of a
+    copy (a table's pickle cost 1 ms a chunk)."""
+    numerics = process_numerics()
     table = chunk_table(rows, protocols)
     # results arrive unordered: carry the chunk's identity back with its file
-    return study, index, part_content(table, chunk_hash_), len(table), failed_runs(table)
+    return study, index, part_content(table, chunk_hash_, numerics), len(table), failed_runs(table), numerics
+
+
+class OtherNumericsError(RuntimeError):
+    """A worker computes other last bits than the main process: its part is not written."""
+
+
+def check_numerics(worker: str, here: str, study: str, index: int) -> None:
+    """Refuse a chunk computed by a worker whose numerics (:func:`process_numerics`) are not this process's.
+
+    Raises
+    ------
+    OtherNumericsError
+        Naming both and what to do.
+    """
+    if worker != here:
+        raise OtherNumericsError(
+            f"the worker that weighed chunk {index} of study {study} computes other last bits than this process "
+            f"(numerics digest and compile target {worker!r} there, {here!r} here): its part is not written. Run "
+            "the workers on x86-64 machines with AVX2 and FMA and the versions of constraints.txt, and import no "
+            "numba-compiled code before bogie in them (docs/architecture.md, 'The same bits on every machine')"
+        )
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
@@ -208,8 +232,8 @@ def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | 
 #: weighs, so that a worker holding one chunk waited 12 ms for the next, 4 % of its time [-]
 WORKER_CHUNKS = 2
 
-#: what a part's task returns: study, chunk index, the part file's bytes, its runs and its failed runs
-Result = tuple[str, int, bytes, int, int]
+#: what a part's task returns: study, chunk index, the part file's bytes, its runs and its failed runs, its numerics
+Result = tuple[str, int, bytes, int, int, str]
 
 #: the environment of a loky worker: one thread in every threaded library (what joblib's loky backend sets with
 #: inner_max_num_threads=1), so that n_jobs processes keep n_jobs cores busy and no more
@@ -430,9 +454,11 @@ def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: in
     """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
     by_key = {(c.study, c.index): c for c in pending}
     failed = 0
+    here = process_numerics()
     progress = Progress(total, log)
     try:
-        for study, index, content, runs, failed_runs in _results(pending, execution) if pending else ():
+        for study, index, content, runs, failed_runs, numerics in _results(pending, execution) if pending else ():
+            check_numerics(numerics, here, study, index)
             write_part(content, by_key[(study, index)].path)
             failed += failed_runs
             progress.update(runs)
@@ -468,7 +494,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--out", default="data/runs", help="runs dataset directory (default: data/runs)")
     args = parser.parse_args(argv)
-    warn_unpinned("simulate")
+    warn_if_unportable("simulate")
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
@@ -482,7 +508,7 @@ def main(argv: list[str] | None = None) -> int:
     protocols = {study: study_protocols(config, study) for study in samples}
     try:
         simulate_samples(samples, protocols, config.execution, args.out)
-    except (RunsLockedError, OSError) as exc:
+    except (RunsLockedError, OtherNumericsError, OSError) as exc:
         print(f"simulate: {exc}", file=sys.stderr)
         return 2
     return 0

@@ -7,12 +7,14 @@ varies as sampled.
 
 from __future__ import annotations
 
+import math
 from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy.stats import binomtest
 
+from bogie import numerics
 from pipeline.constants import GROUP_AXLES
 
 __all__ = ["DESIGN_BINS", "DESIGN_COLUMNS", "DESIGN_CONFIDENCE", "DESIGN_GRID", "design_table", "wilson_interval"]
@@ -57,7 +59,9 @@ def _nice_log_edges(x: np.ndarray) -> np.ndarray:
     """Edges 1, 3, 10, 30, ... times a power of ten that cover ``x`` (positive)."""
     lo, hi = float(np.min(x)), float(np.max(x))
     ladder = np.sort(
-        np.outer(10.0 ** np.arange(np.floor(np.log10(lo)) - 1, np.ceil(np.log10(hi)) + 2), [1.0, 3.0]).ravel()
+        np.outer(
+            numerics.power(10.0, np.arange(math.floor(math.log10(lo)) - 1, math.ceil(math.log10(hi)) + 2)), [1.0, 3.0]
+        ).ravel()
     )
     edges = ladder[(ladder >= ladder[ladder <= lo].max()) & (ladder <= ladder[ladder >= hi].min())]
     return edges if len(edges) > 1 else np.array([lo, hi * 1.0001 + 1e-12])

@@ -20,7 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
-from pipeline.chunks import HASH_KEY, RunsLockedError, part_content, part_name, runs_lock
+from pipeline.chunks import HASH_KEY, NUMERICS_KEY, RunsLockedError, part_content, part_name, runs_lock
 from pipeline.config import load_params, parse_config
 from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
 from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, write_runs_file
@@ -113,9 +113,9 @@ def test_a_part_file_is_byte_for_byte_the_file_its_rows_give_through_pandas(conf
     rows.loc[1, "payload_fraction"] = 3.0  # the protocol's run fails
     rows.loc[2, "bush_stiffness"] = -1.0  # not a bogie
     protocols = study_protocols(config, "fleet")
-    content = part_content(chunk_table({c: rows[c].tolist() for c in COLUMNS}, protocols), "0" * 64)
+    content = part_content(chunk_table({c: rows[c].tolist() for c in COLUMNS}, protocols), "0" * 64, "digest target")
     through_pandas = tmp_path / "pandas.parquet"
-    write_runs_file(run_chunk(rows, protocols), through_pandas, {HASH_KEY: b"0" * 64})
+    write_runs_file(run_chunk(rows, protocols), through_pandas, {HASH_KEY: b"0" * 64, NUMERICS_KEY: b"digest target"})
     assert pq.read_table(through_pandas).column("status").to_pylist().count("failed") == 4
     assert content == through_pandas.read_bytes()
 

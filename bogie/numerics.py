@@ -1,0 +1,310 @@
+"""Elementary functions and a compile target whose last bits do not depend on the CPU a process runs on.
+
+Why (``docs/architecture.md``, "The same bits on every machine"): numpy dispatches its float64 ``exp``, ``log``,
+``sin``, ``cos``, ``power``, ``arctan2``, ``tanh`` and others to SIMD loops chosen by the CPU when numpy is imported
+(AVX-512 loops, partly Intel's SVML, on an AVX-512 machine; the C library's scalar functions on an AVX2 one), and
+those loops round differently in the last bit. A sampled bush stiffness, an ISO 8608 road and so every run moved by
+an ulp from one machine to the other. Which loops a process gets depends on the CPU and on what the environment said
+when numpy was imported (``NPY_DISABLE_CPU_FEATURES``), so the bits depended on the import order of pytest, a
+notebook or a dask worker.
+
+This module's functions take that choice away by construction: each is a numba ufunc whose loop calls the C
+library's scalar function once per element (``math.exp`` compiled by numba is a call to libm's ``exp``), so their bits
+are the C library's, whatever numpy dispatches and whatever the environment said. glibc picks its own variant of
+``exp``, ``log``, ``pow``, ``sin``, ``cos`` and ``atan2`` by the CPU's features too, but on every x86-64 machine with
+AVX2 and FMA (the x86-64-v3 level, which every AVX-512 machine has) it picks the same FMA variant, so these are
+the same bits on all of them; on aarch64 they are that machine's libm's.
+
+:func:`fix_compile_target` fixes the CPU numba compiles bogie's kernels for (x86-64-v3 on a host with that level),
+from Python, before the first kernel is compiled: the kernels' ``fastmath`` contraction fuses multiplies and adds
+where the target has FMA, so a machine without FMA would give other bits; one target also gives one numba cache.
+:func:`numerics_digest` is a digest of results that would differ if any of this did not hold in a process (the C
+library's functions, the compiled kernels' arithmetic), which the simulate stage records in every part file and
+compares between its workers.
+
+These functions are for values that end up in results (samples, roads, tapers, packs). Comparisons and plotting may
+use numpy's.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import math
+import platform
+import sys
+
+import numpy as np
+
+__all__ = [
+    "COMPILE_TARGET",
+    "arctan2",
+    "compile_target",
+    "matmul",
+    "cos",
+    "exp",
+    "fix_compile_target",
+    "log",
+    "numerics_digest",
+    "power",
+    "sin",
+    "solve",
+]
+
+#: the CPU numba compiles for on an x86-64 host that has every instruction of :data:`V3_FLAGS` (name, features)
+COMPILE_TARGET = ("x86-64-v3", "+avx2,+fma")
+#: the /proc/cpuinfo flags of the x86-64-v3 level (``abm`` is LZCNT)
+V3_FLAGS = frozenset({"avx", "avx2", "bmi1", "bmi2", "f16c", "fma", "abm", "movbe", "xsave"})
+
+
+def cpu_flags() -> frozenset[str]:
+    """The CPU's flags as /proc/cpuinfo lists them (empty where there is no /proc/cpuinfo)."""
+    try:
+        with open("/proc/cpuinfo", encoding="utf-8") as fh:
+            for line in fh:
+                if line.startswith("flags"):
+                    return frozenset(line.split(":", 1)[1].split())
+    except OSError:
+        pass
+    return frozenset()
+
+
+def is_x86_64() -> bool:
+    """Whether this is an x86-64 machine."""
+    return platform.machine().lower() in ("x86_64", "amd64")
+
+
+def _codegen_started() -> bool:
+    """Whether numba has made its CPU code generator (it reads the target CPU then, once per process)."""
+    registry = sys.modules.get("numba.core.registry")
+    if registry is None:
+        return False
+    # CPUTarget makes its target context, and with it the code generator, on first use (a cached property)
+    return "_toplevel_target_context" in vars(registry.cpu_target)
+
+
+def fix_compile_target(flags: frozenset[str] | None = None) -> tuple[str, str] | None:
+    """Make numba compile for :data:`COMPILE_TARGET` in this process, if this host can run it; return the target
+    numba compiles for, or None for the host CPU.
+
+    numba reads the target CPU when it makes its code generator, on the first compilation or cache load, so setting
+    its configuration here, on ``import bogie``, works whether or not numba was imported before, as long as nothing
+    was compiled yet. A target the user chose (``NUMBA_CPU_NAME``) is kept. On a host without the x86-64-v3 level
+    (or not x86-64) numba compiles for the host, and the last bits may differ from an x86-64-v3 machine's.
+    """
+    from numba.core import config
+
+    if config.CPU_NAME is not None:
+        return (config.CPU_NAME, config.CPU_FEATURES or "")
+    if not is_x86_64() or not V3_FLAGS <= (cpu_flags() if flags is None else flags):
+        return None
+    if _codegen_started():
+        return None
+    config.CPU_NAME, config.CPU_FEATURES = COMPILE_TARGET
+    return COMPILE_TARGET
+
+
+def compile_target() -> str:
+    """The CPU numba compiles for in this process, as ``name features`` (``host`` for the host CPU)."""
+    from numba.core import config
+
+    if config.CPU_NAME is None:
+        return "host"
+    return f"{config.CPU_NAME} {config.CPU_FEATURES or ''}".strip()
+
+
+def _ufuncs():  # the numba ufuncs, made on first use (importing numba's vectorize costs nothing then)
+    from numba import vectorize
+
+    sig1, sig2 = ["float64(float64)"], ["float64(float64, float64)"]
+
+    @vectorize(sig1, cache=True)
+    def _exp(x):
+        return math.exp(x)
+
+    @vectorize(sig1, cache=True)
+    def _log(x):
+        return math.log(x) if x > 0.0 else (-math.inf if x == 0.0 else math.nan)
+
+    @vectorize(sig1, cache=True)
+    def _sin(x):
+        return math.sin(x)
+
+    @vectorize(sig1, cache=True)
+    def _cos(x):
+        return math.cos(x)
+
+    @vectorize(sig2, cache=True)
+    def _power(x, y):
+        return math.pow(x, y) if not (x < 0.0 and y != math.floor(y)) else math.nan
+
+    @vectorize(sig2, cache=True)
+    def _arctan2(y, x):
+        return math.atan2(y, x)
+
+    return {"exp": _exp, "log": _log, "sin": _sin, "cos": _cos, "power": _power, "arctan2": _arctan2}
+
+
+_CACHE: dict = {}
+
+
+def _get(name: str):
+    if not _CACHE:
+        _CACHE.update(_ufuncs())
+    return _CACHE[name]
+
+
+def _apply(name: str, *args):
+    arrays = [np.asarray(a, dtype=np.float64) for a in args]
+    out = _get(name)(*arrays)
+    if all(a.ndim == 0 for a in arrays):
+        return float(out)
+    return out
+
+
+def exp(x):
+    """e^x, element by element, with the C library's bits [-]. A float for a scalar, else an array."""
+    return _apply("exp", x)
+
+
+def log(x):
+    """Natural logarithm, element by element, with the C library's bits (-inf at 0, nan below) [-]."""
+    return _apply("log", x)
+
+
+def sin(x):
+    """sin x (x in rad), element by element, with the C library's bits [-]."""
+    return _apply("sin", x)
+
+
+def cos(x):
+    """cos x (x in rad), element by element, with the C library's bits [-]."""
+    return _apply("cos", x)
+
+
+def power(x, y):
+    """x^y, element by element and broadcast, with the C library's bits (nan for a negative base and a fractional
+    exponent) [-]."""
+    return _apply("power", x, y)
+
+
+def arctan2(y, x):
+    """The angle of (x, y) in (-pi, pi], element by element and broadcast, with the C library's bits [rad]."""
+    return _apply("arctan2", y, x)
+
+
+def _linalg():  # the compiled product and solve, made on first use
+    from numba import njit
+
+    from bogie._lu import lu_factor, lu_solve
+
+    @njit(cache=True)
+    def _matmul(a, b):
+        n, m, p = a.shape[0], a.shape[1], b.shape[1]
+        c = np.zeros((n, p))
+        for i in range(n):
+            for j in range(p):
+                s = 0.0
+                for k in range(m):
+                    s += a[i, k] * b[k, j]
+                c[i, j] = s
+        return c
+
+    @njit(cache=True)
+    def _solve(a, b):
+        lu = a.copy()
+        piv = np.zeros(a.shape[0], dtype=np.int64)
+        x = b.copy()
+        if not lu_factor(lu, piv):
+            return x, False
+        for j in range(x.shape[1]):
+            col = x[:, j].copy()
+            lu_solve(lu, piv, col)
+            x[:, j] = col
+        return x, True
+
+    return {"matmul": _matmul, "solve": _solve}
+
+
+def matmul(a, b) -> np.ndarray:
+    """The matrix product a b with every sum taken in index order, one multiply and one add at a time [-].
+
+    ``numpy.matmul`` hands float64 products to BLAS, whose kernel (and so the order of the sums and where fused
+    multiply-adds are used) OpenBLAS chooses by the CPU: the last bits differ between an AVX2 and an AVX-512 machine.
+    Here they do not. For the small matrices of the static, linear and finite element models. 1-D operands are taken
+    as a row (``a``) or a column (``b``) and the result has numpy's shape.
+    """
+    a_arr = np.asarray(a, dtype=np.float64)
+    b_arr = np.asarray(b, dtype=np.float64)
+    if a_arr.ndim == 0 or b_arr.ndim == 0:
+        raise ValueError("matmul: scalar operands are not matrices; use *")
+    a2 = a_arr.reshape(1, -1) if a_arr.ndim == 1 else a_arr.reshape(-1, a_arr.shape[-1])
+    b2 = b_arr.reshape(-1, 1) if b_arr.ndim == 1 else b_arr
+    if b2.ndim != 2 or a2.shape[1] != b2.shape[0]:
+        raise ValueError(f"matmul: shapes {a_arr.shape} and {b_arr.shape} do not match")
+    if not _LINALG:
+        _LINALG.update(_linalg())
+    c = _LINALG["matmul"](np.ascontiguousarray(a2), np.ascontiguousarray(b2))
+    lead = a_arr.shape[:-1]
+    tail = () if b_arr.ndim == 1 else (b2.shape[1],)
+    return c.reshape(lead + tail)
+
+
+def solve(a, b) -> np.ndarray:
+    """x with a x = b, by LU with partial pivoting (:mod:`bogie._lu`), every sum in index order [-].
+
+    ``numpy.linalg.solve`` calls LAPACK, whose BLAS kernels OpenBLAS chooses by the CPU; this gives the same bits on
+    every x86-64 machine. ``b`` is a vector or a matrix of columns. Raises ``numpy.linalg.LinAlgError`` for a singular
+    ``a``, as numpy does.
+    """
+    a_arr = np.ascontiguousarray(a, dtype=np.float64)
+    b_arr = np.asarray(b, dtype=np.float64)
+    if a_arr.ndim != 2 or a_arr.shape[0] != a_arr.shape[1] or b_arr.shape[:1] != a_arr.shape[:1]:
+        raise ValueError(f"solve: a must be square and b have as many rows, got {a_arr.shape} and {b_arr.shape}")
+    if not _LINALG:
+        _LINALG.update(_linalg())
+    x, ok = _LINALG["solve"](a_arr, np.ascontiguousarray(b_arr.reshape(b_arr.shape[0], -1)))
+    if not ok:
+        raise np.linalg.LinAlgError("Singular matrix")
+    return x.reshape(b_arr.shape)
+
+
+_LINALG: dict = {}
+
+#: arguments of the digest's elementary functions: ordinary ones and ones near the hard cases of each
+_DIGEST_ARGS = (0.1, 0.5, 0.7853981633974483, 1.0, 1.5707963267948966, 2.302585092994046, 3.0, 7.5, 33.0, 1e-7,
+                1.0000000000000002, 709.0, 1e5)  # fmt: skip
+
+
+def numerics_digest() -> str:
+    """A short hex digest of results whose last bits depend on how this process computes: this module's elementary
+    functions on fixed arguments, and a short weighing by the compiled kernels (:func:`bogie.phases.run`: the Stage 1
+    tri-axle tilted nose up, its payload ramped on, then crawling over a wavy road with adaptive steps, where spring-end
+    friction and rolling contacts act). Two processes with the same digest compute the same bits in bogie; with
+    different digests (another C library, another compile target, another architecture) their results may differ in
+    the last bits. About 10 ms once the kernels are compiled."""
+    from bogie import phases
+    from bogie.params import triaxle_stage1
+
+    digest = hashlib.sha256()
+    args = np.array(_DIGEST_ARGS)
+    for values in (exp(-args / 10.0), log(args), sin(args), cos(args), power(args, 1.0 / 3.0), arctan2(args, 0.3)):
+        digest.update(np.ascontiguousarray(values).tobytes())
+    bogie = triaxle_stage1().replace(
+        chassis_tilt=math.radians(0.7), friction_coefficient=0.3, contact_roll_radius=0.06, spring_friction_band=2000.0
+    )
+    dx = 0.01
+    x = np.arange(600) * dx
+    heights = 0.004 * sin(x * (2.0 * math.pi / 0.9)) * cos(x * (2.0 * math.pi / 3.1))
+    weighing = [
+        phases.Phase(0.3, (0.3, 1.0), dt=0.001, name="ramp"),
+        phases.Phase(1.5, 1.0, road=phases.RoadTable(-3.0, dx, heights), speed=1.4, dt=0.001, tolerance=2e-7,
+                     name="crawl"),
+    ]  # fmt: skip
+    result = phases.run(bogie, weighing)
+    if not result.success:  # a kernel that cannot run this is itself a difference worth a digest of its own
+        digest.update(result.message.encode())
+    else:
+        state = result.final_state
+        for values in (state.u, state.v, state.history):
+            digest.update(np.ascontiguousarray(values).tobytes())
+    return digest.hexdigest()[:16]
