@@ -240,7 +240,8 @@ class FrameModel:
             (xi, zi), (xj, zj) = self.coords[i], self.coords[j]
             direction = (xj - xi, zj - zi)
         n = np.asarray(direction, dtype=float)
-        norm = float(np.hypot(*n)) if n.shape == (2,) else 0.0
+        # the C library's hypot, not numpy's SIMD loop (bogie/numerics.py)
+        norm = math.hypot(float(n[0]), float(n[1])) if n.shape == (2,) else 0.0
         if not (math.isfinite(norm) and norm > 0.0):
             raise ValueError(f"direction = {direction!r} must be a non-zero (x, z) vector (coincident nodes need one)")
         n = n / norm

@@ -18,9 +18,9 @@ the same bits on all of them; on aarch64 they are that machine's libm's.
 :func:`fix_compile_target` fixes the CPU numba compiles bogie's kernels for (x86-64-v3 on a host with that level),
 from Python, before the first kernel is compiled: the kernels' ``fastmath`` contraction fuses multiplies and adds
 where the target has FMA, so a machine without FMA would give other bits; one target also gives one numba cache.
-:func:`numerics_digest` is a digest of results that would differ if any of this did not hold in a process (the C
-library's functions, the compiled kernels' arithmetic), which the simulate stage records in every part file and
-compares between its workers.
+:func:`bogie.digest.numerics_digest` is a digest of results that would differ if any of this did not hold in a
+process (the C library's functions, the compiled kernels' arithmetic), which the simulate stage records in every part
+file and compares between its workers.
 
 These functions are for values that end up in results (samples, roads, tapers, packs). Comparisons and plotting may
 use numpy's.
@@ -28,7 +28,6 @@ use numpy's.
 
 from __future__ import annotations
 
-import hashlib
 import math
 import platform
 import sys
@@ -44,7 +43,6 @@ __all__ = [
     "exp",
     "fix_compile_target",
     "log",
-    "numerics_digest",
     "power",
     "sin",
     "solve",
@@ -269,42 +267,3 @@ def solve(a, b) -> np.ndarray:
 
 
 _LINALG: dict = {}
-
-#: arguments of the digest's elementary functions: ordinary ones and ones near the hard cases of each
-_DIGEST_ARGS = (0.1, 0.5, 0.7853981633974483, 1.0, 1.5707963267948966, 2.302585092994046, 3.0, 7.5, 33.0, 1e-7,
-                1.0000000000000002, 709.0, 1e5)  # fmt: skip
-
-
-def numerics_digest() -> str:
-    """A short hex digest of results whose last bits depend on how this process computes: this module's elementary
-    functions on fixed arguments, and a short weighing by the compiled kernels (:func:`bogie.phases.run`: the Stage 1
-    tri-axle tilted nose up, its payload ramped on, then crawling over a wavy road with adaptive steps, where spring-end
-    friction and rolling contacts act). Two processes with the same digest compute the same bits in bogie; with
-    different digests (another C library, another compile target, another architecture) their results may differ in
-    the last bits. About 10 ms once the kernels are compiled."""
-    from bogie import phases
-    from bogie.params import triaxle_stage1
-
-    digest = hashlib.sha256()
-    args = np.array(_DIGEST_ARGS)
-    for values in (exp(-args / 10.0), log(args), sin(args), cos(args), power(args, 1.0 / 3.0), arctan2(args, 0.3)):
-        digest.update(np.ascontiguousarray(values).tobytes())
-    bogie = triaxle_stage1().replace(
-        chassis_tilt=math.radians(0.7), friction_coefficient=0.3, contact_roll_radius=0.06, spring_friction_band=2000.0
-    )
-    dx = 0.01
-    x = np.arange(600) * dx
-    heights = 0.004 * sin(x * (2.0 * math.pi / 0.9)) * cos(x * (2.0 * math.pi / 3.1))
-    weighing = [
-        phases.Phase(0.3, (0.3, 1.0), dt=0.001, name="ramp"),
-        phases.Phase(1.5, 1.0, road=phases.RoadTable(-3.0, dx, heights), speed=1.4, dt=0.001, tolerance=2e-7,
-                     name="crawl"),
-    ]  # fmt: skip
-    result = phases.run(bogie, weighing)
-    if not result.success:  # a kernel that cannot run this is itself a difference worth a digest of its own
-        digest.update(result.message.encode())
-    else:
-        state = result.final_state
-        for values in (state.u, state.v, state.history):
-            digest.update(np.ascontiguousarray(values).tobytes())
-    return digest.hexdigest()[:16]

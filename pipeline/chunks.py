@@ -28,7 +28,8 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import scipy
 
-from bogie.numerics import compile_target, numerics_digest
+from bogie.digest import numerics_digest
+from bogie.numerics import compile_target
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
@@ -57,9 +58,10 @@ def code_version() -> str:
 
     The sources of every project module the simulate stage imports (:func:`pipeline.deps.project_files`, the same
     list as the stage's code dependencies in ``dvc.yaml``), plus the versions of numpy, scipy, numba, pandas and
-    pyarrow, and the numerics digest of this process (:func:`bogie.numerics.numerics_digest`: a machine that computes
-    other last bits has another, and recomputes every part; :func:`process_numerics`). Any edit to those files invalidates every part file: a cosmetic edit costs a rerun, a missed physics
-    change would cost a wrong dataset. An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
+    pyarrow, and the numerics digest of this process (:func:`bogie.digest.numerics_digest`: a machine that computes
+    other last bits has another, and recomputes every part; :func:`process_numerics`). Any edit to those files
+    invalidates every part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong dataset.
+    An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
     """
     digest = hashlib.sha256()
     for path in project_files("pipeline.simulate"):
@@ -73,7 +75,7 @@ def code_version() -> str:
 
 @functools.lru_cache(maxsize=1)
 def process_numerics() -> str:
-    """What this process computes the runs with: its numerics digest (:func:`bogie.numerics.numerics_digest`) and the
+    """What this process computes the runs with: its numerics digest (:func:`bogie.digest.numerics_digest`) and the
     CPU numba compiles for, as ``"<digest> <target>"``. A part file records the one of the process that computed it
     (:data:`NUMERICS_KEY`); the same on every x86-64 machine with AVX2 and FMA, so it keeps the files the same bytes.
     """

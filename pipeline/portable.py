@@ -15,7 +15,7 @@ So it does not matter whether pytest, a notebook or a dask worker imported numpy
 machine or of the process, and :func:`check` reports it: another architecture (aarch64: another C library's
 functions, no x86-64-v3 target), an x86-64 machine without the x86-64-v3 level, numba compiling for another target
 in this process (a kernel compiled before bogie was imported, or ``NUMBA_CPU_NAME`` set), numba using Intel's SVML.
-Its last word is :func:`bogie.numerics.numerics_digest` against :data:`REFERENCE_DIGEST`, the digest of the machines
+Its last word is :func:`bogie.digest.numerics_digest` against :data:`REFERENCE_DIGEST`, the digest of the machines
 that made the committed results: whatever the cause, a process whose digest differs computes other last bits.
 """
 
@@ -24,10 +24,11 @@ from __future__ import annotations
 import sys
 
 from bogie import numerics
+from bogie.digest import numerics_digest
 
-#: :func:`bogie.numerics.numerics_digest` on the x86-64 machines (AVX2 and FMA, with or without AVX-512) that made the
+#: :func:`bogie.digest.numerics_digest` on the x86-64 machines (AVX2 and FMA, with or without AVX-512) that made the
 #: committed dvc.lock, with the library versions of constraints.txt
-REFERENCE_DIGEST = "0000000000000000"
+REFERENCE_DIGEST = "7792a8af7c1ce335"
 
 
 def numpy_dispatch() -> list[str]:
@@ -62,7 +63,7 @@ def check() -> list[str]:
                         "was compiled before bogie was imported, or NUMBA_CPU_NAME is set")  # fmt: skip
     if getattr(config, "USING_SVML", False):
         problems.append("numba uses Intel's SVML (icc_rt is installed), whose vector functions round differently")
-    digest = numerics.numerics_digest()
+    digest = numerics_digest()
     if digest != REFERENCE_DIGEST:
         problems.append(f"its numerics digest is {digest}, not the reference machines' {REFERENCE_DIGEST}")
     return problems
