@@ -4,5 +4,5 @@ from _fingerprint import fingerprint
 
 
 def pytest_report_header(config):
-    """The CPU and library facts that stored bit-for-bit runs depend on (tests/test_kernel_identity.py)."""
-    return "bogie machine: " + ", ".join(f"{k}={v}" for k, v in fingerprint().items() if k != "numpy_simd")
+    """The machine and library facts that stored bit-for-bit runs depend on (tests/test_kernel_identity.py)."""
+    return "bogie machine: " + ", ".join(f"{k}={v}" for k, v in fingerprint().items())

@@ -20,6 +20,7 @@ import pyarrow.parquet as pq
 import pytest
 import yaml
 
+from bogie import numerics
 from pipeline.chunks import HASH_KEY, NUMERICS_KEY, RunsLockedError, part_content, part_name, runs_lock
 from pipeline.config import load_params, parse_config
 from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
@@ -374,3 +375,41 @@ def test_killing_the_main_process_ends_its_workers(config, samples, tmp_path):
     for p in alive:
         p.kill()
     assert not alive, f"{len(alive)} workers outlived their main process by 90 s (loky's own default is 300 s)"
+
+
+# ---- what computed a part --------------------------------------------------------------------------------------
+def test_the_numerics_a_part_records_are_the_digest_and_the_compile_target():
+    # the digest of the weighing process and the compile target: the same on every x86-64 machine with AVX2 and
+    # FMA, so the files stay the same bytes there (docs/architecture.md, "The same bits on every machine")
+    from pipeline.chunks import process_numerics
+
+    digest, target = process_numerics().split(" ", 1)
+    assert re.fullmatch(r"[0-9a-f]{16}", digest)
+    assert target == numerics.compile_target()
+
+
+def test_a_part_file_records_its_numerics_in_its_metadata(config, samples, tmp_path):
+    from pipeline.chunks import process_numerics
+
+    run(config, {"fleet": samples["fleet"].iloc[:3]}, tmp_path / "runs", n_jobs=1)
+    (part,) = parts(tmp_path / "runs")
+    assert pq.read_schema(part).metadata[NUMERICS_KEY] == process_numerics().encode()
+
+
+def test_a_worker_that_computes_other_bits_is_refused_and_writes_nothing(config, samples, tmp_path):
+    # a dask worker whose numba compiles for a generic x86-64 CPU (no fused multiply-adds): its numerics digest
+    # differs, so its chunks would differ in the last bits; the stage stops before writing one. Its first task
+    # compiles the kernels for that target (a minute or two, once; then numba's cache has them)
+    from dask.distributed import LocalCluster
+
+    from pipeline.simulate import OtherNumericsError
+
+    out = tmp_path / "runs"
+    with LocalCluster(
+        n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
+        env={"NUMBA_CPU_NAME": "generic"},
+    ) as cluster:  # fmt: skip
+        with pytest.raises(OtherNumericsError, match="computes other last bits than this process"):
+            run(config, {"fleet": samples["fleet"].iloc[:3]}, out, backend="dask",
+                dask_scheduler=cluster.scheduler_address)  # fmt: skip
+    assert parts(out) == []
