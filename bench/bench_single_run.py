@@ -4,10 +4,10 @@
 ``bench_nonlinear``'s problem (``triaxle_stage1()``, ISO 8608 class B, 15 m/s, 20 s in fixed 1 ms steps) in child
 processes of two kinds, alternately, so that a burst of other work on the shared machine falls on both:
 
-* ``pinned``: numba compiling for x86-64-v3 and numpy limited to its AVX2 loops, as every pipeline stage runs the
-  kernel (the child imports :mod:`pipeline` first, :mod:`pipeline.portable`);
-* ``host``: numba compiling for this machine's own CPU, as ``import bogie`` alone gives (the pinning variables
-  removed from the child's environment).
+* ``pinned``: numba compiling for x86-64-v3, as ``import bogie`` fixes it (:func:`bogie.numerics.fix_compile_target`)
+  in every stage and every user's process;
+* ``host``: numba compiling for this machine's own CPU and its features (``NUMBA_CPU_NAME`` and
+  ``NUMBA_CPU_FEATURES`` set to them in the child's environment, which bogie leaves as the user's choice).
 
 Each child loads (or compiles) its kernels, checks that the run succeeds with ``round(duration / dt)`` steps, then
 times :data:`REPEATS` runs. Printed: each round's median per kind, the median of all runs and the least, the time per
@@ -30,10 +30,8 @@ import subprocess
 import sys
 from pathlib import Path
 
-import pipeline  # noqa: F401 - first: pins this process's environment, which the pinned children inherit
 from bench.bench_nonlinear import DT, DURATION, ROAD, SPEED
 from bench.bench_protocol import reference_tree, tree_env
-from pipeline.portable import PINNED
 
 ROOT = Path(__file__).resolve().parent.parent
 #: timed runs per child process [-]
@@ -75,12 +73,16 @@ print(json.dumps({"times": times, "cpu": cpu, "steps": len(first.t) - 1,
 def child(kind: str, repeats: int, tree: Path = ROOT) -> dict:
     """One child process of ``kind`` importing ``tree``'s code: its run times [s], numba's CPU and the loads.
 
-    ``host``: the pinning variables removed from its environment; any other kind: set as this process set them
-    (:mod:`pipeline.portable`, which :mod:`pipeline` ran on import), whatever the tree's own code does.
+    ``host``: numba's target set to this machine's CPU and features in its environment; any other kind: the target
+    the tree's own code chooses (x86-64-v3 since issue 26; the pin of ``pipeline`` before it, which this process no
+    longer sets, so an older tree's kernel compiles for the host).
     """
-    env = tree_env(tree)
+    env = {k: v for k, v in tree_env(tree).items() if k not in ("NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES")}
     if kind == "host":
-        env = {k: v for k, v in env.items() if k not in PINNED}
+        import llvmlite.binding as llvm
+
+        env["NUMBA_CPU_NAME"] = llvm.get_host_cpu_name()
+        env["NUMBA_CPU_FEATURES"] = llvm.get_host_cpu_features().flatten()
     arguments = [str(repeats), str(SPEED), str(DURATION), str(DT), json.dumps(ROAD)]
     done = subprocess.run([sys.executable, "-c", CHILD, kind, *arguments], cwd=tree, env=env, check=True,
                           capture_output=True, text=True)  # fmt: skip

@@ -406,8 +406,8 @@ def test_a_worker_that_computes_other_bits_is_refused_and_writes_nothing(config,
 
     out = tmp_path / "runs"
     with LocalCluster(
-        n_workers=1, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None,
-        env={"NUMBA_CPU_NAME": "generic"},
+        n_workers=1, threads_per_worker=2, processes=True, host="127.0.0.1", dashboard_address=None,
+        env={"NUMBA_CPU_NAME": "generic"},  # two threads: joblib runs a one-thread cluster's tasks in this process
     ) as cluster:  # fmt: skip
         with pytest.raises(OtherNumericsError, match="computes other last bits than this process"):
             run(config, {"fleet": samples["fleet"].iloc[:3]}, out, backend="dask",
