@@ -10,10 +10,10 @@ its own child process:
 * ``no FMA``: numba compiling for a generic x86-64 CPU (``NUMBA_CPU_NAME=generic``): no fused multiply-adds, so
   nearly every operation of the kernels rounds differently, as another compiler target or architecture would.
 
-It prints, for each variant against the reference and each protocol, the share of runs whose result differs at all
-and the median and largest relative difference of the largest axle-load deviation and the spread, and which bogies
-differ most with their friction settings. About 3 minutes (the ``no FMA`` child compiles the kernels for its target
-the first time).
+It prints, for each variant against the reference and each protocol, the share of runs whose result differs at all,
+the median and largest relative difference of the largest axle-load deviation and the spread, how many of the
+survey's flags (outside 5 %, over 10 %) flipped, and which bogies differ most with their friction settings. About
+15 s with the kernels compiled; 2-3 minutes the first time (the ``no FMA`` child compiles them for its target).
 """
 
 from __future__ import annotations
@@ -29,6 +29,8 @@ from pathlib import Path
 
 ROOT = Path(__file__).resolve().parents[1]
 COLUMNS = ("max_deviation", "spread_kg")
+#: the survey's flags of a run: a flip changes a share the survey counts
+FLAGS = ("outside_5pct", "over_10pct")
 
 
 def _weigh(n_bogies: int, ulp: bool, out: str) -> None:
@@ -91,7 +93,9 @@ def main(argv: list[str] | None = None) -> int:
                 differ |= x != y
                 rel = np.abs(y - x) / np.maximum(np.abs(x), 1e-300)
                 stats.append(f"{np.median(rel):.1e} / {np.max(rel):.1e}")
-            print(f"{variant:7}  {protocol:8}  {int(differ.sum()):4d} of {len(differ):4d}  " + "  ".join(stats))
+            flips = sum(int((a[f].astype(bool).to_numpy() != b[f].astype(bool).to_numpy()).sum()) for f in FLAGS)
+            print(f"{variant:7}  {protocol:8}  {int(differ.sum()):4d} of {len(differ):4d}  " + "  ".join(stats)
+                  + f"  {flips} flags flipped")  # fmt: skip
         rel = (other.loc[both, "max_deviation"] - ref.loc[both, "max_deviation"]).abs()
         worst = ref.loc[rel.sort_values(ascending=False).index[:5]]
         print(f"  {variant}: the runs whose max_deviation moved most (absolute, share of the group mean):")
