@@ -29,6 +29,7 @@ use numpy's.
 from __future__ import annotations
 
 import math
+import os
 import platform
 import sys
 
@@ -84,20 +85,25 @@ def fix_compile_target(flags: frozenset[str] | None = None) -> tuple[str, str] |
     """Make numba compile for :data:`COMPILE_TARGET` in this process, if this host can run it; return the target
     numba compiles for, or None for the host CPU.
 
-    numba reads the target CPU when it makes its code generator, on the first compilation or cache load, so setting
-    its configuration here, on ``import bogie``, works whether or not numba was imported before, as long as nothing
-    was compiled yet. A target the user chose (``NUMBA_CPU_NAME``) is kept. On a host without the x86-64-v3 level
-    (or not x86-64) numba compiles for the host, and the last bits may differ from an x86-64-v3 machine's.
+    numba reads the target CPU when it makes its code generator, on the first compilation or cache load, so this
+    works whether or not numba was imported before, as long as nothing was compiled yet. It sets numba's
+    configuration and the environment variables numba reads it from (``NUMBA_CPU_NAME``, ``NUMBA_CPU_FEATURES``):
+    numba rereads its whole configuration from the environment at a compilation whenever a ``NUMBA_`` variable
+    changed (bogie's own ``NUMBA_CACHE_DIR`` does, on import), which would otherwise put the host's name back in the
+    configuration and in the cache's keys while the code generator keeps compiling for x86-64-v3. Child processes
+    inherit the variables. A target the user chose (``NUMBA_CPU_NAME``) is kept. On a host without the x86-64-v3
+    level (or not x86-64) numba compiles for the host, and the last bits may differ from an x86-64-v3 machine's.
     """
-    from numba.core import config
-
-    if config.CPU_NAME is not None:
-        return (config.CPU_NAME, config.CPU_FEATURES or "")
+    if "NUMBA_CPU_NAME" in os.environ:
+        return (os.environ["NUMBA_CPU_NAME"], os.environ.get("NUMBA_CPU_FEATURES", ""))
     if not is_x86_64() or not V3_FLAGS <= (cpu_flags() if flags is None else flags):
         return None
     if _codegen_started():
         return None
-    config.CPU_NAME, config.CPU_FEATURES = COMPILE_TARGET
+    os.environ["NUMBA_CPU_NAME"], os.environ["NUMBA_CPU_FEATURES"] = COMPILE_TARGET
+    config = sys.modules.get("numba.core.config")
+    if config is not None:
+        config.CPU_NAME, config.CPU_FEATURES = COMPILE_TARGET
     return COMPILE_TARGET
 
 

@@ -96,8 +96,16 @@ def _small_params(tmp_path) -> str:
     return str(path)
 
 
+#: what a fresh process must not inherit from this one (bogie set numba's target variables here on import)
+INHERITED = ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE", "NUMBA_CPU_NAME", "NUMBA_CPU_FEATURES", "NUMBA_CACHE_DIR")
+
+
+def _fresh_env(**changes: str) -> dict[str, str]:
+    return {**{k: v for k, v in os.environ.items() if k not in INHERITED}, **changes}
+
+
 def _run(code: str, *args: str, env: dict[str, str] | None = None, prelude: str = "") -> str:
-    clean = {k: v for k, v in os.environ.items() if k not in ("NPY_DISABLE_CPU_FEATURES", "OPENBLAS_CORETYPE")}
+    clean = _fresh_env()
     out = subprocess.run(
         [sys.executable, "-c", prelude + code, *args], cwd=ROOT, env={**clean, **(env or {})},
         capture_output=True, text=True, check=False, timeout=900,
@@ -204,6 +212,23 @@ def test_import_bogie_fixes_the_compile_target_whatever_was_imported_before():
 
 
 @pytest.mark.skipif(not V3_HOST, reason="needs an x86-64 host with every instruction of the x86-64-v3 level")
+def test_the_compile_target_holds_through_a_first_compilation_with_an_empty_cache(tmp_path):
+    # numba rereads its configuration from the environment at a compilation once a NUMBA_ variable changed (bogie
+    # sets NUMBA_CACHE_DIR on import): the target must survive that, as it must in a fresh clone's first stage
+    code = (
+        "import numba, bogie\n"
+        "from bogie import numerics\n"
+        "numerics.exp(1.0)\n"  # compiled now: the cache is empty
+        "from numba.core import config\n"
+        "print(numerics.compile_target(), config.CPU_NAME)\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=_fresh_env(XDG_CACHE_HOME=str(tmp_path)),
+                         capture_output=True, text=True, check=True)  # fmt: skip
+    assert out.stdout.split() == ["x86-64-v3", "+avx2,+fma", "x86-64-v3"]
+    assert any(tmp_path.rglob("*.nbi")), "nothing was compiled into the empty cache"
+
+
+@pytest.mark.skipif(not V3_HOST, reason="needs an x86-64 host with every instruction of the x86-64-v3 level")
 def test_a_kernel_compiled_before_bogie_is_reported_once_with_what_to_do():
     code = (
         "import numba\n"
@@ -211,7 +236,8 @@ def test_a_kernel_compiled_before_bogie_is_reported_once_with_what_to_do():
         "from pipeline import portable\n"
         "print(portable.warn_if_unportable('stage'))\n"
     )
-    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, capture_output=True, text=True, check=True)
+    out = subprocess.run([sys.executable, "-c", code], cwd=ROOT, env=_fresh_env(), capture_output=True, text=True,
+                         check=True)  # fmt: skip
     assert "numba compiles for host, not x86-64-v3" in out.stdout
     assert out.stderr.count("stage: note:") == 1 and "constraints.txt" in out.stderr
 
