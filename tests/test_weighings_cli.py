@@ -44,7 +44,7 @@ def test_the_json_follows_the_filters(capsys):
 def test_the_table_names_the_skipped_lines_and_the_statistics_in_percent(capsys):
     assert main(["weighings", str(DATA / "site.ditis"), "--format", "ditis", "--min-group-load-t", "15"]) == 0
     out = capsys.readouterr().out
-    assert "5 records read, 4 skipped" in out and "wrong length: 1, line 9" in out
+    assert "5 records read, 4 skipped" in out and "record too short for its stated axles: 1, line 9" in out
     table = [line.split() for line in out.splitlines() if line.startswith(("tandem ", "triaxle "))]
     rows = {row[0]: row for row in reversed(table)}  # the first rows are the statistics, then the quantiles
     # group, n, mean spread [kg], median spread [%], outside 5 % [%], over 10 % [%]
