@@ -74,3 +74,8 @@ def test_a_file_in_another_format_or_missing_is_an_error_not_a_traceback(capsys)
     assert err.startswith("bogie: error: ") and "(format bedit)" in err and "--format mon?" in err
     assert main(["weighings", str(DATA / "missing.mon"), "--format", "mon"]) == 2
     assert "missing.mon: No such file or directory" in capsys.readouterr().err
+
+
+def test_format_auto_is_the_default_and_the_table_says_which_format_it_found(capsys):
+    assert main(["weighings", str(DATA / "site.bedit")]) == 0
+    assert "(format auto: bedit): 5 records read, 4 skipped" in capsys.readouterr().out

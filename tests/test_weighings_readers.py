@@ -184,7 +184,7 @@ def test_a_file_in_another_format_is_refused_naming_the_expected_and_the_found_f
 
 
 def test_an_unknown_format_is_refused():
-    with pytest.raises(ValueError, match="format 'xls' unknown; allowed: csv, mon, castor, bedit, ditis"):
+    with pytest.raises(ValueError, match="format 'xls' unknown; allowed: auto, csv, mon, castor, bedit, ditis"):
         read_weighings(DATA / "site.csv", "xls")
 
 
@@ -230,3 +230,23 @@ def test_a_csv_file_with_only_its_header_is_refused(tmp_path):
     (tmp_path / "h.csv").write_text(CSV_HEADER)
     with pytest.raises(ValueError, match=r"no records: expected CSV layout \(format csv\), found a header and no"):
         read_weighings(tmp_path / "h.csv", "csv")
+
+
+@pytest.mark.parametrize("fmt", ["csv", "mon", "castor", "bedit", "ditis"])
+def test_format_auto_finds_each_files_layout_and_says_which(fmt):
+    result = read_weighings(DATA / f"site.{fmt}")  # auto is the default
+    assert result.format == fmt and (result.n_read, result.n_skipped) == (5, 4)
+
+
+def test_format_auto_refuses_when_no_layout_or_two_fit_naming_the_candidates(tmp_path):
+    (tmp_path / "junk.txt").write_text("hello world\nnot a record\n")
+    with pytest.raises(ValueError, match=r"format auto: no known format fits .*mon: 0 of 2 good.*--format"):
+        read_weighings(tmp_path / "junk.txt", "auto")
+    # two MON and two CASTOR records: neither layout fits more than half the lines
+    mon = (DATA / "site.mon").read_text().splitlines()[1]
+    castor = (DATA / "site.castor").read_text().splitlines()[1]
+    (tmp_path / "mixed.txt").write_text(f"{mon}\n{mon}\n{castor}\n{castor}\n")
+    with pytest.raises(ValueError, match=r"no known format fits .*mon: 2 of 4 good.*castor: 2 of 4 good"):
+        read_weighings(tmp_path / "mixed.txt")
+    with pytest.raises(ValueError, match=r"no records: format auto found an empty file"):
+        read_weighings(DATA / "empty.ditis")

@@ -24,8 +24,8 @@ import pandas as pd
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
 __all__ = [
-    "AXLE_LOAD_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SPACING_RANGE", "SPEED_RANGE", "ReadResult",
-    "read_weighings",
+    "AXLE_LOAD_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES", "SPACING_RANGE", "SPEED_RANGE", "ReadResult",
+    "detect_format", "read_weighings",
 ]  # fmt: skip
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
@@ -319,7 +319,35 @@ def _frame(rows: list[tuple[int, dict]]) -> pd.DataFrame:
     return frame
 
 
-def read_weighings(path: str | Path, fmt: str) -> ReadResult:
+#: non-blank lines ``fmt="auto"`` tries every layout on [-]
+SNIFF_LINES: int = 50
+
+
+def detect_format(lines: list[str], path: str = "") -> str:
+    """The one known format in which more than half of the first :data:`SNIFF_LINES` non-blank lines are good
+    records; a :class:`ValueError` naming the candidates when none or more than one fits."""
+    head = [line for line in lines if line.strip()][:SNIFF_LINES]
+    fits, tried = [], []
+    for fmt in FORMATS:
+        try:
+            results = [r for _, r in _records(head, fmt, path)]
+        except ValueError:
+            tried.append(f"{fmt}: not its header")
+            continue
+        good = sum(isinstance(r, dict) for r in results)
+        tried.append(f"{fmt}: {good} of {len(results)} good")
+        if results and good > len(results) / 2:
+            fits.append(fmt)
+    if len(fits) == 1:
+        return fits[0]
+    what = "no known format fits" if not fits else f"more than one format fits ({', '.join(fits)})"
+    raise ValueError(
+        f"{path}: format auto: {what} the first {len(head)} non-blank lines ({'; '.join(tried)}); "
+        f"name one with --format ({', '.join(FORMATS)})"
+    )
+
+
+def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
     """Read a file of weighings (one vehicle a record) in format ``fmt``.
 
     Parameters
@@ -327,7 +355,9 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     path
         The file (text; fixed-width records one a line, or CSV with a header line).
     fmt
-        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``).
+        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``), or ``auto``
+        (default): the one layout in which most of the first :data:`SNIFF_LINES` non-blank lines parse
+        (:func:`detect_format`); ``ReadResult.format`` says which.
 
     Returns
     -------
@@ -342,11 +372,15 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     OSError
         If the file cannot be read.
     """
-    if fmt not in FORMATS:
-        raise ValueError(f"format {fmt!r} unknown; allowed: {', '.join(FORMATS)}")
+    if fmt != "auto" and fmt not in FORMATS:
+        raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
     path = Path(path)
     with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:  # a BOM from a spreadsheet
         lines = fh.read().splitlines()
+    if fmt == "auto":
+        if not any(line.strip() for line in lines):
+            raise ValueError(f"{path}: no records: format auto found an empty file")
+        fmt = detect_format(lines, str(path))
     name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
     rows: list[tuple[int, dict]] = []
     skipped: Counter = Counter()
