@@ -136,7 +136,8 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     if args.json:
         print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
         return 0
-    print(f"{args.path} ({args.format}): {survey.read.summary()}")
+    shown = args.format if args.format != "auto" else f"format auto: {survey.read.format}"
+    print(f"{args.path} ({shown}): {survey.read.summary()}")
     print(
         f"{len(survey.groups)} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
         f"{args.position}, axles at most {args.group_spacing_m:g} m apart"
@@ -182,7 +183,12 @@ def build_parser() -> argparse.ArgumentParser:
         "filters and print the survey statistics of the tandems and tri-axles.",
     )
     weigh.add_argument("path", help="the file of records")
-    weigh.add_argument("--format", required=True, choices=FORMATS, help="record layout (docs/weighings.md)")
+    weigh.add_argument(
+        "--format",
+        default="auto",
+        choices=("auto", *FORMATS),
+        help="record layout (docs/weighings.md); auto (default): the one that fits the first lines",
+    )
     weigh.add_argument(
         "--min-group-load-t", type=_range("--min-group-load-t", 0.0, 100.0, "t"), default=0.0,
         help="keep groups of at least this load [t] (default 0: every group)",

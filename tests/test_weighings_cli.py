@@ -44,7 +44,7 @@ def test_the_json_follows_the_filters(capsys):
 def test_the_table_names_the_skipped_lines_and_the_statistics_in_percent(capsys):
     assert main(["weighings", str(DATA / "site.ditis"), "--format", "ditis", "--min-group-load-t", "15"]) == 0
     out = capsys.readouterr().out
-    assert "5 records read, 4 skipped" in out and "wrong length: 1, line 9" in out
+    assert "5 records read, 4 skipped" in out and "record too short for its stated axles: 1, line 9" in out
     table = [line.split() for line in out.splitlines() if line.startswith(("tandem ", "triaxle "))]
     rows = {row[0]: row for row in reversed(table)}  # the first rows are the statistics, then the quantiles
     # group, n, mean spread [kg], median spread [%], outside 5 % [%], over 10 % [%]
@@ -74,3 +74,8 @@ def test_a_file_in_another_format_or_missing_is_an_error_not_a_traceback(capsys)
     assert err.startswith("bogie: error: ") and "(format bedit)" in err and "--format mon?" in err
     assert main(["weighings", str(DATA / "missing.mon"), "--format", "mon"]) == 2
     assert "missing.mon: No such file or directory" in capsys.readouterr().err
+
+
+def test_format_auto_is_the_default_and_the_table_says_which_format_it_found(capsys):
+    assert main(["weighings", str(DATA / "site.bedit")]) == 0
+    assert "(format auto: bedit): 5 records read, 4 skipped" in capsys.readouterr().out

@@ -1,113 +1,250 @@
 """The record layouts the readers know: the documented CSV columns and the fixed-width WIM exchange formats.
 
-Every fixed-width layout is data, not code: one :class:`FixedWidthLayout` per format, its fields in record order,
-each with its width in characters and the factor that turns its integer into SI (kg, m, m/s). ``docs/weighings.md``
-prints each layout with an example record and says where it comes from. **No authoritative specification of MON,
-CASTOR, BeDIT or DITIS was available to this project**: the widths and units below are the ones the project's
-issue 13 states (MON: a 9-character head, a 4-digit year, milliseconds, a number of axle groups, 5-character axle
-weights [kg] and spacings [mm]) and, for everything else, assumptions marked ``assumed`` in each layout's
-``assumed`` tuple. Correct a layout here, against the format's documentation, and the reader follows.
+Every fixed-width layout is data, not code: one :class:`FixedWidthLayout` per format, each header field with its own
+0-based start offset and width, and the per-axle block (axle weight, DITIS's axle width, spacing) with its start and
+stride. Source: ``/work/shared/reference/wim-record-formats.md`` (the BTLS documentation's "Traffic file format"
+table, checked there against the character offsets of BTLS' own readers), one section per format, cited on each
+entry. ``docs/weighings.md`` prints the four layouts. ``assumed`` lists, per layout, only what that reference does
+not say (the places it is silent); every offset, width and unit is the reference's.
+
+Conventions (the reference's preamble): one vehicle a line, no separators; every field an unsigned integer
+(Fortran ``In``), right-aligned, padded with spaces or zeros; a field is ``line[start:start + width]``. ``scale``
+turns the integer into SI (kg, m, m/s, s); ``None`` marks a count, a code or a calendar field. Axle fields repeat
+after the header, axle i (1-based) at ``axles.start + axles.stride * (i - 1)``: a field with ``per="axle"`` is
+there for every one of the n axles, one with ``per="gap"`` (the spacing from axle i to i + 1) for i < n only. The
+spacing slot after the last axle and any padding after it may or may not be in the file and are ignored; a line
+that does not reach the end of the last axle's ``per="axle"`` fields (:meth:`FixedWidthLayout.min_record_length`)
+is a bad record.
 """
 
 from __future__ import annotations
 
 from dataclasses import dataclass
 
-__all__ = ["CSV_COLUMNS", "FORMATS", "LAYOUTS", "Field", "FixedWidthLayout", "KMH", "DMS"]
+__all__ = [
+    "CM", "CSV_COLUMNS", "DM", "DMS", "FORMATS", "KG", "KG100", "KMH", "LAYOUTS", "MM", "MS", "REFERENCE", "S100",
+    "AxleBlock", "Field", "FixedWidthLayout",
+]  # fmt: skip
 
-#: km/h -> m/s [m/s per km/h]
-KMH = 1.0 / 3.6
-#: dm/s -> m/s [m/s per dm/s]
+#: the reference every fixed-width layout is taken from
+REFERENCE = "wim-record-formats.md (shared reference; the BTLS documentation's traffic file format table)"
+
+# ---- units: the integer as written -> SI ---------------------------------------------------------------------------
+#: kg -> kg
+KG = 1.0
+#: "kg/100", hundreds of kilograms (123 = 12 300 kg) -> kg
+KG100 = 100.0
+#: mm -> m
+MM = 1e-3
+#: cm -> m
+CM = 1e-2
+#: dm -> m
+DM = 1e-1
+#: dm/s -> m/s
 DMS = 0.1
+#: km/h -> m/s
+KMH = 1.0 / 3.6
+#: hundredths of a second -> s
+S100 = 0.01
+#: milliseconds -> s
+MS = 1e-3
 
 
 @dataclass(frozen=True)
 class Field:
-    """One fixed-width numeric field: ``width`` characters, an unsigned integer, times ``scale`` gives SI."""
+    """One fixed-width unsigned integer ``line[start:start + width]``; times ``scale`` (if not None) gives SI.
 
+    ``start`` is 0-based; in an :class:`AxleBlock` it is relative to the block of the axle. ``per`` is ``"record"``
+    (a header field), ``"axle"`` (one per axle) or ``"gap"`` (one per pair of consecutive axles: n - 1).
+    """
+
+    name: str
+    start: int
     width: int
-    scale: float = 1.0
-    unit: str = "-"
+    scale: float | None
+    unit: str
+    per: str = "record"
+
+    @property
+    def end(self) -> int:
+        """First offset past the field (``[start, end)``) [-]."""
+        return self.start + self.width
+
+
+@dataclass(frozen=True)
+class AxleBlock:
+    """The per-axle fields: axle i (1-based) starts at ``start + stride * (i - 1)``."""
+
+    start: int  # the header's width
+    stride: int  # characters per axle
+    fields: tuple[Field, ...]
 
 
 @dataclass(frozen=True)
 class FixedWidthLayout:
-    """A fixed-width record: head, date, time, speed, gross weight, length, number of axles, [number of axle
-    groups], lane, direction, then ``n`` axle weights and ``n - 1`` axle spacings, in that order.
+    """A fixed-width record: header fields at their own offsets, then one :class:`AxleBlock` per axle.
 
-    ``date`` is ``"YYYYMMDD"`` or ``"YYMMDD"`` (two-digit years are 2000-2099); ``time_fraction`` the digits after
-    HHMMSS (3: milliseconds, 2: hundredths, 0: none). Scales turn the integers into kg, m and m/s.
+    ``max_axles`` is the format's own limit; ``year_digits`` 2 (century not given: read as 2000-2099) or 4;
+    ``direction_base`` 1 (direction written 1 or 2) or 0 (written 0 or 1): the reader stores ``written -
+    direction_base + 1``, so the direction is 1 or 2 in every format. ``weight_step_kg`` is the format's weight
+    resolution (None: the file's own, MON).
     """
 
     name: str
-    head: int
-    date: str
-    time_fraction: int
-    speed: Field
-    gross_weight: Field
-    length: Field
-    n_axles: int
-    n_groups: int  # 0: the format has no number of axle groups
-    lane: int
-    direction: int
-    axle_load: Field
-    spacing: Field
+    section: str  # the reference's section
+    header: tuple[Field, ...]
+    axles: AxleBlock
+    max_axles: int
+    year_digits: int
+    direction_base: int
+    weight_step_kg: float | None
     source: str
     assumed: tuple[str, ...]
 
     @property
     def fixed_width(self) -> int:
-        """Characters before the first axle weight [-]."""
-        return (
-            self.head + len(self.date) + 6 + self.time_fraction + self.speed.width + self.gross_weight.width
-            + self.length.width + self.n_axles + self.n_groups + self.lane + self.direction
-        )  # fmt: skip
+        """Characters before the first axle (the header) [-]: CASTOR 34, BeDIT 35, DITIS 37, MON 50."""
+        return max(f.end for f in self.header)
 
-    def record_length(self, n_axles: int) -> int:
-        """Characters of a record of ``n_axles`` axles (without the line end) [-]."""
-        return self.fixed_width + n_axles * self.axle_load.width + (n_axles - 1) * self.spacing.width
+    def field(self, name: str) -> Field:
+        """The header field ``name``."""
+        return next(f for f in self.header if f.name == name)
+
+    def min_record_length(self, n_axles: int) -> int:
+        """The shortest line holding ``n_axles`` axles: through the last axle's per-axle fields [-].
+
+        CASTOR 5n + 32, BeDIT 6n + 32, DITIS 9n + 34, MON 10n + 45.
+        """
+        last = max(f.end for f in self.axles.fields if f.per == "axle")
+        return self.axles.start + self.axles.stride * (n_axles - 1) + last
+
+    def axle_field_at(self, name: str, axle: int) -> tuple[int, int]:
+        """``(start, end)`` 0-based of the axle field ``name`` of axle ``axle`` (1-based) [-]."""
+        f = next(f for f in self.axles.fields if f.name == name)
+        start = self.axles.start + self.axles.stride * (axle - 1) + f.start
+        return start, start + f.width
 
 
-_ISSUE = "bogie issue 13 (no format specification was available; see docs/weighings.md)"
+#: the reference does not say these, for any of the four formats (docs/weighings.md, "Where the reference is silent")
+_SILENT = (
+    "which physical direction each direction code means",
+    "whether the lane is numbered within its direction or across the road",
+    "the reference point and sign of the transverse position",
+    "how a missing value is written (an all-blank field is read as a bad record)",
+    "time zone (read as local time, as written)",
+)
+_DDMMYY_HHMMSSCC = (  # CASTOR and BeDIT: day, month, year (2 digits), hour, minute, second, second/100, I2 each
+    Field("day", 4, 2, None, "-"),
+    Field("month", 6, 2, None, "-"),
+    Field("year", 8, 2, None, "-"),
+    Field("hour", 10, 2, None, "-"),
+    Field("minute", 12, 2, None, "-"),
+    Field("second", 14, 2, 1.0, "s"),
+    Field("second_100", 16, 2, S100, "s/100"),
+)
 
 LAYOUTS: dict[str, FixedWidthLayout] = {
+    # reference, section "MON (no fixed axle limit; 2-digit axle count)": header 50, 10 characters per axle
     "mon": FixedWidthLayout(
-        name="MON", head=9, date="YYYYMMDD", time_fraction=3,
-        speed=Field(4, DMS, "dm/s"), gross_weight=Field(6, 1.0, "kg"), length=Field(5, 1e-3, "mm"),
-        n_axles=2, n_groups=2, lane=1, direction=1,
-        axle_load=Field(5, 1.0, "kg"), spacing=Field(5, 1e-3, "mm"),
-        source=f"{_ISSUE}: 9-character head, 4-digit year, milliseconds, number of axle groups, 5-character axle "
-        "weights [kg] and spacings [mm]",
-        assumed=("field order", "month, day, hour, minute, second 2 digits each", "speed 4 digits [dm/s]",
-                 "gross weight 6 digits [kg]", "length 5 digits [mm]", "number of axles 2 digits",
-                 "number of axle groups 2 digits", "lane 1 digit", "direction 1 character",
-                 "all weights, then all spacings"),
+        name="MON", section="MON (no fixed axle limit; 2-digit axle count)",
+        header=(
+            Field("head", 0, 9, None, "-"),  # I9
+            Field("day", 9, 2, None, "-"),
+            Field("month", 11, 2, None, "-"),
+            Field("year", 13, 4, None, "-"),
+            Field("hour", 17, 2, None, "-"),
+            Field("minute", 19, 2, None, "-"),
+            Field("millisecond", 21, 5, MS, "ms"),  # milliseconds of the minute, 0-59 999: no separate seconds
+            Field("n_axles", 26, 2, None, "-"),
+            Field("n_groups", 28, 2, None, "-"),  # the WIM system's own count of axle groups
+            Field("gross_weight", 30, 6, KG, "kg"),
+            Field("speed", 36, 3, KMH, "km/h"),
+            Field("length", 39, 5, MM, "mm"),
+            Field("lane", 44, 1, None, "-"),  # lane BEFORE direction in MON only
+            Field("direction", 45, 1, None, "0|1"),  # zero-based
+            Field("transverse_position", 46, 4, MM, "mm"),
+        ),
+        axles=AxleBlock(start=50, stride=10, fields=(
+            Field("axle_load", 0, 5, KG, "kg", "axle"),  # 50 + 10(i-1)
+            Field("spacing", 5, 5, MM, "mm", "gap"),  # 55 + 10(i-1)
+        )),
+        max_axles=99, year_digits=4, direction_base=0, weight_step_kg=None,
+        source=f"{REFERENCE}, section MON",
+        assumed=(*_SILENT, "how the WIM system forms the axle groups it counts (kept, not used for grouping)"),
     ),
+    # reference, section "CASTOR (at most 9 axles)": header 34, 5 characters per axle
     "castor": FixedWidthLayout(
-        name="CASTOR", head=6, date="YYMMDD", time_fraction=2,
-        speed=Field(3, KMH, "km/h"), gross_weight=Field(4, 100.0, "100 kg"), length=Field(3, 0.1, "dm"),
-        n_axles=2, n_groups=0, lane=1, direction=1,
-        axle_load=Field(3, 100.0, "100 kg"), spacing=Field(3, 0.1, "dm"),
-        source=f"{_ISSUE}: the issue names kg/100, dm and km/h among the formats' units without saying which "
-        "format uses which",
-        assumed=("every width", "every unit", "field order", "two-digit year (2000-2099)",
-                 "time to hundredths of a second (the COST 323 recommendation hh:mm:ss:cc)"),
+        name="CASTOR", section="CASTOR (at most 9 axles)",
+        header=(
+            Field("head", 0, 4, None, "-"),  # "head (record / site number)", I4
+            *_DDMMYY_HHMMSSCC,
+            Field("speed", 18, 3, DMS, "dm/s"),
+            Field("gross_weight", 21, 4, KG100, "kg/100"),
+            Field("length", 25, 3, DM, "dm"),
+            Field("n_axles", 28, 1, None, "-"),  # I1
+            Field("direction", 29, 1, None, "1|2"),
+            Field("lane", 30, 1, None, "-"),
+            Field("transverse_position", 31, 3, DM, "dm"),
+        ),
+        axles=AxleBlock(start=34, stride=5, fields=(
+            Field("axle_load", 0, 3, KG100, "kg/100", "axle"),  # 34 + 5(i-1)
+            Field("spacing", 3, 2, DM, "dm", "gap"),  # 37 + 5(i-1); I2: at most 9.9 m
+        )),
+        max_axles=9, year_digits=2, direction_base=1, weight_step_kg=100.0,
+        source=f"{REFERENCE}, section CASTOR",
+        assumed=(*_SILENT, "the century of the two-digit year (read as 2000-2099)"),
     ),
+    # reference, section "BeDIT (at most 20 axles)": header 35, 6 characters per axle
     "bedit": FixedWidthLayout(
-        name="BeDIT", head=8, date="YYYYMMDD", time_fraction=2,
-        speed=Field(4, DMS, "dm/s"), gross_weight=Field(6, 1.0, "kg"), length=Field(4, 0.1, "dm"),
-        n_axles=2, n_groups=0, lane=2, direction=1,
-        axle_load=Field(5, 1.0, "kg"), spacing=Field(4, 0.1, "dm"),
-        source=_ISSUE,
-        assumed=("every width", "every unit", "field order"),
+        name="BeDIT", section="BeDIT (at most 20 axles)",
+        header=(
+            Field("head", 0, 4, None, "-"),
+            *_DDMMYY_HHMMSSCC,
+            Field("speed", 18, 3, DMS, "dm/s"),
+            Field("gross_weight", 21, 4, KG100, "kg/100"),
+            Field("length", 25, 3, DM, "dm"),
+            Field("n_axles", 28, 2, None, "-"),  # I2
+            Field("direction", 30, 1, None, "0|1"),  # zero-based
+            Field("lane", 31, 1, None, "-"),
+            Field("transverse_position", 32, 3, DM, "dm"),
+        ),
+        axles=AxleBlock(start=35, stride=6, fields=(
+            Field("axle_load", 0, 3, KG100, "kg/100", "axle"),  # 35 + 6(i-1)
+            Field("spacing", 3, 3, DM, "dm", "gap"),  # 38 + 6(i-1)
+        )),
+        max_axles=20, year_digits=2, direction_base=0, weight_step_kg=100.0,
+        source=f"{REFERENCE}, section BeDIT",
+        assumed=(*_SILENT, "the century of the two-digit year (read as 2000-2099)"),
     ),
+    # reference, section "DITIS (at most 20 axles)": header 37, 9 characters per axle
     "ditis": FixedWidthLayout(
-        name="DITIS", head=6, date="YYYYMMDD", time_fraction=0,
-        speed=Field(3, KMH, "km/h"), gross_weight=Field(4, 100.0, "100 kg"), length=Field(5, 1e-3, "mm"),
-        n_axles=2, n_groups=0, lane=1, direction=1,
-        axle_load=Field(3, 100.0, "100 kg"), spacing=Field(5, 1e-3, "mm"),
-        source=_ISSUE,
-        assumed=("every width", "every unit", "field order"),
+        name="DITIS", section="DITIS (at most 20 axles)",
+        header=(
+            Field("head", 0, 4, None, "-"),
+            Field("day", 4, 2, None, "-"),
+            Field("month", 6, 2, None, "-"),
+            Field("year", 8, 4, None, "-"),
+            Field("hour", 12, 2, None, "-"),
+            Field("minute", 14, 2, None, "-"),
+            Field("second", 16, 2, 1.0, "s"),
+            Field("second_100", 18, 2, S100, "s/100"),
+            Field("speed", 20, 3, DMS, "dm/s"),
+            Field("gross_weight", 23, 4, KG100, "kg/100"),
+            Field("length", 27, 3, DM, "dm"),
+            Field("n_axles", 30, 2, None, "-"),
+            Field("direction", 32, 1, None, "1|2"),
+            Field("lane", 33, 1, None, "-"),
+            Field("transverse_position", 34, 3, CM, "cm"),  # cm here; CASTOR and BeDIT: dm
+        ),
+        axles=AxleBlock(start=37, stride=9, fields=(
+            Field("axle_load", 0, 3, KG100, "kg/100", "axle"),  # 37 + 9(i-1)
+            Field("axle_width", 3, 3, CM, "cm", "axle"),  # 40 + 9(i-1): axle width (track)
+            Field("spacing", 6, 3, DM, "dm", "gap"),  # 43 + 9(i-1)
+        )),
+        max_axles=20, year_digits=4, direction_base=1, weight_step_kg=100.0,
+        source=f"{REFERENCE}, section DITIS",
+        assumed=(*_SILENT, "the last axle's width is required (the reference says only that what follows the "
+                 "last weight may be ignored)"),
     ),
 }  # fmt: skip
 

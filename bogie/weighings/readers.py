@@ -1,11 +1,12 @@
 """Readers of observed weighings: the documented CSV layout and the fixed-width WIM formats (``formats.py``).
 
 :func:`read_weighings` returns one row per vehicle in SI units (kg, m, m/s) and the count of every record it
-skipped, by reason, with the first few line numbers. A bad record (wrong length, non-numeric, no axles, a date
-that does not exist, an implausible weight, spacing or speed, a gross weight that is not the sum of the axles, a
-length shorter than the wheelbase) is skipped and counted, never silently; a file that is empty, mostly bad (more
-than half its records) or in another format is refused with a :class:`ValueError` that names the format expected
-and what was found. Layouts and bounds: ``docs/weighings.md``.
+skipped, by reason, with the first few line numbers. A bad record (shorter than its stated axles need,
+non-numeric, no axles, a direction code the format does not have, a date that does not exist, an implausible
+weight, spacing or speed, a gross weight that is not the sum of the axles, a length shorter than the wheelbase;
+a longer line, padded past its stated axles, is normal) is skipped and counted, never silently; a file that is
+empty, mostly bad (more than half its records) or in another format is refused with a :class:`ValueError` that
+names the format expected and what was found. Layouts and bounds: ``docs/weighings.md``.
 """
 
 from __future__ import annotations
@@ -23,8 +24,8 @@ import pandas as pd
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
 __all__ = [
-    "AXLE_LOAD_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SPACING_RANGE", "SPEED_RANGE", "ReadResult",
-    "read_weighings",
+    "AXLE_LOAD_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES", "SPACING_RANGE", "SPEED_RANGE", "ReadResult",
+    "detect_format", "read_weighings",
 ]  # fmt: skip
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
@@ -35,8 +36,11 @@ AXLE_LOAD_RANGE: tuple[float, float] = (100.0, 22_680.0)
 SPACING_RANGE: tuple[float, float] = (0.6, 18.75)
 #: plausible speed [m/s]: 0 (a static weighbridge) to 160 km/h (Elkins and Higgins reject above 99 mph)
 SPEED_RANGE: tuple[float, float] = (0.0, 160.0 * KMH)
-#: most axles of one vehicle [-] (the fixed-width formats give the number in 2 digits)
-MAX_AXLES: int = 20
+#: most axles of one vehicle in any format [-] (MON's 2-digit count); each fixed-width format has its own limit too
+#: (``FixedWidthLayout.max_axles``: CASTOR 9, BeDIT 20, DITIS 20, MON 99)
+MAX_AXLES: int = 99
+#: most axles of one vehicle in the CSV layout [-] (a plausibility bound: no road vehicle has more)
+CSV_MAX_AXLES: int = 20
 #: a file with more than this fraction of bad records is refused, not read [-]
 MAX_BAD_FRACTION: float = 0.5
 #: gross weight against the sum of the axle loads: allowed difference, a fraction of the sum plus the fields'
@@ -53,10 +57,13 @@ class ReadResult:
     Attributes
     ----------
     vehicles
-        One row per good record: ``line`` (1-based line of the file), ``head``, ``timestamp``, ``speed`` [m/s],
-        ``gross_weight`` [kg], ``length`` [m] (NaN where the format has none), ``n_axles``, ``n_groups`` (MON's
-        own count; NaN otherwise), ``lane``, ``direction``, ``axle_load_0..`` [kg] (front first) and
-        ``spacing_0..`` [m] (``spacing_i`` between axles i and i + 1), NaN past the vehicle's axles.
+        One row per good record: ``line`` (1-based line of the file), ``head`` (an integer; '' in CSV),
+        ``timestamp``, ``speed`` [m/s], ``gross_weight`` [kg], ``length`` [m] (NaN where the format has none),
+        ``n_axles``, ``n_groups`` (MON's own count; NaN otherwise), ``lane`` (1-based; -1 not given),
+        ``direction`` (1 or 2 in every format: a zero-based code, BeDIT's and MON's 0 or 1, plus 1; -1 not
+        given), ``transverse_position`` [m] (NaN where not given), ``axle_load_0..`` [kg] (front first) and
+        ``spacing_0..`` [m] (``spacing_i`` between axles i and i + 1), NaN past the vehicle's axles; DITIS also
+        ``axle_width_0..`` [m].
     format
         The format read (``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``).
     skipped
@@ -120,61 +127,64 @@ def _check_vehicle(rec: dict, gross_resolution: float = 0.0, load_resolution: fl
         raise _Bad("length shorter than the wheelbase")
 
 
-def _check_n_axles(n: int) -> None:
+def _check_n_axles(n: int, most: int = 99) -> None:
     if n == 0:
         raise _Bad("no axles")
-    if not 2 <= n <= MAX_AXLES:
-        raise _Bad(f"implausible number of axles (allowed 2-{MAX_AXLES})")
+    if not 2 <= n <= most:
+        raise _Bad(f"implausible number of axles (allowed 2-{most})")
 
 
 # ---- fixed width ---------------------------------------------------------------------------------------------------
+_DIGITS = frozenset("0123456789")
+
+
 def _int(text: str) -> int:
-    # right-aligned, padded with spaces or zeros; nothing but digits inside
-    s = text.strip()
-    if not s.isdigit():
+    # right-aligned, padded with spaces or zeros: leading spaces, then ASCII digits only (no sign, no inner or
+    # trailing space, not all blank)
+    s = text.lstrip(" ")
+    if not s or not set(s) <= _DIGITS:
         raise _Bad("non-numeric field")
     return int(s)
 
 
 def _parse_fixed(line: str, layout: FixedWidthLayout) -> dict:
     if len(line) < layout.fixed_width:
-        raise _Bad("wrong length")
-    pos = 0
-
-    def take(width: int) -> str:
-        nonlocal pos
-        pos += width
-        return line[pos - width : pos]
-
-    head = take(layout.head).strip()
-    date, time = take(len(layout.date)), take(6 + layout.time_fraction)
-    speed, gross, length = take(layout.speed.width), take(layout.gross_weight.width), take(layout.length.width)
-    n = _int(take(layout.n_axles))
-    _check_n_axles(n)
-    n_groups = _int(take(layout.n_groups)) if layout.n_groups else math.nan
-    lane, direction = _int(take(layout.lane)), take(layout.direction).strip()
-    if len(line) != layout.record_length(n):
-        raise _Bad("wrong length")
-    loads = [_int(take(layout.axle_load.width)) * layout.axle_load.scale for _ in range(n)]
-    spacings = [_int(take(layout.spacing.width)) * layout.spacing.scale for _ in range(n - 1)]
-    if layout.n_groups and not 1 <= n_groups <= n:
+        raise _Bad("record shorter than the header")
+    raw = {f.name: _int(line[f.start : f.end]) for f in layout.header}
+    n = raw["n_axles"]
+    _check_n_axles(n, min(MAX_AXLES, layout.max_axles))
+    if len(line) < layout.min_record_length(n):
+        raise _Bad("record too short for its stated axles")
+    axles: dict[str, list[float]] = {}
+    for f in layout.axles.fields:
+        count = n if f.per == "axle" else n - 1
+        starts = [layout.axles.start + layout.axles.stride * i + f.start for i in range(count)]
+        axles[f.name] = [_int(line[a : a + f.width]) * f.scale for a in starts]
+    n_groups = raw.get("n_groups", math.nan)
+    if "n_groups" in raw and not 1 <= n_groups <= n:
         raise _Bad("implausible number of axle groups")
-    if not (date + time).isdigit():
-        raise _Bad("non-numeric field")
-    year = int(date[:4]) if layout.date == "YYYYMMDD" else 2000 + int(date[:2])
-    md = date[4:] if layout.date == "YYYYMMDD" else date[2:]
-    fraction = int(time[6:]) / 10**layout.time_fraction if layout.time_fraction else 0.0
+    base = layout.direction_base
+    if raw["direction"] not in (base, base + 1):
+        raise _Bad(f"direction not {base} or {base + 1}")
+    year = raw["year"] + (2000 if layout.year_digits == 2 else 0)  # century not given: 2000-2099
+    if "millisecond" in raw:  # MON: milliseconds of the minute
+        second, micro = divmod(raw["millisecond"] * 1000, 1_000_000)
+    else:
+        second, micro = raw["second"], raw["second_100"] * 10_000
     try:
-        stamp = dt.datetime(year, int(md[:2]), int(md[2:]), int(time[:2]), int(time[2:4]), int(time[4:6]),
-                            round(fraction * 1e6))  # fmt: skip
+        stamp = dt.datetime(year, raw["month"], raw["day"], raw["hour"], raw["minute"], second, micro)
     except ValueError:
         raise _Bad("invalid date or time") from None
+    scale = {f.name: f.scale for f in layout.header}
     rec = {
-        "head": head, "timestamp": stamp, "speed": _int(speed) * layout.speed.scale,
-        "gross_weight": _int(gross) * layout.gross_weight.scale, "length": _int(length) * layout.length.scale,
-        "n_axles": n, "n_groups": n_groups, "lane": lane, "direction": direction, "loads": loads, "spacings": spacings,
+        "head": raw["head"], "timestamp": stamp, "speed": raw["speed"] * scale["speed"],
+        "gross_weight": raw["gross_weight"] * scale["gross_weight"], "length": raw["length"] * scale["length"],
+        "n_axles": n, "n_groups": n_groups, "lane": raw["lane"], "direction": raw["direction"] - base + 1,
+        "transverse_position": raw["transverse_position"] * scale["transverse_position"],
+        "loads": axles["axle_load"], "spacings": axles["spacing"], "axle_widths": axles.get("axle_width"),
     }  # fmt: skip
-    _check_vehicle(rec, layout.gross_weight.scale / 2, layout.axle_load.scale / 2)
+    load_scale = layout.axles.fields[0].scale
+    _check_vehicle(rec, scale["gross_weight"] / 2, load_scale / 2)
     return rec
 
 
@@ -210,7 +220,7 @@ def _parse_csv(row: list[str], columns: dict[str, int], width: int) -> dict:
     if value != int(value):
         raise _Bad("non-numeric field")
     n = int(value)
-    _check_n_axles(n)
+    _check_n_axles(n, CSV_MAX_AXLES)
     need = [f"axle_load_{i}" for i in range(1, n + 1)] + [f"spacing_{i}" for i in range(1, n)]
     if any(c not in columns for c in need):
         raise _Bad("more axles than the file has columns for")
@@ -227,9 +237,9 @@ def _parse_csv(row: list[str], columns: dict[str, int], width: int) -> dict:
     rec = {
         "head": "", "timestamp": stamp, "speed": _float(row[columns["speed_kmh"]], optional=True) * KMH,
         "gross_weight": math.nan, "length": math.nan, "n_axles": n, "n_groups": math.nan,
-        "lane": -1 if math.isnan(lane) else int(lane), "direction": "",
+        "lane": -1 if math.isnan(lane) else int(lane), "direction": -1, "transverse_position": math.nan,
         "loads": [_float(row[columns[f"axle_load_{i}"]]) for i in range(1, n + 1)],
-        "spacings": [_float(row[columns[f"spacing_{i}"]]) for i in range(1, n)],
+        "spacings": [_float(row[columns[f"spacing_{i}"]]) for i in range(1, n)], "axle_widths": None,
     }  # fmt: skip
     _check_vehicle(rec)
     return rec
@@ -285,23 +295,59 @@ def _frame(rows: list[tuple[int, dict]]) -> pd.DataFrame:
     data = {
         "line": [i for i, _ in rows],
         **{k: [r[k] for _, r in rows] for k in ("head", "timestamp", "speed", "gross_weight", "length", "n_axles",
-                                                  "n_groups", "lane", "direction")},
+                                                  "n_groups", "lane", "direction", "transverse_position")},
     }  # fmt: skip
     loads = np.full((len(rows), width), np.nan)
     spacings = np.full((len(rows), width - 1), np.nan)
+    with_widths = any(r["axle_widths"] is not None for _, r in rows)  # DITIS
+    widths = np.full((len(rows), width), np.nan)
     for j, (_, r) in enumerate(rows):
         loads[j, : r["n_axles"]] = r["loads"]
         spacings[j, : r["n_axles"] - 1] = r["spacings"]
+        if r["axle_widths"] is not None:
+            widths[j, : r["n_axles"]] = r["axle_widths"]
     data.update({f"axle_load_{i}": loads[:, i] for i in range(width)})
     data.update({f"spacing_{i}": spacings[:, i] for i in range(width - 1)})
+    if with_widths:
+        data.update({f"axle_width_{i}": widths[:, i] for i in range(width)})
     frame = pd.DataFrame(data)
     frame["timestamp"] = pd.to_datetime(frame["timestamp"])
     frame["n_groups"] = frame["n_groups"].astype(float)
+    frame["transverse_position"] = frame["transverse_position"].astype(float)
     frame["lane"] = frame["lane"].astype(np.int64)  # -1: not given (CSV)
+    frame["direction"] = frame["direction"].astype(np.int64)  # 1 or 2; -1: not given (CSV)
     return frame
 
 
-def read_weighings(path: str | Path, fmt: str) -> ReadResult:
+#: non-blank lines ``fmt="auto"`` tries every layout on [-]
+SNIFF_LINES: int = 50
+
+
+def detect_format(lines: list[str], path: str = "") -> str:
+    """The one known format in which more than half of the first :data:`SNIFF_LINES` non-blank lines are good
+    records; a :class:`ValueError` naming the candidates when none or more than one fits."""
+    head = [line for line in lines if line.strip()][:SNIFF_LINES]
+    fits, tried = [], []
+    for fmt in FORMATS:
+        try:
+            results = [r for _, r in _records(head, fmt, path)]
+        except ValueError:
+            tried.append(f"{fmt}: not its header")
+            continue
+        good = sum(isinstance(r, dict) for r in results)
+        tried.append(f"{fmt}: {good} of {len(results)} good")
+        if results and good > len(results) / 2:
+            fits.append(fmt)
+    if len(fits) == 1:
+        return fits[0]
+    what = "no known format fits" if not fits else f"more than one format fits ({', '.join(fits)})"
+    raise ValueError(
+        f"{path}: format auto: {what} the first {len(head)} non-blank lines ({'; '.join(tried)}); "
+        f"name one with --format ({', '.join(FORMATS)})"
+    )
+
+
+def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
     """Read a file of weighings (one vehicle a record) in format ``fmt``.
 
     Parameters
@@ -309,7 +355,9 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     path
         The file (text; fixed-width records one a line, or CSV with a header line).
     fmt
-        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``).
+        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``), or ``auto``
+        (default): the one layout in which most of the first :data:`SNIFF_LINES` non-blank lines parse
+        (:func:`detect_format`); ``ReadResult.format`` says which.
 
     Returns
     -------
@@ -324,11 +372,15 @@ def read_weighings(path: str | Path, fmt: str) -> ReadResult:
     OSError
         If the file cannot be read.
     """
-    if fmt not in FORMATS:
-        raise ValueError(f"format {fmt!r} unknown; allowed: {', '.join(FORMATS)}")
+    if fmt != "auto" and fmt not in FORMATS:
+        raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
     path = Path(path)
     with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:  # a BOM from a spreadsheet
         lines = fh.read().splitlines()
+    if fmt == "auto":
+        if not any(line.strip() for line in lines):
+            raise ValueError(f"{path}: no records: format auto found an empty file")
+        fmt = detect_format(lines, str(path))
     name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
     rows: list[tuple[int, dict]] = []
     skipped: Counter = Counter()
