@@ -138,6 +138,12 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
         return 0
     shown = args.format if args.format != "auto" else f"format auto: {survey.read.format}"
     print(f"{args.path} ({shown}): {survey.read.summary()}")
+    counts = "; ".join(
+        f"{where} {sum(sizes.values())} ({', '.join(f'{n} {size}' for size, n in sizes.items() if n)})"
+        if sum(sizes.values()) else f"{where} 0"
+        for where, sizes in survey.positions.items()
+    )  # fmt: skip
+    print(f"groups in the file by position: {counts} (steer: the first group; drive: the second; trailer: the rest)")
     print(
         f"{len(survey.groups)} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
         f"{args.position}, axles at most {args.group_spacing_m:g} m apart"
@@ -197,8 +203,9 @@ def build_parser() -> argparse.ArgumentParser:
         "--group-spacing-m", type=_range("--group-spacing-m", 0.1, 5.0, "m"), default=2.0,
         help="largest spacing of two axles of one group [m] (default 2.0)",
     )  # fmt: skip
-    weigh.add_argument("--position", choices=("all", "trailer", "drive"), default="all",
-                       help="which groups: all (default), the trailer's or the drive groups")  # fmt: skip
+    weigh.add_argument("--position", choices=("all", "steer", "drive", "trailer"), default="all",
+                       help="which groups: all (default), the steer, drive (second) or trailer (third and later) "
+                       "groups")  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
     weigh.set_defaults(func=_cmd_weighings, parser=weigh)
     return parser

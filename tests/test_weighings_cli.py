@@ -13,8 +13,15 @@ DATA = Path(__file__).parent / "data" / "weighings"
 def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert main(["weighings", str(DATA / "site.mon"), "--format", "mon", "--min-group-load-t", "15", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"records", "groups"}
+    assert set(out) == {"records", "positions", "groups"}
     assert out["records"] == {"read": 5, "skipped": 4}
+    # every group of the file before the filters (test_weighings_groups.py): A, D steer | single | tri-axle; B steer |
+    # tandem; C steer | tandem | tri-axle; E steer | single
+    assert out["positions"] == {
+        "steer": {"single": 5, "tandem": 0, "triaxle": 0, "other": 0},
+        "drive": {"single": 3, "tandem": 2, "triaxle": 0, "other": 0},
+        "trailer": {"single": 0, "tandem": 0, "triaxle": 3, "other": 0},
+    }
     assert set(out["groups"]) == {"tandem", "triaxle"}
     for entry in out["groups"].values():
         assert set(entry) == {"n_groups", "mean_spread_kg", "median_spread_pct", "share_outside_5pct",
@@ -59,7 +66,7 @@ def test_the_table_names_the_skipped_lines_and_the_statistics_in_percent(capsys)
     [(["--min-group-load-t", "-2"], "--min-group-load-t -2 outside the allowed range [0, 100] t"),
      (["--min-group-load-t", "heavy"], "--min-group-load-t 'heavy' is not a number (t)"),
      (["--group-spacing-m", "9"], "--group-spacing-m 9 outside the allowed range [0.1, 5] m"),
-     (["--position", "steer"], "invalid choice: 'steer'")],
+     (["--position", "front"], "invalid choice: 'front'")],
 )  # fmt: skip
 def test_bad_arguments_name_the_parameter_value_range_and_unit(capsys, args, message):
     with pytest.raises(SystemExit) as exc:

@@ -51,6 +51,23 @@ def test_a_wider_group_spacing_joins_axles_and_a_narrower_one_splits_them(groups
                                                                               ["triaxle", "drive"]]  # fmt: skip
 
 
+def test_every_group_after_the_second_is_a_trailer_group_a_b_doubles_lead_trailer_too():
+    # C made a B-double: steer | tandem drive | tri-axle lead trailer | tri-axle rear trailer (issue 27: before, the
+    # lead trailer was labelled a drive group, as only a vehicle's last group was a trailer group)
+    vehicles = read_weighings(DATA / "site.mon", "mon").vehicles
+    c = vehicles.iloc[[2]].copy()
+    assert int(c["n_axles"].iloc[0]) == 6
+    c["n_axles"] = 9
+    for i, load in enumerate([6000, 9000, 9000, 8000, 8000, 8000, 7000, 7000, 7000]):
+        c[f"axle_load_{i}"] = load
+    for i, spacing in enumerate([3.8, 1.35, 5.0, 1.31, 1.31, 6.5, 1.31, 1.31]):
+        c[f"spacing_{i}"] = spacing
+    wide = axle_groups(c)
+    assert wide["group"].tolist() == ["other", "tandem", "triaxle", "triaxle"]
+    assert wide["position"].tolist() == ["steer", "drive", "trailer", "trailer"]
+    assert wide["group_load"].tolist() == [6000, 18000, 24000, 21000]
+
+
 def test_filters_on_group_load_position_and_speed(groups):
     laden = filter_groups(groups, min_group_load_t=15)
     # >= 15 000 kg: A's and C's tri-axles (24 t), B's and C's tandems (18 t); D's tri-axle (6 t) left out

@@ -3,8 +3,10 @@
 A group is a run of consecutive axles each at most ``group_spacing_m`` from the next (default 2.0 m, issue 13: above
 the 1.31 m spacing of this project's presets and the 1.0-1.8 m of common tandem and tri-axle bogies, below the
 several metres from a tractor's drive axles to its semi-trailer's group). Size: ``tandem`` (2 axles), ``triaxle``
-(3), ``other``. Position: ``steer`` (the group of the first axle), ``trailer`` (the last group of a vehicle with
-three or more groups), ``drive`` (every other group). The group table is wide, as
+(3), ``other``. Position (issue 27): ``steer``, the group of the first axle; ``drive``, the second group (a tractor's
+drive group, or a rigid truck's rear group); ``trailer``, every group after the second, so that a B-double's lead
+trailer counts as a trailer as its rear trailer does (before, only a vehicle's last group did, and a lead trailer was
+called a drive group). The group table is wide, as
 :func:`bogie.weighings.stats.survey_statistics` takes it.
 """
 
@@ -66,7 +68,7 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         ends = [*starts[1:], n]
         for k, (a, b) in enumerate(zip(starts, ends)):
             size = b - a
-            position = "steer" if k == 0 else "trailer" if k == len(starts) - 1 and len(starts) >= 3 else "drive"
+            position = "steer" if k == 0 else "drive" if k == 1 else "trailer"
             row = {
                 "line": v.line, "timestamp": v.timestamp, "speed": v.speed, "lane": v.lane,
                 "vehicle_groups": len(starts), "group_index": k, "first_axle": a, "n_axles": size,

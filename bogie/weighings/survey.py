@@ -14,7 +14,7 @@ from typing import Any
 
 import pandas as pd
 
-from bogie.weighings.groups import GROUP_SPACING_M, axle_groups, filter_groups
+from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups
 from bogie.weighings.readers import ReadResult, read_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
 
@@ -22,6 +22,10 @@ __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
 
 #: the group sizes the statistics are tabulated for
 SURVEYED: tuple[str, ...] = ("tandem", "triaxle")
+
+
+#: the size labels of the position counts, by axles in the group (4 and more: other)
+SIZE_LABELS = {1: "single", **SIZES}
 
 
 @dataclass
@@ -36,22 +40,29 @@ class ObservedSurvey:
         :func:`bogie.weighings.stats.survey_statistics` of the tandems and tri-axles, one row each.
     read
         The reader's result: the vehicles and the skipped records.
+    positions
+        How many groups of each position (steer, drive, trailer) and size (single, tandem, triaxle, other: 4 or
+        more axles) the file has,
+        before any filter: in a WIM file most laden tandems are tractors' drive tandems, not trailer groups.
     """
 
     groups: pd.DataFrame
     statistics: pd.DataFrame
     read: ReadResult
+    positions: dict[str, dict[str, int]]
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
 
-        ``{"records": {"read", "skipped"}, "groups": {"tandem": {...}, "triaxle": {...}}}``; shares are fractions
-        0..1; a size with no group has ``n_groups`` 0 and None for its numbers.
+        ``{"records": {"read", "skipped"}, "positions": {"steer": {"tandem": n, ...}, ...}, "groups": {"tandem":
+        {...}, "triaxle": {...}}}``; shares are fractions 0..1; a size with no group has ``n_groups`` 0 and None for
+        its numbers.
         """
         stats = statistics_dict(self.statistics)
         empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
         return {
             "records": {"read": self.read.n_read, "skipped": self.read.n_skipped},
+            "positions": self.positions,
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
         }
 
@@ -85,7 +96,14 @@ def observed_survey(
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
     read = read_weighings(path, fmt)
-    groups = filter_groups(axle_groups(read.vehicles, group_spacing_m), min_group_load_t, position, speed_kmh)
+    every = axle_groups(read.vehicles, group_spacing_m)
+    size = every["n_axles"].map(lambda n: SIZE_LABELS.get(int(n), "other"))
+    positions = {
+        where: {label: int(((every["position"] == where) & (size == label)).sum()) for label in (*SIZE_LABELS.values(),
+                "other")}
+        for where in POSITIONS[1:]
+    }  # fmt: skip
+    groups = filter_groups(every, min_group_load_t, position, speed_kmh)
     surveyed = groups[groups["group"].isin(SURVEYED)]
     statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
-    return ObservedSurvey(groups, statistics, read)
+    return ObservedSurvey(groups, statistics, read, positions)
