@@ -19,6 +19,7 @@ is a bad record.
 
 from __future__ import annotations
 
+import functools
 from dataclasses import dataclass
 
 __all__ = [
@@ -84,10 +85,9 @@ class AxleBlock:
 class FixedWidthLayout:
     """A fixed-width record: header fields at their own offsets, then one :class:`AxleBlock` per axle.
 
-    ``max_axles`` is the format's own limit; ``year_digits`` 2 (century not given: read as 2000-2099) or 4;
-    ``direction_base`` 1 (direction written 1 or 2) or 0 (written 0 or 1): the reader stores ``written -
-    direction_base + 1``, so the direction is 1 or 2 in every format. ``weight_step_kg`` is the format's weight
-    resolution (None: the file's own, MON).
+    ``max_axles`` is the format's own limit; ``direction_base`` 1 (direction written 1 or 2) or 0 (written 0 or 1):
+    the reader stores ``written - direction_base + 1``, so the direction is 1 or 2 in every format.
+    ``weight_step_kg`` is the format's weight resolution (None: the file's own, MON).
     """
 
     name: str
@@ -95,7 +95,6 @@ class FixedWidthLayout:
     header: tuple[Field, ...]
     axles: AxleBlock
     max_axles: int
-    year_digits: int
     direction_base: int
     weight_step_kg: float | None
     source: str
@@ -106,9 +105,19 @@ class FixedWidthLayout:
         """Characters before the first axle (the header) [-]: CASTOR 34, BeDIT 35, DITIS 37, MON 50."""
         return max(f.end for f in self.header)
 
-    def field(self, name: str) -> Field:
-        """The header field ``name``."""
-        return next(f for f in self.header if f.name == name)
+    @property
+    def year_digits(self) -> int:
+        """Digits of the year, the year field's width: 2 (century not given: read as 2000-2099) or 4 [-]."""
+        return next(f.width for f in self.header if f.name == "year")
+
+    @functools.cached_property
+    def scales(self) -> dict[str, float | None]:
+        """Each header field's ``scale`` by name."""
+        return {f.name: f.scale for f in self.header}
+
+    def axle_field(self, name: str) -> Field:
+        """The per-axle field ``name``."""
+        return next(f for f in self.axles.fields if f.name == name)
 
     def min_record_length(self, n_axles: int) -> int:
         """The shortest line holding ``n_axles`` axles: through the last axle's per-axle fields [-].
@@ -117,12 +126,6 @@ class FixedWidthLayout:
         """
         last = max(f.end for f in self.axles.fields if f.per == "axle")
         return self.axles.start + self.axles.stride * (n_axles - 1) + last
-
-    def axle_field_at(self, name: str, axle: int) -> tuple[int, int]:
-        """``(start, end)`` 0-based of the axle field ``name`` of axle ``axle`` (1-based) [-]."""
-        f = next(f for f in self.axles.fields if f.name == name)
-        start = self.axles.start + self.axles.stride * (axle - 1) + f.start
-        return start, start + f.width
 
 
 #: the reference does not say these, for any of the four formats (docs/weighings.md, "Where the reference is silent")
@@ -133,15 +136,22 @@ _SILENT = (
     "how a missing value is written (an all-blank field is read as a bad record)",
     "time zone (read as local time, as written)",
 )
-_DDMMYY_HHMMSSCC = (  # CASTOR and BeDIT: day, month, year (2 digits), hour, minute, second, second/100, I2 each
-    Field("day", 4, 2, None, "-"),
-    Field("month", 6, 2, None, "-"),
-    Field("year", 8, 2, None, "-"),
-    Field("hour", 10, 2, None, "-"),
-    Field("minute", 12, 2, None, "-"),
-    Field("second", 14, 2, 1.0, "s"),
-    Field("second_100", 16, 2, S100, "s/100"),
-)
+
+
+def _calendar(year_width: int) -> tuple[Field, ...]:
+    """CASTOR's, BeDIT's and DITIS's date and time from offset 4: day, month, year (``year_width`` digits), hour,
+    minute, second, second/100, I2 each but the year."""
+    year_end = 8 + year_width
+    return (
+        Field("day", 4, 2, None, "-"),
+        Field("month", 6, 2, None, "-"),
+        Field("year", 8, year_width, None, "-"),
+        Field("hour", year_end, 2, None, "-"),
+        Field("minute", year_end + 2, 2, None, "-"),
+        Field("second", year_end + 4, 2, 1.0, "s"),
+        Field("second_100", year_end + 6, 2, S100, "s/100"),
+    )
+
 
 LAYOUTS: dict[str, FixedWidthLayout] = {
     # reference, section "MON (no fixed axle limit; 2-digit axle count)": header 50, 10 characters per axle
@@ -168,7 +178,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
             Field("axle_load", 0, 5, KG, "kg", "axle"),  # 50 + 10(i-1)
             Field("spacing", 5, 5, MM, "mm", "gap"),  # 55 + 10(i-1)
         )),
-        max_axles=99, year_digits=4, direction_base=0, weight_step_kg=None,
+        max_axles=99, direction_base=0, weight_step_kg=None,
         source=f"{REFERENCE}, section MON",
         assumed=(*_SILENT, "how the WIM system forms the axle groups it counts (kept, not used for grouping)"),
     ),
@@ -177,7 +187,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
         name="CASTOR", section="CASTOR (at most 9 axles)",
         header=(
             Field("head", 0, 4, None, "-"),  # "head (record / site number)", I4
-            *_DDMMYY_HHMMSSCC,
+            *_calendar(2),
             Field("speed", 18, 3, DMS, "dm/s"),
             Field("gross_weight", 21, 4, KG100, "kg/100"),
             Field("length", 25, 3, DM, "dm"),
@@ -190,7 +200,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
             Field("axle_load", 0, 3, KG100, "kg/100", "axle"),  # 34 + 5(i-1)
             Field("spacing", 3, 2, DM, "dm", "gap"),  # 37 + 5(i-1); I2: at most 9.9 m
         )),
-        max_axles=9, year_digits=2, direction_base=1, weight_step_kg=100.0,
+        max_axles=9, direction_base=1, weight_step_kg=100.0,
         source=f"{REFERENCE}, section CASTOR",
         assumed=(*_SILENT, "the century of the two-digit year (read as 2000-2099)"),
     ),
@@ -199,7 +209,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
         name="BeDIT", section="BeDIT (at most 20 axles)",
         header=(
             Field("head", 0, 4, None, "-"),
-            *_DDMMYY_HHMMSSCC,
+            *_calendar(2),
             Field("speed", 18, 3, DMS, "dm/s"),
             Field("gross_weight", 21, 4, KG100, "kg/100"),
             Field("length", 25, 3, DM, "dm"),
@@ -212,7 +222,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
             Field("axle_load", 0, 3, KG100, "kg/100", "axle"),  # 35 + 6(i-1)
             Field("spacing", 3, 3, DM, "dm", "gap"),  # 38 + 6(i-1)
         )),
-        max_axles=20, year_digits=2, direction_base=0, weight_step_kg=100.0,
+        max_axles=20, direction_base=0, weight_step_kg=100.0,
         source=f"{REFERENCE}, section BeDIT",
         assumed=(*_SILENT, "the century of the two-digit year (read as 2000-2099)"),
     ),
@@ -221,13 +231,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
         name="DITIS", section="DITIS (at most 20 axles)",
         header=(
             Field("head", 0, 4, None, "-"),
-            Field("day", 4, 2, None, "-"),
-            Field("month", 6, 2, None, "-"),
-            Field("year", 8, 4, None, "-"),
-            Field("hour", 12, 2, None, "-"),
-            Field("minute", 14, 2, None, "-"),
-            Field("second", 16, 2, 1.0, "s"),
-            Field("second_100", 18, 2, S100, "s/100"),
+            *_calendar(4),  # offsets 4, 6, 8 (I4), 12, 14, 16, 18
             Field("speed", 20, 3, DMS, "dm/s"),
             Field("gross_weight", 23, 4, KG100, "kg/100"),
             Field("length", 27, 3, DM, "dm"),
@@ -241,7 +245,7 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
             Field("axle_width", 3, 3, CM, "cm", "axle"),  # 40 + 9(i-1): axle width (track)
             Field("spacing", 6, 3, DM, "dm", "gap"),  # 43 + 9(i-1)
         )),
-        max_axles=20, year_digits=4, direction_base=1, weight_step_kg=100.0,
+        max_axles=20, direction_base=1, weight_step_kg=100.0,
         source=f"{REFERENCE}, section DITIS",
         assumed=(*_SILENT, "the last axle's width is required (the reference says only that what follows the "
                  "last weight may be ignored)"),

@@ -175,7 +175,7 @@ def _parse_fixed(line: str, layout: FixedWidthLayout) -> dict:
         stamp = dt.datetime(year, raw["month"], raw["day"], raw["hour"], raw["minute"], second, micro)
     except ValueError:
         raise _Bad("invalid date or time") from None
-    scale = {f.name: f.scale for f in layout.header}
+    scale = layout.scales
     rec = {
         "head": raw["head"], "timestamp": stamp, "speed": raw["speed"] * scale["speed"],
         "gross_weight": raw["gross_weight"] * scale["gross_weight"], "length": raw["length"] * scale["length"],
@@ -183,8 +183,7 @@ def _parse_fixed(line: str, layout: FixedWidthLayout) -> dict:
         "transverse_position": raw["transverse_position"] * scale["transverse_position"],
         "loads": axles["axle_load"], "spacings": axles["spacing"], "axle_widths": axles.get("axle_width"),
     }  # fmt: skip
-    load_scale = layout.axles.fields[0].scale
-    _check_vehicle(rec, scale["gross_weight"] / 2, load_scale / 2)
+    _check_vehicle(rec, scale["gross_weight"] / 2, layout.axle_field("axle_load").scale / 2)
     return rec
 
 
