@@ -60,6 +60,11 @@ BAD = {
 }  # fmt: skip
 
 
+def at_minute(line: str, minute: int) -> str:
+    """A MON record at another minute (offset 19, I2): another vehicle, not a repeat."""
+    return line[:19] + f"{minute:02d}" + line[21:]
+
+
 @pytest.mark.parametrize("fmt", ["csv", "mon", "castor", "bedit", "ditis"])
 def test_every_format_reads_the_five_vehicles_and_counts_the_four_bad_records(fmt):
     result = read_weighings(DATA / f"site.{fmt}", fmt)
@@ -134,8 +139,10 @@ def test_each_layout_has_the_references_header_and_axle_stride_and_its_lines_the
 
 def test_a_line_longer_than_its_axles_need_is_read_and_one_character_short_of_the_last_weight_is_bad(tmp_path):
     b = (DATA / "site.mon").read_text().splitlines()[1]  # B: 3 axles, 80 characters with the trailing spacing
-    # ends right after axle 3's weight (75), padded with zero fields to 20 slots (250), one short (74)
-    (tmp_path / "x.mon").write_text("\n".join([b[:75], b[:75] + "0" * 175, b[:74], b]) + "\n")
+    # ends right after axle 3's weight (75), padded with zero fields to 20 slots (250), one short (74); each at its
+    # own minute (offset 19, I2), since the same record twice is a repeat
+    b = [at_minute(b, minute) for minute in (10, 11, 12, 13)]
+    (tmp_path / "x.mon").write_text("\n".join([b[0][:75], b[1][:75] + "0" * 175, b[2][:74], b[3]]) + "\n")
     result = read_weighings(tmp_path / "x.mon", "mon")
     assert result.vehicles["line"].tolist() == [1, 2, 4]
     assert result.bad_lines == {TOO_SHORT: [3]}
@@ -144,8 +151,8 @@ def test_a_line_longer_than_its_axles_need_is_read_and_one_character_short_of_th
 
 @pytest.mark.parametrize("text", ["085 0", "0850 ", "-8500", "     ", "\uff18\uff15\uff10\uff10\uff10"])
 def test_a_field_with_an_inner_or_trailing_space_a_sign_blanks_or_non_ascii_digits_is_non_numeric(tmp_path, text):
-    b = (DATA / "site.mon").read_text().splitlines()[1]
-    (tmp_path / "x.mon").write_text("\n".join([b, b, b[:70] + text + b[75:]]) + "\n")
+    b = [at_minute((DATA / "site.mon").read_text().splitlines()[1], minute) for minute in (10, 11, 12)]
+    (tmp_path / "x.mon").write_text("\n".join([b[0], b[1], b[2][:70] + text + b[2][75:]]) + "\n")
     assert read_weighings(tmp_path / "x.mon", "mon").bad_lines == {"non-numeric field": [3]}
 
 
@@ -200,6 +207,8 @@ def test_a_single_bad_record_among_good_ones_is_skipped_and_named(tmp_path):
 
 CSV_HEADER = "timestamp,speed_kmh,lane,n_axles,axle_load_1,axle_load_2,spacing_1\n"
 CSV_GOOD = "2026-01-01T00:00:00,80,1,2,5000,6000,1.3\n"
+#: another vehicle a minute later (the same record twice is a repeat, a bad record)
+CSV_LATER = "2026-01-01T00:01:00,80,1,2,5000,6000,1.3\n"
 
 
 def test_csv_with_a_spreadsheets_byte_order_mark_and_a_weighbridge_record_without_speed_or_lane(tmp_path):
@@ -219,7 +228,7 @@ def test_csv_with_a_spreadsheets_byte_order_mark_and_a_weighbridge_record_withou
 )  # fmt: skip
 def test_each_bad_csv_row_is_skipped_under_its_reason(tmp_path, row, reason):
     path = tmp_path / "one.csv"
-    path.write_text(CSV_HEADER + row + "\n" + CSV_GOOD + CSV_GOOD)
+    path.write_text(CSV_HEADER + row + "\n" + CSV_GOOD + CSV_LATER)
     result = read_weighings(path, "csv")
     assert (result.n_read, result.n_skipped) == (2, 1)
     ((found, lines),) = result.bad_lines.items()
@@ -243,9 +252,9 @@ def test_format_auto_refuses_when_no_layout_or_two_fit_naming_the_candidates(tmp
     with pytest.raises(ValueError, match=r"format auto: no known format fits .*mon: 0 of 2 good.*--format"):
         read_weighings(tmp_path / "junk.txt", "auto")
     # two MON and two CASTOR records: neither layout fits more than half the lines
-    mon = (DATA / "site.mon").read_text().splitlines()[1]
-    castor = (DATA / "site.castor").read_text().splitlines()[1]
-    (tmp_path / "mixed.txt").write_text(f"{mon}\n{mon}\n{castor}\n{castor}\n")
+    mon = (DATA / "site.mon").read_text().splitlines()[:2]
+    castor = (DATA / "site.castor").read_text().splitlines()[:2]
+    (tmp_path / "mixed.txt").write_text("\n".join(mon + castor) + "\n")
     with pytest.raises(ValueError, match=r"no known format fits .*mon: 2 of 4 good.*castor: 2 of 4 good"):
         read_weighings(tmp_path / "mixed.txt")
     with pytest.raises(ValueError, match=r"no records: format auto found an empty file"):

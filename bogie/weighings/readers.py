@@ -1,19 +1,26 @@
 """Readers of observed weighings: the documented CSV layout and the fixed-width WIM formats (``formats.py``).
 
 :func:`read_weighings` returns one row per vehicle in SI units (kg, m, m/s) and the count of every record it
-skipped, by reason, with the first few line numbers. A bad record (shorter than its stated axles need,
-non-numeric, no axles, a direction code the format does not have, a date that does not exist, an implausible
-weight, spacing or speed, a gross weight that is not the sum of the axles, a length shorter than the wheelbase;
-a longer line, padded past its stated axles, is normal) is skipped and counted, never silently; a file that is
-empty, mostly bad (more than half its records) or in another format is refused with a :class:`ValueError` that
-names the format expected and what was found. Layouts and bounds: ``docs/weighings.md``.
+skipped, by reason, with the first few line numbers, and the file's weight resolution. A bad record (shorter than
+its stated axles need, a character that is not a digit or a space, no axles, a direction code the format does not
+have, a date that does not exist or an implausible year, an implausible weight, spacing, speed or lane, a gross
+weight that is not the sum of the axles, a length shorter than the wheelbase, a repeat of an earlier record; a
+longer line, padded past its stated axles, is normal) is skipped and counted, never silently; a file that is empty,
+mostly bad (more than half its records) or in another format is refused with a :class:`ValueError` that names the
+format expected and what was found. Layouts and bounds: ``docs/weighings.md``.
+
+The bytes are parsed in bulk (issue 27 Must 5): the file is one numpy byte array, its records are located by their
+line ends, and every field of every record is read with one gather per field (per axle slot for the axle fields),
+never line by line in Python. Records end at ``\\n`` only (a trailing ``\\r`` is dropped): a form feed, a vertical tab
+or a Unicode line separator inside a record is a bad character of that record, not a line end, so that line numbers
+are those of any editor that counts ``\\n``. A file whose first two bytes are gzip's magic number is decompressed first.
 """
 
 from __future__ import annotations
 
 import csv
-import datetime as dt
-import math
+import gzip
+import zlib
 from collections import Counter
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -24,8 +31,8 @@ import pandas as pd
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
 __all__ = [
-    "AXLE_LOAD_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES", "SPACING_RANGE", "SPEED_RANGE", "ReadResult",
-    "detect_format", "read_weighings",
+    "AXLE_LOAD_RANGE", "CSV_LANE_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES", "SPACING_RANGE",
+    "SPEED_RANGE", "WEIGHT_STEPS_KG", "YEAR_RANGE", "ReadResult", "detect_format", "read_weighings",
 ]  # fmt: skip
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
@@ -36,6 +43,16 @@ AXLE_LOAD_RANGE: tuple[float, float] = (100.0, 22_680.0)
 SPACING_RANGE: tuple[float, float] = (0.6, 18.75)
 #: plausible speed [m/s]: 0 (a static weighbridge) to 160 km/h (Elkins and Higgins reject above 99 mph)
 SPEED_RANGE: tuple[float, float] = (0.0, 160.0 * KMH)
+#: plausible year of a record [-]: the hundred years a two-digit year can name under the POSIX ``%y`` rule (69-99
+#: are 1969-1999, 00-68 are 2000-2068: strptime's pivot), applied to the four-digit years of MON, DITIS and CSV too,
+#: so that a record reads the same in every format. Engineering judgement (an assumption: the reference has no
+#: range); it refuses the year 2999 of a mistyped record (issue 27) and admits every WIM record since 1969
+YEAR_RANGE: tuple[int, int] = (1969, 2068)
+#: the two-digit year pivot: yy >= this is 19yy, below it 20yy (POSIX strptime ``%y``) [-]
+TWO_DIGIT_PIVOT: int = 69
+#: a CSV lane: a whole number 1-9, the range of the fixed-width formats' one-digit lane field, so that every CSV file
+#: can be written in every format [-]
+CSV_LANE_RANGE: tuple[int, int] = (1, 9)
 #: most axles of one vehicle in any format [-] (MON's 2-digit count); each fixed-width format has its own limit too
 #: (``FixedWidthLayout.max_axles``: CASTOR 9, BeDIT 20, DITIS 20, MON 99)
 MAX_AXLES: int = 99
@@ -43,11 +60,25 @@ MAX_AXLES: int = 99
 CSV_MAX_AXLES: int = 20
 #: a file with more than this fraction of bad records is refused, not read [-]
 MAX_BAD_FRACTION: float = 0.5
-#: gross weight against the sum of the axle loads: allowed difference, a fraction of the sum plus the fields'
-#: resolution (a WIM system's gross weight is the sum of its axle weights, Enright and OBrien 2011) [-]
+#: gross weight against the sum of the axle loads: allowed difference, a fraction of the sum plus half a weight
+#: step for the gross weight and for each axle (a WIM system's gross weight is the sum of its axle weights,
+#: Enright and OBrien 2011) [-]
 GROSS_TOLERANCE: float = 0.02
+#: the weight steps a file's resolution is detected among [kg]: the largest that divides every axle load of the
+#: good records (MON files are seen at 10 kg and at 100 kg; CASTOR, BeDIT and DITIS write kg/100)
+WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 #: line numbers of bad records shown per reason
 EXAMPLES: int = 5
+#: non-blank lines ``fmt="auto"`` tries every layout on [-]
+SNIFF_LINES: int = 50
+
+# reasons a record is bad (docs/weighings.md, "Bad records and refused files")
+SHORT_HEADER = "record shorter than the header"
+TOO_SHORT = "record too short for its stated axles"
+NON_NUMERIC = "non-numeric field"
+NO_AXLES = "no axles"
+BAD_DATE = "invalid date or time"
+DUPLICATE = "repeat of an earlier record (same time, lane, direction, speed, axle loads and spacings)"
 
 
 @dataclass
@@ -70,12 +101,21 @@ class ReadResult:
         Bad records per reason.
     bad_lines
         The first :data:`EXAMPLES` line numbers of each reason.
+    weight_step_kg
+        The file's weight resolution [kg]: the largest of :data:`WEIGHT_STEPS_KG` that divides every axle load of
+        the records that passed the checks before the gross weight's; None when the loads are not whole kilograms
+        (a CSV file of other data) or no record has loads.
+    format_step_kg
+        The step of the format's weight field [kg]: 1 for MON, 100 for CASTOR, BeDIT and DITIS (kg/100), None for
+        CSV (decimal numbers).
     """
 
     vehicles: pd.DataFrame
     format: str
     skipped: Counter = field(default_factory=Counter)
     bad_lines: dict[str, list[int]] = field(default_factory=dict)
+    weight_step_kg: float | None = None
+    format_step_kg: float | None = None
 
     @property
     def n_read(self) -> int:
@@ -95,110 +135,321 @@ class ReadResult:
             for reason, n in self.skipped.most_common()
         )
 
+    def resolution(self) -> str:
+        """The weight resolution in words: the step, and whether it is the format's or coarser."""
+        if self.weight_step_kg is None:
+            return "weight resolution: none detected (axle loads not whole kilograms)"
+        step = f"{self.weight_step_kg:g} kg"
+        if self.format_step_kg is not None and self.weight_step_kg == self.format_step_kg:
+            return f"weight resolution {step} (the format's unit)"
+        return f"weight resolution {step} (every axle load read is a multiple of {step})"
+
     def summary(self) -> str:
         """One line: records read and skipped, each reason with its first line numbers."""
         text = f"{self.n_read} records read, {self.n_skipped} skipped"
         return text + (f" ({self.reasons()})" if self.skipped else "")
 
 
-class _Bad(Exception):
-    """A bad record; the message is its reason."""
+class _Reasons:
+    """The first reason each record is bad (0: good), flagged check by check in the order of the checks."""
+
+    def __init__(self, m: int) -> None:
+        self.code = np.zeros(m, np.int16)
+        self.names: list[str] = [""]
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.code == 0
+
+    def flag(self, mask: np.ndarray, reason: str) -> None:
+        mask = np.asarray(mask, bool) & (self.code == 0)
+        if mask.any():
+            if reason not in self.names:
+                self.names.append(reason)
+            self.code[mask] = self.names.index(reason)
+
+    def counted(self, line: np.ndarray) -> tuple[Counter, dict[str, list[int]]]:
+        skipped: Counter = Counter()
+        bad_lines: dict[str, list[int]] = {}
+        for k, reason in enumerate(self.names[1:], start=1):
+            where = np.flatnonzero(self.code == k)
+            if len(where):
+                skipped[reason] = len(where)
+                bad_lines[reason] = [int(x) for x in line[where[:EXAMPLES]]]
+        return skipped, bad_lines
 
 
-# ---- checks every format shares ------------------------------------------------------------------------------------
-def _check_vehicle(rec: dict, gross_resolution: float = 0.0, load_resolution: float = 0.0) -> None:
-    n = rec["n_axles"]
-    loads, spacings = rec["loads"], rec["spacings"]
-    lo, hi = AXLE_LOAD_RANGE
-    if any(not lo <= w <= hi for w in loads):
-        raise _Bad(f"implausible axle load (allowed {lo:g}-{hi:g} kg)")
-    lo, hi = SPACING_RANGE
-    if any(not lo <= s <= hi for s in spacings):
-        raise _Bad(f"implausible axle spacing (allowed {lo:g}-{hi:g} m)")
-    lo, hi = SPEED_RANGE
-    if not math.isnan(rec["speed"]) and not lo <= rec["speed"] <= hi:
-        raise _Bad(f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
-    total = sum(loads)
-    gross = rec.get("gross_weight", math.nan)
-    if not math.isnan(gross) and abs(gross - total) > GROSS_TOLERANCE * total + gross_resolution + n * load_resolution:
-        raise _Bad("gross weight is not the sum of the axle loads")
-    length = rec.get("length", math.nan)
-    if not math.isnan(length) and length > 0 and length < sum(spacings):
-        raise _Bad("length shorter than the wheelbase")
+# ---- the bytes of a file ---------------------------------------------------------------------------------------------
+#: bytes a blank line may hold: tab, vertical tab, form feed, carriage return, space (and the line end)
+_BLANK = np.zeros(256, bool)
+_BLANK[[9, 10, 11, 12, 13, 32]] = True
+#: bytes a fixed-width record may hold: ASCII digits, the space, the line end (a trailing carriage return apart)
+_FIELD_BYTE = np.zeros(256, bool)
+_FIELD_BYTE[[10, 32, *range(48, 58)]] = True
+_GZIP_MAGIC = b"\x1f\x8b"
+_BOM = b"\xef\xbb\xbf"
 
 
-def _check_n_axles(n: int, most: int = 99) -> None:
-    if n == 0:
-        raise _Bad("no axles")
-    if not 2 <= n <= most:
-        raise _Bad(f"implausible number of axles (allowed 2-{most})")
+def _file_bytes(path: Path) -> bytes:
+    """The file's bytes: gunzipped if it starts with gzip's magic number, without a UTF-8 byte order mark."""
+    data = path.read_bytes()
+    if data[:2] == _GZIP_MAGIC:
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError, zlib.error) as exc:
+            raise ValueError(f"{path}: starts as a gzip file but does not decompress: {exc}") from None
+    return data[3:] if data[:3] == _BOM else data
+
+
+@dataclass
+class _Lines:
+    """The non-blank lines of a file: offsets ``[start, end)`` into ``buf`` (line end and trailing ``\\r`` not
+    included) and their 1-based line numbers."""
+
+    buf: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    line: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.start)
+
+    def take(self, rows: np.ndarray) -> _Lines:
+        return _Lines(self.buf, self.start[rows], self.end[rows], self.line[rows])
+
+    def text(self, k: int) -> str:
+        return self.buf[self.start[k] : self.end[k]].tobytes().decode("utf-8", errors="replace")
+
+
+def _split(data: bytes) -> _Lines:
+    buf = np.frombuffer(data, np.uint8)
+    ends = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], ends + 1))
+    ends = np.concatenate((ends, [len(buf)]))
+    if starts[-1] == len(buf):  # the file ends with a line end (or is empty): no last line
+        starts, ends = starts[:-1], ends[:-1]
+    if not len(starts):
+        return _Lines(buf, starts, ends, starts + 1)
+    # segment i of reduceat is [start_i, start_i+1): line i and its line end
+    mask = _BLANK[buf]
+    np.logical_not(mask, out=mask)
+    nonblank = np.logical_or.reduceat(mask, starts)
+    del mask
+    cr = (ends > starts) & (buf[np.maximum(ends - 1, 0)] == 13)
+    ends = ends - cr
+    keep = np.flatnonzero(nonblank)
+    return _Lines(buf, starts[keep], ends[keep], keep.astype(np.int64) + 1)
+
+
+def _head(data: bytes, n: int) -> bytes:
+    """The first ``n`` non-blank lines of ``data``, without reading the rest."""
+    lines, pos = [], 0
+    while len(lines) < n and pos < len(data):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        line = data[pos:end]
+        if line.strip(b" \t\r\x0b\x0c"):
+            lines.append(line)
+        pos = end + 1
+    return b"\n".join(lines) + b"\n"
 
 
 # ---- fixed width ---------------------------------------------------------------------------------------------------
-_DIGITS = frozenset("0123456789")
+#: a space's byte minus '0''s, wrapped around in uint8 (what :func:`_gather` sees for a space)
+_SPACE_MINUS_ZERO = np.uint8(256 + 32 - 48)
 
 
-def _int(text: str) -> int:
-    # right-aligned, padded with spaces or zeros: leading spaces, then ASCII digits only (no sign, no inner or
-    # trailing space, not all blank)
-    s = text.lstrip(" ")
-    if not s or not set(s) <= _DIGITS:
-        raise _Bad("non-numeric field")
-    return int(s)
+def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unsigned integer ``line[offset:offset + width]`` of each line in ``rows`` and whether it is one:
+    leading spaces, then ASCII digits only (no sign, no inner or trailing space, not all blank).
+
+    One character column at a time (a gather of one byte per record), so that memory is a few arrays of the
+    number of records, whatever the width."""
+    pos = lines.start[rows] + offset
+    value = np.zeros(len(rows), np.int64)
+    seen = np.zeros(len(rows), bool)
+    ok = np.ones(len(rows), bool)
+    for j in range(width):
+        digit = lines.buf[pos + j] - np.uint8(48)  # wraps around below '0': a digit is < 10
+        is_digit = digit < 10
+        ok &= is_digit | ((digit == _SPACE_MINUS_ZERO) & ~seen)  # a space only before the first digit
+        seen |= is_digit
+        value = value * 10 + np.where(is_digit, digit, 0)
+    return value, ok & seen
 
 
-def _parse_fixed(line: str, layout: FixedWidthLayout) -> dict:
-    if len(line) < layout.fixed_width:
-        raise _Bad("record shorter than the header")
-    raw = {f.name: _int(line[f.start : f.end]) for f in layout.header}
+def _days_in_month(year: np.ndarray, month: np.ndarray) -> np.ndarray:
+    leap = ((year % 4 == 0) & (year % 100 != 0)) | (year % 400 == 0)
+    days = np.array([31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31])[np.clip(month, 1, 12) - 1]
+    return days + ((month == 2) & leap)
+
+
+def _timestamps(ok: np.ndarray, year, month, day, hour, minute, microsecond) -> np.ndarray:
+    """datetime64[us] of each record's calendar fields; NaT where not ``ok`` (fields checked before)."""
+    year, month, day = (np.where(ok, x, d) for x, d in ((year, 1970), (month, 1), (day, 1)))
+    months = ((year - 1970) * 12 + month - 1).astype("datetime64[M]")
+    stamp = months.astype("datetime64[D]").astype("datetime64[us]") + ((day - 1) * 86_400_000_000).astype(
+        "timedelta64[us]"
+    )
+    stamp = stamp + ((hour * 3600 + minute * 60) * 1_000_000 + microsecond).astype("timedelta64[us]")
+    return np.where(ok, stamp, np.datetime64("NaT", "us"))
+
+
+def _check_calendar(reasons: _Reasons, year, month, day, hour, minute, microsecond) -> None:
+    valid = (
+        (month >= 1) & (month <= 12) & (day >= 1) & (day <= _days_in_month(year, month)) & (hour <= 23)
+        & (minute <= 59) & (microsecond >= 0) & (microsecond < 60_000_000)
+    )  # fmt: skip
+    reasons.flag(~valid, BAD_DATE)
+    low, high = YEAR_RANGE
+    reasons.flag((year < low) | (year > high), f"implausible year (allowed {low}-{high})")
+
+
+def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
+    """Every record of ``lines`` in ``layout``: the columns (values of bad records undefined) and the reasons."""
+    m = len(lines)
+    reasons = _Reasons(m)
+    length = lines.end - lines.start
+    reasons.flag(length < layout.fixed_width, SHORT_HEADER)
+    alive = np.flatnonzero(reasons.ok)
+    raw: dict[str, np.ndarray] = {}
+    for f in layout.header:
+        raw[f.name] = np.zeros(m, np.int64)
+        raw[f.name][alive], good = _gather(lines, alive, f.start, f.width)
+        bad = np.zeros(m, bool)
+        bad[alive[~good]] = True
+        reasons.flag(bad, NON_NUMERIC)
     n = raw["n_axles"]
-    _check_n_axles(n, min(MAX_AXLES, layout.max_axles))
-    if len(line) < layout.min_record_length(n):
-        raise _Bad("record too short for its stated axles")
-    axles: dict[str, list[float]] = {}
+    reasons.flag(n == 0, NO_AXLES)
+    most = min(MAX_AXLES, layout.max_axles)
+    reasons.flag((n < 2) | (n > most), f"implausible number of axles (allowed 2-{most})")
+    last = max(f.end for f in layout.axles.fields if f.per == "axle")
+    reasons.flag(length < layout.axles.start + layout.axles.stride * (n - 1) + last, TOO_SHORT)
+    alive_mask = reasons.ok
+    width = int(n[alive_mask].max()) if alive_mask.any() else 2
+    axles: dict[str, np.ndarray] = {}
     for f in layout.axles.fields:
-        count = n if f.per == "axle" else n - 1
-        starts = [layout.axles.start + layout.axles.stride * i + f.start for i in range(count)]
-        axles[f.name] = [_int(line[a : a + f.width]) * f.scale for a in starts]
-    n_groups = raw.get("n_groups", math.nan)
-    if "n_groups" in raw and not 1 <= n_groups <= n:
-        raise _Bad("implausible number of axle groups")
+        count = width if f.per == "axle" else width - 1
+        values = np.full((m, max(count, 0)), -1, np.int64)
+        for k in range(count):
+            rows = np.flatnonzero(alive_mask & (n > (k if f.per == "axle" else k + 1)))
+            offset = layout.axles.start + layout.axles.stride * k + f.start
+            values[rows, k], good = _gather(lines, rows, offset, f.width)
+            bad = np.zeros(m, bool)
+            bad[rows[~good]] = True
+            reasons.flag(bad, NON_NUMERIC)
+        axles[f.name] = values
+    # any other byte but a digit or a space, in a field or in the padding past the last axle: a form feed, a tab,
+    # a Unicode line separator, binary data
+    reasons.flag(_stray_bytes(lines), NON_NUMERIC)
+    if "n_groups" in raw:
+        reasons.flag((raw["n_groups"] < 1) | (raw["n_groups"] > n), "implausible number of axle groups")
     base = layout.direction_base
-    if raw["direction"] not in (base, base + 1):
-        raise _Bad(f"direction not {base} or {base + 1}")
-    year = raw["year"] + (2000 if layout.year_digits == 2 else 0)  # century not given: 2000-2099
+    reasons.flag((raw["direction"] != base) & (raw["direction"] != base + 1), f"direction not {base} or {base + 1}")
+    year = raw["year"]
+    if layout.year_digits == 2:  # the century is not written: POSIX %y
+        year = year + np.where(year >= TWO_DIGIT_PIVOT, 1900, 2000)
     if "millisecond" in raw:  # MON: milliseconds of the minute
-        second, micro = divmod(raw["millisecond"] * 1000, 1_000_000)
+        micro = raw["millisecond"] * 1000
     else:
-        second, micro = raw["second"], raw["second_100"] * 10_000
-    try:
-        stamp = dt.datetime(year, raw["month"], raw["day"], raw["hour"], raw["minute"], second, micro)
-    except ValueError:
-        raise _Bad("invalid date or time") from None
+        micro = raw["second"] * 1_000_000 + raw["second_100"] * 10_000
+    _check_calendar(reasons, year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro)
     scale = layout.scales
-    rec = {
-        "head": raw["head"], "timestamp": stamp, "speed": raw["speed"] * scale["speed"],
+    load_unit = layout.axle_field("axle_load").scale
+    columns = {
+        "head": raw["head"], "speed": raw["speed"] * scale["speed"],
         "gross_weight": raw["gross_weight"] * scale["gross_weight"], "length": raw["length"] * scale["length"],
-        "n_axles": n, "n_groups": n_groups, "lane": raw["lane"], "direction": raw["direction"] - base + 1,
+        "n_axles": n, "n_groups": raw["n_groups"].astype(float) if "n_groups" in raw else np.full(m, np.nan),
+        "lane": raw["lane"], "direction": raw["direction"] - base + 1,
         "transverse_position": raw["transverse_position"] * scale["transverse_position"],
-        "loads": axles["axle_load"], "spacings": axles["spacing"], "axle_widths": axles.get("axle_width"),
     }  # fmt: skip
-    _check_vehicle(rec, scale["gross_weight"] / 2, layout.axle_field("axle_load").scale / 2)
-    return rec
+    loads = np.where(axles["axle_load"] >= 0, axles["axle_load"] * load_unit, np.nan)
+    spacings = np.where(axles["spacing"] >= 0, axles["spacing"] * layout.axle_field("spacing").scale, np.nan)
+    widths = None
+    if "axle_width" in axles:
+        widths = np.where(axles["axle_width"] >= 0, axles["axle_width"] * layout.axle_field("axle_width").scale, np.nan)
+    return {
+        "reasons": reasons, "columns": columns, "loads": loads, "spacings": spacings, "widths": widths,
+        "stamp": (year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro),
+        "gross_step": scale["gross_weight"], "load_step": load_unit,
+    }  # fmt: skip
+
+
+def _stray_bytes(lines: _Lines) -> np.ndarray:
+    """Whether each record ``[start, end)`` holds a byte that is neither an ASCII digit nor a space."""
+    m = len(lines)
+    if not m:
+        return np.zeros(0, bool)
+    stray = _FIELD_BYTE[lines.buf]
+    np.logical_not(stray, out=stray)
+    bounds = np.empty(2 * m, np.int64)
+    bounds[0::2], bounds[1::2] = lines.start, lines.end
+    if bounds[-1] == len(lines.buf):  # reduceat's indices must be inside the array: the last segment runs to its end
+        bounds = bounds[:-1]
+    return np.logical_or.reduceat(stray, bounds)[0::2]
+
+
+# ---- checks every format shares ------------------------------------------------------------------------------------
+def _weight_step(loads: np.ndarray, ok: np.ndarray) -> float | None:
+    """The largest of :data:`WEIGHT_STEPS_KG` dividing every axle load of the ``ok`` records; None if the loads are
+    not whole kilograms or there is none."""
+    values = loads[ok]
+    values = values[~np.isnan(values)]
+    if not len(values) or not (np.round(values) == values).all():
+        return None
+    whole = np.round(values).astype(np.int64)
+    return float(next(step for step in reversed(WEIGHT_STEPS_KG) if step == 1 or not (whole % step).any()))
+
+
+def _check_vehicles(parsed: dict) -> float | None:
+    """The plausibility checks, in their order, on every record not bad yet; returns the weight step detected."""
+    reasons: _Reasons = parsed["reasons"]
+    col = parsed["columns"]
+    loads, spacings = parsed["loads"], parsed["spacings"]
+    lo, hi = AXLE_LOAD_RANGE
+    reasons.flag(((loads < lo) | (loads > hi)).any(axis=1), f"implausible axle load (allowed {lo:g}-{hi:g} kg)")
+    lo, hi = SPACING_RANGE
+    reasons.flag(((spacings < lo) | (spacings > hi)).any(axis=1), f"implausible axle spacing (allowed {lo:g}-{hi:g} m)")
+    lo, hi = SPEED_RANGE
+    speed = col["speed"]
+    reasons.flag((speed < lo) | (speed > hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
+    step = _weight_step(loads, reasons.ok)
+    total = np.nansum(loads, axis=1)
+    gross = col["gross_weight"]
+    if not np.isnan(gross).all():
+        # half a step of the gross weight's field and of each axle's, at the file's resolution if coarser
+        load_half = max(step or 0.0, parsed["load_step"]) / 2
+        gross_half = max(step or 0.0, parsed["gross_step"]) / 2
+        slack = GROSS_TOLERANCE * total + gross_half + col["n_axles"] * load_half
+        reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
+    length = col["length"]
+    reasons.flag((length > 0) & (length < np.nansum(spacings, axis=1)), "length shorter than the wheelbase")
+    return step
+
+
+def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
+    """A good record equal to an earlier good one in time, lane, direction, speed, axle loads and spacings is bad:
+    a WIM system does not weigh two vehicles in one lane at one instant (a record repeated by a copy or a retry)."""
+    reasons: _Reasons = parsed["reasons"]
+    good = np.flatnonzero(reasons.ok)
+    if len(good) < 2:
+        return
+    col = parsed["columns"]
+    key = pd.DataFrame({
+        "t": stamps[good].view(np.int64), "lane": col["lane"][good], "dir": col["direction"][good],
+        "speed": col["speed"][good],
+        **{f"w{i}": parsed["loads"][good, i] for i in range(parsed["loads"].shape[1])},
+        **{f"s{i}": parsed["spacings"][good, i] for i in range(parsed["spacings"].shape[1])},
+    })  # fmt: skip
+    repeat = np.zeros(len(reasons.code), bool)
+    repeat[good[key.duplicated(keep="first").to_numpy()]] = True
+    reasons.flag(repeat, DUPLICATE)
 
 
 # ---- CSV -------------------------------------------------------------------------------------------------------------
-def _float(text: str, optional: bool = False) -> float:
-    s = text.strip()
-    if optional and not s:
-        return math.nan
-    try:
-        x = float(s)
-    except ValueError:
-        raise _Bad("non-numeric field") from None
-    if not math.isfinite(x):
-        raise _Bad("non-numeric field")
-    return x
+#: an ISO 8601 local date and time: date, then optionally hours:minutes, seconds and a fraction (no time zone)
+_ISO_LOCAL = r"\d{4}-\d{2}-\d{2}(?:[T ]\d{2}:\d{2}(?::\d{2}(?:[.,]\d{1,9})?)?)?"
+_ZONED = _ISO_LOCAL + r"(?:Z|[+-]\d{2}(?::?\d{2})?)"
 
 
 def _csv_header(header: list[str], path: str) -> dict[str, int]:
@@ -212,36 +463,108 @@ def _csv_header(header: list[str], path: str) -> dict[str, int]:
     return columns
 
 
-def _parse_csv(row: list[str], columns: dict[str, int], width: int) -> dict:
-    if len(row) != width:
-        raise _Bad("wrong length")
-    value = _float(row[columns["n_axles"]])
-    if value != int(value):
-        raise _Bad("non-numeric field")
-    n = int(value)
-    _check_n_axles(n, CSV_MAX_AXLES)
-    need = [f"axle_load_{i}" for i in range(1, n + 1)] + [f"spacing_{i}" for i in range(1, n)]
-    if any(c not in columns for c in need):
-        raise _Bad("more axles than the file has columns for")
-    extra = [c for c, i in columns.items() if c.startswith(("axle_load_", "spacing_")) and c not in need]
-    if any(row[columns[c]].strip() not in ("", "0") for c in extra):
-        raise _Bad("axle load or spacing past the number of axles")
-    try:
-        stamp = pd.Timestamp(row[columns["timestamp"]].strip()).to_pydatetime()
-    except (ValueError, TypeError):
-        raise _Bad("invalid date or time") from None
-    if pd.isna(stamp):
-        raise _Bad("invalid date or time")
-    lane = _float(row[columns["lane"]], optional=True)
-    rec = {
-        "head": "", "timestamp": stamp, "speed": _float(row[columns["speed_kmh"]], optional=True) * KMH,
-        "gross_weight": math.nan, "length": math.nan, "n_axles": n, "n_groups": math.nan,
-        "lane": -1 if math.isnan(lane) else int(lane), "direction": -1, "transverse_position": math.nan,
-        "loads": [_float(row[columns[f"axle_load_{i}"]]) for i in range(1, n + 1)],
-        "spacings": [_float(row[columns[f"spacing_{i}"]]) for i in range(1, n)], "axle_widths": None,
+def _numbers(cells: pd.Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The float of each cell, whether it is blank, and whether it is a finite number (blank: not)."""
+    text = cells.str.strip()
+    blank = (text == "").to_numpy()
+    value = pd.to_numeric(text.where(~blank, None), errors="coerce").to_numpy(dtype=float)
+    return value, blank, np.isfinite(value)
+
+
+def _row_cells(lines: list[str]) -> tuple[list[list[str] | None], list[str]]:
+    """Each line split into cells (the csv module only where there is a quote); None and why where it cannot be."""
+    rows: list[list[str] | None] = []
+    errors: list[str] = []
+    for line in lines:
+        if '"' not in line:
+            rows.append(line.split(","))
+            continue
+        try:
+            rows.append(next(csv.reader([line])))
+        except csv.Error:  # an unclosed quote, a field over csv's size limit
+            rows.append(None)
+            errors.append(line)
+    return rows, errors
+
+
+def _parse_csv(text_lines: list[str], line_no: np.ndarray, path: str) -> dict:
+    header_cells = next(csv.reader([text_lines[0]]))
+    columns = _csv_header(header_cells, path)
+    body = text_lines[1:]
+    line = line_no[1:]
+    m = len(body)
+    reasons = _Reasons(m)
+    rows, _ = _row_cells(body)
+    width = len(header_cells)
+    reasons.flag(np.array([r is None for r in rows], bool), "unreadable CSV row (an unclosed quote or a huge field)")
+    right = np.array([r is not None and len(r) == width for r in rows], bool)
+    reasons.flag(~right, "wrong length")
+    filler = [""] * width
+    cells = pd.DataFrame([r if ok else filler for r, ok in zip(rows, right)], columns=range(width), dtype=object)
+    if not m:
+        cells = pd.DataFrame(columns=range(width), dtype=object)
+
+    def number(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return _numbers(cells[columns[name]].astype(str))
+
+    n_value, n_blank, n_ok = number("n_axles")
+    reasons.flag(~n_ok | (n_value != np.round(n_value)), NON_NUMERIC)
+    n = np.where(reasons.ok, np.nan_to_num(n_value), 0).astype(np.int64)
+    reasons.flag(reasons.ok & (n == 0), NO_AXLES)
+    reasons.flag((n < 2) | (n > CSV_MAX_AXLES), f"implausible number of axles (allowed 2-{CSV_MAX_AXLES})")
+    n = np.where(reasons.ok, n, 0)
+    load_cols = sorted(int(c[10:]) for c in columns if c.startswith("axle_load_") and c[10:].isdigit())
+    spacing_cols = sorted(int(c[8:]) for c in columns if c.startswith("spacing_") and c[8:].isdigit())
+    have_loads = max((k for i, k in enumerate(load_cols, start=1) if k == i), default=0)  # 1..k all there
+    have_spacings = max((k for i, k in enumerate(spacing_cols, start=1) if k == i), default=0)
+    reasons.flag((n > have_loads) | (n - 1 > have_spacings), "more axles than the file has columns for")
+    past = np.zeros(m, bool)
+    for k in load_cols:
+        text = cells[columns[f"axle_load_{k}"]].astype(str).str.strip()
+        past |= (n < k) & ~text.isin(("", "0")).to_numpy()
+    for k in spacing_cols:
+        text = cells[columns[f"spacing_{k}"]].astype(str).str.strip()
+        past |= (n - 1 < k) & ~text.isin(("", "0")).to_numpy()
+    reasons.flag(past, "axle load or spacing past the number of axles")
+    # the timestamp: ISO 8601 local time, nothing else (no 'now', no 'today', no time zone)
+    stamp_text = cells[columns["timestamp"]].astype(str).str.strip()
+    zoned = stamp_text.str.fullmatch(_ZONED).to_numpy(dtype=bool)
+    reasons.flag(zoned, "time zone in a timestamp (write the local time, as the fixed-width formats do)")
+    iso = stamp_text.str.fullmatch(_ISO_LOCAL).to_numpy(dtype=bool)
+    stamps = pd.to_datetime(stamp_text.where(iso & reasons.ok, None).str.replace(",", ".", regex=False),
+                            format="ISO8601", errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
+    reasons.flag(np.isnat(stamps), BAD_DATE)
+    year = np.where(np.isnat(stamps), 2000, stamps.astype("datetime64[Y]").astype(np.int64) + 1970)
+    low, high = YEAR_RANGE
+    reasons.flag((year < low) | (year > high), f"implausible year (allowed {low}-{high})")
+    lane, lane_blank, lane_ok = number("lane")
+    reasons.flag(~lane_blank & ~lane_ok, NON_NUMERIC)
+    lo, hi = CSV_LANE_RANGE
+    bad_lane = ~lane_blank & lane_ok & ((lane != np.round(lane)) | (lane < lo) | (lane > hi))
+    reasons.flag(bad_lane, f"implausible lane (allowed a whole number {lo}-{hi}, or empty)")
+    speed, speed_blank, speed_ok = number("speed_kmh")
+    reasons.flag(~speed_blank & ~speed_ok, NON_NUMERIC)
+    width_axles = int(n.max()) if m and n.max() >= 2 else 2
+    loads = np.full((m, width_axles), np.nan)
+    spacings = np.full((m, width_axles - 1), np.nan)
+    for i in range(width_axles):
+        for name, target, need in (("axle_load", loads, n > i), ("spacing", spacings, n - 1 > i)):
+            if i >= target.shape[1] or not need.any() or f"{name}_{i + 1}" not in columns:
+                continue  # no column: its rows are bad already (more axles than the file has columns for)
+            value, _, ok = number(f"{name}_{i + 1}")
+            reasons.flag(need & ~ok, NON_NUMERIC)
+            target[:, i] = np.where(need, value, np.nan)
+    columns_out = {
+        "head": np.full(m, "", object), "speed": np.where(speed_blank, np.nan, speed) * KMH,
+        "gross_weight": np.full(m, np.nan), "length": np.full(m, np.nan), "n_axles": n,
+        "n_groups": np.full(m, np.nan),
+        "lane": np.where(lane_blank | ~np.isfinite(lane), -1, np.nan_to_num(lane)).astype(np.int64),
+        "direction": np.full(m, -1, np.int64), "transverse_position": np.full(m, np.nan),
     }  # fmt: skip
-    _check_vehicle(rec)
-    return rec
+    return {
+        "reasons": reasons, "columns": columns_out, "loads": loads, "spacings": spacings, "widths": None,
+        "stamps": stamps, "line": line, "gross_step": 0.0, "load_step": 0.0,
+    }  # fmt: skip
 
 
 # ---- the file ------------------------------------------------------------------------------------------------------
@@ -249,101 +572,118 @@ def _shown(text: str, limit: int = 60) -> str:
     return repr(text if len(text) <= limit else text[: limit - 1] + "…")
 
 
-def _records(lines: list[str], fmt: str, path: str):
-    """(line number, record or reason) of every non-blank line; the CSV header is not a record."""
-    numbered = [(i + 1, line.rstrip("\r\n")) for i, line in enumerate(lines)]
-    numbered = [(i, line) for i, line in numbered if line.strip()]
+def _text_lines(data: bytes) -> tuple[list[str], np.ndarray]:
+    """The non-blank lines of a CSV file as text and their 1-based numbers (``\\n`` ends a line; ``\\r`` before it
+    dropped)."""
+    text = data.decode("utf-8", errors="replace").split("\n")
+    if text and text[-1] == "":
+        text.pop()
+    kept = [(i + 1, t.removesuffix("\r")) for i, t in enumerate(text) if t.strip(" \t\r\x0b\x0c")]
+    return [t for _, t in kept], np.array([i for i, _ in kept], np.int64)
+
+
+def _parse(data: bytes, fmt: str, path: str) -> dict:
+    """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's."""
     if fmt == "csv":
-        if not numbered:
-            return
-        rows = csv.reader([line for _, line in numbered])
-        header = next(rows)
-        columns = _csv_header(header, path)
-        for (i, _), row in zip(numbered[1:], rows):
-            try:
-                yield i, _parse_csv(row, columns, len(header))
-            except _Bad as exc:
-                yield i, str(exc)
-        return
-    layout = LAYOUTS[fmt]
-    for i, line in numbered:
-        try:
-            yield i, _parse_fixed(line, layout)
-        except _Bad as exc:
-            yield i, str(exc)
+        text, numbers = _text_lines(data)
+        if not text:
+            return {}
+        parsed = _parse_csv(text, numbers, path)
+        stamps = parsed["stamps"]
+    else:
+        lines = _split(data)
+        if not len(lines):
+            return {}
+        parsed = _parse_fixed(lines, LAYOUTS[fmt])
+        parsed["line"] = lines.line
+        stamps = None
+    parsed["step"] = _check_vehicles(parsed)
+    if stamps is None:
+        stamps = _timestamps(parsed["reasons"].ok, *parsed["stamp"])
+    _flag_repeats(parsed, stamps)
+    parsed["stamps"] = stamps
+    return parsed
 
 
-def _sniff(lines: list[str], expected: str) -> str:
-    """Which other known format the first lines parse as, for the refusal message ('' if none)."""
-    head = lines[:20]
-    for fmt in FORMATS:
-        if fmt == expected:
-            continue
-        try:
-            results = [r for _, r in _records(head, fmt, "")]
-        except ValueError:
-            continue
-        good = sum(isinstance(r, dict) for r in results)
-        if results and good > len(results) / 2:
-            return f"; its first lines parse as {fmt} records (--format {fmt}?)"
-    return ""
-
-
-def _frame(rows: list[tuple[int, dict]]) -> pd.DataFrame:
-    width = max((r["n_axles"] for _, r in rows), default=2)
-    data = {
-        "line": [i for i, _ in rows],
-        **{k: [r[k] for _, r in rows] for k in ("head", "timestamp", "speed", "gross_weight", "length", "n_axles",
-                                                  "n_groups", "lane", "direction", "transverse_position")},
-    }  # fmt: skip
-    loads = np.full((len(rows), width), np.nan)
-    spacings = np.full((len(rows), width - 1), np.nan)
-    with_widths = any(r["axle_widths"] is not None for _, r in rows)  # DITIS
-    widths = np.full((len(rows), width), np.nan)
-    for j, (_, r) in enumerate(rows):
-        loads[j, : r["n_axles"]] = r["loads"]
-        spacings[j, : r["n_axles"] - 1] = r["spacings"]
-        if r["axle_widths"] is not None:
-            widths[j, : r["n_axles"]] = r["axle_widths"]
-    data.update({f"axle_load_{i}": loads[:, i] for i in range(width)})
-    data.update({f"spacing_{i}": spacings[:, i] for i in range(width - 1)})
-    if with_widths:
-        data.update({f"axle_width_{i}": widths[:, i] for i in range(width)})
-    frame = pd.DataFrame(data)
-    frame["timestamp"] = pd.to_datetime(frame["timestamp"])
-    frame["n_groups"] = frame["n_groups"].astype(float)
-    frame["transverse_position"] = frame["transverse_position"].astype(float)
+def _frame(parsed: dict) -> pd.DataFrame:
+    ok = parsed["reasons"].ok
+    n = parsed["columns"]["n_axles"][ok]
+    width = int(n.max()) if len(n) else 2
+    col = parsed["columns"]
+    frame = pd.DataFrame({
+        "line": parsed["line"][ok], "head": col["head"][ok], "timestamp": parsed["stamps"][ok],
+        **{k: col[k][ok] for k in ("speed", "gross_weight", "length", "n_axles", "n_groups", "lane", "direction",
+                                   "transverse_position")},
+    })  # fmt: skip
+    pad = max(0, width - parsed["loads"].shape[1])
+    loads = np.pad(parsed["loads"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
+    spacings = np.pad(parsed["spacings"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, : width - 1]
+    extra = {f"axle_load_{i}": loads[:, i] for i in range(width)}
+    extra.update({f"spacing_{i}": spacings[:, i] for i in range(width - 1)})
+    if parsed["widths"] is not None:
+        widths = np.pad(parsed["widths"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
+        extra.update({f"axle_width_{i}": widths[:, i] for i in range(width)})
+    frame = pd.concat([frame, pd.DataFrame(extra)], axis=1)
+    frame["timestamp"] = frame["timestamp"].astype("datetime64[us]")
+    frame["n_axles"] = frame["n_axles"].astype(np.int64)
+    frame["line"] = frame["line"].astype(np.int64)
     frame["lane"] = frame["lane"].astype(np.int64)  # -1: not given (CSV)
     frame["direction"] = frame["direction"].astype(np.int64)  # 1 or 2; -1: not given (CSV)
     return frame
 
 
-#: non-blank lines ``fmt="auto"`` tries every layout on [-]
-SNIFF_LINES: int = 50
+def _fits(head: bytes, fmt: str, path: str) -> tuple[int, int]:
+    """(good, all) records of ``head`` in ``fmt``; a ValueError for a CSV header not the layout's."""
+    parsed = _parse(head, fmt, path)
+    if not parsed:
+        return 0, 0
+    ok = parsed["reasons"].ok
+    return int(ok.sum()), len(ok)
+
+
+def _sniff(data: bytes, expected: str) -> str:
+    """Which other known format the first lines parse as, for the refusal message ('' if none)."""
+    head = _head(data, 20)
+    for fmt in FORMATS:
+        if fmt == expected:
+            continue
+        try:
+            good, total = _fits(head, fmt, "")
+        except ValueError:
+            continue
+        if total and good > total / 2:
+            return f"; its first lines parse as {fmt} records (--format {fmt}?)"
+    return ""
+
+
+def _detect(head: bytes, path: str) -> str:
+    fits, tried = [], []
+    n_lines = 0
+    for fmt in FORMATS:
+        try:
+            good, total = _fits(head, fmt, path)
+        except ValueError:
+            tried.append(f"{fmt}: not its header")
+            continue
+        n_lines = max(n_lines, total)
+        tried.append(f"{fmt}: {good} of {total} good")
+        if total and good > total / 2:
+            fits.append(fmt)
+    if len(fits) == 1:
+        return fits[0]
+    what = "no known format fits" if not fits else f"more than one format fits ({', '.join(fits)})"
+    shown = len([line for line in head.split(b"\n") if line.strip()])
+    raise ValueError(
+        f"{path}: format auto: {what} the first {shown} non-blank lines ({'; '.join(tried)}); "
+        f"name one with --format ({', '.join(FORMATS)})"
+    )
 
 
 def detect_format(lines: list[str], path: str = "") -> str:
     """The one known format in which more than half of the first :data:`SNIFF_LINES` non-blank lines are good
     records; a :class:`ValueError` naming the candidates when none or more than one fits."""
-    head = [line for line in lines if line.strip()][:SNIFF_LINES]
-    fits, tried = [], []
-    for fmt in FORMATS:
-        try:
-            results = [r for _, r in _records(head, fmt, path)]
-        except ValueError:
-            tried.append(f"{fmt}: not its header")
-            continue
-        good = sum(isinstance(r, dict) for r in results)
-        tried.append(f"{fmt}: {good} of {len(results)} good")
-        if results and good > len(results) / 2:
-            fits.append(fmt)
-    if len(fits) == 1:
-        return fits[0]
-    what = "no known format fits" if not fits else f"more than one format fits ({', '.join(fits)})"
-    raise ValueError(
-        f"{path}: format auto: {what} the first {len(head)} non-blank lines ({'; '.join(tried)}); "
-        f"name one with --format ({', '.join(FORMATS)})"
-    )
+    data = "\n".join(lines).encode("utf-8", errors="replace")
+    return _detect(_head(data, SNIFF_LINES), path)
 
 
 def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
@@ -352,7 +692,8 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
     Parameters
     ----------
     path
-        The file (text; fixed-width records one a line, or CSV with a header line).
+        The file (text; fixed-width records one a line, or CSV with a header line); gzip-compressed or not (told by
+        its first bytes, not its name).
     fmt
         ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``), or ``auto``
         (default): the one layout in which most of the first :data:`SNIFF_LINES` non-blank lines parse
@@ -361,48 +702,41 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
     Returns
     -------
     ReadResult
-        The good records as a vehicle table (SI) and the bad ones counted by reason.
+        The good records as a vehicle table (SI), the bad ones counted by reason, the weight resolution.
 
     Raises
     ------
     ValueError
         For an unknown format, an empty file, a file whose records are more than half bad or that is in another
-        format (the message names the format expected and what was found).
+        format (the message names the format expected and what was found), a gzip file that does not decompress.
     OSError
         If the file cannot be read.
     """
     if fmt != "auto" and fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
     path = Path(path)
-    with path.open(encoding="utf-8-sig", errors="replace", newline="") as fh:  # a BOM from a spreadsheet
-        lines = fh.read().splitlines()
+    data = _file_bytes(path)
     if fmt == "auto":
-        if not any(line.strip() for line in lines):
+        head = _head(data, SNIFF_LINES)
+        if not head.strip():
             raise ValueError(f"{path}: no records: format auto found an empty file")
-        fmt = detect_format(lines, str(path))
+        fmt = _detect(head, str(path))
     name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
-    rows: list[tuple[int, dict]] = []
-    skipped: Counter = Counter()
-    bad_lines: dict[str, list[int]] = {}
     try:
-        for i, rec in _records(lines, fmt, str(path)):
-            if isinstance(rec, dict):
-                rows.append((i, rec))
-            else:
-                skipped[rec] += 1
-                if len(bad_lines.setdefault(rec, [])) < EXAMPLES:
-                    bad_lines[rec].append(i)
+        parsed = _parse(data, fmt, str(path))
     except ValueError as exc:  # a CSV header that is not the layout's
-        raise ValueError(f"{exc}{_sniff(lines, fmt)}") from None
-    result = ReadResult(_frame(rows), fmt, skipped, bad_lines)
-    total = result.n_read + result.n_skipped
-    if total == 0:
-        found = "a header and no record" if any(line.strip() for line in lines) else "an empty file"
+        raise ValueError(f"{exc}{_sniff(data, fmt)}") from None
+    if not parsed or not len(parsed["reasons"].code):
+        found = "a header and no record" if parsed or _head(data, 1).strip() else "an empty file"
         raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
+    skipped, bad_lines = parsed["reasons"].counted(parsed["line"])
+    format_step = None if fmt == "csv" else LAYOUTS[fmt].axle_field("axle_load").scale
+    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["step"], format_step)
+    total = result.n_read + result.n_skipped
     if result.n_skipped > MAX_BAD_FRACTION * total:
-        first = next(line for line in lines if line.strip())
+        first = _head(data, 1).decode("utf-8", errors="replace").rstrip()
         raise ValueError(
             f"{path}: not read as {name} (format {fmt}): {result.n_skipped} of {total} records bad "
-            f"({result.reasons()}); first line {_shown(first.rstrip())}" + _sniff(lines, fmt)
+            f"({result.reasons()}); first line {_shown(first)}" + _sniff(data, fmt)
         )
     return result
