@@ -302,11 +302,11 @@ ERRORS = [
     # (format, table, the message's pieces: column, value, row, range, unit)
     ("castor", _one(axle_load_1=100_000.0), ["axle_load_1 = 100000 kg", "row 0", "0-99 900 kg in kg/100", "3 digits"]),
     ("castor", _ten_axles(), ["n_axles = 10", "row 0", "2-9 axles"]),
-    ("mon", _one(direction=-1), ["direction = -1", "1 row", "row 0", "1 or 2"]),
+    ("mon", _one(direction=-1), ["direction = -1", "in 1 row (first: 0)", "1 or 2"]),
     ("bedit", _one(spacing_0=-4.2), ["spacing_0 = -4.2 m", "row 0", "negative", "0-99.9 m in dm", "3 digits"]),
     ("castor", _one(timestamp=T("2070-05-01 12:00")), ["timestamp = 2070-05-01T12:00:00", "row 0", "1969-2068"]),
     ("ditis", _one(axle_load_2=NAN), ["axle_load_2 = nan kg", "row 0", "NaN", "0-99 900 kg in kg/100", "3 digits"]),
-    ("mon", _one(lane=-1), ["lane = -1", "row 0", "1-9"]),
+    ("mon", _one(lane=-1), ["lane = -1", "(first: 0)", "1-9"]),
     ("csv", _one(axle_load_0=NAN), ["axle_load_0 = nan kg", "row 0", "NaN"]),
 ]
 
@@ -326,7 +326,7 @@ def test_errors_leave_no_file(tmp_path, fmt, table, pieces):
 def test_error_message_names_rows(tmp_path):
     table = pd.concat([B] * 6, ignore_index=True)
     table.loc[[2, 4, 5], "direction"] = -1
-    with pytest.raises(ValueError, match=r"direction = -1 or NaN \(not given\) in 3 rows, row 2 \(3 rows: 2, 4, 5\)"):
+    with pytest.raises(ValueError, match=r"direction = -1 or NaN \(not given\) in 3 rows \(first: 2, 4, 5\)"):
         write_weighings(table, tmp_path / "x.castor", "castor")
     table = pd.concat([B] * 3, ignore_index=True)
     table.loc[1, "axle_load_1"] = 104_500.0

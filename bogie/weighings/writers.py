@@ -54,6 +54,11 @@ def _num(x: float) -> str:
     return sign + whole + dot + frac
 
 
+def _val(x: float) -> str:
+    """A value for a message, as given: up to 10 significant digits, not grouped (104500, 1.31, nan)."""
+    return f"{x:.10g}"
+
+
 def _rows(rows: np.ndarray) -> str:
     """'row 17' or 'row 17 (3 rows: 17, 20, 31)' or 'row 17 (12 rows: 17, 20, 31, ...)'."""
     first = f"row {rows[0]}"
@@ -87,7 +92,7 @@ def _column(vehicles: pd.DataFrame, name: str, rows: np.ndarray | None = None) -
 
 def _require(vehicles: pd.DataFrame, fmt: str, name: str, rows: np.ndarray | None = None) -> None:
     if name not in vehicles.columns:
-        needed = "" if rows is None else f" (needed by {_rows(rows)}, by its number of axles)"
+        needed = "" if rows is None else f" (needed by the axle count of {_rows(rows)})"
         raise ValueError(f"{fmt}: the table has no column {name}{needed}; required for format {fmt}")
 
 
@@ -112,14 +117,14 @@ def _scaled(fmt: str, name: str, values: np.ndarray, field: Field, rows: np.ndar
         where = np.flatnonzero(bad)
         if len(where):
             raise ValueError(
-                f"{fmt}: {name} = {_num(values[where[0]])}{shown} in {_rows(rows[where])} {why} ({_field_range(field)})"
+                f"{fmt}: {name} = {_val(values[where[0]])}{shown} in {_rows(rows[where])} {why} ({_field_range(field)})"
             )
     q = values if field.scale is None else values / field.scale
     written = _round_half_away(q)
     where = np.flatnonzero(~(written <= 10**field.width - 1))
     if len(where):
         raise ValueError(
-            f"{fmt}: {name} = {_num(values[where[0]])}{shown} in {_rows(rows[where])} does not fit its field "
+            f"{fmt}: {name} = {_val(values[where[0]])}{shown} in {_rows(rows[where])} does not fit its field "
             f"({_field_range(field)})"
         )
     return written.astype(np.int64)
@@ -193,13 +198,14 @@ def _coded(vehicles: pd.DataFrame, fmt: str, name: str, allowed: str, ok) -> np.
     values = _column(vehicles, name)
     missing = np.flatnonzero(np.isnan(values) | (values == -1))
     if len(missing):
+        first = ", ".join(str(r) for r in missing[:_SHOWN_ROWS]) + (", ..." if len(missing) > _SHOWN_ROWS else "")
         raise ValueError(
-            f"{fmt}: {name} = -1 (not given) in {_rows(missing)}; format {fmt} needs it ({allowed}): "
-            f"{len(missing)} row{'s' if len(missing) > 1 else ''}"
+            f"{fmt}: {name} = -1 or NaN (not given) in {len(missing)} row{'s' if len(missing) > 1 else ''} "
+            f"(first: {first}); format {fmt} needs it ({allowed})"
         )
     bad = np.flatnonzero(~ok(values) | (values != np.round(values)))
     if len(bad):
-        raise ValueError(f"{fmt}: {name} = {_num(values[bad[0]])} in {_rows(bad)} is not allowed ({allowed})")
+        raise ValueError(f"{fmt}: {name} = {_val(values[bad[0]])} in {_rows(bad)} is not allowed ({allowed})")
     return values.astype(np.int64)
 
 
@@ -298,7 +304,7 @@ def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
         groups = np.where(np.isnan(given), counted, given)
         bad = np.flatnonzero(groups != np.round(groups))
         if len(bad):
-            raise ValueError(f"{fmt}: n_groups = {_num(groups[bad[0]])} in {_rows(bad)} is not a whole number")
+            raise ValueError(f"{fmt}: n_groups = {_val(groups[bad[0]])} in {_rows(bad)} is not a whole number")
         values["n_groups"] = _scaled(fmt, "n_groups", groups, header["n_groups"], everyone)
     for f in layout.header:
         top = 10**f.width - 1
@@ -352,11 +358,11 @@ def _csv_lines(vehicles: pd.DataFrame) -> list[str]:
     lane = np.where(lane == -1, np.nan, lane)  # -1: not given, written blank
     bad = np.flatnonzero(~np.isnan(lane) & ((lane < 1) | (lane != np.round(lane)) | np.isinf(lane)))
     if len(bad):
-        raise ValueError(f"csv: lane = {_num(lane[bad[0]])} in {_rows(bad)} is not allowed (1-based; -1 or NaN blank)")
+        raise ValueError(f"csv: lane = {_val(lane[bad[0]])} in {_rows(bad)} is not allowed (1-based; -1 or NaN blank)")
     bad = np.flatnonzero((speed < 0) | np.isinf(speed))
     if len(bad):
         raise ValueError(
-            f"csv: speed = {_num(speed[bad[0]])} m/s in {_rows(bad)} is not allowed (0 or more; NaN blank)"
+            f"csv: speed = {_val(speed[bad[0]])} m/s in {_rows(bad)} is not allowed (0 or more; NaN blank)"
         )
     loads = _axle_values(vehicles, fmt, "axle_load", n, n)
     spacings = _axle_values(vehicles, fmt, "spacing", n, n - 1)
@@ -368,7 +374,7 @@ def _csv_lines(vehicles: pd.DataFrame) -> list[str]:
                 where = np.flatnonzero(mask)
                 if len(where):
                     raise ValueError(
-                        f"csv: {prefix}_{i} = {_num(values[where[0]])} {unit} in {_rows(rows[where])} {why} "
+                        f"csv: {prefix}_{i} = {_val(values[where[0]])} {unit} in {_rows(rows[where])} {why} "
                         f"(a finite number, 0 or more, {unit})"
                     )
     width = int(n.max(initial=2))
