@@ -224,7 +224,15 @@ def _axle_values(vehicles: pd.DataFrame, fmt: str, prefix: str, n: np.ndarray, c
 def _time_fields(stamps: pd.DatetimeIndex, fmt: str, layout: FixedWidthLayout) -> dict[str, np.ndarray]:
     """Calendar and time fields of the timestamps rounded to the format's resolution (a tie to the later time)."""
     step = _TIME_STEP_NS[fmt]
-    ns = stamps.as_unit("ns").asi8  # pandas keeps the unit it was given (the reader's: us)
+    try:
+        ns = stamps.as_unit("ns").asi8  # pandas keeps the unit it was given (the reader's: us)
+    except (OverflowError, ValueError):
+        years = np.asarray(stamps.year)
+        bad = np.flatnonzero((years < 1678) | (years > 2261))
+        raise ValueError(
+            f"{fmt}: timestamp = {stamps[bad[0]].isoformat()} in {_rows(bad)} is outside the years 1678-2261 the "
+            "writer handles"
+        ) from None
     # floor division: a half rounds up, to the later time
     rounded = pd.DatetimeIndex(((ns + step // 2) // step) * step, dtype="datetime64[ns]")
     year = rounded.year.to_numpy()
