@@ -1,0 +1,499 @@
+"""Writer of weighings: the vehicle table of :func:`bogie.weighings.readers.read_weighings` back to a file.
+
+:func:`write_weighings` writes the documented CSV layout or one of the fixed-width WIM formats (MON, CASTOR, BeDIT,
+DITIS), every field from the layout data of ``formats.py`` (offset, width, scale to SI), so that reading the file
+back gives the table again, rounded to the format's resolution. Everything is checked before anything is written,
+and the file is written atomically (a temporary file in the same folder, then ``os.replace``): an error leaves no
+file, partial or temporary. The rules (rounding, defaults of absent columns, errors) are in ``docs/weighings.md``,
+section "Writing records".
+"""
+
+from __future__ import annotations
+
+import gzip
+import math
+import os
+import secrets
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+
+from bogie.weighings.formats import FORMATS, LAYOUTS, Field, FixedWidthLayout
+from bogie.weighings.groups import GROUP_SPACING_M
+
+__all__ = ["CSV_MAX_AXLES", "TWO_DIGIT_YEARS", "write_weighings"]
+
+#: most axles of one vehicle in the CSV layout [-] (the layout's limit, docs/weighings.md: n_axles 2 to 20)
+CSV_MAX_AXLES: int = 20
+#: years a two-digit year field (CASTOR, BeDIT) can hold: the POSIX ``%y`` pivot, 69-99 -> 1969-1999, 00-68 ->
+#: 2000-2068
+TWO_DIGIT_YEARS: tuple[int, int] = (1969, 2068)
+#: a quotient (value / scale) is first rounded to this many decimals of its unit, so that a decimal input that
+#: binary floating point cannot hold exactly rounds as written (0.45 m / 0.1 = 4.4999999999999991 dm -> 5 dm) [-]
+_CLEAN_DECIMALS = 6
+#: rows named in an error message
+_SHOWN_ROWS = 3
+#: time resolution of each fixed-width format [ns]: MON milliseconds, the others hundredths of a second
+_TIME_STEP_NS = {"mon": 1_000_000, "castor": 10_000_000, "bedit": 10_000_000, "ditis": 10_000_000}
+#: the SI unit of each quantity, for messages
+_SI = {"kg": "kg", "kg/100": "kg", "mm": "m", "cm": "m", "dm": "m", "dm/s": "m/s", "km/h": "m/s", "ms": "s"}
+
+
+# ---- messages ------------------------------------------------------------------------------------------------------
+def _num(x: float) -> str:
+    """A number for a message: up to 10 significant digits, thousands grouped by a space (99 900)."""
+    if not math.isfinite(x):
+        return str(x)
+    text = f"{x:.10g}"
+    if "e" in text:
+        return text
+    whole, dot, frac = text.partition(".")
+    sign = "-" if whole.startswith("-") else ""
+    whole = f"{int(whole.lstrip('-')):,}".replace(",", " ")
+    return sign + whole + dot + frac
+
+
+def _val(x: float) -> str:
+    """A value for a message, as given: up to 10 significant digits, not grouped (104500, 1.31, nan)."""
+    return f"{x:.10g}"
+
+
+def _rows(rows: np.ndarray) -> str:
+    """'row 17' or 'row 17 (3 rows: 17, 20, 31)' or 'row 17 (12 rows: 17, 20, 31, ...)'."""
+    first = f"row {rows[0]}"
+    if len(rows) == 1:
+        return first
+    shown = ", ".join(str(r) for r in rows[:_SHOWN_ROWS]) + (", ..." if len(rows) > _SHOWN_ROWS else "")
+    return f"{first} ({len(rows)} rows: {shown})"
+
+
+def _field_range(field: Field) -> str:
+    """'0-99 900 kg in kg/100, 3 digits' (the field's range in SI, its unit as written, its width)."""
+    top = 10**field.width - 1
+    if field.scale is None:
+        return f"0-{_num(top)}, {field.width} digit{'s' if field.width > 1 else ''}"
+    si = _SI.get(field.unit, field.unit)
+    return f"0-{_num(round(top * field.scale, 9))} {si} in {field.unit}, {field.width} digits"
+
+
+# ---- values --------------------------------------------------------------------------------------------------------
+def _round_half_away(q: np.ndarray) -> np.ndarray:
+    """Nearest integer, a half away from zero, after cleaning the quotient to :data:`_CLEAN_DECIMALS` decimals."""
+    q = np.round(q, _CLEAN_DECIMALS)
+    return np.sign(q) * np.floor(np.abs(q) + 0.5)
+
+
+def _column(vehicles: pd.DataFrame, name: str, rows: np.ndarray | None = None) -> np.ndarray:
+    """Column ``name`` as float (NaN where missing or not a number), for ``rows`` (positions) or all."""
+    values = pd.to_numeric(vehicles[name], errors="coerce").to_numpy(dtype=float)
+    return values if rows is None else values[rows]
+
+
+def _require(vehicles: pd.DataFrame, fmt: str, name: str, rows: np.ndarray | None = None) -> None:
+    if name not in vehicles.columns:
+        needed = "" if rows is None else f" (needed by the axle count of {_rows(rows)})"
+        raise ValueError(f"{fmt}: the table has no column {name}{needed}; required for format {fmt}")
+
+
+def _integers(vehicles: pd.DataFrame, fmt: str, name: str, what: str) -> np.ndarray:
+    """A required column of whole numbers (NaN or a fraction refused), as int64."""
+    _require(vehicles, fmt, name)
+    values = _column(vehicles, name)
+    bad = np.flatnonzero(~np.isfinite(values) | (values != np.round(values)))
+    if len(bad):
+        raise ValueError(f"{fmt}: {name} = {vehicles[name].iloc[bad[0]]!r} in {_rows(bad)} is not {what}")
+    return values.astype(np.int64)
+
+
+def _scaled(fmt: str, name: str, values: np.ndarray, field: Field, rows: np.ndarray) -> np.ndarray:
+    """SI ``values`` (of table rows ``rows``) as the field's integers, checked against its range."""
+    unit = _SI.get(field.unit, field.unit) if field.scale is not None else ""
+    shown = f" {unit}" if unit else ""
+    for bad, why in (
+        (np.isnan(values), "is not given (NaN) and has no default"),
+        (values < 0, "is negative and does not fit its field"),
+    ):
+        where = np.flatnonzero(bad)
+        if len(where):
+            raise ValueError(
+                f"{fmt}: {name} = {_val(values[where[0]])}{shown} in {_rows(rows[where])} {why} ({_field_range(field)})"
+            )
+    q = values if field.scale is None else values / field.scale
+    written = _round_half_away(q)
+    where = np.flatnonzero(~(written <= 10**field.width - 1))
+    if len(where):
+        raise ValueError(
+            f"{fmt}: {name} = {_val(values[where[0]])}{shown} in {_rows(rows[where])} does not fit its field "
+            f"({_field_range(field)})"
+        )
+    return written.astype(np.int64)
+
+
+def _optional(vehicles: pd.DataFrame, name: str, default: float) -> np.ndarray:
+    """Column ``name`` as float, ``default`` where it is absent or NaN."""
+    if name not in vehicles.columns:
+        return np.full(len(vehicles), float(default))
+    values = _column(vehicles, name)
+    return np.where(np.isnan(values), default, values)
+
+
+def _heads(vehicles: pd.DataFrame, fmt: str) -> np.ndarray:
+    """The ``head`` column as integers: absent, NaN, None or '' -> 0; an int, a whole float or a string of digits."""
+    if "head" not in vehicles.columns:
+        return np.zeros(len(vehicles), dtype=float)
+    out = np.zeros(len(vehicles), dtype=float)
+    for j, value in enumerate(vehicles["head"].tolist()):
+        if value is None or (isinstance(value, str) and not value.strip()):
+            continue
+        if isinstance(value, str):
+            text = value.strip()
+            if not (text.isascii() and text.isdigit()):
+                raise ValueError(f"{fmt}: head = {value!r} in row {j} is not an integer (digits only)")
+            out[j] = int(text)
+            continue
+        try:
+            number = float(value)
+        except (TypeError, ValueError):
+            raise ValueError(f"{fmt}: head = {value!r} in row {j} is not an integer") from None
+        if math.isnan(number):
+            continue
+        if number != round(number):
+            raise ValueError(f"{fmt}: head = {value!r} in row {j} is not an integer")
+        out[j] = number
+    return out
+
+
+def _timestamps(vehicles: pd.DataFrame, fmt: str) -> pd.DatetimeIndex:
+    _require(vehicles, fmt, "timestamp")
+    try:
+        stamps = pd.DatetimeIndex(pd.to_datetime(vehicles["timestamp"]))
+    except (ValueError, TypeError) as exc:
+        raise ValueError(f"{fmt}: timestamp: not read as date and time ({exc})") from None
+    if stamps.tz is not None:
+        raise ValueError(
+            f"{fmt}: timestamp has a time zone ({stamps.tz}); the formats hold local time without one: convert "
+            "it first (e.g. .dt.tz_convert('Europe/Brussels').dt.tz_localize(None))"
+        )
+    bad = np.flatnonzero(stamps.isna())
+    if len(bad):
+        raise ValueError(f"{fmt}: timestamp = NaT in {_rows(bad)} is not given and has no default")
+    return stamps
+
+
+def _axle_counts(vehicles: pd.DataFrame, fmt: str, most: int) -> np.ndarray:
+    n = _integers(vehicles, fmt, "n_axles", "a whole number of axles")
+    bad = np.flatnonzero((n < 2) | (n > most))
+    if len(bad):
+        raise ValueError(
+            f"{fmt}: n_axles = {n[bad[0]]} in {_rows(bad)} is not allowed (2-{most} axles, the format's limit)"
+        )
+    return n
+
+
+def _coded(vehicles: pd.DataFrame, fmt: str, name: str, allowed: str, ok) -> np.ndarray:
+    """A required code column (direction, lane): -1 (not given), absent or NaN refused, ``ok(values)`` must hold."""
+    if name not in vehicles.columns:
+        raise ValueError(f"{fmt}: the table has no column {name}; format {fmt} needs it ({allowed})")
+    values = _column(vehicles, name)
+    missing = np.flatnonzero(np.isnan(values) | (values == -1))
+    if len(missing):
+        first = ", ".join(str(r) for r in missing[:_SHOWN_ROWS]) + (", ..." if len(missing) > _SHOWN_ROWS else "")
+        raise ValueError(
+            f"{fmt}: {name} = -1 or NaN (not given) in {len(missing)} row{'s' if len(missing) > 1 else ''} "
+            f"(first: {first}); format {fmt} needs it ({allowed})"
+        )
+    bad = np.flatnonzero(~ok(values) | (values != np.round(values)))
+    if len(bad):
+        raise ValueError(f"{fmt}: {name} = {_val(values[bad[0]])} in {_rows(bad)} is not allowed ({allowed})")
+    return values.astype(np.int64)
+
+
+def _axle_values(vehicles: pd.DataFrame, fmt: str, prefix: str, n: np.ndarray, count: np.ndarray) -> np.ndarray:
+    """(rows, max count) SI values of ``prefix_0..``; NaN past each row's ``count``; a needed column must exist."""
+    width = int(count.max(initial=0))
+    out = np.full((len(n), width), np.nan)
+    for i in range(width):
+        rows = np.flatnonzero(count > i)
+        _require(vehicles, fmt, f"{prefix}_{i}", rows)
+        out[rows, i] = _column(vehicles, f"{prefix}_{i}", rows)
+    return out
+
+
+# ---- fixed width ---------------------------------------------------------------------------------------------------
+def _time_fields(stamps: pd.DatetimeIndex, fmt: str, layout: FixedWidthLayout) -> dict[str, np.ndarray]:
+    """Calendar and time fields of the timestamps rounded to the format's resolution (a tie to the later time)."""
+    step = _TIME_STEP_NS[fmt]
+    try:
+        ns = stamps.as_unit("ns").asi8  # pandas keeps the unit it was given (the reader's: us)
+    except (OverflowError, ValueError):
+        years = np.asarray(stamps.year)
+        bad = np.flatnonzero((years < 1678) | (years > 2261))
+        raise ValueError(
+            f"{fmt}: timestamp = {stamps[bad[0]].isoformat()} in {_rows(bad)} is outside the years 1678-2261 the "
+            "writer handles"
+        ) from None
+    # floor division: a half rounds up, to the later time
+    rounded = pd.DatetimeIndex(((ns + step // 2) // step) * step, dtype="datetime64[ns]")
+    year = rounded.year.to_numpy()
+    if layout.year_digits == 2:
+        low, high = TWO_DIGIT_YEARS
+        bad = np.flatnonzero((year < low) | (year > high))
+        if len(bad):
+            raise ValueError(
+                f"{fmt}: timestamp = {stamps[bad[0]].isoformat()} in {_rows(bad)} does not fit its field "
+                f"(years {low}-{high}: a two-digit year, read with the POSIX %y pivot 69-99 -> 19xx, 00-68 -> 20xx)"
+            )
+        year = year % 100
+    else:
+        bad = np.flatnonzero(year > 10**layout.year_digits - 1)
+        if len(bad):
+            raise ValueError(f"{fmt}: timestamp = {stamps[bad[0]].isoformat()} in {_rows(bad)}: year too large")
+    sub_ns = (rounded.asi8 % 1_000_000_000).astype(np.int64)
+    second = rounded.second.to_numpy()
+    fields = {
+        "day": rounded.day.to_numpy(), "month": rounded.month.to_numpy(), "year": year,
+        "hour": rounded.hour.to_numpy(), "minute": rounded.minute.to_numpy(), "second": second,
+        "second_100": sub_ns // 10_000_000, "millisecond": second * 1000 + sub_ns // 1_000_000,
+    }  # fmt: skip
+    return {k: np.asarray(v, dtype=np.int64) for k, v in fields.items()}
+
+
+def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
+    layout = LAYOUTS[fmt]
+    header = {f.name: f for f in layout.header}
+    nrows = len(vehicles)
+    everyone = np.arange(nrows)
+    stamps = _timestamps(vehicles, fmt)
+    n = _axle_counts(vehicles, fmt, min(layout.max_axles, 10 ** header["n_axles"].width - 1))
+    base = layout.direction_base
+    direction = _coded(vehicles, fmt, "direction", "1 or 2", lambda d: (d == 1) | (d == 2))
+    lane_top = 10 ** header["lane"].width - 1
+    lane = _coded(vehicles, fmt, "lane", f"1-{lane_top}, 1-based", lambda v: (v >= 1) & (v <= lane_top))
+    _require(vehicles, fmt, "speed")
+
+    # per-axle fields, as written (integers), NaN-free: (rows, n_max) each
+    block = {f.name: f for f in layout.axles.fields}
+    loads = _axle_values(vehicles, fmt, "axle_load", n, n)
+    spacings = _axle_values(vehicles, fmt, "spacing", n, n - 1)
+    axle_ints: dict[str, np.ndarray] = {}
+    for name, si, count in (("axle_load", loads, n), ("spacing", spacings, n - 1)):
+        ints = np.zeros(si.shape, dtype=np.int64)
+        for i in range(si.shape[1]):
+            rows = np.flatnonzero(count > i)
+            ints[rows, i] = _scaled(fmt, f"{name}_{i}", si[rows, i], block[name], rows)
+        axle_ints[name] = ints
+    if "axle_width" in block:  # DITIS: 0 (not given, our assumption) where absent or NaN
+        widths = np.zeros(loads.shape, dtype=np.int64)
+        for i in range(loads.shape[1]):
+            rows = np.flatnonzero(n > i)
+            si = _optional(vehicles, f"axle_width_{i}", 0.0)[rows]
+            widths[rows, i] = _scaled(fmt, f"axle_width_{i}", si, block["axle_width"], rows)
+        axle_ints["axle_width"] = widths
+
+    # header fields, as written
+    values = _time_fields(stamps, fmt, layout)
+    values["n_axles"] = n
+    values["direction"] = direction - 1 + base
+    values["lane"] = lane
+    values["head"] = _scaled(fmt, "head", _heads(vehicles, fmt), header["head"], everyone)
+    values["speed"] = _scaled(fmt, "speed", _column(vehicles, "speed"), header["speed"], everyone)
+    for name in ("length", "transverse_position"):  # 0: not given
+        values[name] = _scaled(fmt, name, _optional(vehicles, name, 0.0), header[name], everyone)
+    # gross weight: where absent or NaN, the sum of the axle loads as written (so the reader's check holds)
+    summed = axle_ints["axle_load"].sum(axis=1) * block["axle_load"].scale
+    gross = _optional(vehicles, "gross_weight", math.nan)
+    gross = np.where(np.isnan(gross), summed, gross)
+    values["gross_weight"] = _scaled(fmt, "gross_weight", gross, header["gross_weight"], everyone)
+    if "n_groups" in header:  # MON: counted from the spacings as written where absent or NaN
+        written = axle_ints["spacing"] * block["spacing"].scale
+        counted = 1 + np.sum((written > GROUP_SPACING_M) & (np.arange(written.shape[1]) < (n - 1)[:, None]), axis=1)
+        given = _column(vehicles, "n_groups") if "n_groups" in vehicles.columns else np.full(nrows, np.nan)
+        groups = np.where(np.isnan(given), counted, given)
+        bad = np.flatnonzero(groups != np.round(groups))
+        if len(bad):
+            raise ValueError(f"{fmt}: n_groups = {_val(groups[bad[0]])} in {_rows(bad)} is not a whole number")
+        values["n_groups"] = _scaled(fmt, "n_groups", groups, header["n_groups"], everyone)
+    for f in layout.header:
+        top = 10**f.width - 1
+        bad = np.flatnonzero((values[f.name] < 0) | (values[f.name] > top))
+        if len(bad):  # calendar fields and codes; the scaled ones are checked above
+            raise ValueError(f"{fmt}: {f.name} = {values[f.name][bad[0]]} in {_rows(bad)} does not fit its field")
+
+    # the text: zero-padded, right-aligned; the spacing slot after the last axle written as zeros
+    header_text = [[f"{v:0{f.width}d}" for v in values[f.name].tolist()] for f in sorted(layout.header, key=_start)]
+    heads = ["".join(parts) for parts in zip(*header_text)] if nrows else []
+    ordered = sorted(layout.axles.fields, key=_start)
+    lines = []
+    for j in range(nrows):
+        parts = [heads[j]]
+        for i in range(int(n[j])):
+            parts.extend(f"{int(axle_ints[f.name][j, i]) if i < axle_ints[f.name].shape[1] else 0:0{f.width}d}"
+                         for f in ordered)  # fmt: skip
+        lines.append("".join(parts))
+    return lines
+
+
+def _start(field: Field) -> int:
+    return field.start
+
+
+def _check_contiguous(layout: FixedWidthLayout) -> None:
+    """The writer concatenates the fields in offset order: every layout must leave no gap and no overlap."""
+    at = 0
+    for f in sorted(layout.header, key=_start):
+        if f.start != at:
+            raise AssertionError(f"{layout.name}: header field {f.name} at {f.start}, expected {at}")
+        at = f.end
+    at = 0
+    for f in sorted(layout.axles.fields, key=_start):
+        if f.start != at:
+            raise AssertionError(f"{layout.name}: axle field {f.name} at {f.start}, expected {at}")
+        at = f.end
+    if layout.fixed_width != layout.axles.start or at != layout.axles.stride:
+        raise AssertionError(f"{layout.name}: header or axle block width differs from its start or stride")
+
+
+# ---- CSV -----------------------------------------------------------------------------------------------------------
+def _csv_lines(vehicles: pd.DataFrame) -> list[str]:
+    fmt = "csv"
+    stamps = _timestamps(vehicles, fmt)
+    n = _axle_counts(vehicles, fmt, CSV_MAX_AXLES)
+    _require(vehicles, fmt, "speed")
+    _require(vehicles, fmt, "lane")
+    speed = _column(vehicles, "speed")
+    lane = _column(vehicles, "lane")
+    lane = np.where(lane == -1, np.nan, lane)  # -1: not given, written blank
+    bad = np.flatnonzero(~np.isnan(lane) & ((lane < 1) | (lane != np.round(lane)) | np.isinf(lane)))
+    if len(bad):
+        raise ValueError(f"csv: lane = {_val(lane[bad[0]])} in {_rows(bad)} is not allowed (1-based; -1 or NaN blank)")
+    bad = np.flatnonzero((speed < 0) | np.isinf(speed))
+    if len(bad):
+        raise ValueError(
+            f"csv: speed = {_val(speed[bad[0]])} m/s in {_rows(bad)} is not allowed (0 or more; NaN blank)"
+        )
+    loads = _axle_values(vehicles, fmt, "axle_load", n, n)
+    spacings = _axle_values(vehicles, fmt, "spacing", n, n - 1)
+    for prefix, si, count, unit in (("axle_load", loads, n, "kg"), ("spacing", spacings, n - 1, "m")):
+        for i in range(si.shape[1]):
+            rows = np.flatnonzero(count > i)
+            values = si[rows, i]
+            for mask, why in ((np.isnan(values), "is not given (NaN)"), (~(values >= 0), "is not allowed")):
+                where = np.flatnonzero(mask)
+                if len(where):
+                    raise ValueError(
+                        f"csv: {prefix}_{i} = {_val(values[where[0]])} {unit} in {_rows(rows[where])} {why} "
+                        f"(a finite number, 0 or more, {unit})"
+                    )
+    width = int(n.max(initial=2))
+    header = ["timestamp", "speed_kmh", "lane", "n_axles"]
+    header += [f"axle_load_{i}" for i in range(1, width + 1)] + [f"spacing_{i}" for i in range(1, width)]
+    lines = [",".join(header)]
+    for j in range(len(vehicles)):
+        k = int(n[j])
+        cells = [
+            stamps[j].isoformat(),
+            "" if np.isnan(speed[j]) else repr(float(speed[j] * 3.6)),
+            "" if np.isnan(lane[j]) else str(int(lane[j])),
+            str(k),
+            *(repr(float(x)) for x in loads[j, :k]),
+            *([""] * (width - k)),
+            *(repr(float(x)) for x in spacings[j, : k - 1]),
+            *([""] * (width - k)),
+        ]
+        lines.append(",".join(cells))
+    return lines
+
+
+# ---- the file ------------------------------------------------------------------------------------------------------
+def _write_atomically(path: Path, data: bytes) -> None:
+    """``data`` to ``path`` through a temporary file in the same folder and ``os.replace``; no file left on error."""
+    temporary = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
+    descriptor = os.open(temporary, os.O_WRONLY | os.O_CREAT | os.O_EXCL, 0o666)  # the umask applies, as for open()
+    try:
+        with os.fdopen(descriptor, "wb") as fh:
+            fh.write(data)
+            fh.flush()
+            os.fsync(fh.fileno())
+        os.replace(temporary, path)
+    except BaseException:
+        temporary.unlink(missing_ok=True)
+        raise
+
+
+def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
+    """Write a vehicle table as a file of weighings in format ``fmt`` (the inverse of ``read_weighings``).
+
+    Every value is converted from SI to its field's unit (divided by the field's scale), rounded to the nearest
+    integer, a half away from zero (after rounding the quotient to 6 decimals, so that 0.45 m is 4.5 dm, not
+    4.4999999999999991), and checked against the field's range 0 to 10**width - 1. Times are rounded to the
+    format's resolution (MON 1 ms; CASTOR, BeDIT, DITIS 0.01 s; a half to the later time), the date carried
+    (23:59:59.996 on 31 December is 00:00:00.00 on 1 January). The whole table is checked before anything is
+    written; the file is written atomically (a temporary file in the same folder, then ``os.replace``), so an
+    error leaves neither a partial file nor a temporary one. The same table gives the same bytes every time.
+
+    Parameters
+    ----------
+    vehicles
+        The vehicle table of :func:`bogie.weighings.readers.read_weighings` (any index; row numbers in messages
+        are 0-based positions, ``vehicles.iloc[row]``). Required: ``timestamp`` (no time zone; local time),
+        ``speed`` [m/s], ``lane`` (1-based), ``n_axles`` (2 to the format's limit: CSV 20, CASTOR 9, BeDIT 20,
+        DITIS 20, MON 99), ``axle_load_0..n-1`` [kg] and ``spacing_0..n-2`` [m] (0-based, front first; cells
+        past a row's axles are ignored); fixed-width formats also ``direction`` (1 or 2). Optional, with the
+        value written where the column is absent or NaN: ``gross_weight`` [kg] -> the sum of the axle loads as
+        written (the rounded loads, in the field's unit); ``length`` [m] -> 0 (the reader's "not given");
+        ``transverse_position`` [m] -> 0; ``head`` (an integer, or a string of digits) -> 0, also for '' (the
+        CSV reader's head); ``n_groups`` (MON only) -> counted: 1 + the spacings as written wider than
+        ``GROUP_SPACING_M`` (2.0 m; the rule of ``groups.axle_groups``); ``axle_width_0..n-1`` [m] (DITIS only)
+        -> 0, which this project takes as "not given" (an assumption: the reference has no missing value).
+        CSV writes only its layout's columns: ``speed`` NaN and ``lane`` -1 or NaN are written blank.
+    path
+        The file to write, replaced if it exists. A name ending in ``.gz`` is written gzip-compressed, with
+        modification time 0 and no file name in the gzip header (byte-reproducible).
+    fmt
+        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``).
+
+    Returns
+    -------
+    int
+        The number of records (vehicles) written [-].
+
+    Raises
+    ------
+    ValueError
+        For an unknown format, a missing required column, or a value that does not fit its field (negative,
+        NaN without a default, too large, a year outside 1969-2068 for CASTOR and BeDIT, fewer than 2 or more
+        than the format's axles, ``direction`` or ``lane`` -1 (not given) for a fixed-width format, a timestamp
+        with a time zone, a head that is not an integer): the message names the format, the column, the first
+        offending row (and how many rows, with the first few), the value, the allowed range and the unit.
+    OSError
+        If the file cannot be written.
+
+    Notes
+    -----
+    Fixed-width records: every field zero-padded, right-aligned at its offset; one record a line ending in
+    ``\\n``, ASCII; each line ends with its last axle's fields and the (unused) spacing slot after the last
+    axle, written as zeros. MON's direction is written ``direction - 1`` (zero-based), BeDIT's too, CASTOR's and
+    DITIS's as 1 or 2. CSV: header ``timestamp,speed_kmh,lane,n_axles,axle_load_1..N,spacing_1..N-1`` (N the
+    table's largest axle count, 1-based), ``timestamp`` ISO 8601 without zone (``Timestamp.isoformat()``),
+    numbers as ``repr(float)`` (the shortest text that reads back to the same float), speed in km/h
+    (``speed * 3.6``), cells past a vehicle's axles blank.
+    """
+    if fmt not in FORMATS:
+        raise ValueError(f"format {fmt!r} unknown; allowed: {', '.join(FORMATS)}")
+    if not isinstance(vehicles, pd.DataFrame):
+        raise TypeError(f"vehicles: expected a pandas DataFrame, got {type(vehicles).__name__}")
+    vehicles = vehicles.reset_index(drop=True)
+    if fmt == "csv":
+        lines = _csv_lines(vehicles)
+        count = len(lines) - 1
+    else:
+        _check_contiguous(LAYOUTS[fmt])
+        lines = _fixed_lines(vehicles, fmt)
+        count = len(lines)
+    data = "".join(line + "\n" for line in lines).encode("ascii")
+    path = Path(path)
+    if path.name.lower().endswith(".gz"):
+        data = gzip.compress(data, mtime=0)  # no file name in the header; mtime 0: byte-reproducible
+    _write_atomically(path, data)
+    return count
