@@ -272,7 +272,6 @@ def test_gzip_reproducible(tmp_path, fmt):
     assert gzip.decompress(a.read_bytes()) == plain.read_bytes()
 
 
-@pytest.mark.xfail(strict=False, reason="read_weighings reads .gz only after its rewrite")
 @pytest.mark.parametrize("fmt", ["csv", "castor", "mon"])
 def test_gzip_round_trip(tmp_path, fmt):
     path = tmp_path / f"site.{fmt}.gz"
