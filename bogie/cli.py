@@ -3,6 +3,7 @@
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from collections.abc import Sequence
 from pathlib import Path
@@ -137,7 +138,7 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
         print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
         return 0
     shown = args.format if args.format != "auto" else f"format auto: {survey.read.format}"
-    print(f"{args.path} ({shown}): {survey.read.summary()}")
+    print(f"{args.path} ({shown}): {survey.read.summary()}; {survey.read.resolution()}")
     counts = "; ".join(
         f"{where} {sum(sizes.values())} ({', '.join(f'{n} {size}' for size, n in sizes.items() if n)})"
         if sum(sizes.values()) else f"{where} 0"
@@ -221,10 +222,19 @@ def main(argv: Sequence[str] | None = None) -> int:
     elif args.command == "figure2":
         _image_suffix(args.parser, "--out", args.out)
     try:
-        return args.func(args)
+        code = args.func(args)
+        sys.stdout.flush()  # inside the try: a reader that closed the pipe fails here, not at exit
+        return code
     except ValueError as exc:
         print(f"bogie: error: {exc}", file=sys.stderr)
         return 2
+    except BrokenPipeError:
+        # the reader of our output stopped early (``bogie weighings ... | head``): not an error of ours. Point stdout
+        # at /dev/null so that the interpreter's own flush at exit does not fail again, and exit as a C tool killed
+        # by SIGPIPE does (128 + 13)
+        devnull = os.open(os.devnull, os.O_WRONLY)
+        os.dup2(devnull, sys.stdout.fileno())
+        return 128 + 13
 
 
 if __name__ == "__main__":

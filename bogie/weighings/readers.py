@@ -558,7 +558,8 @@ def _parse_csv(text_lines: list[str], line_no: np.ndarray, path: str) -> dict:
         "head": np.full(m, "", object), "speed": np.where(speed_blank, np.nan, speed) * KMH,
         "gross_weight": np.full(m, np.nan), "length": np.full(m, np.nan), "n_axles": n,
         "n_groups": np.full(m, np.nan),
-        "lane": np.where(lane_blank | ~np.isfinite(lane), -1, np.nan_to_num(lane)).astype(np.int64),
+        # a lane outside 1-9 is a bad record already: clipped only so that the cast to integers is defined
+        "lane": np.where(lane_blank | ~np.isfinite(lane), -1, np.clip(np.nan_to_num(lane), -1, 99)).astype(np.int64),
         "direction": np.full(m, -1, np.int64), "transverse_position": np.full(m, np.nan),
     }  # fmt: skip
     return {

@@ -21,8 +21,8 @@ import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 __all__ = [
-    "PAIR_TOLERANCE", "QUANTILES", "SHARE_TOLERANCE", "STATISTICS_COLUMNS", "axle_columns", "group_inequality",
-    "statistics_dict", "survey_statistics",
+    "PAIR_TOLERANCE", "QUANTILES", "SHARE_TOLERANCE", "STATISTICS_COLUMNS", "at_resolution", "axle_columns",
+    "group_inequality", "statistics_dict", "survey_statistics",
 ]  # fmt: skip
 
 #: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
@@ -35,6 +35,23 @@ QUANTILES: tuple[float, ...] = (0.05, 0.25, 0.50, 0.75, 0.95)
 STATISTICS_COLUMNS: tuple[str, ...] = (
     "n_groups", "mean_spread_kg", "median_spread_pct", "share_outside_5pct", "share_over_10pct",
 )  # fmt: skip
+
+
+def at_resolution(loads: ArrayLike, step_kg: float | None) -> NDArray:
+    """Loads [kg] as a scale of resolution ``step_kg`` reads them: each rounded to the nearest multiple of the step
+    (ties to even, numpy's rounding; a tie has probability 0 for a simulated load). None returns the loads as they
+    are. NaN stays NaN.
+
+    Issue 27 Must 3: at 100 kg a tandem's "outside 5 %" is a matter of a few steps, so a simulated survey compared
+    with an observed one is read at the observed file's resolution
+    (:attr:`bogie.weighings.readers.ReadResult.weight_step_kg`) before any statistic.
+    """
+    loads = np.asarray(loads, dtype=float)
+    if step_kg is None:
+        return loads.copy()
+    if not (np.isfinite(step_kg) and step_kg > 0.0):
+        raise ValueError(f"step_kg = {step_kg!r} kg: a weight resolution is a positive number of kilograms")
+    return np.round(loads / step_kg) * step_kg
 
 
 def axle_columns(n: int) -> list[str]:

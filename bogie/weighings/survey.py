@@ -54,14 +54,19 @@ class ObservedSurvey:
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
 
-        ``{"records": {"read", "skipped"}, "positions": {"steer": {"tandem": n, ...}, ...}, "groups": {"tandem":
-        {...}, "triaxle": {...}}}``; shares are fractions 0..1; a size with no group has ``n_groups`` 0 and None for
-        its numbers.
+        ``{"records": {"read", "skipped", "weight_step_kg"}, "positions": {"steer": {"tandem": n, ...}, ...},
+        "groups": {"tandem": {...}, "triaxle": {...}}}``; shares are fractions 0..1; a size with no group has
+        ``n_groups`` 0 and None for its numbers; ``weight_step_kg`` is the file's weight resolution [kg] (None: not
+        whole kilograms).
         """
         stats = statistics_dict(self.statistics)
         empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
         return {
-            "records": {"read": self.read.n_read, "skipped": self.read.n_skipped},
+            "records": {
+                "read": self.read.n_read,
+                "skipped": self.read.n_skipped,
+                "weight_step_kg": self.read.weight_step_kg,
+            },
             "positions": self.positions,
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
         }
