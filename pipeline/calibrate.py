@@ -54,8 +54,9 @@ from scipy.stats import energy_distance, truncnorm
 from bogie import wim
 from bogie.metrics import max_deviation
 from bogie.params import GRAVITY, INHIBITORS
-from bogie.weighings.stats import group_inequality, survey_statistics
+from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
 from bogie.weighings.survey import observed_survey
+from bogie.weighings.writers import write_weighings
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
 from pipeline.config_schema import CALIBRATION_QUANTITIES
@@ -90,15 +91,20 @@ class CalibrationError(ValueError):
 # ---- the observed side -------------------------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Observed:
-    """Per size: the observed groups' loads [kg] (rows, front first), and each group's record rank (for halves)."""
+    """Per size: the observed groups' loads [kg] (rows, front first), and each group's record rank (for halves);
+    the file's weight resolution [kg] (None: not whole kilograms), at which the simulated readings are read."""
 
     loads: Mapping[str, np.ndarray]
     record: Mapping[str, np.ndarray]
+    weight_step_kg: float | None = None
 
     def half(self, parity: int) -> Observed:
         """The groups of alternate records: even (0) or odd (1) ranks."""
         keep = {k: self.record[k] % 2 == parity for k in self.loads}
-        return Observed({k: v[keep[k]] for k, v in self.loads.items()}, {k: v[keep[k]] for k, v in self.record.items()})
+        return Observed(
+            {k: v[keep[k]] for k, v in self.loads.items()}, {k: v[keep[k]] for k, v in self.record.items()},
+            self.weight_step_kg,
+        )  # fmt: skip
 
 
 def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]:
@@ -126,7 +132,7 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
             f"group_spacing_m {obs.group_spacing:g} m, position {obs.position}) it has {counts} groups; calibration "
             f"needs at least {MIN_GROUPS} laden tandem or tri-axle groups"
         )
-    return Observed(loads, record), groups
+    return Observed(loads, record, survey.read.weight_step_kg), groups
 
 
 def observed_quantities(loads: np.ndarray) -> np.ndarray:
@@ -299,20 +305,36 @@ def build_table(config: Config, progress: Callable[[str], None] = print) -> Tabl
     return dataclasses.replace(base, loads=loads, n_failed=failed)
 
 
+#: the tractor a synthetic survey puts in front of each simulated group (:func:`write_csv_survey`): a 4x2 tractor,
+#: steer and drive axle [kg] and the spacings steer-drive and drive-group [m]. Placeholders that make the group the
+#: vehicle's third, a trailer group (bogie.weighings.groups); single axles, so no statistic of tandems or tri-axles
+#: reads them
+SYNTHETIC_TRACTOR = {"loads_kg": (6500.0, 10500.0), "spacings_m": (3.6, 6.0)}
+
+
 def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 80.0, spacing_m: float = 1.31) -> None:
     """Write simulated groups (:func:`simulate_fleet`'s wide loads [kg]) as a survey in the ``csv`` weighings format
-    (``docs/weighings.md``), one record per group, a second apart: a synthetic survey the stage reads as a real one."""
-    rows = []
-    for i, r in enumerate(frame.to_dict("records")):
-        n = int(r["n_axles"])
-        stamp = pd.Timestamp("2026-01-05T06:00:00") + pd.Timedelta(seconds=i)
-        rows.append({
-            "timestamp": stamp.strftime("%Y-%m-%dT%H:%M:%S.000"), "speed_kmh": speed_kmh, "lane": 1, "n_axles": n,
-            **{f"axle_load_{k + 1}": round(float(r[f"axle_load_{k}"])) if k < n else None for k in range(6)},
-            **{f"spacing_{k + 1}": spacing_m if k < n - 1 else None for k in range(5)}, "vehicle_class": "synthetic",
-        })  # fmt: skip
+    (``docs/weighings.md``), one semi-trailer a record, a second apart: a synthetic survey the stage reads as a real
+    one. Each group is the trailer group of a vehicle behind :data:`SYNTHETIC_TRACTOR`; loads in whole kilograms."""
+    steer, drive = SYNTHETIC_TRACTOR["loads_kg"]
+    n_group = frame["n_axles"].to_numpy(dtype=np.int64)
+    width = 2 + int(n_group.max()) if len(frame) else 5
+    vehicles = pd.DataFrame({
+        "timestamp": pd.Timestamp("2026-01-05T06:00:00") + pd.to_timedelta(np.arange(len(frame)), unit="s"),
+        "speed": speed_kmh / 3.6, "lane": 1, "n_axles": 2 + n_group,
+    })  # fmt: skip
+    for i in range(width):
+        if i < 2:
+            load = np.full(len(frame), (steer, drive)[i])
+        else:
+            column = frame[f"axle_load_{i - 2}"].to_numpy(dtype=float) if i - 2 < 3 else np.zeros(len(frame))
+            load = np.where(n_group > i - 2, np.round(column), np.nan)
+        vehicles[f"axle_load_{i}"] = load
+    for i in range(width - 1):
+        gap = SYNTHETIC_TRACTOR["spacings_m"][i] if i < 2 else spacing_m
+        vehicles[f"spacing_{i}"] = np.where(2 + n_group - 1 > i, gap, np.nan)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
-    pd.DataFrame(rows).to_csv(path, index=False)
+    write_weighings(vehicles, path, "csv")
 
 
 def _cdf(dist: TruncNormal, x: np.ndarray) -> np.ndarray:
@@ -372,10 +394,11 @@ class Simulated:
 
 def simulated(
     table: Table, values: Mapping[str, float], dist: Any, min_load_kg: float,
-    slot_counts: np.ndarray | None = None,
+    slot_counts: np.ndarray | None = None, weight_step_kg: float | None = None,
 ) -> Simulated:  # fmt: skip
-    """The simulated survey: the calibration groups that pass the filters, weighted (1 - a) steel and a air."""
-    readings = fleet_readings(table, values, dist)
+    """The simulated survey: the calibration groups that pass the filters, weighted (1 - a) steel and a air; every
+    reading first read at the observed file's resolution ``weight_step_kg`` [kg] (None: as it is)."""
+    readings = at_resolution(fleet_readings(table, values, dist), weight_step_kg)
     share = values["air_share"]
     counts = np.ones(len(table.size)) if slot_counts is None else slot_counts
     quantities, weights = {}, {}
@@ -418,11 +441,14 @@ class Problem:
     base: dict[str, float]
     tilt_distribution: Any  # the fleet's (pipeline.distributions), SI
     min_load_kg: float
+    weight_step_kg: float | None = None  # the observed file's resolution [kg]
 
     def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
         def f(theta: np.ndarray) -> float:
             values = _values(theta, self.fitted, self.base)
-            sim = simulated(self.table, values, self.tilt_distribution, self.min_load_kg, slot_counts)
+            sim = simulated(
+                self.table, values, self.tilt_distribution, self.min_load_kg, slot_counts, self.weight_step_kg
+            )
             return distance(self.obs, obs_weights, sim, self.scales)
 
         return f
@@ -438,7 +464,10 @@ def make_problem(table: Table, observed: Observed, config: Config) -> Problem:
     fitted = tuple(q for q in ORDER if q in config.calibrate.fit)
     bounds = tuple(tuple(config.calibrate.fit[q]) for q in fitted)
     dist = config.distributions["chassis_tilt"]
-    return Problem(table, obs, scales, fitted, bounds, defaults(config), dist, config.observed.min_group_load)
+    return Problem(
+        table, obs, scales, fitted, bounds, defaults(config), dist, config.observed.min_group_load,
+        observed.weight_step_kg,
+    )  # fmt: skip
 
 
 def fit(
@@ -568,12 +597,15 @@ def _profiles(problem: Problem, f: Callable, best: np.ndarray) -> pd.DataFrame:
 
 # ---- the calibrated fleet, simulated directly -------------------------------------------------------------------
 def simulate_fleet(
-    table: Table, values: Mapping[str, float], config: Config, variant: str = "baseline", steel_only: bool = False
-) -> pd.DataFrame:
+    table: Table, values: Mapping[str, float], config: Config, variant: str = "baseline", steel_only: bool = False,
+    weight_step_kg: float | None = None,
+) -> pd.DataFrame:  # fmt: skip
     """The calibration fleet with the quantities ``values``, weighed directly (no table): one row per group kept
     (wide loads [kg], ``n_axles``, ``group``, ``suspension``), with the sensor's error, before the filters.
 
-    ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``).
+    ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``);
+    ``weight_step_kg`` reads the loads at the observed file's resolution [kg] (None: as they are; the ablation's
+    physics is read so).
     """
     tilt = bogie_tilts(table, values, config.distributions["chassis_tilt"])
     kinds = np.where(table.air_u < values["air_share"], "air", "steel")
@@ -593,6 +625,7 @@ def simulate_fleet(
     loads = _weigh_many(tasks, config.execution.n_jobs)
     if config.calibrate.protocol == "wim":
         loads = loads * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep])
+    loads = at_resolution(loads, weight_step_kg)
     frame = pd.DataFrame({
         "slot": keep, "group": table.size[keep], "n_axles": [SIZES[s] for s in table.size[keep]],
         "suspension": kinds[keep], "tilt_deg": tilt[keep],
@@ -686,7 +719,8 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
     problem = make_problem(table, observed, config)
     cal = config.calibrate
     result = calibrate(problem, config.seed, cal, progress)
-    direct = filtered(simulate_fleet(table, result.values, config), config.observed.min_group_load)
+    step = observed.weight_step_kg
+    direct = filtered(simulate_fleet(table, result.values, config, weight_step_kg=step), config.observed.min_group_load)
     # held out: a fit on the even records, the odd ones against the fleet it calibrates
     even, odd = observed.half(0), observed.half(1)
     held: dict[str, Any] = {"fit_on": "even records", "held_out": "odd records"}
@@ -694,7 +728,9 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
         half = make_problem(table, even, config)
         theta, d_half, _ = fit(half, config.seed, cal.maxiter, cal.popsize, progress=progress, label="half fit")
         values_half = _values(theta, half.fitted, half.base)
-        direct_half = filtered(simulate_fleet(table, values_half, config), config.observed.min_group_load)
+        direct_half = filtered(
+            simulate_fleet(table, values_half, config, weight_step_kg=step), config.observed.min_group_load
+        )
         odd_q = {k: observed_quantities(v) for k, v in odd.loads.items() if k in half.obs and len(v)}
         held.update(
             fitted={q: _round(values_half[q]) for q in half.fitted},
@@ -730,7 +766,7 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
             "n_weighings": int(np.prod(table.loads.shape[:4])),
             "n_failed": table.n_failed,
         },  # fmt: skip
-        "observed": {"groups": groups_stats(observed.loads)},
+        "observed": {"groups": groups_stats(observed.loads), "weight_step_kg": step},
         "calibrated": {"groups": frame_stats(direct)},
         "held_out": held,
         "ablation": {

@@ -283,6 +283,20 @@ class ObservedConfig:
 
 
 @dataclass(frozen=True)
+class SurveyConfig:
+    """What the survey stage writes besides its statistics (``survey:``; ``docs/outputs.md``).
+
+    Attributes
+    ----------
+    export_format
+        None, or the record format (``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``) in which the fleet study's WIM
+        readings are written to ``data/survey/fleet_wim.<format>``.
+    """
+
+    export_format: str | None = None
+
+
+@dataclass(frozen=True)
 class CalibrateConfig:
     """The fleet quantities fitted to an observed survey (``calibrate:``; ``docs/calibration.md``).
 
@@ -363,6 +377,7 @@ class Config:
     ablation: AblationConfig
     execution: ExecutionConfig
     observed: ObservedConfig
+    survey: SurveyConfig = SurveyConfig()
     calibrate: CalibrateConfig | None = None
     design: DesignConfig | None = None
 
@@ -483,6 +498,7 @@ def to_config(params: Params) -> Config:
         ablation=AblationConfig(n_bogies=params.ablation.n_bogies),
         execution=_execution(params.execution),
         observed=_observed(params.observed),
+        survey=SurveyConfig(export_format=params.survey.export_format if params.survey is not None else None),
         calibrate=_calibrate(params.calibrate),
         design=_design(params.design),
     )

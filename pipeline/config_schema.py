@@ -35,10 +35,13 @@ from pipeline.distributions import Choice, Constant, Distribution, ParameterErro
 
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
 BACKENDS: tuple[str, ...] = ("loky", "dask")
-#: the formats and group positions of bogie.weighings (formats.FORMATS, groups.POSITIONS), written out here so that
-#: every stage's code (all of them import this schema) does not depend on the readers; a test keeps them equal
-OBSERVED_FORMATS: tuple[str, ...] = ("csv", "mon", "castor", "bedit", "ditis")
+#: the formats and group positions of bogie.weighings (``auto`` and formats.FORMATS, groups.POSITIONS), written out
+#: here so that every stage's code (all of them import this schema) does not depend on the readers; a test keeps them
+#: equal. ``auto``: the one layout the file's first lines fit (bogie.weighings.readers.detect_format)
+OBSERVED_FORMATS: tuple[str, ...] = ("auto", "csv", "mon", "castor", "bedit", "ditis")
 OBSERVED_POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
+#: the formats the survey stage can write the fleet's WIM readings in (bogie.weighings.writers.write_weighings)
+EXPORT_FORMATS: tuple[str, ...] = OBSERVED_FORMATS[1:]
 #: the directory, relative to the project root, an observed survey's file must be in: dvc.yaml tracks it as a
 #: dependency of the observed stage, so that a changed file reruns the stage (docs/observed.md)
 OBSERVED_DIR = "observed"
@@ -486,6 +489,13 @@ class Observed(Strict):
     position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
 
 
+class Survey(Strict):
+    """``survey:`` what the survey stage writes besides its statistics."""
+
+    # null: nothing; a format: data/survey/fleet_wim.<format>, the fleet study's WIM readings as records
+    export_format: Literal[EXPORT_FORMATS] | None = named("record format")  # type: ignore[valid-type]
+
+
 #: the fleet quantities ``calibrate`` can fit, each with its physical range and unit (``docs/calibration.md``)
 CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg
@@ -588,6 +598,7 @@ class Params(Strict):
     ablation: Ablation
     execution: Execution
     observed: Observed
+    survey: Survey | None = None
     calibrate: Calibrate | None = None
     design: Design | None = None
     figure2: Any = None
@@ -598,6 +609,9 @@ class Params(Strict):
         if self.sensitivity.protocol not in run:
             expected = f"is not run: protocol.run lists only {', '.join(run)}"
             raise config_error("sensitivity.protocol", self.sensitivity.protocol, expected)
+        if self.survey is not None and self.survey.export_format is not None and "wim" not in run:
+            expected = f"needs WIM readings to export: protocol.run lists only {', '.join(run)} (add wim, or null)"
+            raise config_error("survey.export_format", self.survey.export_format, expected)
         if self.ablation.n_bogies > self.fleet.n_bogies:
             expected = f"must not exceed fleet.n_bogies = {self.fleet.n_bogies}: the ablation reuses fleet bogies"
             raise config_error("ablation.n_bogies", self.ablation.n_bogies, expected)

@@ -36,7 +36,13 @@ import pyarrow.parquet as pq
 import yaml
 
 from bogie.params import GRAVITY
-from bogie.weighings.stats import STATISTICS_COLUMNS, group_inequality, statistics_dict, survey_statistics
+from bogie.weighings.stats import (
+    STATISTICS_COLUMNS,
+    at_resolution,
+    group_inequality,
+    statistics_dict,
+    survey_statistics,
+)
 from bogie.weighings.survey import SURVEYED, observed_survey
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
@@ -131,8 +137,9 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
     groups : pandas.DataFrame
         The columns of :data:`GROUPS_SCHEMA`; no row for no survey.
     statistics : dict or None
-        ``{"path", "format", "sha256", "records": {"read", "skipped", "skipped_by_reason"}, "groups": {"tandem",
-        "triaxle"}}``, or None for no survey.
+        ``{"path", "format" (the one read), "format_asked" (``auto`` or that one), "sha256", "records": {"read",
+        "skipped", "weight_step_kg", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or None for no
+        survey.
 
     Raises
     ------
@@ -147,15 +154,22 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
     )
     stats = survey.to_dict()
     stats["records"]["skipped_by_reason"] = dict(sorted(survey.read.skipped.items()))
-    header = {"path": observed.path, "format": observed.format, "sha256": hashlib.sha256(path.read_bytes()).hexdigest()}
+    header = {
+        "path": observed.path, "format": survey.read.format, "format_asked": observed.format,
+        "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+    }  # fmt: skip
     return with_inequality(survey.groups), {**header, **stats}
 
 
 # ---- the simulated side ------------------------------------------------------------------------------------------
 def simulated_readings(
-    runs: pd.DataFrame, min_group_load: float, position: str
+    runs: pd.DataFrame, min_group_load: float, position: str, weight_step_kg: float | None = None
 ) -> tuple[pd.DataFrame, dict[str, dict[str, int]]]:
     """The fleet's readings under the observed survey's filters, and what was left out, per protocol.
+
+    Every reading (each protocol's) is first read at the observed file's weight resolution ``weight_step_kg``
+    (:func:`bogie.weighings.stats.at_resolution`): each axle load rounded to the step, the group load their sum, as
+    the observed groups' are; then the filters apply.
 
     Parameters
     ----------
@@ -166,6 +180,9 @@ def simulated_readings(
     position
         The survey's position filter: ``all`` and ``trailer`` keep every simulated group, ``steer`` and ``drive``
         none (:data:`SIMULATED_POSITIONS`).
+    weight_step_kg
+        The observed file's weight resolution [kg]; None reads the simulated loads as they are (no survey, or a file
+        of loads that are not whole kilograms).
 
     Returns
     -------
@@ -178,7 +195,17 @@ def simulated_readings(
     failed = runs["status"].astype(str) != "ok"
     airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
     usable = ~failed & ~airborne
-    light = usable & (runs["group_load"].to_numpy(dtype=float) < min_group_load * GRAVITY)
+    n_axles = runs["n_axles"].to_numpy(dtype=np.int64)
+    # each axle's reading [kg] at the file's resolution; a tandem's third load is no axle: NaN, as in the observed table
+    loads = np.column_stack([
+        np.where(n_axles > i, runs[f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY, np.nan) for i in range(_AXLES)
+    ])  # fmt: skip
+    if weight_step_kg is not None:
+        loads = at_resolution(loads, weight_step_kg)
+        group_load = np.nansum(loads, axis=1)
+    else:
+        group_load = runs["group_load"].to_numpy(dtype=float) / GRAVITY
+    light = usable & (group_load < min_group_load)
     by_position = usable & ~light & (position not in SIMULATED_POSITIONS)
     kept = usable & ~light & ~by_position
     protocol = runs["protocol"].astype(str)
@@ -191,11 +218,10 @@ def simulated_readings(
             "n_kept": int((sel & kept).sum()),
         }  # fmt: skip
     frame = runs.loc[kept, list(_RUN_COLUMNS[:4])].astype({"group": str, "protocol": str})
-    frame["group_load"] = runs.loc[kept, "group_load"].to_numpy(dtype=float) / GRAVITY
+    kept_rows = np.asarray(kept, dtype=bool)
+    frame["group_load"] = group_load[kept_rows]
     for i in range(_AXLES):
-        # a tandem's third load is 0 in the runs, no axle: NaN, as in the observed table
-        load = runs.loc[kept, f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY
-        frame[f"axle_load_{i}"] = np.where(frame["n_axles"].to_numpy() > i, load, np.nan)
+        frame[f"axle_load_{i}"] = loads[kept_rows, i]
     frame = frame.sort_values(["protocol", "sample_id"], kind="stable")
     return with_inequality(frame)[SIMULATED_SCHEMA.names], counts
 
@@ -311,7 +337,8 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, RunsError, OSError, ValueError, yaml.YAMLError) as exc:
         print(f"observed: {exc}", file=sys.stderr)
         return 2
-    readings, counts = simulated_readings(runs, observed.min_group_load, observed.position)
+    step = observed_stats["records"]["weight_step_kg"] if observed_stats is not None else None
+    readings, counts = simulated_readings(runs, observed.min_group_load, observed.position, step)
     metrics = observed_metrics(observed, observed_stats, simulated_statistics(readings, counts), config.protocol.wim)
     try:
         write_outputs(groups, readings, metrics, args.out, args.metrics)

@@ -30,10 +30,11 @@ import yaml
 
 from bogie.params import GRAVITY
 from bogie.weighings.stats import group_inequality, survey_statistics
+from bogie.weighings.writers import write_weighings
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
-from pipeline.sample import TYRE_WEAR_COLUMNS
+from pipeline.sample import TYRE_WEAR_COLUMNS, bogie_from_sample
 from pipeline.schema import SchemaError, check_file_schema, check_runs
 from pipeline.survey_design import DESIGN_COLUMNS, design_table
 
@@ -509,6 +510,49 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
 
 
 # ---- output --------------------------------------------------------------------------------------------------------
+# ---- the fleet's WIM readings as records ------------------------------------------------------------------------
+#: the export's synthetic clock: the first record's time, then one record every EXPORT_HEADWAY_S. The fleet study has
+#: no traffic flow; the times only order the records and keep each distinct (a reader counts a repeat as bad)
+EXPORT_START = "2026-01-01T00:00:00"
+EXPORT_HEADWAY_S = 10
+
+
+def wim_records(runs: pd.DataFrame, samples: pd.DataFrame, speed: float) -> tuple[pd.DataFrame, dict[str, int]]:
+    """The fleet study's WIM readings as a vehicle table of :func:`bogie.weighings.writers.write_weighings`.
+
+    One record per WIM reading kept by the survey (not failed, no wheel in the air), in ``sample_id`` order: the
+    bogie's axles only (the tractor and the rest of the vehicle are not simulated), its axle loads [kg] as the WIM
+    read them, its axle spacings [m] from the bogie's geometry, the WIM pass's ``speed`` [m/s], lane 1, direction 1,
+    on the synthetic clock :data:`EXPORT_START` + :data:`EXPORT_HEADWAY_S` per record. Returns the table and the
+    counts ``{"n_readings", "n_failed", "n_airborne", "n_written"}``.
+    """
+    wim = runs[runs["protocol"].astype(str) == "wim"]
+    failed = wim["status"].astype(str) != "ok"
+    airborne = ~failed & wim["wheel_airborne"].fillna(False).astype(bool)
+    kept = wim[~failed & ~airborne].sort_values("sample_id", kind="stable")
+    counts = {
+        "n_readings": len(wim), "n_failed": int(failed.sum()), "n_airborne": int(airborne.sum()),
+        "n_written": len(kept),
+    }  # fmt: skip
+    n = kept["n_axles"].to_numpy(dtype=np.int64)
+    width = int(n.max()) if len(kept) else 2
+    by_id = samples.set_index("sample_id")
+    spacings = np.full((len(kept), width - 1), np.nan)
+    for j, sample_id in enumerate(kept["sample_id"].to_numpy()):
+        axle_x = bogie_from_sample(by_id.loc[sample_id].to_dict()).axle_x
+        spacings[j, : len(axle_x) - 1] = np.diff(axle_x)
+    vehicles = pd.DataFrame({
+        "timestamp": pd.Timestamp(EXPORT_START) + pd.to_timedelta(EXPORT_HEADWAY_S * np.arange(len(kept)), unit="s"),
+        "speed": np.full(len(kept), speed), "lane": 1, "direction": 1, "n_axles": n,
+    })  # fmt: skip
+    for i in range(width):
+        load = kept[f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY
+        vehicles[f"axle_load_{i}"] = np.where(n > i, load, np.nan)
+    for i in range(width - 1):
+        vehicles[f"spacing_{i}"] = spacings[:, i]
+    return vehicles, counts
+
+
 def _write_table(frame: pd.DataFrame, path: Path) -> None:
     if path.suffix == ".parquet":
         frame.to_parquet(path, index=False)
@@ -517,9 +561,11 @@ def _write_table(frame: pd.DataFrame, path: Path) -> None:
 
 
 def write_outputs(
-    tables: Mapping[str, pd.DataFrame], out_dir: str | Path, metrics: Mapping[str, Any], metrics_path: str | Path
-) -> None:
-    """Write the tables into ``out_dir`` and the metrics JSON, all or nothing.
+    tables: Mapping[str, pd.DataFrame], out_dir: str | Path, metrics: Mapping[str, Any], metrics_path: str | Path,
+    records: tuple[str, pd.DataFrame, str] | None = None,
+) -> None:  # fmt: skip
+    """Write the tables into ``out_dir`` and the metrics JSON, all or nothing; ``records`` (file name, vehicle table,
+    format) is written with :func:`bogie.weighings.writers.write_weighings` into ``out_dir`` too.
 
     The tables go to a temporary sibling directory that replaces ``out_dir`` by renames, and the JSON to a
     temporary file renamed last: a reader sees the old outputs or the new ones, never a mix or half a file, and an
@@ -531,6 +577,9 @@ def write_outputs(
             fh.write("\n")
         for name, frame in tables.items():
             _write_table(frame, tmp_dir / name)
+        if records is not None:
+            name, vehicles, fmt = records
+            write_weighings(vehicles, tmp_dir / name, fmt)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -538,6 +587,7 @@ def main(argv: list[str] | None = None) -> int:
     parser = argparse.ArgumentParser(prog="python -m pipeline.survey", description=__doc__.splitlines()[0])
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
+    parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--out", default="data/survey", help="output directory (default: data/survey)")
     parser.add_argument("--metrics", default="metrics/survey.json", help="metrics file (default: metrics/survey.json)")
     args = parser.parse_args(argv)
@@ -551,10 +601,21 @@ def main(argv: list[str] | None = None) -> int:
     tables = survey(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
     tables["design_guidance.csv"] = design_table(inequality_columns(readings(runs)))
+    records = None
+    fmt = config.survey.export_format
+    if fmt is not None:
+        try:
+            samples = pq.read_table(Path(args.samples) / f"{SURVEY_STUDY}.parquet").to_pandas()
+        except OSError as exc:
+            print(f"survey: {exc}", file=sys.stderr)
+            return 2
+        vehicles, counts = wim_records(runs, samples, config.protocol.wim.speed)
+        records = (f"fleet_wim.{fmt}", vehicles, fmt)
+        metrics["export"] = {"format": fmt, "file": f"fleet_wim.{fmt}", **counts}
     try:
-        write_outputs(tables, args.out, metrics, args.metrics)
-    except OSError as exc:
-        print(io_error("survey", exc), file=sys.stderr)
+        write_outputs(tables, args.out, metrics, args.metrics, records)
+    except (OSError, ValueError) as exc:  # ValueError: a reading that does not fit the format's fields
+        print(io_error("survey", exc) if isinstance(exc, OSError) else f"survey: {exc}", file=sys.stderr)
         return 2
     n_ok, n_runs, n_failed = metrics["n_ok"], metrics["n_runs"], metrics["n_failed"]
     print(f"survey: {n_ok} of {n_runs} runs succeeded ({n_failed} failed); wrote {args.out} and {args.metrics}")

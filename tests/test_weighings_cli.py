@@ -14,7 +14,7 @@ def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert main(["weighings", str(DATA / "site.mon"), "--format", "mon", "--min-group-load-t", "15", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
     assert set(out) == {"records", "positions", "groups"}
-    assert out["records"] == {"read": 5, "skipped": 4}
+    assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
     # every group of the file before the filters (test_weighings_groups.py): A, D steer | single | tri-axle; B steer |
     # tandem; C steer | tandem | tri-axle; E steer | single
     assert out["positions"] == {

@@ -98,7 +98,7 @@ def test_a_group_spacing_out_of_range_is_refused():
 def test_observed_survey_statistics_by_hand():
     survey = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15)
     out = survey.to_dict()
-    assert out["records"] == {"read": 5, "skipped": 4}
+    assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
     tandem, tri = out["groups"]["tandem"], out["groups"]["triaxle"]
     # tandems B (9500, 8500) and C (9000, 9000): spreads 1000 and 0 kg -> mean 500 kg;
     # spread over the mean axle load 1000/9000 = 11.11 % and 0 % -> median 5.556 %;

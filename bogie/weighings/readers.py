@@ -31,8 +31,8 @@ import pandas as pd
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
 __all__ = [
-    "AXLE_LOAD_RANGE", "CSV_LANE_RANGE", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES", "SPACING_RANGE",
-    "SPEED_RANGE", "WEIGHT_STEPS_KG", "YEAR_RANGE", "ReadResult", "detect_format", "read_weighings",
+    "AXLE_LOAD_RANGE", "CSV_LANE_RANGE", "CSV_MAX_AXLES", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES",
+    "SPACING_RANGE", "SPEED_RANGE", "WEIGHT_STEPS_KG", "YEAR_RANGE", "ReadResult", "detect_format", "read_weighings",
 ]  # fmt: skip
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and

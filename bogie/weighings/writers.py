@@ -21,14 +21,13 @@ import pandas as pd
 
 from bogie.weighings.formats import FORMATS, LAYOUTS, Field, FixedWidthLayout
 from bogie.weighings.groups import GROUP_SPACING_M
+from bogie.weighings.readers import CSV_MAX_AXLES, YEAR_RANGE
 
 __all__ = ["CSV_MAX_AXLES", "TWO_DIGIT_YEARS", "write_weighings"]
 
-#: most axles of one vehicle in the CSV layout [-] (the layout's limit, docs/weighings.md: n_axles 2 to 20)
-CSV_MAX_AXLES: int = 20
 #: years a two-digit year field (CASTOR, BeDIT) can hold: the POSIX ``%y`` pivot, 69-99 -> 1969-1999, 00-68 ->
-#: 2000-2068
-TWO_DIGIT_YEARS: tuple[int, int] = (1969, 2068)
+#: 2000-2068, the reader's plausible years
+TWO_DIGIT_YEARS: tuple[int, int] = YEAR_RANGE
 #: a quotient (value / scale) is first rounded to this many decimals of its unit, so that a decimal input that
 #: binary floating point cannot hold exactly rounds as written (0.45 m / 0.1 = 4.4999999999999991 dm -> 5 dm) [-]
 _CLEAN_DECIMALS = 6

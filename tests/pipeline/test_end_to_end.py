@@ -170,13 +170,16 @@ def test_an_observed_survey_given_then_changed_reruns_the_observed_stage_only(pr
     assert "calibrate: skipped, no calibrate section" in out
     assert "Running stage 'simulate'" not in out
     observed = json.loads((path / "metrics" / "observed.json").read_text())["observed"]
-    assert (observed["records"]["read"], observed["groups"]["tandem"]["n_groups"]) == (5, 2)
+    # observed.position trailer (the default): the laden tri-axles of A and C (24 t each); B's and C's tandems are
+    # drive tandems
+    assert (observed["records"]["read"], observed["groups"]["triaxle"]["n_groups"]) == (5, 2)
+    assert observed["groups"]["tandem"]["n_groups"] == 0
     # the same path, another content: DVC hashes the whole observed/ directory, so it sees the change
     text = (path / "observed" / "site.csv").read_text()
-    extra = "2026-03-14T07:13:00.000,80,1,3,6000,9000,8500,,,,4.2,1.35,,,,R3\n"
+    extra = "2026-03-14T07:13:00.000,80,1,5,6000,9000,8000,8000,8000,,3.6,5.2,1.31,1.31,,T2S3\n"
     (path / "observed" / "site.csv").write_text(text + ("" if text.endswith("\n") else "\n") + extra)
     out = dvc(path, "repro")
     assert "Running stage 'observed'" in out and "Running stage 'validate'" not in out
     observed = json.loads((path / "metrics" / "observed.json").read_text())["observed"]
-    assert (observed["records"]["read"], observed["groups"]["tandem"]["n_groups"]) == (6, 3)
+    assert (observed["records"]["read"], observed["groups"]["triaxle"]["n_groups"]) == (6, 3)
     assert "Data and pipelines are up to date" in dvc(path, "repro")

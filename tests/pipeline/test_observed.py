@@ -84,7 +84,7 @@ def metrics(root):
 
 
 def test_the_schema_offers_the_formats_and_positions_of_the_readers():
-    assert OBSERVED_FORMATS == FORMATS
+    assert OBSERVED_FORMATS == ("auto", *FORMATS)
     assert OBSERVED_POSITIONS == POSITIONS
 
 
@@ -225,3 +225,24 @@ def test_validate_refuses_a_path_that_names_no_file_before_any_result_is_compute
     shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.mon", root / "observed" / "site.mon")
     assert validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")]) == 0
     assert json.loads((root / "data" / "config.json").read_text())["observed"]["path"] == "observed/site.mon"
+
+
+def test_simulated_readings_are_read_at_the_observed_files_resolution_before_any_filter():
+    # at a (deliberately coarse) 3000 kg step: static bogie 0 (9000, 8000) reads (9000, 9000), spread 0; bogie 3
+    # (9000, 8000, 7000) reads (9000, 9000, 6000), spread 3000 kg; group loads are the sums of the readings
+    readings, _ = simulated_readings(fabricated_runs(raw_params()), 15_000.0, "all", weight_step_kg=3000.0)
+    static = readings[readings["protocol"] == "static"].set_index("sample_id")
+    assert static.loc[0, ["axle_load_0", "axle_load_1"]].tolist() == [9000.0, 9000.0]
+    assert (static.loc[0, "group_load"], static.loc[0, "spread_kg"]) == (18_000.0, 0.0)
+    assert static.loc[3, ["axle_load_0", "axle_load_1", "axle_load_2"]].tolist() == [9000.0, 9000.0, 6000.0]
+    assert (static.loc[3, "group_load"], static.loc[3, "spread_kg"]) == (24_000.0, 3000.0)
+
+
+def test_format_auto_and_the_files_resolution_are_in_the_metrics(tmp_path):
+    root = project(tmp_path, path="observed/site.csv", fmt="auto")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    assert main(args(root)) == 0
+    obs = metrics(root)["observed"]
+    assert (obs["format"], obs["format_asked"]) == ("csv", "auto")
+    assert obs["records"]["weight_step_kg"] == 100.0  # site.csv: every load a whole 100 kg

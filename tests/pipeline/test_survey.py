@@ -422,3 +422,58 @@ def test_a_reading_with_a_wheel_in_the_air_is_counted_and_kept_out_of_the_statis
     assert summary["share_outside_5pct"] == 0.0  # the nine real readings, all within 5 %
     assert summary["mean_max_deviation"] == pytest.approx(0.5 / 80.5)  # |W - mean| / mean of the nine
     assert headline_metrics(tables)["n_airborne"] == 1
+
+
+# ---- the fleet's WIM readings as a file of records (issue 27 Must 6) ---------------------------------------------
+def export_dir(stage_dir, fmt):
+    raw = yaml.safe_load((stage_dir / "params.yaml").read_text())
+    raw["survey"] = {"export_format": fmt}
+    (stage_dir / "params.yaml").write_text(yaml.safe_dump(raw))
+    fleet = sample_studies(parse_config(raw))["fleet"]
+    (stage_dir / "data" / "samples").mkdir(parents=True, exist_ok=True)
+    fleet.to_parquet(stage_dir / "data" / "samples" / "fleet.parquet", index=False)
+    return fleet, [*stage_args(stage_dir), "--samples", str(stage_dir / "data" / "samples")]
+
+
+@pytest.mark.parametrize(("fmt", "step_kg", "step_m"), [("mon", 1.0, 1e-3), ("castor", 100.0, 0.1), ("csv", 0.0, 0.0)])
+def test_the_fleets_wim_readings_are_written_as_records_that_read_back_at_the_formats_resolution(
+    stage_dir, fmt, step_kg, step_m
+):
+    from bogie.weighings.readers import read_weighings
+    from pipeline.sample import bogie_from_sample
+
+    fleet, argv = export_dir(stage_dir, fmt)
+    assert main(argv) == 0
+    metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())
+    # 40 bogies, the WIM run of sample 3 failed (fabricated_runs): 39 records
+    assert metrics["export"] == {
+        "format": fmt, "file": f"fleet_wim.{fmt}", "n_readings": 40, "n_failed": 1, "n_airborne": 0, "n_written": 39,
+    }  # fmt: skip
+    read = read_weighings(stage_dir / "data" / "survey" / f"fleet_wim.{fmt}", fmt)
+    assert (read.n_read, read.n_skipped) == (39, 0)
+    runs = read_runs(stage_dir / "data" / "runs", "fleet")
+    wim = runs[(runs["protocol"] == "wim") & (runs["status"] == "ok")].sort_values("sample_id")
+    by_id = fleet.set_index("sample_id")
+
+    def at(x, step):
+        return np.round(np.asarray(x, float) / step) * step if step else np.asarray(x, float)
+
+    for k, (row, got) in enumerate(zip(wim.to_dict("records"), read.vehicles.to_dict("records"))):
+        n = row["n_axles"]
+        assert got["n_axles"] == n
+        loads = [row[f"axle_load_{i}"] / GRAVITY for i in range(n)]
+        assert [got[f"axle_load_{i}"] for i in range(n)] == pytest.approx(at(loads, step_kg), abs=1e-6)
+        spacings = np.diff(bogie_from_sample(by_id.loc[row["sample_id"]].to_dict()).axle_x)
+        assert [got[f"spacing_{i}"] for i in range(n - 1)] == pytest.approx(at(spacings, step_m), abs=1e-9)
+        assert got["timestamp"] == pd.Timestamp("2026-01-01") + pd.Timedelta(seconds=10 * k)
+
+
+def test_an_export_without_wim_readings_is_refused_in_validation():
+    from pipeline.config import ConfigError
+
+    raw = small_raw()
+    raw["survey"] = {"export_format": "mon"}
+    raw["protocol"]["run"] = ["static"]
+    raw["sensitivity"]["protocol"] = "static"
+    with pytest.raises(ConfigError, match=r"survey.export_format.*needs WIM readings to export"):
+        parse_config(raw)
