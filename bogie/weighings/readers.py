@@ -27,6 +27,9 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
+import pyarrow.compute as pc
+import pyarrow.csv as pacsv
 
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
@@ -434,6 +437,11 @@ def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
     good = np.flatnonzero(reasons.ok)
     if len(good) < 2:
         return
+    # only records that share their time with another can repeat one: compare the rest of the key for those only
+    same_time = pd.Series(stamps[good].view(np.int64)).duplicated(keep=False).to_numpy()
+    good = good[same_time]
+    if len(good) < 2:
+        return
     col = parsed["columns"]
     key = pd.DataFrame({
         "t": stamps[good].view(np.int64), "lane": col["lane"][good], "dir": col["direction"][good],
@@ -463,49 +471,117 @@ def _csv_header(header: list[str], path: str) -> dict[str, int]:
     return columns
 
 
-def _numbers(cells: pd.Series) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The float of each cell, whether it is blank, and whether it is a finite number (blank: not)."""
-    text = cells.str.strip()
-    blank = (text == "").to_numpy()
-    value = pd.to_numeric(text.where(~blank, None), errors="coerce").to_numpy(dtype=float)
+def _numbers(cells: pa.Array) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The float of each cell, whether it is blank, and whether it is a finite number (blank: not).
+
+    pyarrow's cast parses a column of clean numbers in one pass; a column with anything it does not take (a letter,
+    an underscore, ``--5``) goes through pandas' ``to_numeric`` instead, which makes those cells NaN."""
+    text = pc.utf8_trim_whitespace(cells)
+    blank = pc.equal(text, "").to_numpy(zero_copy_only=False)
+    nulled = pc.if_else(pc.equal(text, ""), pa.scalar(None, pa.string()), text)
+    try:
+        value = pc.cast(nulled, pa.float64()).to_numpy(zero_copy_only=False)
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
+        value = pd.to_numeric(pd.Series(nulled.to_pylist(), dtype=object), errors="coerce").to_numpy(dtype=float)
+    value = np.asarray(value, dtype=float)
     return value, blank, np.isfinite(value)
 
 
-def _row_cells(lines: list[str]) -> tuple[list[list[str] | None], list[str]]:
-    """Each line split into cells (the csv module only where there is a quote); None and why where it cannot be."""
-    rows: list[list[str] | None] = []
-    errors: list[str] = []
-    for line in lines:
-        if '"' not in line:
-            rows.append(line.split(","))
-            continue
-        try:
-            rows.append(next(csv.reader([line])))
-        except csv.Error:  # an unclosed quote, a field over csv's size limit
-            rows.append(None)
-            errors.append(line)
-    return rows, errors
+def _count_per_line(lines: _Lines, byte: int) -> np.ndarray:
+    """How many times ``byte`` occurs in each line ``[start, end)`` (located, not scanned line by line)."""
+    m = len(lines)
+    counts = np.zeros(m, np.int64)
+    for a in range(0, m, _CHUNK_LINES):  # in chunks of lines: the positions of a byte take 8 bytes each
+        b = min(a + _CHUNK_LINES, m)
+        first = lines.start[a]
+        where = np.flatnonzero(lines.buf[first : lines.end[b - 1]] == byte) + first
+        row = np.searchsorted(lines.start[a:b], where, side="right") - 1
+        inside = (row >= 0) & (where < lines.end[a:b][np.maximum(row, 0)])
+        counts[a:b] = np.bincount(row[inside], minlength=b - a)
+    return counts
 
 
-def _parse_csv(text_lines: list[str], line_no: np.ndarray, path: str) -> dict:
-    header_cells = next(csv.reader([text_lines[0]]))
+#: lines per chunk of :func:`_count_per_line` [-]
+_CHUNK_LINES = 100_000
+
+
+class _Cells:
+    """The cells of a CSV body, one column at a time as a pyarrow string array of one entry per line ('' for a line
+    that is not a row of the header's width).
+
+    Lines without a quote and with the header's number of commas (all of them, in a clean file) are parsed together
+    by pyarrow's CSV reader, quotes off; a line with a quote by the csv module, alone (an unclosed quote or a field
+    over its 128 KiB limit: unreadable)."""
+
+    def __init__(self, data: bytes, body: _Lines, width: int) -> None:
+        m = len(body)
+        commas = _count_per_line(body, 44)
+        quoted = _count_per_line(body, 34) > 0
+        simple = ~quoted & (commas == width - 1)
+        rows: list[list[str]] = []
+        self.unreadable = np.zeros(m, bool)
+        self.right = simple.copy()
+        for k in np.flatnonzero(quoted):
+            try:
+                row = next(csv.reader([body.text(k)]))
+            except csv.Error:
+                self.unreadable[k] = True
+                continue
+            if len(row) == width:
+                rows.append(row)
+                self.right[k] = True
+        n_simple = int(simple.sum())
+        source = np.full(m, n_simple + len(rows), np.int64)  # the filler ''
+        source[simple] = np.arange(n_simple)
+        source[self.right & ~simple] = n_simple + np.arange(len(rows))
+        self._source = pa.array(source)
+        self._quoted = rows
+        self._width = width
+        self._table = None
+        if n_simple:
+            where = np.flatnonzero(simple)
+            if n_simple == m and (body.start[1:] == body.end[:-1] + 1).all():
+                # every line a simple row, one \n apart (no \r, no blank line): the bytes as they are, not a copy
+                blob = pa.py_buffer(memoryview(data)[body.start[0] : body.end[-1]])
+            else:
+                blob = pa.py_buffer(
+                    b"\n".join(data[s:e] for s, e in zip(body.start[where].tolist(), body.end[where].tolist()))
+                )
+            self._table = pacsv.read_csv(
+                blob,
+                read_options=pacsv.ReadOptions(column_names=[str(j) for j in range(width)], use_threads=False,
+                                               block_size=1 << 26),
+                parse_options=pacsv.ParseOptions(quote_char=False, double_quote=False, newlines_in_values=False),
+                convert_options=pacsv.ConvertOptions(column_types=dict.fromkeys(map(str, range(width)), pa.string()),
+                                                     strings_can_be_null=False, quoted_strings_can_be_null=False),
+            )  # fmt: skip
+        self._cache: dict[int, pa.Array] = {}
+
+    def __call__(self, j: int) -> pa.Array:
+        if j not in self._cache:
+            parts = [] if self._table is None else self._table.column(str(j)).chunks
+            parts = [*parts, pa.array([r[j] for r in self._quoted] + [""], pa.string())]
+            self._cache[j] = pc.take(pa.concat_arrays([p.cast(pa.string()) for p in parts]), self._source)
+        return self._cache[j]
+
+
+def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
+    try:
+        header_cells = next(csv.reader([lines.text(0)]))
+    except csv.Error:
+        header_cells = [lines.text(0)]
     columns = _csv_header(header_cells, path)
-    body = text_lines[1:]
-    line = line_no[1:]
+    body = lines.take(np.arange(1, len(lines)))
+    line = body.line
     m = len(body)
     reasons = _Reasons(m)
-    rows, _ = _row_cells(body)
     width = len(header_cells)
-    reasons.flag(np.array([r is None for r in rows], bool), "unreadable CSV row (an unclosed quote or a huge field)")
-    right = np.array([r is not None and len(r) == width for r in rows], bool)
-    reasons.flag(~right, "wrong length")
-    filler = [""] * width
-    cells = pd.DataFrame([r if ok else filler for r, ok in zip(rows, right)], columns=range(width), dtype=object)
-    if not m:
-        cells = pd.DataFrame(columns=range(width), dtype=object)
+    cells = _Cells(data, body, width)
+    reasons.flag(cells.unreadable, "unreadable CSV row (an unclosed quote or a huge field)")
+    reasons.flag(~cells.right, "wrong length")
 
     def number(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return _numbers(cells[columns[name]].astype(str))
+        return _numbers(cells(columns[name]))
 
     n_value, n_blank, n_ok = number("n_axles")
     reasons.flag(~n_ok | (n_value != np.round(n_value)), NON_NUMERIC)
@@ -519,20 +595,22 @@ def _parse_csv(text_lines: list[str], line_no: np.ndarray, path: str) -> dict:
     have_spacings = max((k for i, k in enumerate(spacing_cols, start=1) if k == i), default=0)
     reasons.flag((n > have_loads) | (n - 1 > have_spacings), "more axles than the file has columns for")
     past = np.zeros(m, bool)
+    empty = pa.array(["", "0"])
     for k in load_cols:
-        text = cells[columns[f"axle_load_{k}"]].astype(str).str.strip()
-        past |= (n < k) & ~text.isin(("", "0")).to_numpy()
+        cell = pc.utf8_trim_whitespace(cells(columns[f"axle_load_{k}"]))
+        past |= (n < k) & ~pc.is_in(cell, value_set=empty).to_numpy(zero_copy_only=False)
     for k in spacing_cols:
-        text = cells[columns[f"spacing_{k}"]].astype(str).str.strip()
-        past |= (n - 1 < k) & ~text.isin(("", "0")).to_numpy()
+        cell = pc.utf8_trim_whitespace(cells(columns[f"spacing_{k}"]))
+        past |= (n - 1 < k) & ~pc.is_in(cell, value_set=empty).to_numpy(zero_copy_only=False)
     reasons.flag(past, "axle load or spacing past the number of axles")
     # the timestamp: ISO 8601 local time, nothing else (no 'now', no 'today', no time zone)
-    stamp_text = cells[columns["timestamp"]].astype(str).str.strip()
-    zoned = stamp_text.str.fullmatch(_ZONED).to_numpy(dtype=bool)
+    stamp_cells = pc.utf8_trim_whitespace(cells(columns["timestamp"]))
+    zoned = pc.match_substring_regex(stamp_cells, f"^{_ZONED}$").to_numpy(zero_copy_only=False)
     reasons.flag(zoned, "time zone in a timestamp (write the local time, as the fixed-width formats do)")
-    iso = stamp_text.str.fullmatch(_ISO_LOCAL).to_numpy(dtype=bool)
-    stamps = pd.to_datetime(stamp_text.where(iso & reasons.ok, None).str.replace(",", ".", regex=False),
-                            format="ISO8601", errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
+    iso = pc.match_substring_regex(stamp_cells, f"^{_ISO_LOCAL}$").to_numpy(zero_copy_only=False) & reasons.ok
+    stamp_text = pc.replace_substring(pc.if_else(pa.array(iso), stamp_cells, pa.scalar(None, pa.string())), ",", ".")
+    stamps = pd.to_datetime(pd.Series(stamp_text.to_numpy(zero_copy_only=False), dtype=object), format="ISO8601",
+                            errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
     reasons.flag(np.isnat(stamps), BAD_DATE)
     year = np.where(np.isnat(stamps), 2000, stamps.astype("datetime64[Y]").astype(np.int64) + 1970)
     low, high = YEAR_RANGE
@@ -573,23 +651,25 @@ def _shown(text: str, limit: int = 60) -> str:
     return repr(text if len(text) <= limit else text[: limit - 1] + "…")
 
 
-def _text_lines(data: bytes) -> tuple[list[str], np.ndarray]:
-    """The non-blank lines of a CSV file as text and their 1-based numbers (``\\n`` ends a line; ``\\r`` before it
-    dropped)."""
-    text = data.decode("utf-8", errors="replace").split("\n")
-    if text and text[-1] == "":
-        text.pop()
-    kept = [(i + 1, t.removesuffix("\r")) for i, t in enumerate(text) if t.strip(" \t\r\x0b\x0c")]
-    return [t for _, t in kept], np.array([i for i, _ in kept], np.int64)
+def _utf8(data: bytes) -> bytes:
+    """``data`` if it is UTF-8; else decoded with U+FFFD for every undecodable byte and encoded again."""
+    if data.isascii():
+        return data
+    try:
+        data.decode("utf-8")
+    except UnicodeDecodeError:
+        return data.decode("utf-8", errors="replace").encode("utf-8")
+    return data
 
 
 def _parse(data: bytes, fmt: str, path: str) -> dict:
     """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's."""
     if fmt == "csv":
-        text, numbers = _text_lines(data)
-        if not text:
+        data = _utf8(data)
+        lines = _split(data)
+        if not len(lines):
             return {}
-        parsed = _parse_csv(text, numbers, path)
+        parsed = _parse_csv(data, lines, path)
         stamps = parsed["stamps"]
     else:
         lines = _split(data)
