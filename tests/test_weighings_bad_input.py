@@ -238,3 +238,12 @@ def test_at_resolution_rounds_to_the_nearest_step_and_refuses_a_step_that_is_not
     np.testing.assert_array_equal(at_resolution(loads, None), loads)
     with pytest.raises(ValueError, match="step_kg = 0.0 kg"):
         at_resolution(loads, 0.0)
+
+
+def test_a_csv_date_that_does_not_exist_is_an_invalid_date_and_the_others_are_read(tmp_path):
+    path = tmp_path / "feb30.csv"
+    path.write_text(CSV_HEADER + csv_row(1) + csv_row(2, stamp="2026-02-30T07:02:00") + csv_row(3, stamp="2024-02-29"))
+    result = read_weighings(path, "csv")
+    assert result.bad_lines == {"invalid date or time": [3]}
+    stamps = result.vehicles["timestamp"].dt.strftime("%Y-%m-%d %H:%M").tolist()
+    assert stamps == ["2026-03-14 07:01", "2024-02-29 00:00"]

@@ -3,6 +3,7 @@ their labels, the filters, and the statistics of an observed survey worked out b
 
 from pathlib import Path
 
+import numpy as np
 import pandas as pd
 import pytest
 
@@ -136,3 +137,35 @@ def test_a_filter_that_leaves_no_tandem_gives_an_empty_entry_not_an_error():
     assert out["groups"]["triaxle"]["n_groups"] == 2
     none = observed_survey(DATA / "site.mon", "mon", min_group_load_t=99).to_dict()
     assert none["groups"]["triaxle"]["n_groups"] == 0
+
+
+def test_the_bulk_grouping_is_the_per_vehicle_rule_on_random_vehicles():
+    # the rule written plainly, vehicle by vehicle: a group ends after a spacing wider than the threshold
+    rng = np.random.default_rng(27)
+    n = rng.integers(2, 9, 300)
+    width = int(n.max())
+    loads = np.where(np.arange(width) < n[:, None], rng.uniform(1000, 11000, (300, width)).round(), np.nan)
+    gaps = np.where(np.arange(width - 1) < n[:, None] - 1, rng.choice([1.3, 1.4, 1.9, 2.0, 2.1, 3.6, 6.0],
+                                                                        (300, width - 1)), np.nan)  # fmt: skip
+    vehicles = pd.DataFrame({
+        "line": np.arange(300) + 1, "timestamp": pd.Timestamp("2026-01-01"), "speed": 22.0, "lane": 1, "n_axles": n,
+        **{f"axle_load_{i}": loads[:, i] for i in range(width)},
+        **{f"spacing_{i}": gaps[:, i] for i in range(width - 1)},
+    })  # fmt: skip
+    got = axle_groups(vehicles, 2.0)
+    expected = []
+    for v in range(300):
+        first = 0
+        for i in range(1, int(n[v]) + 1):
+            if i == n[v] or gaps[v, i - 1] > 2.0:
+                expected.append((v + 1, first, i - first, float(loads[v, first:i].sum())))
+                first = i
+    assert list(zip(got["line"], got["first_axle"], got["n_axles"], got["group_load"])) == expected
+    for row in got.itertuples():
+        v, a, k = row.line - 1, row.first_axle, row.n_axles
+        shown = [getattr(row, f"axle_load_{i}") for i in range(3)]
+        if k <= 3:  # a tandem's or tri-axle's loads front first, NaN past them
+            assert shown[:k] == list(loads[v, a : a + k]) and all(np.isnan(shown[k:]))
+        else:  # a group of more than three: no loads in the three columns
+            assert all(np.isnan(shown))
+        assert row.position == ("steer", "drive", "trailer")[min(row.group_index, 2)]

@@ -57,34 +57,62 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         more than three) and ``spacing_0..1`` [m].
     """
     _check("group_spacing_m", group_spacing_m, 0.0, 5.0, "m", low_open=True)
-    rows = []
-    load_cols = [c for c in vehicles.columns if c.startswith("axle_load_")]
-    for v in vehicles.itertuples(index=False):
-        n = int(v.n_axles)
-        loads = np.array([getattr(v, c) for c in load_cols[:n]], dtype=float)
-        spacings = np.array([getattr(v, f"spacing_{i}") for i in range(n - 1)], dtype=float)
-        # a new group starts after every spacing wider than group_spacing_m
-        starts = [0, *(i + 1 for i in np.flatnonzero(spacings > group_spacing_m))]
-        ends = [*starts[1:], n]
-        for k, (a, b) in enumerate(zip(starts, ends)):
-            size = b - a
-            position = "steer" if k == 0 else "drive" if k == 1 else "trailer"
-            row = {
-                "line": v.line, "timestamp": v.timestamp, "speed": v.speed, "lane": v.lane,
-                "vehicle_groups": len(starts), "group_index": k, "first_axle": a, "n_axles": size,
-                "group": SIZES.get(size, "other"), "position": position, "group_load": float(loads[a:b].sum()),
-            }  # fmt: skip
-            for i in range(_GROUP_COLUMNS):
-                row[f"axle_load_{i}"] = loads[a + i] if i < size and size <= _GROUP_COLUMNS else np.nan
-            for i in range(_GROUP_COLUMNS - 1):
-                row[f"spacing_{i}"] = spacings[a + i] if i < size - 1 and size <= _GROUP_COLUMNS else np.nan
-            rows.append(row)
     columns = [
         "line", "timestamp", "speed", "lane", "vehicle_groups", "group_index", "first_axle", "n_axles", "group",
         "position", "group_load", *(f"axle_load_{i}" for i in range(_GROUP_COLUMNS)),
         *(f"spacing_{i}" for i in range(_GROUP_COLUMNS - 1)),
     ]  # fmt: skip
-    return pd.DataFrame(rows, columns=columns)
+    if not len(vehicles):
+        return pd.DataFrame(columns=columns)
+    # every vehicle at once (a year of a WIM site is millions of vehicles): the axles as a (vehicles, axles) table
+    n = vehicles["n_axles"].to_numpy(dtype=np.int64)
+    width = int(n.max())
+    loads = vehicles[[f"axle_load_{i}" for i in range(width)]].to_numpy(dtype=float)
+    gaps = vehicles[[f"spacing_{i}" for i in range(width - 1)]].to_numpy(dtype=float).reshape(len(n), width - 1)
+    axle = np.arange(width)[None, :]
+    present = axle < n[:, None]
+    # a new group starts at the front axle and after every spacing wider than group_spacing_m
+    starts = np.zeros((len(n), width), bool)
+    starts[:, 0] = True
+    starts[:, 1:] = (gaps > group_spacing_m) & present[:, 1:]
+    in_vehicle = np.cumsum(starts, axis=1) - 1  # each axle's group index within its vehicle
+    n_groups = in_vehicle[np.arange(len(n)), n - 1] + 1
+    first_group = np.concatenate(([0], np.cumsum(n_groups)[:-1]))  # each vehicle's first group, in the group table
+    group_of = (first_group[:, None] + in_vehicle)[present]  # row-major: vehicle by vehicle, front axle first
+    axle_of = np.broadcast_to(axle, present.shape)[present]
+    total = int(n_groups.sum())
+    size = np.bincount(group_of, minlength=total)
+    # the loads summed in axle order, front first, as a per-group loop would
+    group_load = np.bincount(group_of, weights=loads[present], minlength=total)
+    first_axle = np.zeros(total, np.int64)
+    first_axle[group_of[starts[present]]] = axle_of[starts[present]]
+    vehicle_of = np.repeat(np.arange(len(n)), n_groups)
+    index = np.arange(total) - first_group[vehicle_of]
+    out = pd.DataFrame({
+        "line": vehicles["line"].to_numpy()[vehicle_of], "timestamp": vehicles["timestamp"].to_numpy()[vehicle_of],
+        "speed": vehicles["speed"].to_numpy()[vehicle_of], "lane": vehicles["lane"].to_numpy()[vehicle_of],
+        "vehicle_groups": n_groups[vehicle_of], "group_index": index, "first_axle": first_axle, "n_axles": size,
+        "group": np.select([size == k for k in SIZES], list(SIZES.values()), "other"),
+        "position": np.where(index == 0, "steer", np.where(index == 1, "drive", "trailer")),
+        "group_load": group_load,
+    })  # fmt: skip
+    # the group's own axles and spacings, front first; NaN past them, and for a group of more than three axles
+    narrow = size <= _GROUP_COLUMNS
+    j = axle_of - first_axle[group_of]  # the axle's place in its group
+    for i in range(_GROUP_COLUMNS):
+        column = np.full(total, np.nan)
+        pick = (j == i) & narrow[group_of]
+        column[group_of[pick]] = loads[present][pick]
+        out[f"axle_load_{i}"] = column
+    gap_of = np.full((len(n), width), np.nan)
+    gap_of[:, : width - 1] = gaps  # the spacing behind each axle (to the next one)
+    behind = gap_of[present]
+    for i in range(_GROUP_COLUMNS - 1):
+        column = np.full(total, np.nan)
+        pick = (j == i) & (j < size[group_of] - 1) & narrow[group_of]
+        column[group_of[pick]] = behind[pick]
+        out[f"spacing_{i}"] = column
+    return out[columns]
 
 
 def filter_groups(

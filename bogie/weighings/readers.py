@@ -550,19 +550,20 @@ class _Cells:
             self._table = pacsv.read_csv(
                 blob,
                 read_options=pacsv.ReadOptions(column_names=[str(j) for j in range(width)], use_threads=False,
-                                               block_size=1 << 26),
+                                               block_size=1 << 30),
                 parse_options=pacsv.ParseOptions(quote_char=False, double_quote=False, newlines_in_values=False),
                 convert_options=pacsv.ConvertOptions(column_types=dict.fromkeys(map(str, range(width)), pa.string()),
                                                      strings_can_be_null=False, quoted_strings_can_be_null=False),
             )  # fmt: skip
-        self._cache: dict[int, pa.Array] = {}
+        self._every_line_simple = m > 0 and n_simple == m
 
     def __call__(self, j: int) -> pa.Array:
-        if j not in self._cache:
-            parts = [] if self._table is None else self._table.column(str(j)).chunks
-            parts = [*parts, pa.array([r[j] for r in self._quoted] + [""], pa.string())]
-            self._cache[j] = pc.take(pa.concat_arrays([p.cast(pa.string()) for p in parts]), self._source)
-        return self._cache[j]
+        """Column ``j``, one string per line (not kept: a column is asked for once or twice)."""
+        if self._every_line_simple:  # the parsed column is the column: no copy (one block, one chunk)
+            return self._table.column(str(j)).combine_chunks()
+        parts = [] if self._table is None else self._table.column(str(j)).chunks
+        parts = [*parts, pa.array([r[j] for r in self._quoted] + [""], pa.string())]
+        return pc.take(pa.concat_arrays(parts), self._source)
 
 
 def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
@@ -609,8 +610,11 @@ def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
     reasons.flag(zoned, "time zone in a timestamp (write the local time, as the fixed-width formats do)")
     iso = pc.match_substring_regex(stamp_cells, f"^{_ISO_LOCAL}$").to_numpy(zero_copy_only=False) & reasons.ok
     stamp_text = pc.replace_substring(pc.if_else(pa.array(iso), stamp_cells, pa.scalar(None, pa.string())), ",", ".")
-    stamps = pd.to_datetime(pd.Series(stamp_text.to_numpy(zero_copy_only=False), dtype=object), format="ISO8601",
-                            errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
+    try:  # pyarrow's ISO 8601 parser, in one pass; a date that does not exist (30 February) fails the whole column
+        stamps = pc.cast(stamp_text, pa.timestamp("us")).to_numpy(zero_copy_only=False).astype("datetime64[us]")
+    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):  # then pandas, which makes that one NaT
+        stamps = pd.to_datetime(pd.Series(stamp_text.to_numpy(zero_copy_only=False), dtype=object),
+                                format="ISO8601", errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
     reasons.flag(np.isnat(stamps), BAD_DATE)
     year = np.where(np.isnat(stamps), 2000, stamps.astype("datetime64[Y]").astype(np.int64) + 1970)
     low, high = YEAR_RANGE

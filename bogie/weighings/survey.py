@@ -12,6 +12,7 @@ from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
 from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups
@@ -102,7 +103,8 @@ def observed_survey(
     """
     read = read_weighings(path, fmt)
     every = axle_groups(read.vehicles, group_spacing_m)
-    size = every["n_axles"].map(lambda n: SIZE_LABELS.get(int(n), "other"))
+    axles = every["n_axles"].to_numpy()
+    size = np.select([axles == k for k in SIZE_LABELS], list(SIZE_LABELS.values()), "other")
     positions = {
         where: {label: int(((every["position"] == where) & (size == label)).sum()) for label in (*SIZE_LABELS.values(),
                 "other")}
