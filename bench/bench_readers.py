@@ -17,7 +17,7 @@ a file (today's, a gzip file) is reported as "not supported"; nothing here passe
 reader on the same records in the same run: the table's ratio is the MON reading's time over the CSV reading's.
 The load average is printed at the start and the end.
 
-Run alone: ``python -m bench.bench_readers [--records N] [--repeat R] [--castor] [--reader-root DIR]``.
+Run alone: ``python -m bench.bench_readers [--records N] [--repeat R] [--castor] [--reader-root DIR] [--previous DIR]``.
 """
 
 from __future__ import annotations
@@ -436,6 +436,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--castor", action="store_true", help="a CASTOR file of the same vehicles too")
     parser.add_argument("--reader-root", type=Path, default=ROOT,
                         help="the checkout whose bogie.weighings.readers is timed (default: this one)")  # fmt: skip
+    parser.add_argument("--previous", type=Path, default=None,
+                        help="a checkout of the previous reader: its MON and CSV readings as rows of the same run "
+                        "(e.g. `git worktree add /tmp/previous 46608fd`, the line-by-line reader)")  # fmt: skip
     args = parser.parse_args(argv)
     if args.records < 1 or args.repeat < 1:
         parser.error("--records and --repeat must be at least 1")
@@ -449,10 +452,17 @@ def main(argv: list[str] | None = None) -> None:
         files = write_files(Path(tmp), args.records, args.castor)
         print(f"generated in {time.perf_counter() - start:.1f} s (not timed below): "
               + ", ".join(f"{path.name} {_size(path)}" for path, *_ in files.values()), flush=True)  # fmt: skip
+        roots = dict.fromkeys(files, root)
+        if args.previous is not None:
+            previous = args.previous.resolve()
+            print(f"previous reader: {previous} ({_commit(previous)})")
+            for row in ("MON", "CSV (the peer)"):
+                name = f"{row.split(' ')[0]}, previous reader"
+                files[name], roots[name] = files[row], previous
         sizes = {row: _size(path) for row, (path, *_) in files.items()}
         for r in range(args.repeat):
             for row, (path, fmt, _) in files.items():
-                report = read_in_child(path, fmt, root)
+                report = read_in_child(path, fmt, roots[row])
                 runs.setdefault(row, []).append(report)
                 what = report.get("error") or f"{report['n_read']:,} read in {report['seconds']:.2f} s"
                 print(f"  reading {r + 1} {row:15s}: {what[:160]}", flush=True)
