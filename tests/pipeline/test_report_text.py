@@ -247,7 +247,8 @@ def observed_metrics(given=True, position="all", sensor_error=False):
     runs = {"n_runs": 40, "n_failed": 1, "n_airborne": 2, "n_light": 7, "n_position": 0, "n_kept": 30}
     observed = {
         "path": "observed/site.csv", "format": "csv", "sha256": "0123456789abcdef" * 4,
-        "records": {"read": 5, "skipped": 4, "skipped_by_reason": {"no axles": 1, "wrong length": 3}},
+        "records": {"read": 5, "skipped": 4, "weight_step_kg": 100.0,
+                    "skipped_by_reason": {"no axles": 1, "wrong length": 3}},
         "groups": {"tandem": stats(2, 0.5, 0.0, 500.0), "triaxle": stats(2, 1.0, 0.5, 1600.0)},
     }  # fmt: skip
     return {
@@ -287,7 +288,8 @@ def test_observed_text_with_a_survey_quotes_both_sides_and_what_was_skipped():
     assert "No observed survey" not in text_
     assert (
         "Observed: observed/site.csv (csv, sha256 0123456789ab): 5 records read, 4 skipped (no axles: 1; wrong "
-        "length: 3); after the filters 2 tandem and 2 tri-axle groups." in paras
+        "length: 3); after the filters 2 tandem and 2 tri-axle groups. Its weights are in 100 kg steps; every "
+        "simulated axle load is read at the same step before the statistics." in paras
     )
     assert "of 40 static runs, 1 failed, 2 with a wheel in the air and 7 below 15 t" in text_
     assert "mean spread: observed 500 kg, static 364 kg, WIM 1113 kg." in text_
