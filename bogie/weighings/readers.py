@@ -27,9 +27,6 @@ from pathlib import Path
 
 import numpy as np
 import pandas as pd
-import pyarrow as pa
-import pyarrow.compute as pc
-import pyarrow.csv as pacsv
 
 from bogie.weighings.formats import CSV_COLUMNS, FORMATS, KMH, LAYOUTS, FixedWidthLayout
 
@@ -455,9 +452,56 @@ def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
 
 
 # ---- CSV -------------------------------------------------------------------------------------------------------------
-#: an ISO 8601 local date and time: date, then optionally hours:minutes, seconds and a fraction (no time zone)
-_ISO_LOCAL = r"\d{4}-\d{2}-\d{2}(?:[T ]\d{2}:\d{2}(?::\d{2}(?:[.,]\d{1,9})?)?)?"
-_ZONED = _ISO_LOCAL + r"(?:Z|[+-]\d{2}(?::?\d{2})?)"
+#: an ISO 8601 local date and time, character by character: the positions of the date's and the time's digits and
+#: separators (``YYYY-MM-DD``, then ``[T ]HH:MM``, ``:SS``, ``[.,]fraction`` of 1-9 digits)
+_DATE_DIGITS = (0, 1, 2, 3, 5, 6, 8, 9)
+
+
+def _iso_local(cells: np.ndarray, too_long: np.ndarray, reasons: _Reasons) -> np.ndarray:
+    """The datetime64[us] of each ISO 8601 local time of ``cells`` (byte strings), NaT where none; flags a time
+    zone, anything else (*invalid date or time*), a date that does not exist and a year outside
+    :data:`YEAR_RANGE`, with the calendar check of the fixed-width formats. A fraction finer than a microsecond is
+    cut to microseconds."""
+    width = max(cells.dtype.itemsize, 28)
+    chars = np.zeros((len(cells), width), np.uint8)
+    if cells.dtype.itemsize:
+        chars[:, : cells.dtype.itemsize] = cells.view(np.uint8).reshape(len(cells), cells.dtype.itemsize)
+    length = np.char.str_len(cells)
+    digit = (chars - np.uint8(48)) < 10
+
+    def number(first: int, last: int) -> np.ndarray:
+        value = np.zeros(len(cells), np.int64)
+        for j in range(first, last):
+            value = value * 10 + (chars[:, j].astype(np.int64) - 48)
+        return value
+
+    date = digit[:, list(_DATE_DIGITS)].all(axis=1) & (chars[:, 4] == 45) & (chars[:, 7] == 45)
+    clock = np.isin(chars[:, 10], (84, 32)) & digit[:, [11, 12, 14, 15]].all(axis=1) & (chars[:, 13] == 58)
+    seconds = (chars[:, 16] == 58) & digit[:, [17, 18]].all(axis=1)
+    fraction_digits = np.clip(length - 20, 0, None)
+    fraction = np.isin(chars[:, 19], (46, 44)) & (fraction_digits >= 1) & (fraction_digits <= 9)
+    after = np.arange(width)[None, :]
+    fraction &= (digit | (after < 20) | (after >= length[:, None])).all(axis=1)
+    valid = (
+        ~too_long & date & ((length == 10) | (clock & (length == 16)) | (clock & seconds & ((length == 19) | fraction)))
+    )
+    zoned = ~valid & ~too_long & date & clock & (length > 16) & (
+        (chars[np.arange(len(cells)), np.maximum(length - 1, 0)] == 90)
+        | np.isin(chars[:, 16:], (43, 45)).any(axis=1)
+    )  # fmt: skip
+    reasons.flag(zoned, "time zone in a timestamp (write the local time, as the fixed-width formats do)")
+    reasons.flag(~valid, BAD_DATE)
+    has_time = valid & (length >= 16)
+    has_seconds = valid & (length >= 19)
+    micro = np.zeros(len(cells), np.int64)
+    for j in range(6):  # the fraction's first six digits; missing ones are 0
+        micro = micro * 10 + np.where(fraction & (j < fraction_digits), chars[:, 20 + j].astype(np.int64) - 48, 0)
+    microsecond = np.where(has_seconds, number(17, 19), 0) * 1_000_000 + np.where(fraction, micro, 0)
+    year, month, day = number(0, 4), number(5, 7), number(8, 10)
+    hour, minute = np.where(has_time, number(11, 13), 0), np.where(has_time, number(14, 16), 0)
+    _check_calendar(reasons, np.where(valid, year, 2000), np.where(valid, month, 1), np.where(valid, day, 1),
+                    hour, minute, microsecond)  # fmt: skip
+    return _timestamps(reasons.ok, year, month, day, hour, minute, microsecond)
 
 
 def _csv_header(header: list[str], path: str) -> dict[str, int]:
@@ -471,20 +515,57 @@ def _csv_header(header: list[str], path: str) -> dict[str, int]:
     return columns
 
 
-def _numbers(cells: pa.Array) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """The float of each cell, whether it is blank, and whether it is a finite number (blank: not).
+def _decimals(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Plain decimals (``[+-]digits[.digits]``, at most 15 digits) of a byte-string array, in one pass per
+    character: (value, whether the cell is one). The value is the integer of its digits over a power of ten, both
+    exact in binary, so the division rounds it correctly: the float Python's ``float()`` gives, bit for bit."""
+    width = cells.dtype.itemsize
+    chars = cells.view(np.uint8).reshape(len(cells), width) if width else np.zeros((len(cells), 0), np.uint8)
+    whole = np.zeros(len(cells), np.int64)
+    places = np.zeros(len(cells), np.int64)
+    digits = np.zeros(len(cells), np.int64)
+    dots = np.zeros(len(cells), np.int64)
+    ended = np.zeros(len(cells), bool)  # past the cell's last byte (numpy pads with NUL)
+    ok = np.ones(len(cells), bool)
+    negative = chars[:, 0] == 45 if width else np.zeros(len(cells), bool)
+    for j in range(width):
+        c = chars[:, j]
+        digit = c - np.uint8(48)
+        is_digit = (digit < 10) & ~ended
+        is_dot = (c == 46) & ~ended
+        sign = (j == 0) & np.isin(c, (43, 45))
+        nul = c == 0
+        ok &= is_digit | is_dot | sign | nul
+        ok &= ~(ended & ~nul)  # nothing after a NUL
+        ended |= nul
+        whole = np.where(is_digit, whole * 10 + digit, whole)
+        places += is_digit & (dots > 0)
+        digits += is_digit
+        dots += is_dot
+    ok &= (digits >= 1) & (digits <= 15) & (dots <= 1)
+    value = np.where(negative, -1.0, 1.0) * whole / 10.0**places
+    return value, ok
 
-    pyarrow's cast parses a column of clean numbers in one pass; a column with anything it does not take (a letter,
-    an underscore, ``--5``) goes through pandas' ``to_numeric`` instead, which makes those cells NaN."""
-    text = pc.utf8_trim_whitespace(cells)
-    blank = pc.equal(text, "").to_numpy(zero_copy_only=False)
-    nulled = pc.if_else(pc.equal(text, ""), pa.scalar(None, pa.string()), text)
-    try:
-        value = pc.cast(nulled, pa.float64()).to_numpy(zero_copy_only=False)
-    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):
-        value = pd.to_numeric(pd.Series(nulled.to_pylist(), dtype=object), errors="coerce").to_numpy(dtype=float)
-    value = np.asarray(value, dtype=float)
+
+def _numbers(cells: np.ndarray, too_long: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """The float of each cell (byte strings), whether it is blank, and whether it is a finite number (blank: not).
+
+    Plain decimals in bulk (:func:`_decimals`); any other cell (an exponent, ``nan``, a letter) as numpy reads a
+    byte string (Python's ``float()``), one by one; a cell longer than :data:`_CELL_MAX` is not a number."""
+    stripped = np.char.strip(cells)
+    blank = (stripped == b"") & ~too_long
+    value, plain = _decimals(stripped)
+    for k in np.flatnonzero(~plain & ~blank & ~too_long):
+        try:
+            value[k] = stripped[k : k + 1].astype(np.float64)[0]
+        except ValueError:
+            value[k] = np.nan
+    value[blank | too_long] = np.nan
     return value, blank, np.isfinite(value)
+
+
+#: the longest CSV cell read as a number or a time [characters]; a longer one is a non-numeric field
+_CELL_MAX = 40
 
 
 def _count_per_line(lines: _Lines, byte: int) -> np.ndarray:
@@ -506,21 +587,21 @@ _CHUNK_LINES = 100_000
 
 
 class _Cells:
-    """The cells of a CSV body, one column at a time as a pyarrow string array of one entry per line ('' for a line
+    """The cells of a CSV body, one column at a time as a byte-string array of one entry per line (b'' for a line
     that is not a row of the header's width).
 
-    Lines without a quote and with the header's number of commas (all of them, in a clean file) are parsed together
-    by pyarrow's CSV reader, quotes off; a line with a quote by the csv module, alone (an unclosed quote or a field
-    over its 128 KiB limit: unreadable)."""
+    Lines without a quote and with the header's number of commas (all of them, in a clean file) are cut at their
+    commas in bulk; a line with a quote is parsed by the csv module, alone (an unclosed quote or a field over its
+    128 KiB limit: unreadable)."""
 
     def __init__(self, data: bytes, body: _Lines, width: int) -> None:
         m = len(body)
-        commas = _count_per_line(body, 44)
+        self.body, self.width = body, width
         quoted = _count_per_line(body, 34) > 0
-        simple = ~quoted & (commas == width - 1)
-        rows: list[list[str]] = []
+        self.simple = ~quoted & (_count_per_line(body, 44) == width - 1)  # the commas, counted
         self.unreadable = np.zeros(m, bool)
-        self.right = simple.copy()
+        self.right = self.simple.copy()
+        self.quoted_rows: dict[int, list[str]] = {}
         for k in np.flatnonzero(quoted):
             try:
                 row = next(csv.reader([body.text(k)]))
@@ -528,42 +609,43 @@ class _Cells:
                 self.unreadable[k] = True
                 continue
             if len(row) == width:
-                rows.append(row)
+                self.quoted_rows[int(k)] = row
                 self.right[k] = True
-        n_simple = int(simple.sum())
-        source = np.full(m, n_simple + len(rows), np.int64)  # the filler ''
-        source[simple] = np.arange(n_simple)
-        source[self.right & ~simple] = n_simple + np.arange(len(rows))
-        self._source = pa.array(source)
-        self._quoted = rows
-        self._width = width
-        self._table = None
-        if n_simple:
-            where = np.flatnonzero(simple)
-            if n_simple == m and (body.start[1:] == body.end[:-1] + 1).all():
-                # every line a simple row, one \n apart (no \r, no blank line): the bytes as they are, not a copy
-                blob = pa.py_buffer(memoryview(data)[body.start[0] : body.end[-1]])
-            else:
-                blob = pa.py_buffer(
-                    b"\n".join(data[s:e] for s, e in zip(body.start[where].tolist(), body.end[where].tolist()))
-                )
-            self._table = pacsv.read_csv(
-                blob,
-                read_options=pacsv.ReadOptions(column_names=[str(j) for j in range(width)], use_threads=False,
-                                               block_size=1 << 30),
-                parse_options=pacsv.ParseOptions(quote_char=False, double_quote=False, newlines_in_values=False),
-                convert_options=pacsv.ConvertOptions(column_types=dict.fromkeys(map(str, range(width)), pa.string()),
-                                                     strings_can_be_null=False, quoted_strings_can_be_null=False),
-            )  # fmt: skip
-        self._every_line_simple = m > 0 and n_simple == m
+        # the commas of each simple row, from its start [bytes]: (simple rows, width - 1)
+        self.rows = np.flatnonzero(self.simple)
+        parts = []
+        for a in range(0, m, _CHUNK_LINES):
+            b = min(a + _CHUNK_LINES, m)
+            where = np.flatnonzero(body.buf[body.start[a] : body.end[b - 1]] == 44) + body.start[a]
+            row = np.searchsorted(body.start[a:b], where, side="right") - 1 + a
+            keep = self.simple[row] & (where < body.end[row])
+            parts.append((where[keep] - body.start[row[keep]]).astype(np.int32).reshape(-1, max(width - 1, 0)))
+        self.commas = np.concatenate(parts) if parts else np.zeros((0, max(width - 1, 0)), np.int32)
 
-    def __call__(self, j: int) -> pa.Array:
-        """Column ``j``, one string per line (not kept: a column is asked for once or twice)."""
-        if self._every_line_simple:  # the parsed column is the column: no copy (one block, one chunk)
-            return self._table.column(str(j)).combine_chunks()
-        parts = [] if self._table is None else self._table.column(str(j)).chunks
-        parts = [*parts, pa.array([r[j] for r in self._quoted] + [""], pa.string())]
-        return pc.take(pa.concat_arrays(parts), self._source)
+    def __call__(self, j: int) -> tuple[np.ndarray, np.ndarray]:
+        """Column ``j``: its cells as byte strings (at most :data:`_CELL_MAX` long) and which cells are longer."""
+        body, rows = self.body, self.rows
+        m = len(body)
+        start = body.start[rows] + (self.commas[:, j - 1] + 1 if j > 0 else 0)
+        end = body.start[rows] + self.commas[:, j] if j < self.width - 1 else body.end[rows]
+        length = end - start
+        too_long = np.zeros(m, bool)
+        too_long[rows] = length > _CELL_MAX
+        quoted = {k: row[j].encode("utf-8", errors="replace") for k, row in self.quoted_rows.items()}
+        for k, cell in quoted.items():
+            too_long[k] = len(cell) > _CELL_MAX
+        width = int(min(max(length.max(initial=0), *(len(c) for c in quoted.values()), 1), _CELL_MAX))
+        offsets = np.arange(width)
+        gathered = body.buf[np.minimum(start[:, None] + offsets, len(body.buf) - 1)]
+        gathered[offsets[None, :] >= length[:, None]] = 0
+        if len(rows) == m:
+            chars = gathered
+        else:
+            chars = np.zeros((m, width), np.uint8)
+            chars[rows] = gathered
+        for k, cell in quoted.items():
+            chars[k, : min(len(cell), width)] = np.frombuffer(cell[:width], np.uint8)
+        return chars.view(f"S{width}").ravel(), too_long
 
 
 def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
@@ -582,7 +664,7 @@ def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
     reasons.flag(~cells.right, "wrong length")
 
     def number(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return _numbers(cells(columns[name]))
+        return _numbers(*cells(columns[name]))
 
     n_value, n_blank, n_ok = number("n_axles")
     reasons.flag(~n_ok | (n_value != np.round(n_value)), NON_NUMERIC)
@@ -595,30 +677,24 @@ def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
     have_loads = max((k for i, k in enumerate(load_cols, start=1) if k == i), default=0)  # 1..k all there
     have_spacings = max((k for i, k in enumerate(spacing_cols, start=1) if k == i), default=0)
     reasons.flag((n > have_loads) | (n - 1 > have_spacings), "more axles than the file has columns for")
+    # each axle column read once: the cells past a vehicle's axles must be empty or 0, the others numbers
+    width_axles = int(n.max()) if m and n.max() >= 2 else 2
     past = np.zeros(m, bool)
-    empty = pa.array(["", "0"])
-    for k in load_cols:
-        cell = pc.utf8_trim_whitespace(cells(columns[f"axle_load_{k}"]))
-        past |= (n < k) & ~pc.is_in(cell, value_set=empty).to_numpy(zero_copy_only=False)
-    for k in spacing_cols:
-        cell = pc.utf8_trim_whitespace(cells(columns[f"spacing_{k}"]))
-        past |= (n - 1 < k) & ~pc.is_in(cell, value_set=empty).to_numpy(zero_copy_only=False)
+    values = {"axle_load": np.full((m, width_axles), np.nan), "spacing": np.full((m, width_axles - 1), np.nan)}
+    not_number = np.zeros(m, bool)
+    for name, ks, count in (("axle_load", load_cols, n), ("spacing", spacing_cols, n - 1)):
+        for k in ks:
+            cell, too_long = cells(columns[f"{name}_{k}"])
+            value, blank, ok = _numbers(cell, too_long)
+            past |= (count < k) & ~(blank | (value == 0.0))
+            need = count >= k
+            if k <= values[name].shape[1]:
+                not_number |= need & ~ok
+                values[name][:, k - 1] = np.where(need, value, np.nan)
     reasons.flag(past, "axle load or spacing past the number of axles")
     # the timestamp: ISO 8601 local time, nothing else (no 'now', no 'today', no time zone)
-    stamp_cells = pc.utf8_trim_whitespace(cells(columns["timestamp"]))
-    zoned = pc.match_substring_regex(stamp_cells, f"^{_ZONED}$").to_numpy(zero_copy_only=False)
-    reasons.flag(zoned, "time zone in a timestamp (write the local time, as the fixed-width formats do)")
-    iso = pc.match_substring_regex(stamp_cells, f"^{_ISO_LOCAL}$").to_numpy(zero_copy_only=False) & reasons.ok
-    stamp_text = pc.replace_substring(pc.if_else(pa.array(iso), stamp_cells, pa.scalar(None, pa.string())), ",", ".")
-    try:  # pyarrow's ISO 8601 parser, in one pass; a date that does not exist (30 February) fails the whole column
-        stamps = pc.cast(stamp_text, pa.timestamp("us")).to_numpy(zero_copy_only=False).astype("datetime64[us]")
-    except (pa.ArrowInvalid, pa.ArrowNotImplementedError):  # then pandas, which makes that one NaT
-        stamps = pd.to_datetime(pd.Series(stamp_text.to_numpy(zero_copy_only=False), dtype=object),
-                                format="ISO8601", errors="coerce").to_numpy(dtype="datetime64[us]")  # fmt: skip
-    reasons.flag(np.isnat(stamps), BAD_DATE)
-    year = np.where(np.isnat(stamps), 2000, stamps.astype("datetime64[Y]").astype(np.int64) + 1970)
-    low, high = YEAR_RANGE
-    reasons.flag((year < low) | (year > high), f"implausible year (allowed {low}-{high})")
+    stamp_cells, stamp_long = cells(columns["timestamp"])
+    stamps = _iso_local(np.char.strip(stamp_cells), stamp_long, reasons)
     lane, lane_blank, lane_ok = number("lane")
     reasons.flag(~lane_blank & ~lane_ok, NON_NUMERIC)
     lo, hi = CSV_LANE_RANGE
@@ -626,16 +702,8 @@ def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
     reasons.flag(bad_lane, f"implausible lane (allowed a whole number {lo}-{hi}, or empty)")
     speed, speed_blank, speed_ok = number("speed_kmh")
     reasons.flag(~speed_blank & ~speed_ok, NON_NUMERIC)
-    width_axles = int(n.max()) if m and n.max() >= 2 else 2
-    loads = np.full((m, width_axles), np.nan)
-    spacings = np.full((m, width_axles - 1), np.nan)
-    for i in range(width_axles):
-        for name, target, need in (("axle_load", loads, n > i), ("spacing", spacings, n - 1 > i)):
-            if i >= target.shape[1] or not need.any() or f"{name}_{i + 1}" not in columns:
-                continue  # no column: its rows are bad already (more axles than the file has columns for)
-            value, _, ok = number(f"{name}_{i + 1}")
-            reasons.flag(need & ~ok, NON_NUMERIC)
-            target[:, i] = np.where(need, value, np.nan)
+    reasons.flag(not_number, NON_NUMERIC)
+    loads, spacings = values["axle_load"], values["spacing"]
     columns_out = {
         "head": np.full(m, "", object), "speed": np.where(speed_blank, np.nan, speed) * KMH,
         "gross_weight": np.full(m, np.nan), "length": np.full(m, np.nan), "n_axles": n,

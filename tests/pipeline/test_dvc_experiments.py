@@ -146,7 +146,8 @@ def test_an_experiment_in_a_temporary_copy_reads_a_dvc_tracked_survey_file(proje
     args = ["-S", "observed.path=observed/site.csv", "-S", "observed.format=csv"]
     out = run(project, dvc, "exp", "run", "--temp", "observed", *args).stdout
     assert "Running stage 'observed'" in out, out
-    # the experiment's metrics/observed.json: the survey's path, format, sha256, records read and skipped
+    # the experiment's metrics/observed.json: the survey's path, format read and asked, sha256, records read and
+    # skipped, weight resolution
     sha = hashlib.sha256((project / "observed" / "site.csv").read_bytes()).hexdigest()
     shown = run(project, dvc, "exp", "show", "--csv").stdout
-    assert f",observed/site.csv,csv,{sha},5,4," in shown, shown
+    assert f",observed/site.csv,csv,csv,{sha},5,4,100.0," in shown, shown
