@@ -59,10 +59,12 @@ from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
+from pipeline.config_rules import calibration_tilt_count
 from pipeline.config_schema import CALIBRATION_QUANTITIES
 from pipeline.distributions import TruncNormal
 from pipeline.observed import _by_size
 from pipeline.protocol import weigh
+from pipeline.resources import worker_count
 from pipeline.sample import bogie_from_sample, sample_fleet, suspension_draw
 
 __all__ = [
@@ -163,42 +165,6 @@ class Table:
     n_failed: int
 
 
-def _tilt_distribution(config: Config) -> TruncNormal:
-    dist = config.distributions["chassis_tilt"]
-    if not isinstance(dist, TruncNormal):
-        raise CalibrationError(
-            f"calibrate.fit has chassis tilt quantities, but distributions.chassis_tilt_deg is {dist.kind}: the "
-            "fleet's tilt has a centre and a spread to fit only as kind truncnormal"
-        )
-    return dist
-
-
-def check_quantities(config: Config) -> None:
-    """Refuse a fitted quantity the fleet does not have (named, with why)."""
-    cal = config.calibrate
-    names = set(cal.fit)
-    if names & {"chassis_tilt_mean_deg", "chassis_tilt_sd_deg"}:
-        dist = _tilt_distribution(config)
-        low, high = math.degrees(dist.low), math.degrees(dist.high)
-        bounds = cal.fit.get("chassis_tilt_mean_deg")
-        if bounds and (bounds[0] < low or bounds[1] > high):
-            raise CalibrationError(
-                f"calibrate.fit.chassis_tilt_mean_deg = {list(bounds)}: must lie within the tilt distribution's "
-                f"bounds, [{low:g}, {high:g}] degree"
-            )
-    wim_spec = config.protocol.wim
-    if "site_iri_m_km" in names and wim_spec.site_before + wim_spec.site_after <= 0.0:
-        raise CalibrationError(
-            f"calibrate.fit.site_iri_m_km = {list(cal.fit['site_iri_m_km'])}: the WIM protocol has no site "
-            "(protocol.wim.site_length_before_m and site_length_after_m are 0), so no site roughness to fit"
-        )
-    if cal.n_bogies > config.fleet.n_bogies:
-        raise CalibrationError(
-            f"calibrate.n_bogies = {cal.n_bogies}: the calibration fleet is the first fleet bogies; allowed: at "
-            f"most fleet.n_bogies = {config.fleet.n_bogies} [-]"
-        )
-
-
 def defaults(config: Config) -> dict[str, float]:
     """The value each quantity has in params.yaml (what an unfitted quantity keeps)."""
     dist = config.distributions["chassis_tilt"]
@@ -239,6 +205,8 @@ def _weigh_kg(sample: Mapping[str, Any], protocol: str, spec: Any) -> np.ndarray
 
 
 def _weigh_many(tasks: Sequence[tuple[dict, str, Any]], n_jobs: int) -> np.ndarray:
+    # the same cap as simulate's: at most this machine's cores, and what its free memory holds
+    n_jobs = worker_count(n_jobs, lambda text: print(text, file=sys.stderr, flush=True), "calibrate")
     chunk = max(1, len(tasks) // (8 * max(n_jobs, 1)) or 1)
     parts = [tasks[i : i + chunk] for i in range(0, len(tasks), chunk)]
 
@@ -260,8 +228,7 @@ def calibration_samples(config: Config) -> pd.DataFrame:
 def _tilt_grid(config: Config) -> np.ndarray:
     dist = config.distributions["chassis_tilt"]
     low, high = (math.degrees(v) for v in dist.support)
-    k = max(2, int(math.ceil((high - low) / config.calibrate.tilt_step - 1e-9)) + 1)
-    return np.linspace(low, high, k)
+    return np.linspace(low, high, calibration_tilt_count(low, high, config.calibrate.tilt_step))
 
 
 def crn_table(config: Config) -> Table:
@@ -345,7 +312,7 @@ def _cdf(dist: TruncNormal, x: np.ndarray) -> np.ndarray:
 def bogie_tilts(table: Table, values: Mapping[str, float], dist: Any) -> np.ndarray:
     """Each calibration bogie's tilt [degree] in a fleet of ``values``: the quantile of its uniform under the
     fleet's truncated normal with the centre and spread of ``values``; its own sampled tilt when the fleet's tilt
-    distribution is of another kind (then its centre and spread cannot be fitted, :func:`check_quantities`)."""
+    distribution is of another kind (then its centre and spread cannot be fitted: the schema refuses to fit them)."""
     if not isinstance(dist, TruncNormal):
         return np.degrees(table.samples["chassis_tilt"].to_numpy(dtype=float))
     mean, sd = math.radians(values["chassis_tilt_mean_deg"]), math.radians(values["chassis_tilt_sd_deg"])
@@ -713,7 +680,6 @@ def skipped_metrics(reason: str) -> dict[str, Any]:
 
 def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> tuple[dict, dict[str, pd.DataFrame]]:
     """The whole calibration: metrics and the tables of data/calibration/."""
-    check_quantities(config)
     observed, _ = observed_groups(path, config)
     table = build_table(config, progress)
     problem = make_problem(table, observed, config)

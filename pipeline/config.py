@@ -22,7 +22,8 @@ from pydantic import ValidationError
 from bogie.params import GRAVITY
 from bogie.wim import axle_error_sd
 from pipeline.config_distributions import ROAD_CLASSES
-from pipeline.config_errors import ConfigError, to_config_error
+from pipeline.config_errors import RULE_ERROR, ConfigError, error_lines, shown
+from pipeline.config_rules import rule_errors
 from pipeline.config_schema import (
     BACKENDS,
     OTHER_SECTIONS,
@@ -528,8 +529,19 @@ def parse_config(raw: Mapping[str, Any]) -> Config:
     try:
         params = Params.model_validate(dict(raw))
     except ValidationError as exc:
-        raise to_config_error(Params, exc) from None
+        raise _with_rules(raw, exc) from None
     return to_config(params)
+
+
+def _with_rules(raw: Mapping[str, Any], exc: ValidationError) -> ConfigError:
+    """The field errors of ``exc`` and every rule between keys whose keys are valid (pipeline.config_rules), at once."""
+    fields = [e for e in exc.errors() if e["type"] != RULE_ERROR]
+    lines = error_lines(Params, fields)
+    bad = [key for key, _ in lines]
+    rules = rule_errors(Params, raw, bad)
+    lines += [(r.key, f"{r.key} = {shown(r.value)}: {r.expected}") for r in rules]
+    lines = list(dict.fromkeys(lines))
+    return ConfigError(lines[0][0], "\n".join(line for _, line in lines), lines)
 
 
 def load_config(path: str | Path = "params.yaml") -> Config:

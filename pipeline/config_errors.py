@@ -11,17 +11,33 @@ from __future__ import annotations
 
 import difflib
 import re
+import reprlib
 import types
 from collections.abc import Iterable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any, Literal, Union, get_args, get_origin
+from typing import Annotated, Any, Literal, Union, get_args, get_origin
 
 from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails, PydanticCustomError
 
-#: the error type of :func:`config_error`
+#: the error type of :func:`config_error`, and of :func:`rule_error` (a rule between sections, pipeline.config_rules)
 CONFIG_ERROR = "config"
+RULE_ERROR = "config_rule"
+
+#: the most characters of a value a message shows: a value of any size (a YAML alias expanded a billion times) is
+#: shown in bounded time, its start and an ellipsis
+SHOWN_CHARS = 60
+
+_REPR = reprlib.Repr()
+_REPR.maxlevel, _REPR.maxstring, _REPR.maxother = 3, SHOWN_CHARS, SHOWN_CHARS
+
+
+def shown(value: Any) -> str:
+    """``repr(value)`` as a message shows it: at most :data:`SHOWN_CHARS` characters, ``...`` marking a cut."""
+    text = _REPR.repr(value)
+    return text if len(text) <= SHOWN_CHARS else text[: SHOWN_CHARS - 3] + "..."
+
 
 _NUMBER_TYPES = ("int_type", "float_type", "int_from_float")
 
@@ -64,6 +80,11 @@ def config_error(key: str, value: Any, expected: str) -> PydanticCustomError:
     return PydanticCustomError(CONFIG_ERROR, "{expected}", {"key": key, "value": value, "expected": expected})
 
 
+def rule_error(key: str, value: Any, expected: str) -> PydanticCustomError:
+    """:func:`config_error` for a rule between sections (``key`` from the top level), told apart from field errors."""
+    return PydanticCustomError(RULE_ERROR, "{expected}", {"key": key, "value": value, "expected": expected})
+
+
 # ---- where an error is in the schema -----------------------------------------------------------------------------
 @dataclass(frozen=True)
 class Place:
@@ -84,6 +105,10 @@ class Place:
         Unit of the nearest enclosing field that gives one (``-`` if none does).
     what
         What the value is, in words (``preset``, ``ISO 8608 class``), for the messages.
+    entry
+        For an entry of a mapping field with free keys (``calibrate.fit.air_share``), what the entry must be.
+    range
+        The physical range of the distribution the key belongs to (``[-10, 10] degree``), if it is in one.
     """
 
     key: str
@@ -92,6 +117,8 @@ class Place:
     field: FieldInfo | None
     unit: str
     what: str
+    entry: str | None = None
+    range: str | None = None
 
 
 def _extra(field: FieldInfo | None, name: str) -> Any:
@@ -134,6 +161,7 @@ def locate(schema: type[BaseModel], loc: Sequence[str | int]) -> Place:
     """Follow an error location ``loc`` through the models of ``schema`` (see :class:`Place`)."""
     node: Any = schema
     owner, field, parts, fields = None, None, [], []
+    entry = None
     for part in loc:
         node = _without_none(node)
         if _is_model(node):
@@ -145,6 +173,12 @@ def locate(schema: type[BaseModel], loc: Sequence[str | int]) -> Place:
             node = union_tags(node)[part]  # the tag of a tagged union is not a key of params.yaml
         elif get_origin(node) in (list, tuple):
             node, field = get_args(node)[0], None
+            if get_origin(node) is Annotated:  # an item with its own constraints, list[Annotated[float, Field(...)]]
+                node, field = get_args(node)[0], next((m for m in get_args(node)[1:] if isinstance(m, FieldInfo)), None)
+            parts.append(part)
+        elif get_origin(node) is dict:
+            entry = entry or _extra(field, "entry")
+            node, field = get_args(node)[1], None
             parts.append(part)
         else:
             node, field = None, None
@@ -152,7 +186,8 @@ def locate(schema: type[BaseModel], loc: Sequence[str | int]) -> Place:
     unit = next((u for f in reversed(fields) if (u := _extra(f, "unit")) is not None), "-")
     named = next((f for f in reversed(fields) if f is not None), None)
     what = _extra(named, "what") or unit
-    return Place(join_key(parts), _without_none(node), owner, field, unit, what)
+    physical = next((r for f in reversed(fields) if (r := _extra(f, "range")) is not None), None)
+    return Place(join_key(parts), _without_none(node), owner, field, unit, what, entry, physical)
 
 
 # ---- what was expected there ---------------------------------------------------------------------------------
@@ -194,6 +229,8 @@ def expected(place: Place) -> str:
     node, field = place.node, place.field
     if _extra(field, "expected"):
         return _extra(field, "expected")
+    if place.entry and field is None and get_origin(node) in (list, tuple):
+        return place.entry
     if _is_model(node):
         return f"a mapping with the keys {', '.join(node.model_fields)}"
     if union_tags(node):
@@ -233,9 +270,10 @@ def _line(schema: type[BaseModel], error: ErrorDetails) -> tuple[str, str]:
     kind, value, ctx = error["type"], error.get("input"), error.get("ctx") or {}
     place = locate(schema, error["loc"])
     key, name = place.key, place.key or "the top level"
-    if kind == CONFIG_ERROR:
+    if kind in (CONFIG_ERROR, RULE_ERROR):
         key = f"{place.key}.{ctx['key']}" if place.key and ctx["key"] else place.key or ctx["key"]
-        return key, f"{key} = {ctx['value']!r}: {ctx['expected']}"
+        key = key.replace(".[", "[")
+        return key, f"{key} = {shown(ctx['value'])}: {ctx['expected']}"
     if kind == "missing":
         hint = ""
         if place.owner is not None and "kind" in place.owner.model_fields:
@@ -251,16 +289,21 @@ def _line(schema: type[BaseModel], error: ErrorDetails) -> tuple[str, str]:
         tags = ", ".join(union_tags(place.node))
         if kind == "union_tag_not_found":
             return f"{key}.kind", f"missing key {key}.kind: expected one of {tags}"
-        return f"{key}.kind", f"{key}.kind = {ctx.get('tag')!r}: unknown {place.what}: must be one of {tags}"
+        return f"{key}.kind", f"{key}.kind = {shown(ctx.get('tag'))}: unknown {place.what}: must be one of {tags}"
     if kind == "literal_error":
-        hint = _suggestion(value, _options(place.node))
-        return key, f"{name} = {value!r}: unknown {place.what}{hint}: must be {expected(place)}"
+        hint = _suggestion(value, _options(place.node)) if isinstance(value, str) else ""
+        return key, f"{name} = {shown(value)}: unknown {place.what}{hint}: must be {expected(place)}"
+    if kind == "finite_number":
+        hint = f"a finite number within {place.range}, the range of the quantity" if place.range else expected(place)
+        return key, f"{name} = {shown(value)}: is not a finite number (NaN or infinity): must be {hint}"
     if kind in _NUMBER_TYPES and _is_numeric_text(value):
-        text = f"{name} = {value!r}: is text, not a number (must be {expected(place)})"
+        text = f"{name} = {shown(value)}: is text, not a number (must be {expected(place)})"
         if _YAML_TEXT_EXPONENT.fullmatch(value.strip()):
             return key, f"{text}; YAML reads 1e3 and 1.0e3 as text, write 1.0e+3"
         return key, f"{text}; write it without quotes"
-    return key, f"{name} = {value!r}: must be {expected(place)}"
+    if kind == "too_short" and get_origin(place.node) is list and (ctx.get("min_length") or 0) > 1:
+        return key, f"{name} = {shown(value)}: must be {expected(place)}: at least {ctx['min_length']} items"
+    return key, f"{name} = {shown(value)}: must be {expected(place)}"
 
 
 def error_lines(schema: type[BaseModel], errors: Iterable[ErrorDetails]) -> list[tuple[str, str]]:

@@ -29,9 +29,11 @@ from pydantic import (
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from bogie.wim import ACCURACY_CLASSES
 from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
-from pipeline.config_errors import config_error
+from pipeline.config_errors import config_error, rule_error
+from pipeline.config_rules import rule_errors
 from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
 from pipeline.distributions import Choice, Constant, Distribution, ParameterError
+from pipeline.resources import MAX_JOBS
 
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
 BACKENDS: tuple[str, ...] = ("loky", "dask")
@@ -206,7 +208,7 @@ def _checked(q: Quantity) -> WrapValidator:
 def _distribution_field(q: Quantity) -> tuple[Any, Any]:
     what = f"distribution kind for the categorical {q.name}" if q.labels else "distribution kind"
     expected = f"a distribution of {q.name} in {q.yaml_unit}, e.g. {{kind: uniform, ...}}"
-    extra = {"unit": q.yaml_unit, "what": what, "expected": expected}
+    extra = {"unit": q.yaml_unit, "what": what, "expected": expected, **({} if q.labels else {"range": q.range_text})}
     spec = LabelSpec if q.labels else NumericSpec
     return Annotated[spec, _checked(q)], Field(json_schema_extra=extra)
 
@@ -414,13 +416,27 @@ class Protocols(Strict):
     wim: Wim
 
 
+def _numeric_factors(names: list[str]) -> list[str]:
+    for i, name in enumerate(names):
+        if QUANTITIES[name].labels:
+            numeric = ", ".join(k for k, q in QUANTITIES.items() if not q.labels)
+            expected = (
+                f"is categorical ({QUANTITIES[name].yaml_unit} labels): a Sobol' factor must be a numeric quantity, "
+                f"one of {numeric}"
+            )
+            raise config_error(f"[{i}]", name, expected)
+    return names
+
+
 class Sensitivity(Strict):
     """``sensitivity:`` the Sobol' design (see :class:`pipeline.config.SensitivityConfig`)."""
 
     group: Literal[tuple(GROUP_AXLES)] = named("axle group")  # type: ignore[valid-type]
     base_size: Annotated[int, AfterValidator(_power_of_two)] = integer(2, 2**20)
     # the factors are keys of distributions:
-    factors: Annotated[list[Literal[tuple(QUANTITIES)]], _distinct("factor")] = named("factor", min_length=1)  # type: ignore[valid-type]
+    factors: Annotated[list[Literal[tuple(QUANTITIES)]], _distinct("factor"), AfterValidator(_numeric_factors)] = named(  # type: ignore[valid-type]
+        "factor", min_length=1
+    )
     bootstrap_resamples: int = integer(1, 100_000)
     confidence_level: float = number("[-]", gt=0.0, lt=1.0)
     protocol: Protocol = named("protocol")
@@ -433,11 +449,17 @@ class Ablation(Strict):
 
 
 _ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
+#: the schemes of dask.distributed's network transports a scheduler listens on (``inproc`` is in-process only)
+DASK_SCHEMES: tuple[str, ...] = ("tcp", "tls", "ucx", "ws", "wss")
 
 
 def _address(value: str | None) -> str | None:
-    if value is not None and "://" not in value:
-        raise config_error("", value, f"must be null or {_ADDRESS}")
+    if value is None:
+        return None
+    scheme, sep, host = value.partition("://")
+    if not sep or scheme.lower() not in DASK_SCHEMES or not host.strip("/"):
+        schemes = ", ".join(f"{s}://" for s in DASK_SCHEMES)
+        raise config_error("", value, f"must be null or {_ADDRESS}: a scheme of {schemes} and a host")
     return value
 
 
@@ -445,7 +467,8 @@ class Execution(Strict):
     """``execution:`` how the simulation runs (see :class:`pipeline.config.ExecutionConfig`)."""
 
     backend: Literal[BACKENDS] = named("backend")  # type: ignore[valid-type]
-    n_jobs: int = integer(1, 4096)
+    # at most pipeline.resources.MAX_JOBS; each stage runs at most this machine's cores (resources.worker_count)
+    n_jobs: int = integer(1, MAX_JOBS)
     chunk_size: int = integer(1, 10_000_000)
     dask_scheduler: Annotated[str | None, AfterValidator(_address)] = Field(
         json_schema_extra={"expected": f"null or {_ADDRESS}"}
@@ -504,6 +527,10 @@ CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
     "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's relative error on an axle reading
 }
+#: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
+#: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's
+#: site classes end at 4 m/km, so no WIM site is rougher than 10
+SITE_IRI_RANGE: tuple[float, float] = CALIBRATION_QUANTITIES["site_iri_m_km"][:2]
 #: the quantities that belong to the WIM protocol
 WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct")
 
@@ -513,9 +540,24 @@ class Calibrate(Strict):
 
     protocol: Literal[PROTOCOLS] = named("protocol")  # type: ignore[valid-type]
     n_bogies: int = integer(20, 100_000)
-    fit: dict[str, list[float]] = Field(min_length=1)
+    fit: dict[str, list[float]] = Field(
+        min_length=1,
+        json_schema_extra={
+            "expected": "a mapping naming at least one quantity to fit, each [low, high]: "
+            + ", ".join(CALIBRATION_QUANTITIES),
+            "entry": "[low, high], two numbers in the unit of the quantity's name",
+        },
+    )
     tilt_step_deg: float = number("degree", gt=0.0, le=1.0)
-    site_iri_levels_m_km: list[float] = Field(min_length=2)
+    # each level within the range calibrate fits the site's roughness over (CALIBRATION_QUANTITIES)
+    site_iri_levels_m_km: list[Annotated[float, Field(ge=SITE_IRI_RANGE[0], le=SITE_IRI_RANGE[1])]] = Field(
+        min_length=2,
+        json_schema_extra={
+            "unit": "m/km",
+            "expected": "a list of two or more increasing roughnesses in "
+            f"[{SITE_IRI_RANGE[0]:g}, {SITE_IRI_RANGE[1]:g}] m/km",
+        },
+    )
     bootstrap_resamples: int = integer(0, 10_000)
     confidence_level: float = number("-", gt=0.0, lt=1.0)
     maxiter: int = integer(1, 10_000)
@@ -564,7 +606,14 @@ class Design(Strict):
     groups: Annotated[list[Literal[tuple(GROUP_AXLES)]], _distinct("axle group")] = named("axle group", min_length=1)  # type: ignore[valid-type]
     n_conditions: int = integer(2, 100_000)
     tilt_step_deg: float = number("degree", gt=0.0, le=2.0)
-    grid: dict[str, list[float]] = Field(min_length=1)
+    grid: dict[str, list[float]] = Field(
+        min_length=1,
+        json_schema_extra={
+            "expected": "a mapping naming at least one design factor, each with its levels: "
+            + ", ".join(DESIGN_FACTORS),
+            "entry": "a list of one or more levels, numbers in the unit of the factor's name",
+        },
+    )
     n_space_filling: int = integer(0, 10_000)
     target_share: float = number("-", gt=0.0, lt=1.0)
     confidence_level: float = number("-", gt=0.0, lt=1.0)
@@ -603,16 +652,13 @@ class Params(Strict):
     design: Design | None = None
     figure2: Any = None
 
-    @model_validator(mode="after")
-    def _sections_agree(self) -> Params:
-        run = self.protocol.run
-        if self.sensitivity.protocol not in run:
-            expected = f"is not run: protocol.run lists only {', '.join(run)}"
-            raise config_error("sensitivity.protocol", self.sensitivity.protocol, expected)
-        if self.survey is not None and self.survey.export_format is not None and "wim" not in run:
-            expected = f"needs WIM readings to export: protocol.run lists only {', '.join(run)} (add wim, or null)"
-            raise config_error("survey.export_format", self.survey.export_format, expected)
-        if self.ablation.n_bogies > self.fleet.n_bogies:
-            expected = f"must not exceed fleet.n_bogies = {self.fleet.n_bogies}: the ablation reuses fleet bogies"
-            raise config_error("ablation.n_bogies", self.ablation.n_bogies, expected)
-        return self
+    @model_validator(mode="wrap")
+    @classmethod
+    def _sections_agree(cls, data: Any, handler: ValidatorFunctionWrapHandler) -> Params:
+        # the rules between keys and the bounds on the costs (pipeline.config_rules) read the file as written; when a
+        # field is bad, pipeline.config.parse_config runs those whose keys are valid and reports them with it
+        params = handler(data)
+        broken = rule_errors(cls, data)
+        if broken:
+            raise rule_error(broken[0].key, broken[0].value, broken[0].expected)
+        return params

@@ -3,6 +3,11 @@
 PyYAML's ``safe_load`` keeps the last of two equal keys without a word, so a value edited in one place and left
 in another would silently win or lose. :func:`read_yaml` composes the document, checks every mapping at every
 depth for a repeated key (naming its key path and both line numbers), then constructs it like ``safe_load``.
+
+A document too large to be a parameter file is refused before it is built, in bounded time and memory
+(:class:`DocumentTooLargeError`): nesting deeper than :data:`MAX_DEPTH` (PyYAML composes recursively, 5,000 nested
+``[`` raised a RecursionError), or more than :data:`MAX_NODES` values once every alias is expanded (a "billion laughs"
+of nested aliases is a few lines that expand to 10^9 values, which validation and its message would walk).
 """
 
 from __future__ import annotations
@@ -13,6 +18,47 @@ import yaml
 
 #: YAML's merge key ``<<``, which may legitimately appear more than once
 _MERGE_TAG = "tag:yaml.org,2002:merge"
+
+#: the deepest nesting of mappings and lists a parameter file may have (params.yaml nests 4 deep) [-]
+MAX_DEPTH = 32
+#: the most values (scalars, lists, mappings) a parameter file may hold, aliases expanded (params.yaml: about 400) [-]
+MAX_NODES = 100_000
+
+
+class DocumentTooLargeError(ValueError):
+    """A YAML document nested too deep or too large once its aliases are expanded: refused before it is built."""
+
+
+class _Loader(yaml.SafeLoader):
+    """PyYAML's safe loader that refuses nesting deeper than :data:`MAX_DEPTH` while it composes."""
+
+    def __init__(self, stream: str | IO[str], source: str) -> None:
+        super().__init__(stream)
+        self.source, self.depth = source, 0
+
+    def compose_node(self, parent: yaml.Node | None, index: Any) -> yaml.Node | None:
+        self.depth += 1
+        try:
+            if self.depth > MAX_DEPTH:
+                line = self.peek_event().start_mark.line + 1
+                raise DocumentTooLargeError(
+                    f"{self.source}: nested more than {MAX_DEPTH} levels deep at line {line}: not a parameter file"
+                )
+            return super().compose_node(parent, index)
+        finally:
+            self.depth -= 1
+
+
+def _expanded_size(node: yaml.Node, sizes: dict[int, int]) -> int:
+    """The number of values under ``node`` with every alias expanded, each shared node counted once (memoised)."""
+    if id(node) not in sizes:
+        children: list[yaml.Node] = []
+        if isinstance(node, yaml.SequenceNode):
+            children = node.value
+        elif isinstance(node, yaml.MappingNode):
+            children = [n for pair in node.value for n in pair]
+        sizes[id(node)] = min(1 + sum(_expanded_size(c, sizes) for c in children), MAX_NODES + 1)
+    return sizes[id(node)]
 
 
 class DuplicateKeyError(ValueError):
@@ -79,14 +125,22 @@ def read_yaml(stream: str | IO[str], source: str = "params.yaml") -> Any:
     ------
     DuplicateKeyError
         If a mapping at any depth gives a key twice; every such key is listed, each with both line numbers.
+    DocumentTooLargeError
+        If the document nests deeper than :data:`MAX_DEPTH` or holds more than :data:`MAX_NODES` values.
     yaml.YAMLError
         If the text is not valid YAML.
     """
-    loader = yaml.SafeLoader(stream)
+    loader = _Loader(stream, source)
     try:
         node = loader.get_single_node()
         if node is None:
             return None
+        size = _expanded_size(node, {})
+        if size > MAX_NODES:
+            raise DocumentTooLargeError(
+                f"{source}: more than {MAX_NODES:,} values once its aliases are expanded (an alias of an alias of "
+                "...): not a parameter file; write the values out"
+            )
         duplicates = sorted(_duplicates(loader, node, "", set()), key=lambda d: d[2])
         if duplicates:
             raise DuplicateKeyError(source, duplicates)

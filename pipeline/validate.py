@@ -1,11 +1,12 @@
 """DVC stage ``validate``: params.yaml checked as a whole before any stage that writes results runs.
 
-``python -m pipeline.validate`` reads params.yaml through the schema (:mod:`pipeline.config`: every bad key,
-every rule between keys), checks that the studies fit in this machine's memory and that ``observed.path`` (if
-given) names a file, then writes the validated configuration in SI units to ``data/config.json``. Every other
-stage depends on that file, so a bad value stops the pipeline here, and DVC, which deletes a stage's outputs before
-running it, deletes only this small file: a failed ``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the
-runs and the report in place (see the README for what DVC itself does to params.yaml and how to recover).
+``python -m pipeline.validate`` reads params.yaml through the schema (:mod:`pipeline.config`: every bad key, every
+rule between keys, the bounds on the runs and on the memory the studies imply, against a fixed budget:
+:mod:`pipeline.config_rules`), checks that ``observed.path`` (if given) names a file, then writes the validated
+configuration in SI units to ``data/config.json``. Every other stage depends on that file, so a bad value stops the
+pipeline here, and DVC, which deletes a stage's outputs before running it, deletes only this small file: a failed
+``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the runs and the report in place (see the README for what
+DVC itself does to params.yaml and how to recover).
 """
 
 from __future__ import annotations
@@ -22,8 +23,6 @@ import yaml
 
 from pipeline.atomic import atomic_file, io_error
 from pipeline.config import ConfigError, load_config, observed_file
-from pipeline.resources import available_memory
-from pipeline.sample import check_memory
 
 __all__ = ["as_json", "main"]
 
@@ -49,7 +48,6 @@ def main(argv: list[str] | None = None) -> int:
     args = parser.parse_args(argv)
     try:
         config = load_config(args.params)
-        check_memory(config, available_memory())
         # a wrong observed.path is found now, not after the simulation (the observed stage checks it again)
         observed_file(config.observed, Path(args.params).parent)
     except (ConfigError, OSError, yaml.YAMLError) as exc:

@@ -329,11 +329,12 @@ def test_default_studies_sample_in_well_under_a_few_seconds():
 
 
 def test_studies_that_would_not_fit_in_memory_are_refused_before_sampling():
-    config = parse_config(small_raw(fleet__n_bogies=10_000_000))
+    # 4,000,000 bogies fit validate's fixed budget (pipeline.resources.MEMORY_BUDGET), not 8 GiB of free memory
+    config = parse_config(small_raw(fleet__n_bogies=4_000_000))
     need = memory_needed(config)
-    assert need > 10_000_000 * 3 * 1024  # the fleet alone at 3 KiB a bogie
+    assert need > 4_000_000 * 3 * 1024  # the fleet alone at 3 KiB a bogie
     check_memory(config, available=need)  # just fits
     check_memory(config, available=None)  # unknown memory: no check
-    with pytest.raises(ConfigError, match=r"fleet.n_bogies = 10000000: .* more than the 8.0 GiB available") as err:
+    with pytest.raises(ConfigError, match=r"fleet.n_bogies = 4000000: .* more than the 8.0 GiB available") as err:
         check_memory(config, available=8 * 2**30)
     assert err.value.key == "fleet.n_bogies"

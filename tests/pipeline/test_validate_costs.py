@@ -1,0 +1,172 @@
+"""Issue 28, items 2, 5 and 7: validate bounds every cost a setting implies and refuses what would fail later,
+reports the rules between keys with the other errors, caps the workers, and refuses hostile YAML quickly."""
+
+import copy
+import time
+from pathlib import Path
+
+import pytest
+
+from pipeline import calibrate
+from pipeline.config import ConfigError, load_config, load_params, parse_config
+from pipeline.config_schema import Params
+from pipeline.resources import MAX_JOBS, MEMORY_BUDGET, worker_count
+
+PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
+
+
+@pytest.fixture(scope="module")
+def raw():
+    return load_params(PARAMS)
+
+
+def changed(raw, **values):
+    """A deep copy of ``raw`` with each dotted key (``__`` for ``.``) set."""
+    new = copy.deepcopy(raw)
+    for path, value in values.items():
+        *parents, last = path.split("__")
+        node = new
+        for key in parents:
+            node = node[key]
+        node[last] = value
+    return new
+
+
+def refused(raw, **values):
+    start = time.perf_counter()
+    with pytest.raises(ConfigError) as err:
+        parse_config(changed(raw, **values))
+    assert time.perf_counter() - start < 1.0  # bounded before anything is built
+    return err.value
+
+
+# ---- item 2: every cost bounded, every late refusal made early ----------------------------------------------------
+@pytest.mark.parametrize(
+    ("values", "key", "words"),
+    [
+        ({"design__tilt_step_deg": 1e-6}, "design.tilt_step_deg", ["runs, more than 10,000,000"]),
+        (
+            {"design__grid": {"bush_stiffness": [1.0 + i for i in range(1000)],
+                              "contact_roll_radius_mm": [0.1 * i for i in range(1000)],
+                              "equaliser_arm_mm": [100.0 + 0.1 * i for i in range(1000)]}},
+            "design.tilt_step_deg",
+            ["1,000,000,000 grid combinations"],
+        ),
+        ({"calibrate__tilt_step_deg": 1e-9}, "calibrate.tilt_step_deg", ["tilts", "more than 10,000,000"]),
+        ({"calibrate__n_bogies": 5000}, "calibrate.n_bogies", ["5000", "fleet.n_bogies = 2000"]),
+        ({"sensitivity__factors": ["bush_stiffness", "road_class"]}, "sensitivity.factors[1]", ["categorical"]),
+        ({"execution__dask_scheduler": "file:///tmp/scheduler.json"}, "execution.dask_scheduler", ["tcp://"]),
+        ({"calibrate__site_iri_levels_m_km": [1.0, 2.0, 1000.0]}, "calibrate.site_iri_levels_m_km[2]", ["[0.3, 10]"]),
+        ({"fleet__n_bogies": 8_000_000}, "fleet.n_bogies", ["memory budget of 16 GiB", "MEMORY_BUDGET"]),
+    ],
+)  # fmt: skip
+def test_a_setting_that_would_fail_after_sample_and_simulate_is_refused_by_validate(raw, values, key, words):
+    err = refused(raw, **values)
+    assert err.key == key
+    for word in words:
+        assert word in str(err)
+
+
+def test_a_design_tilt_range_without_level_is_refused_by_the_schema(raw):
+    tilt = {"kind": "truncnormal", "mean": 1.0, "sd": 0.5, "low": 0.5, "high": 2.0}
+    err = refused(raw, distributions__chassis_tilt_deg=tilt, calibrate__fit={"air_share": [0.0, 1.0]})
+    assert err.key == "distributions.chassis_tilt_deg" and "must include level" in str(err)
+
+
+def test_the_memory_verdict_is_the_same_on_any_machine(raw, monkeypatch):
+    import pipeline.resources as resources
+
+    monkeypatch.setattr(resources, "available_memory", lambda: 1)  # a machine with no memory free: same verdict
+    parse_config(changed(raw, fleet__n_bogies=4_000_000))
+    assert MEMORY_BUDGET == 16 * 2**30
+
+
+# ---- item 5: resources ------------------------------------------------------------------------------------------
+def test_an_absurd_worker_count_is_refused(raw):
+    err = refused(raw, execution__n_jobs=4096)
+    assert err.key == "execution.n_jobs" and f"[1, {MAX_JOBS}]" in str(err)
+
+
+def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
+    seen = []
+
+    class FakeParallel:
+        def __init__(self, n_jobs, backend):
+            seen.append(n_jobs)
+
+        def __call__(self, tasks):
+            return [f(*a, **k) for f, a, k in tasks]
+
+    monkeypatch.setattr(calibrate, "Parallel", FakeParallel)
+    monkeypatch.setattr(calibrate, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
+    monkeypatch.setattr(calibrate, "worker_count", lambda n, log, stage: worker_count(n, log, stage, cores=2))
+    loads = calibrate._weigh_many([({}, "static", None)] * 40, 16)
+    assert loads.shape == (40, 3)
+    assert seen == [2]  # 16 asked, 2 cores: 2 workers, not 16
+
+
+def test_worker_cap_is_the_cores_and_the_free_memory():
+    logged = []
+    assert worker_count(16, logged.append, "calibrate", cores=2, memory=64 * 2**30) == 2
+    assert "calibrate: warning: execution.n_jobs = 16" in logged[0]
+    assert worker_count(8, logged.append, "simulate", cores=64, memory=3 * 300 * 2**20) == 3
+
+
+@pytest.mark.parametrize("which", ["bomb", "deep"])
+def test_an_alias_bomb_or_deep_nesting_is_refused_quickly_with_a_message(tmp_path, which):
+    text = PARAMS.read_text()
+    if which == "bomb":
+        bomb = "a0: &a0 [x, x, x, x, x, x, x, x, x, x]\n"
+        bomb += "".join(f"a{i}: &a{i} [" + ", ".join([f"*a{i - 1}"] * 10) + "]\n" for i in range(1, 10))
+        text = text.replace("seed: 20261122", "seed: *a9").replace("figure2:", bomb + "figure2:")
+    else:
+        text = text.replace("seed: 20261122", "seed: " + "[" * 5000 + "]" * 5000)
+    path = tmp_path / "params.yaml"
+    path.write_text(text)
+    start = time.perf_counter()
+    with pytest.raises(ConfigError) as err:
+        load_config(path)
+    assert time.perf_counter() - start < 1.0
+    assert ("aliases are expanded" if which == "bomb" else "nested more than 32 levels") in str(err.value)
+    assert len(str(err.value)) < 300
+
+
+def test_a_huge_value_is_shown_cut_short(raw):
+    err = refused(raw, seed=[list(range(1000))] * 1000)
+    line = str(err).splitlines()[0]
+    assert line.startswith("seed = [[0, 1, 2") and "..." in line and len(line) < 200
+
+
+# ---- item 7: messages -------------------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("values", "key", "words"),
+    [
+        ({"calibrate__fit": {}}, "calibrate.fit", ["at least one quantity to fit", "chassis_tilt_mean_deg"]),
+        ({"calibrate__fit": {"air_share": 1.0}}, "calibrate.fit.air_share", ["[low, high]"]),
+        ({"design__grid": {}}, "design.grid", ["at least one design factor", "bush_stiffness"]),
+        ({"design__grid": {"bush_stiffness": 3.0}}, "design.grid.bush_stiffness", ["list of one or more levels"]),
+    ],
+)
+def test_every_refusal_says_what_is_expected(raw, values, key, words):
+    err = refused(raw, **values)
+    assert err.key == key and "another form" not in str(err)
+    for word in words:
+        assert word in str(err)
+
+
+def test_the_hint_for_a_nan_parameter_names_the_quantitys_range(raw):
+    tilt = {"kind": "uniform", "low": float("nan"), "high": 2.0}
+    err = refused(raw, distributions__chassis_tilt_deg=tilt)
+    assert err.key == "distributions.chassis_tilt_deg.low"
+    assert "not a finite number" in str(err) and "[-10, 10] degree" in str(err)
+
+
+def test_a_rule_between_keys_is_reported_with_the_other_errors(raw):
+    err = refused(raw, sensitivity__base_size=500, ablation__n_bogies=5000, calibrate__n_bogies=3000)
+    keys = [key for key, _ in err.errors]
+    assert keys == ["sensitivity.base_size", "ablation.n_bogies", "calibrate.n_bogies"]
+
+
+def test_the_schema_alone_enforces_the_rules(raw):
+    with pytest.raises(ValueError, match="must not exceed fleet.n_bogies = 2000: the calibration fleet"):
+        Params.model_validate(changed(raw, calibrate__n_bogies=3000))
