@@ -134,6 +134,15 @@ def design_tilt_count(low: float, high: float, step: float) -> int:
     return math.floor(max(high, 0.0) / step) + math.floor(max(-low, 0.0) / step) + 3
 
 
+def _calibrates(view: View) -> None:
+    """Raise :class:`Unavailable` (the rule does not apply) when no calibration will run: no ``calibrate`` section,
+    or no observed survey to calibrate to (``observed.path`` null: the stage skips, docs/calibration.md), so that a
+    small fleet (``dvc exp run -S fleet.n_bogies=40``) is not refused for a calibration that will not run."""
+    view.section("calibrate")
+    if view.get("observed.path") is None:
+        raise Unavailable("observed.path")
+
+
 # ---- rules between sections ---------------------------------------------------------------------------------
 def _protocols_run(view: View) -> Iterator[RuleError]:
     run = view.get("protocol.run")
@@ -154,7 +163,7 @@ def _ablation_fleet(view: View) -> Iterator[RuleError]:
 
 
 def _calibration_fleet(view: View) -> Iterator[RuleError]:
-    view.section("calibrate")
+    _calibrates(view)
     n, fleet = view.get("calibrate.n_bogies"), view.get("fleet.n_bogies")
     if n > fleet:
         expected = f"must not exceed fleet.n_bogies = {fleet}: the calibration fleet is the first fleet bogies [-]"
@@ -162,7 +171,7 @@ def _calibration_fleet(view: View) -> Iterator[RuleError]:
 
 
 def _calibration_tilt(view: View) -> Iterator[RuleError]:
-    view.section("calibrate")
+    _calibrates(view)
     fit = view.get("calibrate.fit")
     if not {"chassis_tilt_mean_deg", "chassis_tilt_sd_deg"} & set(fit):
         return
@@ -182,7 +191,7 @@ def _calibration_tilt(view: View) -> Iterator[RuleError]:
 
 
 def _calibration_site(view: View) -> Iterator[RuleError]:
-    view.section("calibrate")
+    _calibrates(view)
     fit = view.get("calibrate.fit")
     if "site_iri_m_km" in fit:
         site = view.get("protocol.wim.site_length_before_m") + view.get("protocol.wim.site_length_after_m")
@@ -208,7 +217,7 @@ def _design_level(view: View) -> Iterator[RuleError]:
 # ---- what the settings cost ---------------------------------------------------------------------------------
 def calibration_runs(view: View) -> tuple[int, str]:
     """Weighings of the calibration table, and how they are counted (bogies x 2 x tilts x roughnesses)."""
-    view.section("calibrate")
+    _calibrates(view)
     low, high = _tilt_support(view)
     tilts = calibration_tilt_count(low, high, view.get("calibrate.tilt_step_deg"))
     levels = len(view.get("calibrate.site_iri_levels_m_km")) if view.get("calibrate.protocol") == "wim" else 1

@@ -44,6 +44,7 @@ def raw_params(path=None, fmt="csv", position="all"):
     raw["fleet"]["n_bogies"] = len(BOGIES)
     raw["sensitivity"]["base_size"] = 2
     raw["ablation"]["n_bogies"] = 2
+    raw["calibrate"] = None  # the stage under test is observed; a calibration of 4 bogies is not one
     raw["observed"].update(path=path, format=fmt, position=position)
     return raw
 

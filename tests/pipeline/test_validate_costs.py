@@ -20,6 +20,10 @@ def raw():
     return load_params(PARAMS)
 
 
+#: a survey named, so that the calibration would run and its rules apply (with observed.path null it is skipped)
+SURVEY = {"observed__path": "observed/site.csv"}
+
+
 def changed(raw, **values):
     """A deep copy of ``raw`` with each dotted key (``__`` for ``.``) set."""
     new = copy.deepcopy(raw)
@@ -52,8 +56,8 @@ def refused(raw, **values):
             "design.tilt_step_deg",
             ["1,000,000,000 grid combinations"],
         ),
-        ({"calibrate__tilt_step_deg": 1e-9}, "calibrate.tilt_step_deg", ["tilts", "more than 10,000,000"]),
-        ({"calibrate__n_bogies": 5000}, "calibrate.n_bogies", ["5000", "fleet.n_bogies = 2000"]),
+        ({"calibrate__tilt_step_deg": 1e-9, **SURVEY}, "calibrate.tilt_step_deg", ["tilts", "more than 10,000,000"]),
+        ({"calibrate__n_bogies": 5000, **SURVEY}, "calibrate.n_bogies", ["5000", "fleet.n_bogies = 2000"]),
         ({"sensitivity__factors": ["bush_stiffness", "road_class"]}, "sensitivity.factors[1]", ["categorical"]),
         ({"execution__dask_scheduler": "file:///tmp/scheduler.json"}, "execution.dask_scheduler", ["tcp://"]),
         ({"calibrate__site_iri_levels_m_km": [1.0, 2.0, 1000.0]}, "calibrate.site_iri_levels_m_km[2]", ["[0.3, 10]"]),
@@ -161,12 +165,17 @@ def test_the_hint_for_a_nan_parameter_names_the_quantitys_range(raw):
     assert "not a finite number" in str(err) and "[-10, 10] degree" in str(err)
 
 
+def test_a_calibration_that_will_not_run_is_not_checked_against_the_fleet(raw):
+    # no survey: the calibrate stage skips, so a fleet smaller than calibrate.n_bogies (300) is not refused
+    assert parse_config(changed(raw, fleet__n_bogies=250, ablation__n_bogies=100)).calibrate.n_bogies == 300
+
+
 def test_a_rule_between_keys_is_reported_with_the_other_errors(raw):
-    err = refused(raw, sensitivity__base_size=500, ablation__n_bogies=5000, calibrate__n_bogies=3000)
+    err = refused(raw, sensitivity__base_size=500, ablation__n_bogies=5000, calibrate__n_bogies=3000, **SURVEY)
     keys = [key for key, _ in err.errors]
     assert keys == ["sensitivity.base_size", "ablation.n_bogies", "calibrate.n_bogies"]
 
 
 def test_the_schema_alone_enforces_the_rules(raw):
     with pytest.raises(ValueError, match="must not exceed fleet.n_bogies = 2000: the calibration fleet"):
-        Params.model_validate(changed(raw, calibrate__n_bogies=3000))
+        Params.model_validate(changed(raw, calibrate__n_bogies=3000, **SURVEY))
