@@ -292,9 +292,14 @@ def _marker_format(out: Path) -> object:
 
 
 def _not_ours(out: Path) -> list[Path]:
-    """The entries of an unmarked ``out`` that are not the stage's: anything but parts (:func:`is_own_part`) and
-    part temporaries in ``study=*`` folders."""
-    foreign = [p for p in out.iterdir() if p.is_dir() and not p.is_symlink() and not p.name.startswith("study=")]
+    """The files of an unmarked ``out`` that are not the stage's (anything but parts, :func:`is_own_part`, and part
+    temporaries in ``study=*`` folders), and its empty folders other than ``study=*``."""
+    # an empty folder of someone else's counts too: out would not be empty without it
+    foreign = [
+        p
+        for p in out.iterdir()
+        if p.is_dir() and not p.is_symlink() and not p.name.startswith("study=") and not any(p.iterdir())
+    ]
     for relative in _files(out):
         kind = _kind(relative)
         if kind != "temporary" and not (kind == "part" and is_own_part(out / relative)):
@@ -327,12 +332,13 @@ def check_runs_dir(out: Path) -> bool:
         return True
     foreign = _not_ours(out)
     if foreign:
-        names = ", ".join(str(p.relative_to(out)) for p in foreign[:3])
-        more = f" and {len(foreign) - 3} more" if len(foreign) > 3 else ""
+        # the entries of out that hold them: .git rather than its 160 files
+        tops = sorted({p.relative_to(out).parts[0] for p in foreign})
+        names = ", ".join(tops[:3]) + (f" and {len(tops) - 3} more" if len(tops) > 3 else "")
         raise NotRunsDatasetError(
-            f"{out} is not a runs dataset of this stage (it has no {MARKER}) and holds files the stage did not write "
-            f"({names}{more}): it touched nothing there; choose a new or empty folder for the runs, or move those "
-            "files out"
+            f"{out} is not a runs dataset of this stage (it has no {MARKER}) and holds {len(foreign)} files the stage "
+            f"did not write (in {names}): it touched nothing there; choose a new or empty folder for the runs, or "
+            "move those files out"
         )
     return False
 
