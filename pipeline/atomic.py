@@ -3,20 +3,34 @@
 Each output (a file or a directory) is first written under a temporary dot-name beside its final path, then all of
 them replace their targets by renames once every one is complete. A reader sees the old outputs or the new ones,
 never half a file; an exception while writing removes the temporaries and leaves the old outputs in place. Readers
-that list a directory (pyarrow datasets) skip dot-names, and the stages delete leftover temporaries of a killed run.
-Files and directories get the permissions of the user's umask (``tempfile`` would make them private).
+that list a directory (pyarrow datasets) skip dot-names. Files and directories get the permissions of the user's umask
+(``tempfile`` would make them private).
+
+A stage owns its outputs while it runs through :func:`stage_outputs`: :func:`output_lock` on each (a second process
+of the stage is refused in one line), then :func:`remove_leftovers` deletes what a killed run's
+:func:`atomic_outputs` left beside them (``data/.design.k2x9a_7q.tmp``): every writer of those names holds the lock,
+so a temporary found while holding it belongs to no live process.
 """
 
 from __future__ import annotations
 
+import fcntl
 import os
+import re
 import shutil
+import sys
 import tempfile
-from collections.abc import Iterator, Sequence
-from contextlib import contextmanager
+from collections.abc import Callable, Iterator, Sequence
+from contextlib import ExitStack, contextmanager
 from pathlib import Path
 
-__all__ = ["atomic_outputs", "atomic_file", "io_error", "replace_dir"]
+__all__ = [
+    "LockedError", "atomic_outputs", "atomic_file", "io_error", "output_lock", "remove_leftovers", "replace_dir",
+    "stage_outputs",
+]  # fmt: skip
+
+#: the random part of a ``tempfile`` name: 8 characters of its alphabet (``tempfile._RandomNameSequence``)
+_RANDOM = "[a-z0-9_]{8}"
 
 
 def io_error(stage: str, exc: OSError) -> str:
@@ -49,9 +63,9 @@ def replace_dir(tmp: Path, final: Path) -> None:
 
 
 @contextmanager
-def atomic_outputs(files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = ()) -> Iterator[
-    tuple[list[Path], list[Path]]
-]:
+def atomic_outputs(
+    files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = ()
+) -> Iterator[tuple[list[Path], list[Path]]]:
     """Yield temporary paths ``(file_tmps, dir_tmps)`` for ``files`` and ``dirs``; on success move them into place.
 
     Each temporary file exists (empty) and each temporary directory exists (empty) when the block starts; parent
@@ -89,3 +103,137 @@ def atomic_file(path: str | Path) -> Iterator[Path]:
     """Yield a temporary path to write ``path``'s new content to; it replaces ``path`` when the block succeeds."""
     with atomic_outputs(files=[path]) as (tmps, _):
         yield tmps[0]
+
+
+def temporary_name(path: str | Path) -> re.Pattern[str]:
+    """The exact names of :func:`atomic_outputs`'s temporaries for ``path``: ``.<name>.<8 random characters>.tmp``."""
+    return re.compile(rf"\.{re.escape(Path(path).name)}\.{_RANDOM}\.tmp")
+
+
+def remove_leftovers(path: str | Path) -> list[Path]:
+    """Delete what a killed :func:`atomic_outputs` left for the output ``path``; returns what was deleted.
+
+    Only names the writer makes are touched: its temporaries (:func:`temporary_name`, files or directories) and
+    :func:`replace_dir`'s ``.<name>.old``. An ``.old`` directory with no ``path`` beside it is the previous output of
+    a run killed between its two renames: it is put back, not deleted. Call it only while holding
+    :func:`output_lock` on ``path``: that proves no writer of these names is alive.
+    """
+    path = Path(path)
+    if not path.parent.is_dir():
+        return []
+    removed = []
+    pattern = temporary_name(path)
+    for entry in sorted(path.parent.iterdir()):
+        if not pattern.fullmatch(entry.name):
+            continue
+        if entry.is_dir() and not entry.is_symlink():
+            shutil.rmtree(entry)
+        else:
+            entry.unlink()
+        removed.append(entry)
+    old = path.with_name(f".{path.name}.old")
+    if old.is_dir() and not old.is_symlink():
+        if os.path.lexists(path):
+            shutil.rmtree(old)
+            removed.append(old)
+        else:
+            os.replace(old, path)
+    return removed
+
+
+class LockedError(RuntimeError):
+    """Another process is writing a stage's output."""
+
+
+def _new_dirs(directory: Path) -> list[Path]:
+    """The directories ``mkdir(parents=True)`` of ``directory`` would create, deepest first."""
+    missing = []
+    while not directory.exists() and directory != directory.parent:
+        missing.append(directory)
+        directory = directory.parent
+    return missing
+
+
+@contextmanager
+def output_lock(path: str | Path, stage: str) -> Iterator[None]:
+    """Hold an exclusive lock on the output ``path`` (file ``.<name>.lock`` beside it) while ``stage`` writes it.
+
+    The lock file holds the holder's pid and is removed when the lock is released (while still held: a process that
+    locked it in between sees that the file at the path is no longer the one it locked and takes the new one), and
+    so are the directories made for it that are still empty: a refused or failed run leaves nothing behind.
+
+    Raises
+    ------
+    LockedError
+        If another process holds it, naming the output, the holder's pid and the lock file.
+    """
+    shown = Path(path)
+    path = Path(os.path.abspath(path))  # "." and ".." have no name of their own
+    lock_path = path.parent / f".{path.name}.lock"
+    created = _new_dirs(path.parent)
+    try:
+        while True:
+            path.parent.mkdir(parents=True, exist_ok=True)
+            try:
+                handle = open(lock_path, "a+", encoding="utf-8")
+            except FileNotFoundError:  # a finishing holder removed the directory it had made
+                continue
+            try:
+                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                handle.seek(0)
+                holder = handle.read().strip() or "unknown"
+                handle.close()
+                raise LockedError(
+                    f"{shown} is being written by another {stage} process (pid {holder}, lock {lock_path}): wait "
+                    "for it to finish or stop it, then run again"
+                ) from None
+            try:
+                same = os.path.samestat(os.stat(lock_path), os.fstat(handle.fileno()))
+            except FileNotFoundError:
+                same = False
+            if same:
+                break
+            handle.close()
+        handle.seek(0)
+        handle.truncate()
+        handle.write(f"{os.getpid()}\n")
+        handle.flush()
+        try:
+            yield
+        finally:
+            lock_path.unlink(missing_ok=True)
+            fcntl.flock(handle, fcntl.LOCK_UN)
+            handle.close()
+    finally:
+        for directory in created:
+            try:
+                directory.rmdir()
+            except OSError:
+                break
+
+
+def _stderr(line: str) -> None:
+    print(line, file=sys.stderr, flush=True)
+
+
+@contextmanager
+def stage_outputs(
+    stage: str, files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = (), log: Callable[[str], None] = _stderr
+) -> Iterator[None]:
+    """Own a stage's outputs while it runs: lock each (:func:`output_lock`), then delete the leftovers of a killed
+    run of the stage beside them (:func:`remove_leftovers`), one log line for each.
+
+    Raises
+    ------
+    LockedError
+        If another process of the stage holds one of them; nothing is deleted then.
+    """
+    with ExitStack() as stack:
+        outputs = [Path(p) for p in (*files, *dirs)]
+        for path in outputs:
+            stack.enter_context(output_lock(path, stage))
+        for path in outputs:
+            for leftover in remove_leftovers(path):
+                log(f"{stage}: removed {leftover}, left by an interrupted run of the stage")
+        yield

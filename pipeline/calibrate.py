@@ -57,7 +57,7 @@ from bogie.params import GRAVITY, INHIBITORS
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
 from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
 from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
 from pipeline.config_rules import calibration_tilt_count
 from pipeline.config_schema import CALIBRATION_QUANTITIES
@@ -780,6 +780,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--metrics", default="metrics/calibration.json", help="default: metrics/calibration.json")
     args = parser.parse_args(argv)
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
+    try:
+        # a second calibrate is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("calibrate", files=[args.metrics], dirs=[args.out], log=log):
+            return _stage(args, log)
+    except LockedError as exc:
+        print(f"calibrate: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("calibrate", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(args: argparse.Namespace, log: Callable[[str], None]) -> int:
+    """The stage's work while it owns its outputs: read, calibrate, write; the exit code."""
     try:
         config = load_config(args.params)
         path = observed_file(config.observed, Path(args.params).resolve().parent)

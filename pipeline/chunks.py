@@ -1,9 +1,11 @@
 """The runs dataset's chunks: what determines a part file's content, the plan of files, and their resumption.
 
 :func:`plan_chunks` splits each study into chunks and hashes each (:func:`chunk_hash`: the sample rows, the
-protocols and the code, :func:`code_version`); :func:`reconcile` keeps the part files whose stored hash matches and
-that read back whole (page checksums), counting their failed runs, deletes the rest and quarantines files that are
-not ours; :func:`runs_lock` keeps a second process off the dataset; :func:`part_content` makes a part file's bytes
+protocols and the code, :func:`code_version`); :func:`check_runs_dir` refuses a folder that is not the stage's runs
+dataset (marker :data:`MARKER`) and :func:`claim_runs_dir` marks a new one; :func:`reconcile` keeps the part files
+whose stored hash matches and that read back whole (page checksums), counting their failed runs, deletes the rest of
+the stage's own files and quarantines the files that are not ours; :func:`runs_lock` keeps a second process off the
+dataset; :func:`part_content` makes a part file's bytes
 (in the worker that weighed the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a
 chunk's samples, is :func:`pipeline.simulate.chunk_table`.
 """
@@ -11,13 +13,13 @@ chunk's samples, is :func:`pipeline.simulate.chunk_table`.
 from __future__ import annotations
 
 import dataclasses
-import fcntl
 import functools
 import hashlib
 import json
 import os
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from contextlib import contextmanager
+import re
+from collections.abc import Callable, Mapping, Sequence
+from contextlib import AbstractContextManager
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -30,6 +32,7 @@ import scipy
 
 from bogie.digest import numerics_digest
 from bogie.numerics import compile_target
+from pipeline.atomic import LockedError, atomic_file, output_lock, temporary_name
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
@@ -172,12 +175,16 @@ def plan_chunks(
 def reconcile(
     chunks: Sequence[Chunk], out: Path, log: Log = _print
 ) -> tuple[list[Chunk], list[Chunk], list[Path], int]:
-    """Compare the plan with the files in ``out``; delete every part that does not belong to it.
+    """Compare the plan with the files in the marked dataset ``out``; delete every part of the stage's that does not
+    belong to it.
 
     A part is kept only if its stored hash matches its chunk's and it reads back whole: every page's CRC32 checksum
     verified and the runs schema's fields (:func:`pipeline.schema.check_file_schema`); a part with a changed byte is
-    recomputed, with a log line. Any other file in ``out`` (a user's ``notes.txt``, which would stop pandas from
-    reading the dataset) is moved to ``<out parent>/.quarantine/<out name>/`` with a log line, never deleted.
+    recomputed, with a log line. Only the stage's own files are deleted: a part's name in a ``study=*`` folder and a
+    content hash in its metadata (:func:`is_own_part`), or the exact name of the stage's temporary. Any other file
+    (a user's ``notes.txt`` or ``part-notes.txt``, which would stop pandas from reading the dataset, or a part's
+    name on a file without the stage's metadata) is moved to ``<out parent>/.quarantine/<out name>/`` under a name
+    no earlier quarantined file has, with a log line naming it, never deleted.
 
     Returns
     -------
@@ -227,65 +234,180 @@ def _kept_failures(chunk: Chunk, log: Log) -> int | None:
     return failed_runs(table)
 
 
+# ---- what the stage owns in its folder -------------------------------------------------------------------------
+#: the file that makes a folder a runs dataset this stage made: the stage writes and sweeps no other folder
+MARKER = ".bogie-runs"
+#: the marker's format: the names, places and metadata of the parts (this module's)
+MARKER_FORMAT = 1
+_PART = re.compile(r"part-\d{5}\.parquet")
+#: the temporary names of :func:`write_part` (:func:`pipeline.atomic.temporary_name` of a part)
+_PART_TMP = re.compile(r"\.part-\d{5}\.parquet\.[a-z0-9_]{8}\.tmp")
+
+
+class NotRunsDatasetError(RuntimeError):
+    """The output folder is not a runs dataset the stage made: the stage touches nothing in it."""
+
+
+def is_own_part(path: Path) -> bool:
+    """Whether ``path`` is a part file the stage wrote: a Parquet footer whose metadata holds a content hash
+    (:data:`HASH_KEY`, :func:`part_content`)."""
+    try:
+        return HASH_KEY in (pq.read_schema(path).metadata or {})
+    except (OSError, pa.ArrowException):
+        return False
+
+
+def _kind(relative: Path) -> str | None:
+    """What the stage's file at ``relative`` (to the dataset) is by its name and place: ``"marker"``,
+    ``"temporary"`` (of a part or of the marker), ``"part"`` (if its content says so too: :func:`is_own_part`), or
+    None: not a name the stage writes."""
+    parts = relative.parts
+    if parts == (MARKER,):
+        return "marker"
+    if len(parts) == 1 and temporary_name(MARKER).fullmatch(parts[0]):
+        return "temporary"
+    if len(parts) != 2 or not parts[0].startswith("study="):
+        return None
+    if _PART_TMP.fullmatch(parts[1]):
+        return "temporary"
+    return "part" if _PART.fullmatch(parts[1]) else None
+
+
+def _files(out: Path) -> list[Path]:
+    """Every entry of ``out`` but its directories (symbolic links are entries, never followed), relative, sorted."""
+    found = []
+    for root, dirs, files in os.walk(out):
+        base = Path(root).relative_to(out)
+        links = [d for d in dirs if os.path.islink(os.path.join(root, d))]
+        dirs[:] = [d for d in dirs if d not in links]
+        found += [base / name for name in (*files, *links)]
+    return sorted(found)
+
+
+def _marker_format(out: Path) -> object:
+    try:
+        return json.loads((out / MARKER).read_text(encoding="utf-8")).get("format")
+    except (OSError, ValueError, AttributeError):
+        return None
+
+
+def _not_ours(out: Path) -> list[Path]:
+    """The files of an unmarked ``out`` that are not the stage's (anything but parts, :func:`is_own_part`, and part
+    temporaries in ``study=*`` folders), and its empty folders other than ``study=*``."""
+    # an empty folder of someone else's counts too: out would not be empty without it
+    foreign = [
+        p
+        for p in out.iterdir()
+        if p.is_dir() and not p.is_symlink() and not p.name.startswith("study=") and not any(p.iterdir())
+    ]
+    for relative in _files(out):
+        kind = _kind(relative)
+        if kind != "temporary" and not (kind == "part" and is_own_part(out / relative)):
+            foreign.append(out / relative)
+    return sorted(set(foreign))
+
+
+def check_runs_dir(out: Path) -> bool:
+    """Refuse ``out`` unless the stage may write and sweep it; returns whether it carries the marker.
+
+    The stage's folder is absent, empty, marked (:data:`MARKER`, written by :func:`claim_runs_dir`), or, written by
+    the stage before the marker existed, holds nothing but the stage's parts. It reads, never writes.
+
+    Raises
+    ------
+    NotRunsDatasetError
+        Naming the folder and why (the first files the stage did not write), in one line.
+    """
+    if not os.path.lexists(out):
+        return False
+    if not out.is_dir():
+        raise NotRunsDatasetError(f"{out} is not a folder: the runs dataset must be one")
+    if os.path.lexists(out / MARKER):
+        found = _marker_format(out)
+        if found != MARKER_FORMAT:
+            raise NotRunsDatasetError(
+                f"{out} has a runs dataset marker {MARKER} of format {found!r}, and this stage writes format "
+                f"{MARKER_FORMAT}: it touched nothing there; choose another folder for the runs"
+            )
+        return True
+    foreign = _not_ours(out)
+    if foreign:
+        # the entries of out that hold them: .git rather than its 160 files
+        tops = sorted({p.relative_to(out).parts[0] for p in foreign})
+        names = ", ".join(tops[:3]) + (f" and {len(tops) - 3} more" if len(tops) > 3 else "")
+        raise NotRunsDatasetError(
+            f"{out} is not a runs dataset of this stage (it has no {MARKER}) and holds {len(foreign)} files the stage "
+            f"did not write (in {names}): it touched nothing there; choose a new or empty folder for the runs, or "
+            "move those files out"
+        )
+    return False
+
+
+def claim_runs_dir(out: Path, log: Log) -> None:
+    """Make ``out`` the stage's runs dataset: check it again (:func:`check_runs_dir`) and write the marker if it
+    has none. Call it holding :func:`runs_lock`."""
+    if check_runs_dir(out):
+        return
+    adopted = out.is_dir() and any(out.iterdir())
+    out.mkdir(parents=True, exist_ok=True)
+    with atomic_file(out / MARKER) as tmp:
+        tmp.write_text(json.dumps({"format": MARKER_FORMAT, "written_by": "pipeline.simulate"}) + "\n")
+    if adopted:
+        log(f"simulate: {out} holds only part files of this stage: marked it as its runs dataset ({MARKER})")
+
+
+def quarantine_dir(out: Path) -> Path:
+    """Where the files of ``out`` the stage did not write go: ``<out's parent>/.quarantine/<out's name>``."""
+    out = Path(os.path.abspath(out))  # "." has no name of its own
+    return out.parent / ".quarantine" / out.name
+
+
+def quarantine(path: Path, target: Path) -> Path:
+    """Move ``path`` to ``target``, or to ``target.1``, ``target.2``, ... if that name is taken; returns where."""
+    target.parent.mkdir(parents=True, exist_ok=True)
+    candidate, n = target, 0
+    while os.path.lexists(candidate):
+        n += 1
+        candidate = target.with_name(f"{target.name}.{n}")
+    os.replace(path, candidate)
+    return candidate
+
+
 def _sweep(out: Path, keep: set[Path], log: Log) -> list[Path]:
-    """Delete the parts and temporaries in ``out`` not in ``keep``; quarantine every file that is not ours."""
+    """Delete the stage's parts and temporaries in ``out`` not in ``keep``; quarantine every file the stage did not
+    write (:func:`quarantine`), naming each. Call it holding :func:`runs_lock` on a marked ``out``: the lock proves
+    that no writer of a temporary is alive."""
     removed = []
-    quarantine = out.parent / ".quarantine" / out.name
-    for path in sorted(out.rglob("*")):
-        if path.is_dir() or path in keep:
+    for relative in _files(out):
+        path = out / relative
+        kind = _kind(relative)
+        if path in keep or kind == "marker":
             continue
-        relative = path.relative_to(out)
-        ours = len(relative.parts) == 2 and relative.parts[0].startswith("study=")
-        ours = ours and path.name.startswith(("part-", ".part-"))
-        if ours:
+        if kind == "temporary" or (kind == "part" and is_own_part(path)):
             path.unlink()
             removed.append(path)
         else:
-            target = quarantine / relative
-            target.parent.mkdir(parents=True, exist_ok=True)
-            os.replace(path, target)
-            log(f"simulate: warning: {path} is not a part file of the runs dataset; moved it to {target}")
-    for directory in sorted((d for d in out.rglob("*") if d.is_dir()), reverse=True):
-        if not any(directory.iterdir()):
-            directory.rmdir()
+            target = quarantine(path, quarantine_dir(out) / relative)
+            log(f"simulate: warning: {path} is not a file the stage wrote; moved it to {target}")
+    for root, _, _ in os.walk(out, topdown=False):
+        if Path(root) != out and not any(Path(root).iterdir()):
+            Path(root).rmdir()
     return removed
 
 
-@contextmanager
-def runs_lock(out: Path) -> Iterator[None]:
-    """Hold an exclusive lock on the dataset ``out`` (file ``<out>.lock`` beside it) while the stage writes it.
+def runs_lock(out: Path) -> AbstractContextManager[None]:
+    """Hold an exclusive lock on the dataset ``out`` while the stage writes it (:func:`pipeline.atomic.output_lock`).
 
     Raises
     ------
     RunsLockedError
         If another process holds it: two stages writing one dataset would delete each other's temporary files.
     """
-    out.parent.mkdir(parents=True, exist_ok=True)
-    lock_path = out.parent / f".{out.name}.lock"
-    with open(lock_path, "a+", encoding="utf-8") as handle:
-        try:
-            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            handle.seek(0)
-            holder = handle.read().strip() or "unknown"
-            raise RunsLockedError(
-                f"{out} is being written by another simulate process (pid {holder}, lock {lock_path}): wait for it "
-                "to finish or stop it, then run again"
-            ) from None
-        handle.seek(0)
-        handle.truncate()
-        handle.write(f"{os.getpid()}\n")
-        handle.flush()
-        try:
-            yield
-        finally:
-            handle.seek(0)
-            handle.truncate()
-            fcntl.flock(handle, fcntl.LOCK_UN)
+    return output_lock(out, "simulate")
 
 
-class RunsLockedError(RuntimeError):
-    """Another process is writing the runs dataset."""
+#: another process is writing the runs dataset (:class:`pipeline.atomic.LockedError`, the one lock of every stage)
+RunsLockedError = LockedError
 
 
 def part_content(table: pa.Table, chunk_hash_: str, numerics: str) -> bytes:

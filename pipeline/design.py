@@ -42,7 +42,8 @@ from scipy.stats import qmc
 
 from bogie.metrics import max_deviation
 from bogie.weighings.stats import group_inequality
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
+from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES
 from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, _frame, design_seed, road_seed, sensor_seed
@@ -561,12 +562,26 @@ def main(argv: list[str] | None = None) -> int:
     out, metrics_path = Path(args.out), Path(args.metrics)
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
     try:
+        # a second design is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("design", files=[metrics_path], dirs=[out], log=log):
+            return _stage(config, Path(args.runs), out, metrics_path, log)
+    except LockedError as exc:
+        print(f"design: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("design", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(config: Config, runs_dir: Path, out: Path, metrics_path: Path, log: Callable[[str], None]) -> int:
+    """The stage's work while it owns its outputs: run, analyse, write; the exit code."""
+    try:
         if config.design is None:
             summary, frames = skipped_metrics("design is null in params.yaml (no design study asked for)"), {}
         else:
-            analysis, conds, summary = run(config, Path(args.runs), log)
+            analysis, conds, summary = run(config, runs_dir, log)
             frames = tables(analysis, conds)
-    except (DesignError, ValueError) as exc:
+    except (DesignError, ValueError, NotRunsDatasetError) as exc:
         print(f"design: {exc}", file=sys.stderr)
         return 2
     try:
@@ -575,7 +590,7 @@ def main(argv: list[str] | None = None) -> int:
         print(io_error("design", exc), file=sys.stderr)
         return 2
     if not frames:
-        Path(args.runs).mkdir(parents=True, exist_ok=True)  # the stage's other output exists, empty
+        runs_dir.mkdir(parents=True, exist_ok=True)  # the stage's other output exists, empty
         print(f"design: skipped, {summary['skipped']}")
         return 0
     for line in summary["guidance"]:

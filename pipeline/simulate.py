@@ -18,9 +18,12 @@ chunk's file as bytes and the main process writes each file as soon as its chunk
 Resumable: each file carries in its Parquet metadata (key :data:`HASH_KEY`) a hash of everything that determines its
 content: the chunk's sample rows, the protocols and their settings, and the code (the sources of ``bogie`` and of
 the pipeline modules that turn a sample into a row, and the numerical libraries' versions). A rerun keeps the files
-whose hash matches, deletes every other file (stale chunks, leftovers of an interrupted write) and computes only the
-missing chunks. Files are written under a temporary dot-name and renamed, so a reader or a rerun never sees half a
-file. Deterministic: every run is a pure function of its sample row and protocol settings (each bogie's road has its
+whose hash matches, deletes every other file of its own (stale chunks, leftovers of an interrupted write) and computes
+only the missing chunks. It writes and sweeps only a folder that is its own runs dataset: one it made (the marker
+file ``data/runs/.bogie-runs``) or an empty one; it refuses any other folder in one line and touches nothing there,
+and it moves every file it did not write to ``data/.quarantine/runs/``, never deleting one (:mod:`pipeline.chunks`).
+Files are written under a temporary dot-name and renamed, so a reader or a rerun never sees half a file.
+Deterministic: every run is a pure function of its sample row and protocol settings (each bogie's road has its
 own seed), so the dataset is byte for byte the same whatever ``n_jobs``, chunk size or backend. (Timing is not
 stored in the dataset, which would then differ at every rebuild: the stage's summary line gives the runs per second,
 and ``bench/`` measures the cost per run.)
@@ -51,9 +54,12 @@ from joblib.externals.loky import get_reusable_executor
 from pipeline.chunks import (
     Chunk,
     Log,
+    NotRunsDatasetError,
     Protocols,
     RunsLockedError,
     _print,
+    check_runs_dir,
+    claim_runs_dir,
     part_content,
     plan_chunks,
     process_numerics,
@@ -414,7 +420,8 @@ def simulate_samples(
     execution
         Backend, workers, chunk size and dask scheduler.
     out
-        The dataset directory (``data/runs``).
+        The dataset directory (``data/runs``): absent, empty, or a runs dataset the stage made
+        (:func:`pipeline.chunks.check_runs_dir`).
     log
         Receives the progress and summary lines.
 
@@ -422,11 +429,20 @@ def simulate_samples(
     -------
     Summary
         The counts and timing of this invocation.
+
+    Raises
+    ------
+    NotRunsDatasetError
+        If ``out`` holds anything but a runs dataset of the stage; nothing is written or moved then.
+    RunsLockedError
+        If another process writes ``out``.
     """
     start = time.perf_counter()
     out = Path(out)
+    check_runs_dir(out)  # before the lock: a refused folder gets no lock file beside it either
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
     with runs_lock(out):
+        claim_runs_dir(out, log)
         pending, done, removed, failed_done = reconcile(chunks, out, log)
         total = sum(c.n_runs for c in pending)
         log(
@@ -508,7 +524,7 @@ def main(argv: list[str] | None = None) -> int:
     protocols = {study: study_protocols(config, study) for study in samples}
     try:
         simulate_samples(samples, protocols, config.execution, args.out)
-    except (RunsLockedError, OtherNumericsError, OSError) as exc:
+    except (NotRunsDatasetError, RunsLockedError, OtherNumericsError, OSError) as exc:
         print(f"simulate: {exc}", file=sys.stderr)
         return 2
     return 0

@@ -6,6 +6,7 @@ time step 2 ms) in about a second of CPU; the reference dataset is computed once
 
 import copy
 import dataclasses
+import json
 import os
 import re
 import signal
@@ -21,7 +22,15 @@ import pytest
 import yaml
 
 from bogie import numerics
-from pipeline.chunks import HASH_KEY, NUMERICS_KEY, RunsLockedError, part_content, part_name, runs_lock
+from pipeline.chunks import (
+    HASH_KEY,
+    NUMERICS_KEY,
+    NotRunsDatasetError,
+    RunsLockedError,
+    part_content,
+    part_name,
+    runs_lock,
+)
 from pipeline.config import load_params, parse_config
 from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
 from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, write_runs_file
@@ -229,6 +238,84 @@ def test_a_stray_file_in_the_dataset_is_quarantined_with_a_warning(config, sampl
     assert (quarantine / "README").exists() and not notes.exists()
     assert sum("warning" in line and "notes.txt" in line for line in lines) == 1
     pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)  # pandas reads the dataset again
+
+
+def snapshot(folder):
+    """Every entry under ``folder`` (directories, files with their bytes), to compare before and after a run."""
+    return {str(p.relative_to(folder)): (p.read_bytes() if p.is_file() else None) for p in Path(folder).rglob("*")}
+
+
+@pytest.mark.parametrize("out", [".", "samples"])
+def test_a_folder_that_is_not_a_runs_dataset_is_refused_and_nothing_in_it_moves(
+    samples, tmp_path, monkeypatch, capsys, out
+):
+    # a copy of the project: `--out .` once moved .git into ./.quarantine/, `--out samples` moved the samples
+    from pipeline.simulate import main
+
+    command, _, _ = stage_command(samples, tmp_path)
+    (tmp_path / ".git").mkdir()
+    (tmp_path / ".git" / "HEAD").write_text("ref: refs/heads/main\n")
+    (tmp_path / "README.md").write_text("my project")
+    monkeypatch.chdir(tmp_path)
+    before, beside = snapshot(tmp_path), sorted(tmp_path.parent.iterdir())
+    params, sample_dir = command[command.index("--params") + 1], command[command.index("--samples") + 1]
+    assert main(["--params", params, "--samples", sample_dir, "--out", out]) == 2
+    err = capsys.readouterr().err.strip()
+    assert "\n" not in err and "Traceback" not in err
+    assert err.startswith(f"simulate: {out} is not a runs dataset of this stage (it has no .bogie-runs)"), err
+    assert "touched nothing" in err and ("in .git, README.md" in err if out == "." else "fleet.parquet" in err)
+    assert snapshot(tmp_path) == before  # nothing moved, deleted or added (no lock file, no quarantine)
+    assert sorted(tmp_path.parent.iterdir()) == beside
+
+
+def test_files_the_stage_did_not_write_are_never_deleted_nor_overwritten_in_quarantine(
+    config, samples, reference, tmp_path
+):
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    fleet = out / "study=fleet"
+    (fleet / "part-notes.txt").write_text("a part's name, not a part")  # today's sweep deleted it
+    theirs = fleet / "part-00099.parquet"  # a part's exact name, but not a file the stage wrote (no content hash)
+    pd.DataFrame({"x": [1.0]}).to_parquet(theirs)
+    theirs_bytes = theirs.read_bytes()
+    (fleet / "notes.txt").write_text("first notes")
+    summary, lines = run(config, samples, out)
+    assert summary.computed_chunks == 0 and summary.removed_files == 0
+    quarantine = tmp_path / ".quarantine" / "runs" / "study=fleet"
+    assert (quarantine / "part-notes.txt").read_text() == "a part's name, not a part"
+    assert (quarantine / "part-00099.parquet").read_bytes() == theirs_bytes
+    for name in ("part-notes.txt", "part-00099.parquet", "notes.txt"):  # each move named in the log
+        assert sum(f"{fleet / name} is not a file the stage wrote; moved it to {quarantine / name}" in line
+                   for line in lines) == 1, lines  # fmt: skip
+    (fleet / "notes.txt").write_text("second notes")  # the same name, quarantined again
+    _, lines = run(config, samples, out)
+    assert (quarantine / "notes.txt").read_text() == "first notes"
+    assert (quarantine / "notes.txt.1").read_text() == "second notes"
+    assert any(f"moved it to {quarantine / 'notes.txt.1'}" in line for line in lines)
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def test_a_dataset_from_before_the_marker_is_kept_and_marked_but_not_with_others_files(
+    config, samples, reference, tmp_path
+):
+    # a user's data/runs from before the marker (or their DVC checkout of it): every file is a part of the stage
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    marker = out / ".bogie-runs"
+    assert json.loads(marker.read_text())["format"] == 1
+    marker.unlink()
+    files = parts(out)
+    summary, lines = run(config, samples, out)
+    assert summary.computed_chunks == 0 and parts(out) == files and marker.exists()
+    assert any("holds only part files of this stage: marked it" in line for line in lines)
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+    # unmarked with a file of someone else's: refused before anything is read, locked or moved
+    marker.unlink()
+    (out / "study=fleet" / "notes.txt").write_text("mine")
+    before = snapshot(tmp_path)
+    with pytest.raises(NotRunsDatasetError, match=r"holds 1 files the stage did not write \(in study=fleet\)"):
+        run(config, samples, out)
+    assert snapshot(tmp_path) == before
 
 
 def test_a_second_simulate_on_the_same_dataset_is_refused_while_the_first_holds_it(config, samples, tmp_path):
