@@ -70,7 +70,7 @@ from pipeline.chunks import (
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.portable import warn_if_unportable
 from pipeline.protocol import Outcome, result_rows, weighing
-from pipeline.resources import available_memory
+from pipeline.resources import worker_count
 from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
 from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame, table_from_rows
 
@@ -205,33 +205,6 @@ def check_numerics(worker: str, here: str, study: str, index: int) -> None:
 #: short enough that an idle worker does not outlive its main process by loky's default 300 s (a killed main process's
 #: workers end sooner: :func:`_watch_main_process`)
 WORKER_IDLE_TIMEOUT = 30.0
-
-#: memory one loky worker needs: its interpreter, numpy, numba and the compiled kernels, and one run's histories
-WORKER_MEMORY = 300 * 2**20  # [bytes]
-
-
-def worker_count(n_jobs: int, log: Log, cores: int | None = None, memory: int | None = None) -> int:
-    """``n_jobs`` capped at the cores and at what the available memory holds (:data:`WORKER_MEMORY` a worker).
-
-    A cap is logged as a warning; results do not depend on the number of workers, only the time does.
-    """
-    if cores is None:
-        cores = len(os.sched_getaffinity(0)) if hasattr(os, "sched_getaffinity") else os.cpu_count() or 1
-    memory = available_memory() if memory is None else memory
-    limits = {"the cores": cores}
-    if memory is not None:
-        limits["the available memory"] = max(1, memory // WORKER_MEMORY)
-    limit = min(limits.values())
-    if n_jobs <= limit:
-        return n_jobs
-    reason = min(limits, key=limits.get)
-    mib = "" if memory is None else f", {memory / 2**20:,.0f} MiB free, about {WORKER_MEMORY // 2**20} MiB a worker"
-    log(
-        f"simulate: warning: execution.n_jobs = {n_jobs} is more than {reason} can hold ({cores} cores{mib}); "
-        f"running {limit} workers"
-    )
-    return limit
-
 
 #: chunks a local loky worker holds at a time, the one it weighs and the next: each result and each next chunk pass
 #: through threads of the main process, which wait up to 5 ms for the interpreter lock each while the main process
@@ -451,7 +424,7 @@ def simulate_samples(
             + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
         )
         if execution.backend == "loky" and pending:
-            execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log))
+            execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log, "simulate"))
         failed = failed_done + _run_pending(pending, execution, total, log)
     summary = Summary(
         runs=sum(c.n_runs for c in chunks),

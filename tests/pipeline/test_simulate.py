@@ -32,9 +32,10 @@ from pipeline.chunks import (
     runs_lock,
 )
 from pipeline.config import load_params, parse_config
+from pipeline.resources import worker_count
 from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
 from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, write_runs_file
-from pipeline.simulate import chunk_table, run_chunk, simulate_samples, study_protocols, worker_count
+from pipeline.simulate import chunk_table, run_chunk, simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
 KEYS = ["study", "sample_id", "protocol"]
@@ -436,12 +437,12 @@ def test_a_dask_local_cluster_gives_the_loky_results(config, samples, reference,
 
 def test_n_jobs_beyond_the_cores_or_the_memory_is_capped_with_a_warning():
     lines = []
-    assert worker_count(2, lines.append, cores=2, memory=8 * 2**30) == 2 and lines == []
-    assert worker_count(64, lines.append, cores=2, memory=8 * 2**30) == 2
+    assert worker_count(2, lines.append, "simulate", cores=2, memory=8 * 2**30) == 2 and lines == []
+    assert worker_count(64, lines.append, "simulate", cores=2, memory=8 * 2**30) == 2
     assert "execution.n_jobs = 64 is more than the cores can hold (2 cores" in lines[-1]
-    assert worker_count(16, lines.append, cores=32, memory=1 * 2**30) == 3  # 1 GiB / 300 MiB
+    assert worker_count(16, lines.append, "simulate", cores=32, memory=1 * 2**30) == 3  # 1 GiB / 300 MiB
     assert "more than the available memory can hold" in lines[-1] and "running 3 workers" in lines[-1]
-    assert worker_count(4, lines.append, cores=8, memory=10 * 2**20) == 1  # never fewer than one
+    assert worker_count(4, lines.append, "simulate", cores=8, memory=10 * 2**20) == 1  # never fewer than one
 
 
 def test_killing_the_main_process_ends_its_workers(config, samples, tmp_path):
