@@ -16,6 +16,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from _flips import PLACES, flip
 
 from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
@@ -317,3 +318,17 @@ def test_a_symlink_to_another_file_in_observed_is_read(tmp_path):
     metrics = json.loads((root / "metrics" / "observed.json").read_text())
     assert metrics["observed"]["path"] == "observed/site.csv"
     assert metrics["observed"]["sha256"] == hashlib.sha256(SITE.read_bytes()).hexdigest()
+
+
+@pytest.mark.parametrize("place", PLACES)
+def test_a_runs_part_with_one_flipped_bit_is_refused_naming_it(tmp_path, capsys, place):
+    # issue 28, item 4: the observed stage verifies the runs it reads (pipeline.survey.read_runs)
+    root = project(tmp_path, path="observed/site.csv")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    damaged = root / "data" / "runs" / "study=fleet" / "part-000000.parquet"
+    flip(damaged, place)
+    assert main(args(root)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"observed: {damaged} is damaged: its SHA-256 does not match") and "\n" not in err, err
+    assert not (root / "data" / "observed").exists() and not (root / "metrics").exists()
