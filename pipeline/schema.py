@@ -275,8 +275,18 @@ def checksummed_content(table: pa.Table) -> bytes:
     pq.write_table(table, sink, write_page_checksum=True)
     content = sink.getvalue().to_pybytes()
     at = _checksum_offset(content, _UNSEALED)
-    assert at is not None, "pyarrow wrote the checksum's placeholder in an unexpected form"
-    return content[:at] + hashlib.sha256(content).hexdigest().encode() + content[at + len(_UNSEALED) :]
+    if at is None:  # a pyarrow that encodes the footer otherwise: no file without its checksum
+        raise RuntimeError(f"pyarrow {pa.__version__} did not write {CHECKSUM_KEY.decode()} where it is looked for")
+    return content[:at] + _file_digest(content, at) + content[at + len(_UNSEALED) :]
+
+
+def _file_digest(content: bytes, at: int) -> bytes:
+    """The hex SHA-256 of ``content`` with the checksum's value at ``at`` read as :data:`_UNSEALED`."""
+    view = memoryview(content)
+    digest = hashlib.sha256(view[:at])
+    digest.update(_UNSEALED)
+    digest.update(view[at + len(_UNSEALED) :])
+    return digest.hexdigest().encode()
 
 
 def _checksum_offset(content: bytes, value: bytes) -> int | None:
@@ -315,8 +325,7 @@ def read_runs_content(content: bytes, where: str) -> pa.Table:
             f"of simulate; {rerun}"
         )
     at = _checksum_offset(content, stored)
-    unsealed = content[:at] + _UNSEALED + content[at + len(_UNSEALED) :] if at is not None else b""
-    if at is None or hashlib.sha256(unsealed).hexdigest().encode() != stored:
+    if at is None or _file_digest(content, at) != stored:
         raise RunsFileError(
             f"{where} is damaged: its SHA-256 does not match the checksum it carries (a changed byte in a data page, "
             f"a page's statistics or the footer); {rerun}"
