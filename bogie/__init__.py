@@ -4,30 +4,36 @@ Modules: :mod:`bogie.params` (the bogie and its presets), :mod:`bogie.static` (S
 :mod:`bogie.metrics` (p, P1, RMS, LSC, DLC, road-wear factor), :mod:`bogie.plotting` (figures).
 """
 
-import hashlib
 import os
 import sys
 from pathlib import Path
 
+from bogie import numba_cache as _numba_cache
+
+#: this process's claim on its cache directory (:func:`bogie.numba_cache.claim`): the lock lasts as long as the process
+_CACHE_CLAIM: int | None = None
+
 
 def _set_numba_cache_dir() -> None:
-    """Key numba's on-disk cache by a hash of the compiled sources.
+    """Key numba's on-disk cache by a hash of the compiled sources, and keep the cache bounded.
 
     numba invalidates a cached function only when its own file changes, not when a compiled function it calls
     (in another module) does; a cache directory per source hash rules out running stale machine code. numba reads
     ``NUMBA_CACHE_DIR`` when it is imported, so if a program imported numba before bogie, its configuration is set
     too (otherwise the kernels would load from beside the sources, where an older build's machine code may lie).
+    The directory is claimed for this process and the others beyond the few most recently used are removed
+    (:mod:`bogie.numba_cache`): one per version of the sources would otherwise pile up without end.
     """
+    global _CACHE_CLAIM
     if "NUMBA_CACHE_DIR" in os.environ:
-        return
-    here = Path(__file__).parent
-    digest = hashlib.sha256()
-    for path in sorted(here.glob("*.py")):
-        digest.update(path.read_bytes())
-    base = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache"))
-    os.environ["NUMBA_CACHE_DIR"] = str(base / "bogie-numba" / digest.hexdigest()[:16])
+        return  # set by the user, or inherited from the bogie process that started this one (and holds the claim)
+    root = _numba_cache.cache_root()
+    directory = root / _numba_cache.source_digest(Path(__file__).parent)
+    os.environ["NUMBA_CACHE_DIR"] = str(directory)
     if "numba" in sys.modules:
         sys.modules["numba"].core.config.CACHE_DIR = os.environ["NUMBA_CACHE_DIR"]
+    _CACHE_CLAIM = _numba_cache.claim(directory)
+    _numba_cache.prune(root)
 
 
 _set_numba_cache_dir()

@@ -3,11 +3,11 @@
 :func:`plan_chunks` splits each study into chunks and hashes each (:func:`chunk_hash`: the sample rows, the
 protocols and the code, :func:`code_version`); :func:`check_runs_dir` refuses a folder that is not the stage's runs
 dataset (marker :data:`MARKER`) and :func:`claim_runs_dir` marks a new one; :func:`reconcile` keeps the part files
-whose stored hash matches and that read back whole (page checksums), counting their failed runs, deletes the rest of
-the stage's own files and quarantines the files that are not ours; :func:`runs_lock` keeps a second process off the
-dataset; :func:`part_content` makes a part file's bytes
-(in the worker that weighed the chunk) and :func:`write_part` writes them atomically. The work itself, weighing a
-chunk's samples, is :func:`pipeline.simulate.chunk_table`.
+whose stored hash matches and that read back whole (:func:`pipeline.schema.read_runs_content`: the file's SHA-256 and
+its pages' CRC32s), counting their failed runs, deletes the rest of the stage's own files and quarantines the files
+that are not ours; :func:`runs_lock` keeps a second process off the dataset; :func:`part_content` makes a part file's
+bytes (in the worker that weighed the chunk) and :func:`write_part` writes them atomically. The work itself, weighing
+a chunk's samples, is :func:`pipeline.simulate.chunk_table`.
 """
 
 from __future__ import annotations
@@ -36,7 +36,7 @@ from pipeline.atomic import LockedError, atomic_file, output_lock, temporary_nam
 from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
 from pipeline.sample import COLUMNS
-from pipeline.schema import SchemaError, check_file_schema, failed_runs, runs_file_content, write_file
+from pipeline.schema import RunsFileError, failed_runs, read_runs_content, runs_file_content, write_file
 
 Spec = StaticProtocol | WimProtocol
 #: a study's protocols in run order: (name, settings) pairs
@@ -178,13 +178,14 @@ def reconcile(
     """Compare the plan with the files in the marked dataset ``out``; delete every part of the stage's that does not
     belong to it.
 
-    A part is kept only if its stored hash matches its chunk's and it reads back whole: every page's CRC32 checksum
-    verified and the runs schema's fields (:func:`pipeline.schema.check_file_schema`); a part with a changed byte is
-    recomputed, with a log line. Only the stage's own files are deleted: a part's name in a ``study=*`` folder and a
-    content hash in its metadata (:func:`is_own_part`), or the exact name of the stage's temporary. Any other file
-    (a user's ``notes.txt`` or ``part-notes.txt``, which would stop pandas from reading the dataset, or a part's
-    name on a file without the stage's metadata) is moved to ``<out parent>/.quarantine/<out name>/`` under a name
-    no earlier quarantined file has, with a log line naming it, never deleted.
+    A part is kept only if its stored hash matches its chunk's and it reads back whole
+    (:func:`pipeline.schema.read_runs_content`: the SHA-256 of every byte, page statistics and footer included, every
+    page's CRC32 and the runs schema's fields); a part with a changed byte is recomputed, with a log line. Only the
+    stage's own files are deleted: a part's name in a ``study=*`` folder and a content hash in its metadata
+    (:func:`is_own_part`), or the exact name of the stage's temporary. Any other file (a user's ``notes.txt`` or
+    ``part-notes.txt``, which would stop pandas from reading the dataset, or a part's name on a file without the
+    stage's metadata) is moved to ``<out parent>/.quarantine/<out name>/`` under a name no earlier quarantined file
+    has, with a log line naming it, never deleted.
 
     Returns
     -------
@@ -209,28 +210,21 @@ def reconcile(
 def _kept_failures(chunk: Chunk, log: Log) -> int | None:
     """The failed runs in ``chunk``'s part file if the file is up to date (see :func:`reconcile`), else None.
 
-    One open and one read of the file give its hash, its check and its failures (a read of the hash, one of the
-    whole file and one of its status column cost three times as much on a rerun).
+    One read of the file's bytes gives its hash, its verification (:func:`pipeline.schema.read_runs_content`: its
+    SHA-256 over every byte, statistics and footer included, its pages' CRC32s, its fields) and its failures.
     """
-    if not chunk.path.exists():
-        return None
     try:
-        file = pq.ParquetFile(chunk.path, page_checksum_verification=True)
+        content = chunk.path.read_bytes()
+        stored = (pq.read_metadata(pa.BufferReader(content)).metadata or {}).get(HASH_KEY)
     except (OSError, pa.ArrowException):
         return None  # no readable footer: another chunk's leftover or garbage, recomputed without a word
-    with file:
-        try:
-            stored = (file.schema_arrow.metadata or {}).get(HASH_KEY)
-        except (OSError, pa.ArrowException):
-            return None
-        if stored != chunk.hash.encode():
-            return None
-        try:
-            table = file.read()
-            check_file_schema(table.schema, str(chunk.path))
-        except (OSError, pa.ArrowException, SchemaError) as exc:
-            log(f"simulate: {chunk.path} is damaged ({type(exc).__name__}: {exc}); recomputing it")
-            return None
+    if stored != chunk.hash.encode():
+        return None
+    try:
+        table = read_runs_content(content, str(chunk.path))
+    except RunsFileError as exc:
+        log(f"simulate: {chunk.path} is damaged ({exc}); recomputing it")
+        return None
     return failed_runs(table)
 
 

@@ -11,6 +11,7 @@ file is refused too (:mod:`pipeline.config_yaml`).
 
 from __future__ import annotations
 
+import os
 from collections.abc import Iterable, Iterator, Mapping
 from dataclasses import dataclass
 from pathlib import Path
@@ -26,6 +27,7 @@ from pipeline.config_errors import RULE_ERROR, ConfigError, error_lines, shown
 from pipeline.config_rules import rule_errors
 from pipeline.config_schema import (
     BACKENDS,
+    OBSERVED_DIR,
     OTHER_SECTIONS,
     PROTOCOLS,
     QUANTITIES,
@@ -566,23 +568,51 @@ def load_config(path: str | Path = "params.yaml") -> Config:
 
 
 def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
-    """The file of the observed survey under the project root ``root`` (the directory of params.yaml).
+    """The file of the observed survey under the project root ``root`` (the directory of params.yaml), symlinks
+    followed.
 
-    Returns None when no survey is given (``observed.path: null``).
+    ``observed.path`` names a file in ``observed/`` (the schema checks the name); a symlink there may point to another
+    file in ``observed/``, never out of it: what it points to is resolved (every link on the way followed, an
+    ``observed/`` that is itself a link included) and must lie in the project's ``observed/`` directory, resolved
+    too. A link to a file elsewhere (a secret, ``/proc/self/environ``) is refused before the file is opened, and the
+    message names where it points, never what it holds. validate, observed and calibrate all call this.
+
+    Returns None when no survey is given (``observed.path: null``); else the resolved file, so the stage opens the
+    file that was checked.
 
     Raises
     ------
     ConfigError
-        Naming ``observed.path``, its value and where it was looked for, if it is not a file.
+        Naming ``observed.path``, its value and where it was looked for, if it is not a file, or where it points if
+        that is outside ``observed/``.
     """
     if observed.path is None:
         return None
     path = Path(root) / observed.path
-    if not path.is_file():
-        what = "is not a file" if path.exists() else "no such file"
+    given = f"observed.path = {observed.path!r}"
+    try:
+        target = path.resolve(strict=True)
+    except FileNotFoundError:
         raise ConfigError(
             "observed.path",
-            f"observed.path = {observed.path!r}: {what} (looked for {path}); put the survey's records there or set "
-            "observed.path: null (docs/observed.md)",
+            f"{given}: no such file (looked for {path}"
+            + (f", a symlink to {Path(os.readlink(path))} which does not exist" if path.is_symlink() else "")
+            + "); put the survey's records there or set observed.path: null (docs/observed.md)",
+        ) from None
+    except (OSError, RuntimeError) as exc:  # a symlink loop, a directory that cannot be searched
+        raise ConfigError("observed.path", f"{given}: cannot be resolved ({path}: {exc})") from None
+    allowed = Path(root).resolve() / OBSERVED_DIR
+    if not target.is_relative_to(allowed):
+        raise ConfigError(
+            "observed.path",
+            f"{given} points to {target}, outside the project's {OBSERVED_DIR}/ ({allowed}; symlinks followed): "
+            f"it must be a file in {OBSERVED_DIR}/ or a symlink to one there; copy the survey's records into "
+            f"{OBSERVED_DIR}/ (docs/observed.md)",
         )
-    return path
+    if not target.is_file():
+        raise ConfigError(
+            "observed.path",
+            f"{given}: is not a file (looked for {path}); put the survey's records there or set observed.path: null "
+            "(docs/observed.md)",
+        )
+    return target

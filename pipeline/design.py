@@ -47,6 +47,7 @@ from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.constants import GROUP_AXLES
 from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, _frame, design_seed, road_seed, sensor_seed
+from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
 from pipeline.survey import rounded
 from pipeline.survey_design import wilson_interval
@@ -538,7 +539,9 @@ def run(
     )
     protocols = {"design": (("static", config.protocol.static),)}
     simulate_samples({"design": samples[list(COLUMNS)]}, protocols, config.execution, runs_dir, log)
-    runs = pd.read_parquet(runs_dir / "study=design")
+    # every part verified (the file's SHA-256, its pages' CRC32s: pipeline.schema.read_runs_frame), as every stage
+    # that reads runs does
+    runs = read_runs_frame(runs_dir, "design").drop(columns="study")
     runs = runs.drop(columns=[c for c in ("design", "condition", "slot") if c in runs.columns])
     runs = runs.merge(samples[["sample_id", "design", "condition", "slot"]], on="sample_id", how="left", validate="1:1")
     analysis = analyse(runs, designs, tilts, spec.target_share, spec.confidence_level)

@@ -21,6 +21,7 @@ import pandas as pd
 
 from pipeline.atomic import atomic_file, io_error
 from pipeline.constants import GROUP_AXLES, PROTOCOLS
+from pipeline.schema import read_runs_frame
 
 __all__ = ["headline", "main"]
 
@@ -60,7 +61,8 @@ def main(argv: list[str] | None = None) -> int:
     try:
         survey = json.loads((metrics / "survey.json").read_text(encoding="utf-8"))
         sensitivity = json.loads((metrics / "sensitivity.json").read_text(encoding="utf-8"))
-        status = pd.read_parquet(args.runs, columns=["status"])["status"].astype(str)
+        # every part file verified (pipeline.schema.read_runs_frame): a damaged one is refused, not counted
+        status = read_runs_frame(args.runs, columns=["status"])["status"].astype(str)
     except (OSError, ValueError, KeyError) as exc:
         print(f"headline: {exc}", file=sys.stderr)
         return 2

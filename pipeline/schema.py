@@ -11,6 +11,8 @@ categoricals.
 from __future__ import annotations
 
 import functools
+import hashlib
+import struct
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 
@@ -33,12 +35,18 @@ __all__ = [
     "RUN_COLUMNS",
     "SAMPLE_COLUMNS",
     "UNITS",
+    "CHECKSUM_KEY",
+    "RunsFileError",
     "SchemaError",
     "check_file_schema",
+    "checksummed_content",
     "check_runs",
     "check_table",
     "conform",
     "failed_runs",
+    "read_runs_content",
+    "read_runs_file",
+    "read_runs_frame",
     "runs_frame",
     "runs_file_content",
     "runs_table",
@@ -119,6 +127,10 @@ RUNS_SCHEMA: pa.Schema = pa.schema(
 
 class SchemaError(ValueError):
     """A runs table that does not have the runs schema's columns, types or nulls."""
+
+
+class RunsFileError(SchemaError):
+    """A part file of the runs dataset that does not read back as written: a changed byte, no checksum, no footer."""
 
 
 def conform(frame: pd.DataFrame) -> pd.DataFrame:
@@ -228,17 +240,147 @@ def check_table(table: pa.Table, where: str = "the runs") -> None:
         raise SchemaError(f"{where} break the runs schema: {'; '.join(problems)}")
 
 
+#: Parquet metadata key of a part file's checksum: the SHA-256 of every byte of the file, this value read as
+#: :data:`_UNSEALED` (:func:`runs_file_content`, :func:`read_runs_content`)
+CHECKSUM_KEY = b"bogie.runs.sha256"
+#: the checksum's value while the file is hashed: 64 characters, as long as a hex SHA-256 digest
+_UNSEALED = b"0" * 64
+#: the Thrift compact encoding between a key and its 64-byte value in the footer: a binary field 2 (0x18) of length
+#: 64 (varint 0x40)
+_VALUE_HEADER = b"\x18\x40"
+
+
 def runs_file_content(table: pa.Table, metadata: Mapping[bytes, bytes] | None = None) -> bytes:
     """The Parquet file of an Arrow table of run rows (:func:`runs_table`, :func:`table_from_rows`), checked
     (:func:`check_table`), with extra schema metadata: what :func:`write_runs_file` writes, as bytes a process can
-    pass to the one that writes the file."""
+    pass to the one that writes the file.
+
+    The file carries two checksums. Every page's CRC32 (Parquet's page checksum) covers the pages' data; the file's
+    SHA-256 under :data:`CHECKSUM_KEY` covers every byte, page headers (their statistics), the footer (the column
+    statistics, the schema, every metadata value) and the data alike: the file is written with a placeholder of the
+    digest's length, hashed, and the placeholder replaced by the digest. Every stage that reads runs verifies both
+    (:func:`read_runs_content`).
+    """
     check_table(table)
     if metadata:
         table = table.replace_schema_metadata({**(table.schema.metadata or {}), **metadata})
+    return checksummed_content(table)
+
+
+def checksummed_content(table: pa.Table) -> bytes:
+    """The Parquet file of any Arrow table with the checksums of a part file (:func:`runs_file_content`, which checks
+    the table first): a test's way to a file that verifies but holds other columns or nulls."""
+    table = table.replace_schema_metadata({**(table.schema.metadata or {}), CHECKSUM_KEY: _UNSEALED})
     sink = pa.BufferOutputStream()
-    # CRC32 of every page: a changed byte in a data page is detected on read (pipeline.chunks.reconcile)
     pq.write_table(table, sink, write_page_checksum=True)
-    return sink.getvalue().to_pybytes()
+    content = sink.getvalue().to_pybytes()
+    at = _checksum_offset(content, _UNSEALED)
+    if at is None:  # a pyarrow that encodes the footer otherwise: no file without its checksum
+        raise RuntimeError(f"pyarrow {pa.__version__} did not write {CHECKSUM_KEY.decode()} where it is looked for")
+    return content[:at] + _file_digest(content, at) + content[at + len(_UNSEALED) :]
+
+
+def _file_digest(content: bytes, at: int) -> bytes:
+    """The hex SHA-256 of ``content`` with the checksum's value at ``at`` read as :data:`_UNSEALED`."""
+    view = memoryview(content)
+    digest = hashlib.sha256(view[:at])
+    digest.update(_UNSEALED)
+    digest.update(view[at + len(_UNSEALED) :])
+    return digest.hexdigest().encode()
+
+
+def _checksum_offset(content: bytes, value: bytes) -> int | None:
+    """Where the checksum's ``value`` lies in the footer of the Parquet file ``content``, if once there."""
+    (length,) = struct.unpack("<I", content[-8:-4])
+    start = len(content) - 8 - length
+    needle = CHECKSUM_KEY + _VALUE_HEADER + value
+    at = content.find(needle, start)
+    if at < 0 or content.find(needle, at + 1) >= 0:
+        return None
+    return at + len(CHECKSUM_KEY) + len(_VALUE_HEADER)
+
+
+def read_runs_content(content: bytes, where: str) -> pa.Table:
+    """The runs table of the part file ``content`` (named ``where`` in errors), verified.
+
+    The file's SHA-256 (:data:`CHECKSUM_KEY`) must match its bytes, every page's CRC32 its data, and its fields the
+    runs schema's (:func:`check_file_schema`). A changed bit anywhere, in a data page, a page's statistics or the
+    footer, is an error, not a silently different number.
+
+    Raises
+    ------
+    RunsFileError
+        Naming ``where`` and what failed.
+    """
+    rerun = "delete it and rerun the simulate stage (make repro) to recompute it"
+    if len(content) < 12 or content[:4] != b"PAR1" or content[-4:] != b"PAR1":
+        raise RunsFileError(f"{where} is not a whole Parquet file (no PAR1 marks at both ends): {rerun}")
+    try:
+        stored = (pq.read_metadata(pa.BufferReader(content)).metadata or {}).get(CHECKSUM_KEY)
+    except (OSError, pa.ArrowException) as exc:
+        raise RunsFileError(f"{where} is damaged: its footer does not read ({exc}); {rerun}") from None
+    if stored is None:
+        raise RunsFileError(
+            f"{where} carries no checksum (metadata key {CHECKSUM_KEY.decode()}): not a part file of this version "
+            f"of simulate; {rerun}"
+        )
+    at = _checksum_offset(content, stored)
+    if at is None or _file_digest(content, at) != stored:
+        raise RunsFileError(
+            f"{where} is damaged: its SHA-256 does not match the checksum it carries (a changed byte in a data page, "
+            f"a page's statistics or the footer); {rerun}"
+        )
+    try:
+        table = pq.ParquetFile(pa.BufferReader(content), page_checksum_verification=True).read()
+    except (OSError, pa.ArrowException) as exc:
+        raise RunsFileError(f"{where} is damaged: {exc}; {rerun}") from None
+    check_file_schema(table.schema, where)
+    return table
+
+
+def read_runs_file(path: str | Path) -> pa.Table:
+    """The runs table of the part file ``path``, verified (:func:`read_runs_content`).
+
+    Raises
+    ------
+    RunsFileError
+        Naming the file and what failed.
+    OSError
+        If the file cannot be read.
+    """
+    return read_runs_content(Path(path).read_bytes(), str(path))
+
+
+def read_runs_frame(
+    runs_dir: str | Path, study: str | None = None, columns: Sequence[str] | None = None
+) -> pd.DataFrame:
+    """The runs of one study (None: of every study) of the dataset ``runs_dir``, every part file verified
+    (:func:`read_runs_file`; a file in a study's directory that is not a part fails too): what
+    ``pd.read_parquet(runs_dir, filters=[("study", "==", study)])`` gives (the ``study`` column last, as text),
+    ``columns`` and ``study`` alone if ``columns`` is given.
+
+    Raises
+    ------
+    RunsFileError
+        Naming the first part file that fails verification and what failed, or if there is none.
+    OSError
+        If a file cannot be read.
+    """
+    runs_dir = Path(runs_dir)
+    # every file pyarrow's dataset reads (it skips names starting with a dot or an underscore): a stray file fails
+    paths = sorted(p for p in runs_dir.glob(f"study={study if study is not None else '*'}/*")
+                   if not p.name.startswith((".", "_")) and not p.is_dir())  # fmt: skip
+    frames = []
+    for path in paths:
+        table = read_runs_file(path)
+        table = table.select(list(columns)) if columns is not None else table
+        frame = table.to_pandas()
+        frame["study"] = path.parent.name.removeprefix("study=")
+        frames.append(frame)
+    if not frames:
+        what = f"study {study!r}" if study is not None else "any study"
+        raise RunsFileError(f"{runs_dir}/ holds no part file of {what}; run the simulate stage first")
+    return pd.concat(frames, ignore_index=True)
 
 
 def write_file(content: bytes, path: str | Path) -> None:

@@ -35,7 +35,7 @@ from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
 from pipeline.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
 from pipeline.sample import TYRE_WEAR_COLUMNS, bogie_from_sample
-from pipeline.schema import SchemaError, check_file_schema, check_runs
+from pipeline.schema import SchemaError, check_runs, read_runs_frame
 from pipeline.survey_design import DESIGN_COLUMNS, design_table
 
 #: the study a roadside survey samples
@@ -67,30 +67,28 @@ class RunsError(ValueError):
 def read_runs(runs_dir: str | Path, study: str, columns: Sequence[str] = REQUIRED_COLUMNS) -> pd.DataFrame:
     """The runs of one study from the hive-partitioned dataset ``runs_dir/study=<study>/part-*.parquet``.
 
-    Each part file is checked against the runs schema (:mod:`pipeline.schema`) and the rows against its null rule:
-    no null in a successful row, only nulls in the results of a failed one.
+    Each part file is verified (:func:`pipeline.schema.read_runs_frame`: its SHA-256 and page checksums, the runs
+    schema's fields) and the rows checked against the null rule: no null in a successful row, only nulls in the
+    results of a failed one. Every stage that reads runs reads them here.
 
     Raises
     ------
     RunsError
-        If the study has no part file, a file is not of the runs schema, or the nulls break the rule.
+        If the study has no part file, a file fails verification (named, with what failed), or the nulls break the
+        rule.
     """
     runs_dir = Path(runs_dir)
     partition = runs_dir / f"study={study}"
-    files = sorted(partition.glob("*.parquet"))
-    if not files:
+    if not any(partition.glob("*.parquet")):
         raise RunsError(f"no runs of study {study!r}: {partition}/ holds no Parquet file; run the simulate stage first")
     try:
-        for path in files:
-            check_file_schema(pq.read_schema(path), str(path))
-        frame = pd.read_parquet(runs_dir, filters=[("study", "==", study)])
+        frame = read_runs_frame(runs_dir, study)
         check_runs(frame, f"runs of study {study!r} in {runs_dir}")
     except SchemaError as exc:
         raise RunsError(str(exc)) from None
     missing = [c for c in columns if c not in frame.columns]
     if missing:
         raise RunsError(f"runs of study {study!r} in {runs_dir} lack the columns {', '.join(missing)}")
-    frame["study"] = frame["study"].astype(str)
     return frame
 
 

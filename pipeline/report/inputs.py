@@ -16,6 +16,7 @@ import pandas as pd
 import bogie
 import pipeline
 from pipeline.config import Config, load_config, load_params
+from pipeline.schema import SchemaError, read_runs_frame
 from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, readings
 
 __all__ = [
@@ -194,8 +195,10 @@ def read_inputs(
     }
     if not any(Path(runs).glob("study=*/*.parquet")):
         raise RunsError(f"{runs}/ holds no runs; run the simulate stage first")
-    every = pd.read_parquet(runs, columns=STATUS_COLUMNS)
-    every["study"] = every["study"].astype(str)
+    try:  # every part file verified, as every stage reads them
+        every = read_runs_frame(runs, columns=[c for c in STATUS_COLUMNS if c != "study"])[STATUS_COLUMNS]
+    except SchemaError as exc:
+        raise RunsError(str(exc)) from None
     ok = inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
     metrics_dir = Path(metrics_dir)
     observed_dir = Path(survey_dir).with_name("observed") if observed_dir is None else observed_dir

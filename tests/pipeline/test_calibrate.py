@@ -218,3 +218,13 @@ def test_a_quantity_the_fleet_does_not_have_is_refused(tmp_path, capsys):
     raw = raw_params(20, fit={"site_iri_m_km": [1.0, 4.0]})
     raw["protocol"]["wim"].update(site_length_before_m=0.0, site_length_after_m=0.0)
     _refused(tmp_path, raw, capsys, ["site_iri_m_km", "no site"])
+
+
+def test_a_survey_that_is_a_symlink_out_of_the_project_is_refused_before_it_is_read(tmp_path, capsys):
+    # issue 28, item 3: the check of validate and observed (pipeline.config.observed_file), here too
+    outside = tmp_path.parent / f"{tmp_path.name}-outside.csv"
+    synthetic_survey(outside, n_vehicles=30)
+    (tmp_path / "observed").mkdir()
+    (tmp_path / "observed" / "s.csv").symlink_to(outside)
+    words = ["observed.path = 'observed/s.csv'", f"points to {outside}", "observed/"]
+    _refused(tmp_path, raw_params(20), capsys, words)

@@ -3,8 +3,11 @@
 import json
 
 import pandas as pd
+from _flips import flip
+from test_observed import fabricated_runs, raw_params
 
 from pipeline.headline import headline, main
+from pipeline.schema import write_runs_file
 
 SURVEY = {
     "static": {"tandem": {"share_outside_5pct": 0.4, "mean_spread_kg": 371.4},
@@ -36,8 +39,23 @@ def test_stage_writes_the_file(tmp_path):
     (tmp_path / "m" / "sensitivity.json").write_text(json.dumps(SENSITIVITY))
     runs = tmp_path / "runs" / "study=fleet"
     runs.mkdir(parents=True)
-    pd.DataFrame({"status": ["ok", "failed"]}).to_parquet(runs / "part-00000.parquet")
+    write_runs_file(fabricated_runs(raw_params()), runs / "part-00000.parquet")  # 8 runs, one failed
     out = tmp_path / "m" / "headline.json"
     assert main(["--metrics", str(tmp_path / "m"), "--runs", str(tmp_path / "runs"), "--out", str(out)]) == 0
-    assert json.loads(out.read_text())["failed"] == 1
+    assert (json.loads(out.read_text())["runs"], json.loads(out.read_text())["failed"]) == (8, 1)
     assert main(["--metrics", str(tmp_path / "missing"), "--out", str(out)]) == 2
+
+
+def test_stage_refuses_a_part_with_a_flipped_bit_in_its_footer(tmp_path, capsys):
+    # issue 28, item 4: the headline counts runs; a damaged part is refused, not counted
+    (tmp_path / "m").mkdir()
+    (tmp_path / "m" / "survey.json").write_text(json.dumps(SURVEY))
+    (tmp_path / "m" / "sensitivity.json").write_text(json.dumps(SENSITIVITY))
+    part = tmp_path / "runs" / "study=fleet" / "part-00000.parquet"
+    part.parent.mkdir(parents=True)
+    write_runs_file(fabricated_runs(raw_params()), part)
+    flip(part, "footer metadata")
+    out = tmp_path / "m" / "headline.json"
+    assert main(["--metrics", str(tmp_path / "m"), "--runs", str(tmp_path / "runs"), "--out", str(out)]) == 2
+    assert f"headline: {part} is damaged: its SHA-256 does not match" in capsys.readouterr().err
+    assert not out.exists()

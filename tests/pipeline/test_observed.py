@@ -16,6 +16,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from _flips import PLACES, flip
 
 from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
@@ -247,3 +248,88 @@ def test_format_auto_and_the_files_resolution_are_in_the_metrics(tmp_path):
     obs = metrics(root)["observed"]
     assert (obs["format"], obs["format_asked"]) == ("csv", "auto")
     assert obs["records"]["weight_step_kg"] == 100.0  # site.csv: every load a whole 100 kg
+
+
+# ---- a symlink in observed/ stays in observed/ (issue 28, item 3) -------------------------------------------------
+SECRET = "BOGIE_TEST_SECRET=do-not-print-me"
+
+
+def _linked_project(tmp_path, target, link="observed/site.csv"):
+    """A project in tmp_path/project whose observed.path is a symlink to ``target``."""
+    root = tmp_path / "project"
+    root.mkdir()
+    project(root, path=link)
+    (root / "observed").mkdir(exist_ok=True)
+    (root / link).symlink_to(target)
+    return root
+
+
+def _validate(root):
+    from pipeline import validate
+
+    return validate.main(["--params", str(root / "params.yaml"), "--out", str(root / "data" / "config.json")])
+
+
+@pytest.mark.parametrize("stage", ["validate", "observed"])
+def test_a_symlink_to_a_file_outside_the_project_is_refused_without_printing_it(tmp_path, capsys, stage):
+    outside = tmp_path / "elsewhere" / "secret.csv"
+    outside.parent.mkdir()
+    outside.write_text(SECRET + "\n")
+    root = _linked_project(tmp_path, outside)
+    assert (_validate(root) if stage == "validate" else main(args(root))) == 2
+    out, err = capsys.readouterr()
+    for words in ("observed.path = 'observed/site.csv'", f"points to {outside}", f"{root}/observed", "observed/"):
+        assert words in err, err
+    assert "do-not-print-me" not in out + err
+    assert not (root / "data" / "observed").exists() and not (root / "data" / "config.json").exists()
+
+
+@pytest.mark.parametrize("stage", ["validate", "observed"])
+def test_a_symlink_to_proc_self_environ_is_refused_without_printing_the_environment(tmp_path, capsys, monkeypatch,
+                                                                                     stage):  # fmt: skip
+    monkeypatch.setenv("BOGIE_TEST_SECRET", "do-not-print-me")
+    root = _linked_project(tmp_path, "/proc/self/environ")
+    assert (_validate(root) if stage == "validate" else main(args(root))) == 2
+    out, err = capsys.readouterr()
+    assert "observed.path = 'observed/site.csv' points to /proc/" in err and "outside the project's observed/" in err
+    assert "do-not-print-me" not in out + err and "PATH=" not in out + err
+
+
+def test_an_observed_directory_that_is_a_symlink_out_of_the_project_is_refused(tmp_path, capsys):
+    outside = tmp_path / "elsewhere"
+    outside.mkdir()
+    shutil.copy(SITE, outside / "site.csv")
+    root = tmp_path / "project"
+    root.mkdir()
+    project(root, path="observed/site.csv")
+    (root / "observed").symlink_to(outside, target_is_directory=True)
+    assert main(args(root)) == 2
+    assert f"points to {outside / 'site.csv'}, outside the project's observed/" in capsys.readouterr().err
+
+
+def test_a_symlink_to_another_file_in_observed_is_read(tmp_path):
+    root = tmp_path / "project"
+    root.mkdir()
+    project(root, path="observed/site.csv")
+    (root / "observed" / "raw").mkdir(parents=True)
+    shutil.copy(SITE, root / "observed" / "raw" / "2026-01.csv")
+    (root / "observed" / "site.csv").symlink_to(Path("raw") / "2026-01.csv")
+    assert _validate(root) == 0
+    assert main(args(root)) == 0
+    metrics = json.loads((root / "metrics" / "observed.json").read_text())
+    assert metrics["observed"]["path"] == "observed/site.csv"
+    assert metrics["observed"]["sha256"] == hashlib.sha256(SITE.read_bytes()).hexdigest()
+
+
+@pytest.mark.parametrize("place", PLACES)
+def test_a_runs_part_with_one_flipped_bit_is_refused_naming_it(tmp_path, capsys, place):
+    # issue 28, item 4: the observed stage verifies the runs it reads (pipeline.survey.read_runs)
+    root = project(tmp_path, path="observed/site.csv")
+    (root / "observed").mkdir()
+    shutil.copy(SITE, root / "observed" / "site.csv")
+    damaged = root / "data" / "runs" / "study=fleet" / "part-000000.parquet"
+    flip(damaged, place)
+    assert main(args(root)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"observed: {damaged} is damaged: its SHA-256 does not match") and "\n" not in err, err
+    assert not (root / "data" / "observed").exists() and not (root / "metrics").exists()

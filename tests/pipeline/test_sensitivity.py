@@ -9,6 +9,7 @@ import numpy as np
 import pandas as pd
 import pytest
 import yaml
+from _flips import PLACES, flip
 from SALib.sample import sobol as sobol_sample
 from SALib.test_functions import Ishigami
 
@@ -434,3 +435,19 @@ def test_stage_refuses_missing_runs_and_writes_nothing(tmp_path, config, studies
 def test_bootstrap_seeds_are_positive_distinct_and_reproducible():
     a, b = bootstrap_seed(1, "sensitivity_bootstrap"), bootstrap_seed(1, "ablation_bootstrap")
     assert a > 0 and b > 0 and a != b and a == bootstrap_seed(1, "sensitivity_bootstrap")
+
+
+@pytest.mark.parametrize("study", ["sensitivity", "ablation"])
+@pytest.mark.parametrize("place", PLACES)
+def test_stage_refuses_a_part_with_one_flipped_bit_naming_it(tmp_path, config, studies, sens_runs, capsys, study,
+                                                             place):  # fmt: skip
+    # issue 28, item 4: the sensitivity stage verifies what it reads, as the survey does (pipeline.survey.read_runs)
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(small_raw()))
+    write_runs(tmp_path, "sensitivity", sens_runs)
+    write_runs(tmp_path, "ablation", ablation_study_runs(config, studies))
+    damaged = tmp_path / "data" / "runs" / f"study={study}" / "part-000000.parquet"
+    flip(damaged, place)
+    assert main(stage_args(tmp_path)) == 2
+    err = capsys.readouterr().err.strip()
+    assert f"{damaged} is damaged: its SHA-256 does not match" in err and "\n" not in err, err
+    assert not (tmp_path / "data" / "sensitivity").exists() and not (tmp_path / "metrics").exists()

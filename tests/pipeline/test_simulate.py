@@ -20,6 +20,7 @@ import pandas as pd
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from _flips import flip
 
 from bogie import numerics
 from pipeline.chunks import (
@@ -223,6 +224,23 @@ def test_a_flipped_bit_inside_a_data_page_is_detected_and_the_part_recomputed(co
     summary, lines = run(config, samples, out)
     assert (summary.computed_chunks, summary.skipped_chunks) == (1, len(parts(out)) - 1)
     assert any(f"{damaged} is damaged" in line and "recomputing" in line for line in lines)
+    pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
+
+
+def test_a_flip_in_page_statistics_or_the_footer_is_detected_and_the_part_recomputed(config, samples, reference,
+                                                                                      tmp_path):  # fmt: skip
+    # issue 28, item 4: the pages' CRC32s cover their data, not their headers' statistics nor the footer; the file's
+    # SHA-256 covers every byte
+    out = tmp_path / "runs"
+    run(config, samples, out)
+    places = {part_name(1): "page statistics", part_name(2): "footer statistics", part_name(3): "footer metadata"}
+    for name, place in places.items():
+        flip(out / "study=fleet" / name, place)
+    summary, lines = run(config, samples, out)
+    assert (summary.computed_chunks, summary.skipped_chunks) == (3, len(parts(out)) - 3)
+    for name in places:
+        damaged = out / "study=fleet" / name
+        assert any(f"{damaged} is damaged" in line and "SHA-256" in line for line in lines), lines
     pd.testing.assert_frame_equal(dataset(out), reference, check_exact=True)
 
 

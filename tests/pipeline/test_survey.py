@@ -11,12 +11,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import pytest
 import yaml
+from _flips import PLACES, flip
 
 from bogie.params import GRAVITY
 from pipeline.config import load_params, parse_config
 from pipeline.protocol import result_row
 from pipeline.sample import sample_studies
-from pipeline.schema import RUNS_SCHEMA, runs_frame, write_runs_file
+from pipeline.schema import RUNS_SCHEMA, checksummed_content, read_runs_file, runs_frame, write_runs_file
 from pipeline.survey import (
     RunsError,
     band,
@@ -366,13 +367,14 @@ def test_read_runs_refuses_files_of_another_schema_and_rows_that_break_the_null_
     runs_dir = stage_dir / "data" / "runs"
     first = sorted((runs_dir / "study=fleet").iterdir())[0]  # holds the failed run of sample 3
     frame = pd.read_parquet(first)
-    frame.drop(columns="max_deviation").to_parquet(first)
+    # each file with its checksums (pipeline.schema.checksummed_content): these faults are in what the writer wrote
+    first.write_bytes(checksummed_content(pa.Table.from_pandas(frame.drop(columns="max_deviation"))))
     with pytest.raises(RunsError, match=r"part-000000.parquet is not a runs file of this version: max_deviation miss"):
         read_runs(runs_dir, "fleet")
     # a successful row with a null result: refused, never averaged over
     ok = frame.index[frame["status"] == "ok"][:3]
     frame.loc[ok, "max_deviation"] = np.nan
-    pq.write_table(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False), first)
+    first.write_bytes(checksummed_content(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False)))
     with pytest.raises(RunsError, match=r"max_deviation null in 3 successful rows"):
         read_runs(runs_dir, "fleet")
     # a failed row with a number in it: a made-up result, refused
@@ -380,7 +382,7 @@ def test_read_runs_refuses_files_of_another_schema_and_rows_that_break_the_null_
     failed = frame.index[frame["status"] == "failed"]
     assert len(failed)
     frame.loc[failed, "spread_kg"] = 0.0
-    pq.write_table(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False), first)
+    first.write_bytes(checksummed_content(pa.Table.from_pandas(frame, schema=RUNS_SCHEMA, preserve_index=False)))
     with pytest.raises(RunsError, match=rf"spread_kg set in {len(failed)} failed rows \(must be null\)"):
         read_runs(runs_dir, "fleet")
 
@@ -477,3 +479,26 @@ def test_an_export_without_wim_readings_is_refused_in_validation():
     raw["sensitivity"]["protocol"] = "static"
     with pytest.raises(ConfigError, match=r"survey.export_format.*needs WIM readings to export"):
         parse_config(raw)
+
+
+@pytest.mark.parametrize("place", PLACES)
+def test_a_part_with_one_flipped_bit_is_refused_naming_the_file_not_averaged(stage_dir, capsys, place):
+    # issue 28, item 4: a flip in a data page changed mean_max_deviation without a word; one in the statistics or the
+    # footer's metadata changes no number but is damage all the same, and the same check sees every byte
+    damaged = stage_dir / "data" / "runs" / "study=fleet" / "part-000001.parquet"
+    flip(damaged, place)
+    assert main(stage_args(stage_dir)) == 2
+    err = capsys.readouterr().err.strip()
+    assert err.startswith(f"survey: {damaged} is damaged: its SHA-256 does not match") and "\n" not in err, err
+    assert "rerun the simulate stage" in err
+    assert not (stage_dir / "metrics" / "survey.json").exists()
+
+
+def test_a_part_without_the_checksum_is_refused_and_every_written_part_verifies(stage_dir, capsys):
+    first, second = sorted((stage_dir / "data" / "runs" / "study=fleet").iterdir())
+    for path in (first, second):  # what write_runs_file writes verifies and reads back as pandas reads it
+        pd.testing.assert_frame_equal(read_runs_file(path).to_pandas(), pd.read_parquet(path))
+    pq.write_table(pq.read_table(second).replace_schema_metadata({}), second)  # a Parquet file from elsewhere
+    assert main(stage_args(stage_dir)) == 2
+    err = capsys.readouterr().err
+    assert f"{second} carries no checksum (metadata key bogie.runs.sha256)" in err

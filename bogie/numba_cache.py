@@ -1,0 +1,146 @@
+"""numba's on-disk cache of bogie's kernels: one directory per version of the sources, and no more than a few.
+
+numba invalidates a cached function only when its own file changes, not when a compiled function it calls (in
+another module) does, so ``import bogie`` points ``NUMBA_CACHE_DIR`` at a directory of its own per version of the
+sources (:func:`source_digest`): ``<root>/<digest>/``, the root ``$XDG_CACHE_HOME/bogie-numba`` (``~/.cache``
+without it, :func:`cache_root`). numba keys what it caches there by the path of each source file too (one
+subdirectory per clone, its index stamped with the file's modification time), so two clones of one version share the
+directory but not the files; sharing those would make each clone overwrite the other's index on every start.
+
+Every edit of a source is a new version, and nothing removed the old ones: the root grew by a directory per version
+and clone (75 MB after a day's work). So each process that sets the directory claims it (:func:`claim`: a shared
+lock on ``<digest>/.in-use`` held until the process ends, and the directory's modification time set to now, the
+time of its last use) and prunes the root (:func:`prune`): it keeps the :data:`KEEP` most recently used directories,
+its own among them, and removes the others, except one in use by a running process (its lock is held: another clone
+compiling now keeps its cache to the end) or used within :data:`GRACE`. Removal takes the directory's lock
+exclusively, renames it out of the way and then deletes it, so a process that starts on it meanwhile finds the lock
+file gone, starts afresh on a new directory and recompiles; two processes pruning at once remove each directory
+once. Nothing here may stop ``import bogie``: a root that cannot be written or locked is left as it is.
+"""
+
+from __future__ import annotations
+
+import hashlib
+import os
+import shutil
+import time
+from pathlib import Path
+
+try:
+    import fcntl
+except ImportError:  # no flock (Windows): claim nothing, prune nothing
+    fcntl = None  # type: ignore[assignment]
+
+__all__ = ["GRACE", "KEEP", "cache_root", "claim", "prune", "source_digest"]
+
+#: the cache directories kept, the most recently used first, this process's own among them: the versions a day's
+#: switching between branches and clones comes back to (each is 0.5-25 MB; one not kept costs a recompilation,
+#: about a minute)
+KEEP = 4
+#: a directory used within this time is never removed, whatever :data:`KEEP` says [s]: a process of an older bogie,
+#: which takes no lock, may still be running on it
+GRACE = 3600.0
+#: the lock file in each cache directory: held shared by every process using the directory
+LOCK_NAME = ".in-use"
+#: name prefix of a directory being removed (renamed into the root first); leftovers of an interrupted removal too
+_REMOVING = ".removing-"
+
+
+def cache_root() -> Path:
+    """The directory of bogie's numba caches: ``$XDG_CACHE_HOME/bogie-numba``, or ``~/.cache/bogie-numba``."""
+    return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "bogie-numba"
+
+
+def source_digest(package: Path) -> str:
+    """A 16-hex-digit hash of the package's modules (``package/*.py``, by name order): a cache directory's name."""
+    digest = hashlib.sha256()
+    for path in sorted(package.glob("*.py")):
+        digest.update(path.read_bytes())
+    return digest.hexdigest()[:16]
+
+
+def claim(directory: Path, attempts: int = 5) -> int | None:
+    """Mark the cache directory ``directory`` as in use by this process until it ends; create it if need be.
+
+    A shared lock on ``directory/.in-use`` (the returned descriptor holds it: keep it open) and the directory's
+    modification time set to now. If a pruner renamed the directory away between the open and the lock, the lock
+    file is no longer at its path: the claim starts again on a fresh directory.
+
+    Returns
+    -------
+    int or None
+        The lock file's descriptor, or None if no lock could be taken (no flock, an unwritable root).
+    """
+    if fcntl is None:
+        return None
+    for _ in range(attempts):
+        try:
+            directory.mkdir(parents=True, exist_ok=True)
+            fd = os.open(directory / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+        except OSError:
+            return None
+        try:
+            fcntl.flock(fd, fcntl.LOCK_SH)
+            if os.fstat(fd).st_ino == os.stat(directory / LOCK_NAME).st_ino:
+                os.utime(directory)
+                return fd
+        except OSError:
+            pass  # the lock file vanished with a pruner's rename: again
+        os.close(fd)
+    return None
+
+
+def prune(root: Path, keep: int = KEEP, grace: float = GRACE, now: float | None = None) -> list[Path]:
+    """Remove the cache directories of ``root`` beyond the ``keep`` most recently used (by modification time).
+
+    A directory is removed only if it was not used within ``grace`` seconds of ``now`` and no running process holds
+    its lock (:func:`claim`); a directory that vanishes or is taken meanwhile is skipped. Leftovers of an interrupted
+    removal older than ``grace`` are removed too. Errors are ignored: pruning must never stop an import.
+
+    Returns
+    -------
+    list of Path
+        The directories removed.
+    """
+    if fcntl is None:
+        return []
+    now = time.time() if now is None else now
+    try:
+        entries = [p for p in root.iterdir() if not p.name.startswith(".") and p.is_dir()]
+    except OSError:
+        return []
+    used = {entry: _mtime(entry) for entry in entries}
+    ranked = sorted(entries, key=lambda entry: (used[entry], entry.name), reverse=True)
+    removed = [entry for entry in ranked[keep:] if now - used[entry] >= grace and _remove(entry, root)]
+    for leftover in root.glob(f"{_REMOVING}*"):
+        if now - _mtime(leftover) >= grace:
+            shutil.rmtree(leftover, ignore_errors=True)
+    return removed
+
+
+def _mtime(path: Path) -> float:
+    try:
+        return path.stat().st_mtime
+    except OSError:
+        return float("inf")  # gone or unreadable: never a candidate
+
+
+def _remove(entry: Path, root: Path) -> bool:
+    """Remove ``entry`` unless a process holds its lock; True if this call removed it."""
+    try:
+        fd = os.open(entry / LOCK_NAME, os.O_RDWR | os.O_CREAT, 0o644)
+    except OSError:
+        return False
+    trash = root / f"{_REMOVING}{entry.name}-{os.getpid()}"
+    try:
+        fcntl.flock(fd, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        # the lock file still at its path: not renamed away by another pruner between our open and our lock
+        if os.fstat(fd).st_ino != os.stat(entry / LOCK_NAME).st_ino:
+            return False
+        os.rename(entry, trash)
+    except OSError:
+        return False  # in use, or removed by another process first
+    finally:
+        os.close(fd)
+    shutil.rmtree(trash, ignore_errors=True)
+    return True

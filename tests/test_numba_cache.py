@@ -1,0 +1,95 @@
+"""numba's on-disk cache stays bounded (bogie.numba_cache; issue 28, item 8).
+
+Every test works in a cache root of its own (``XDG_CACHE_HOME`` or a ``root`` argument), never in ``~/.cache``.
+"""
+
+import os
+import shutil
+import subprocess
+import sys
+import textwrap
+import time
+from pathlib import Path
+
+from bogie.numba_cache import GRACE, KEEP, LOCK_NAME, claim, prune
+
+ROOT = Path(__file__).resolve().parents[1]
+DAY = 86400.0
+
+
+def fake_entries(root, n, age_days=3.0):
+    """``n`` cache directories of other versions, each with a kernel file, used ``age_days`` ago and before."""
+    entries = []
+    for i in range(n):
+        entry = root / f"{i:016x}"
+        (entry / "bogie_0123").mkdir(parents=True)
+        (entry / "bogie_0123" / "kernel.nbi").write_bytes(b"x" * 1000)
+        used = time.time() - (age_days + i / 24.0) * DAY
+        os.utime(entry, (used, used))
+        entries.append(entry)
+    return entries
+
+
+def directories(root):
+    return sorted(p for p in root.iterdir() if p.is_dir() and not p.name.startswith("."))
+
+
+def test_one_start_prunes_thirty_old_directories_to_the_bound_and_keeps_a_fresh_one(tmp_path):
+    root = tmp_path / "bogie-numba"
+    old = fake_entries(root, 30)
+    fresh = root / ("f" * 16)
+    (fresh / "bogie_4567").mkdir(parents=True)  # another version compiled a minute ago, by a process now ended
+    os.utime(fresh, (time.time() - 60.0, time.time() - 60.0))
+    env = {k: v for k, v in os.environ.items() if k != "NUMBA_CACHE_DIR"}
+    env["XDG_CACHE_HOME"] = str(tmp_path)
+    script = "import os, bogie; print(os.environ['NUMBA_CACHE_DIR'])"
+    result = subprocess.run([sys.executable, "-c", script], cwd=ROOT, capture_output=True, text=True, env=env,
+                            timeout=300)  # fmt: skip
+    assert result.returncode == 0, result.stderr
+    own = Path(result.stdout.strip())
+    left = directories(root)
+    assert len(left) <= KEEP and own in left and fresh in left, left
+    assert old[0] in left and old[-1] not in left  # the most recently used of the old ones stay
+    assert not [p for p in root.iterdir() if p.name.startswith(".")]  # no half-removed leftover
+
+
+def test_a_directory_in_use_or_used_within_the_grace_time_is_never_removed(tmp_path):
+    root = tmp_path / "bogie-numba"
+    entries = fake_entries(root, 6)
+    busy, recent = entries[-1], entries[-2]  # the least recently used two
+    fd = claim(busy)  # a running process holds it (another open of the lock file conflicts with this one's lock)
+    assert fd is not None
+    try:
+        os.utime(busy, (time.time() - 9 * DAY, time.time() - 9 * DAY))
+        now = time.time() + 1.0
+        os.utime(recent, (now - GRACE / 2, now - GRACE / 2))
+        removed = prune(root, keep=0, now=now)  # nothing kept for being recent in rank: only the lock and the time
+        assert sorted(removed) == sorted(set(entries) - {busy, recent})
+        assert directories(root) == sorted([busy, recent])
+    finally:
+        os.close(fd)
+    # the process has ended and the grace time passed: both go
+    assert sorted(prune(root, keep=0, now=now + 2 * GRACE)) == sorted([busy, recent])
+    assert directories(root) == []
+
+
+def test_two_pruners_at_once_remove_each_directory_once_and_a_claim_survives_a_removal(tmp_path):
+    root = tmp_path / "bogie-numba"
+    fake_entries(root, 12)
+    script = textwrap.dedent(f"""
+        from pathlib import Path
+        from bogie.numba_cache import prune
+        print(len(prune(Path({str(root)!r}), keep=2)))
+    """)
+    runs = [subprocess.Popen([sys.executable, "-c", script], cwd=ROOT, stdout=subprocess.PIPE, text=True)
+            for _ in range(2)]  # fmt: skip
+    counts = [int(p.communicate(timeout=300)[0]) for p in runs]
+    assert sum(counts) == 10 and len(directories(root)) == 2
+    # a process that claims a directory a pruner has just removed gets a fresh one, lock file included
+    entry = directories(root)[0]
+    shutil.rmtree(entry)
+    fd = claim(entry)
+    try:
+        assert fd is not None and os.fstat(fd).st_ino == (entry / LOCK_NAME).stat().st_ino
+    finally:
+        os.close(fd)
