@@ -59,8 +59,8 @@ from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
 from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
 from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
-from pipeline.config_rules import calibration_tilt_count
-from pipeline.config_schema import CALIBRATION_QUANTITIES
+from pipeline.config.rules import calibration_tilt_count
+from pipeline.config.schema import CALIBRATION_QUANTITIES
 from pipeline.distributions import TruncNormal
 from pipeline.observed import _by_size
 from pipeline.protocol import weigh

@@ -103,7 +103,7 @@ def typical_design(config: Config) -> dict[str, float]:
 
 def tilt_grid(config: Config) -> np.ndarray:
     """The tilts of the tolerance grid [degree]: from level outward by ``design.tilt_step`` to the tilt
-    distribution's bounds, both ends included (the schema, pipeline.config_rules, makes sure they include level)."""
+    distribution's bounds, both ends included (the schema, pipeline.config.rules, makes sure they include level)."""
     low, high = (math.degrees(v) for v in config.distributions["chassis_tilt"].support)
     step = config.design.tilt_step
     up = np.arange(0.0, high - 1e-9, step) if high > 0.0 else np.zeros(0)

@@ -14,7 +14,7 @@ from pathlib import Path
 __all__ = ["MAX_JOBS", "MEMORY_BUDGET", "WORKER_MEMORY", "available_memory", "worker_count"]
 
 #: the memory the pipeline's peak may need [bytes]: 16 GiB, what a GitHub-hosted Linux runner and a common
-#: workstation have; validate refuses params whose estimate (pipeline.config_rules) exceeds it, on any machine
+#: workstation have; validate refuses params whose estimate (pipeline.config.rules) exceeds it, on any machine
 MEMORY_BUDGET = 16 * 2**30
 
 #: the most workers ``execution.n_jobs`` may ask for [-]: the cores of the largest single machines (two 128-core

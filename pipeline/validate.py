@@ -2,7 +2,7 @@
 
 ``python -m pipeline.validate`` reads params.yaml through the schema (:mod:`pipeline.config`: every bad key, every
 rule between keys, the bounds on the runs and on the memory the studies imply, against a fixed budget:
-:mod:`pipeline.config_rules`), checks that ``observed.path`` (if given) names a file, then writes the validated
+:mod:`pipeline.config.rules`), checks that ``observed.path`` (if given) names a file, then writes the validated
 configuration in SI units to ``data/config.json``. Every other stage depends on that file, so a bad value stops the
 pipeline here, and DVC, which deletes a stage's outputs before running it, deletes only this small file: a failed
 ``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the runs and the report in place (see the README for what
@@ -31,7 +31,8 @@ def as_json(value: Any) -> Any:
     """A validated configuration (dataclasses, maps, tuples) as plain JSON values; a distribution gets its ``kind``."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = {f.name: as_json(getattr(value, f.name)) for f in dataclasses.fields(value)}
-        section = type(value).__module__ == "pipeline.config"  # a section of the configuration, not a distribution
+        # a section of the configuration (a dataclass of pipeline.config.settings), not a distribution
+        section = type(value).__module__ == "pipeline.config.settings"
         return fields if section else {"kind": type(value).__name__.lower(), **fields}
     if isinstance(value, Mapping):
         return {str(k): as_json(v) for k, v in value.items()}

@@ -305,7 +305,7 @@ def test_a_cross_section_rule_is_checked_once_the_sections_are_valid(raw):
 
 
 def test_the_schema_exports_its_ranges_and_units_as_json_schema():
-    from pipeline.config_schema import Params
+    from pipeline.config.schema import Params
 
     defs = Params.model_json_schema()["$defs"]
     speed = defs["Wim"]["properties"]["speed_m_s"]

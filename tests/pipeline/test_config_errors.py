@@ -1,4 +1,4 @@
-"""The formatter of pydantic's errors (pipeline.config_errors), on hand-made errors and a small hand-made schema."""
+"""The formatter of pydantic's errors (pipeline.config.errors), on hand-made errors and a small hand-made schema."""
 
 from typing import Literal
 
@@ -6,8 +6,8 @@ import pytest
 from pydantic import Field, ValidationError
 from pydantic_core import InitErrorDetails
 
-from pipeline.config_distributions import Strict
-from pipeline.config_errors import (
+from pipeline.config.distributions import Strict
+from pipeline.config.errors import (
     ConfigError,
     config_error,
     error_lines,
@@ -16,7 +16,7 @@ from pipeline.config_errors import (
     range_text,
     to_config_error,
 )
-from pipeline.config_schema import Params, named, number
+from pipeline.config.schema import Params, named, number
 
 
 class Wheel(Strict):

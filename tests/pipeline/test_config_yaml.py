@@ -1,4 +1,4 @@
-"""Duplicated keys in params.yaml are refused (pipeline.config_yaml), at any depth, with both line numbers."""
+"""Duplicated keys in params.yaml are refused (pipeline.config.yaml_loader), at any depth, with both line numbers."""
 
 from pathlib import Path
 
@@ -6,7 +6,7 @@ import pytest
 import yaml
 
 from pipeline.config import ConfigError, load_config, load_params
-from pipeline.config_yaml import DuplicateKeyError, read_yaml
+from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
 
 PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
 

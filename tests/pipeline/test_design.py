@@ -53,7 +53,7 @@ def test_tilt_grid_steps_outward_from_level_and_keeps_the_ends():
     config = parse_config(raw)
     np.testing.assert_allclose(D.tilt_grid(config), [-2.0, -1.5, -0.75, 0.0, 0.75, 1.5, 2.0])
     raw["distributions"]["chassis_tilt_deg"] = {"kind": "uniform", "low": 0.5, "high": 2.0}
-    # refused by the schema, before any stage runs (pipeline.config_rules)
+    # refused by the schema, before any stage runs (pipeline.config.rules)
     with pytest.raises(ConfigError, match="chassis_tilt_deg.*must include level"):
         parse_config(raw)
 

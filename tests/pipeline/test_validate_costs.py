@@ -9,7 +9,7 @@ import pytest
 
 from pipeline import calibrate
 from pipeline.config import ConfigError, load_config, load_params, parse_config
-from pipeline.config_schema import Params
+from pipeline.config.schema import Params
 from pipeline.resources import MAX_JOBS, MEMORY_BUDGET, worker_count
 
 PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"

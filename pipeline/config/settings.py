@@ -1,12 +1,12 @@
 """Loading and validating params.yaml.
 
 :func:`load_params` returns the raw mapping (used by the ``figure2`` stage). :func:`load_config` validates the
-sections of the Monte Carlo fleet pipeline against the pydantic schema of :mod:`pipeline.config_schema` and
+sections of the Monte Carlo fleet pipeline against the pydantic schema of :mod:`pipeline.config.schema` and
 converts every value to SI once, into the frozen dataclasses below: keys ending in ``_mm``, ``_deg``, ``_t`` or
 ``_s`` / ``_m`` / ``_m_s`` give their unit in the name; everything in a :class:`Config` is SI ([m], [rad], [N],
 [s], [kg]). Bad values raise one :class:`ConfigError` (a ``ValueError``) with a line per bad key naming its key
-path, the value and the expected form, range and unit (:mod:`pipeline.config_errors`); a key given twice in the
-file is refused too (:mod:`pipeline.config_yaml`).
+path, the value and the expected form, range and unit (:mod:`pipeline.config.errors`); a key given twice in the
+file is refused too (:mod:`pipeline.config.yaml_loader`).
 """
 
 from __future__ import annotations
@@ -22,10 +22,10 @@ from pydantic import ValidationError
 
 from bogie.params import GRAVITY
 from bogie.wim import axle_error_sd
-from pipeline.config_distributions import ROAD_CLASSES
-from pipeline.config_errors import RULE_ERROR, ConfigError, error_lines, shown
-from pipeline.config_rules import rule_errors
-from pipeline.config_schema import (
+from pipeline.config.distributions import ROAD_CLASSES
+from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
+from pipeline.config.rules import rule_errors
+from pipeline.config.schema import (
     BACKENDS,
     OBSERVED_DIR,
     OTHER_SECTIONS,
@@ -36,7 +36,7 @@ from pipeline.config_schema import (
     Quantity,
     si_distribution,
 )
-from pipeline.config_yaml import DuplicateKeyError, read_yaml
+from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
 from pipeline.constants import GROUP_AXLES, SUSPENSIONS
 
 __all__ = [
@@ -490,7 +490,7 @@ def _design(design: Any) -> DesignConfig | None:
 
 
 def to_config(params: Params) -> Config:
-    """The validated params.yaml sections (:class:`~pipeline.config_schema.Params`) as a :class:`Config`, SI."""
+    """The validated params.yaml sections (:class:`~pipeline.config.schema.Params`) as a :class:`Config`, SI."""
     distributions = {q.name: si_distribution(getattr(params.distributions, key), q) for key, q in QUANTITIES.items()}
     return Config(
         seed=params.seed,
@@ -536,7 +536,7 @@ def parse_config(raw: Mapping[str, Any]) -> Config:
 
 
 def _with_rules(raw: Mapping[str, Any], exc: ValidationError) -> ConfigError:
-    """The field errors of ``exc`` and every rule between keys whose keys are valid (pipeline.config_rules), at once."""
+    """The field errors of ``exc`` and every rule between keys whose keys are valid (pipeline.config.rules), at once."""
     fields = [e for e in exc.errors() if e["type"] != RULE_ERROR]
     lines = error_lines(Params, fields)
     bad = [key for key, _ in lines]

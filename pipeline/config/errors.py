@@ -21,7 +21,7 @@ from pydantic import BaseModel, ValidationError
 from pydantic.fields import FieldInfo
 from pydantic_core import ErrorDetails, PydanticCustomError
 
-#: the error type of :func:`config_error`, and of :func:`rule_error` (a rule between sections, pipeline.config_rules)
+#: the error type of :func:`config_error`, and of :func:`rule_error` (a rule between sections, pipeline.config.rules)
 CONFIG_ERROR = "config"
 RULE_ERROR = "config_rule"
 

@@ -2,8 +2,8 @@
 
 Types are strict (a bool or a numeric text is not a number, an integer field takes no float), unknown keys are
 refused, ranges are field constraints, maps with fixed keys (``axle_mix: {tandem, triaxle}``) are sub-models and
-the distributions are unions tagged by ``kind`` (:mod:`pipeline.config_distributions`). Rules that span fields are
-model validators raising :func:`pipeline.config_errors.config_error`. Every field's ``json_schema_extra`` gives
+the distributions are unions tagged by ``kind`` (:mod:`pipeline.config.distributions`). Rules that span fields are
+model validators raising :func:`pipeline.config.errors.config_error`. Every field's ``json_schema_extra`` gives
 its ``unit`` (as in params.yaml), and ``what`` it is or the ``expected`` form in words, for the error messages.
 """
 
@@ -28,9 +28,9 @@ from pydantic import (
 
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from bogie.wim import ACCURACY_CLASSES
-from pipeline.config_distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
-from pipeline.config_errors import config_error, rule_error
-from pipeline.config_rules import rule_errors
+from pipeline.config.distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
+from pipeline.config.errors import config_error, rule_error
+from pipeline.config.rules import rule_errors
 from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
 from pipeline.distributions import Choice, Constant, Distribution, ParameterError
 from pipeline.resources import MAX_JOBS
@@ -655,7 +655,7 @@ class Params(Strict):
     @model_validator(mode="wrap")
     @classmethod
     def _sections_agree(cls, data: Any, handler: ValidatorFunctionWrapHandler) -> Params:
-        # the rules between keys and the bounds on the costs (pipeline.config_rules) read the file as written; when a
+        # the rules between keys and the bounds on the costs (pipeline.config.rules) read the file as written; when a
         # field is bad, pipeline.config.parse_config runs those whose keys are valid and reports them with it
         params = handler(data)
         broken = rule_errors(cls, data)

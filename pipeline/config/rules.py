@@ -1,6 +1,6 @@
 """The rules between keys of params.yaml, and the bounds on what the settings cost, checked before any work.
 
-Each rule reads the values it needs through a :class:`View` of the mapping as written. :class:`pipeline.config_schema.
+Each rule reads the values it needs through a :class:`View` of the mapping as written. :class:`pipeline.config.schema.
 Params` runs every rule once its fields are valid; when some field is bad, :func:`rule_errors` still runs each rule
 whose keys are all valid (a bad key it needs makes it :class:`Unavailable`), so a rule between keys is reported with
 the field errors, not only once they are fixed.
@@ -20,8 +20,8 @@ from typing import Any
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
 from bogie.params import INHIBITORS
-from pipeline.config_distributions import NumericSpec
-from pipeline.config_errors import locate
+from pipeline.config.distributions import NumericSpec
+from pipeline.config.errors import locate
 from pipeline.distributions import ParameterError
 from pipeline.resources import MEMORY_BUDGET
 
@@ -76,7 +76,7 @@ class View:
     Parameters
     ----------
     schema
-        The model of the whole file (:class:`pipeline.config_schema.Params`).
+        The model of the whole file (:class:`pipeline.config.schema.Params`).
     raw
         The mapping read from params.yaml.
     bad
@@ -249,7 +249,7 @@ def _cost(key_of: str, counted: Callable[[View], tuple[int, str]], cause: str) -
     def rule(view: View) -> Iterator[RuleError]:
         runs, how = counted(view)
         if runs > MAX_RUNS:
-            expected = f"makes {how} = {runs:,} runs, more than {MAX_RUNS:,} (pipeline.config_rules.MAX_RUNS): {cause}"
+            expected = f"makes {how} = {runs:,} runs, more than {MAX_RUNS:,} (pipeline.config.rules.MAX_RUNS): {cause}"
             yield RuleError(key_of, view.get(key_of), expected)
 
     return rule

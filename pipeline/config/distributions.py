@@ -4,7 +4,7 @@ Each model holds the parameters exactly as written in params.yaml, in the unit o
 :meth:`DistributionSpec.build` makes the sampling class of :mod:`pipeline.distributions` from them, which checks
 the rules that span parameters (``low < high``, one weight per value) and raises
 :class:`~pipeline.distributions.ParameterError`. The conversion to SI and the check against the physical range of
-the quantity are done per quantity by :mod:`pipeline.config_schema`.
+the quantity are done per quantity by :mod:`pipeline.config.schema`.
 """
 
 from __future__ import annotations
