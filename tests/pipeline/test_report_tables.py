@@ -106,7 +106,9 @@ def test_summary_table_formats_indices_and_ablation_without_units():
     assert rows[0] == [
         "contact roll radius", "1", "0.24 (0.19 to 0.29)", "0.20 (0.16 to 0.24)", "1.50", "1.71 (1.61 to 1.81)", "25.0"
     ]  # fmt: skip
-    assert rows[1] == ["spring-end friction coefficient", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"]
+    assert rows[1] == [
+        "spring-end friction coefficient", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"
+    ]  # fmt: skip
     assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71 (1.61 to 1.81)", "0.0"]
     assert rows[3] == ["none removed", "", "", "", "3.21", "", "62.5"]
 
