@@ -10,6 +10,7 @@ from matplotlib.figure import Figure
 
 from bogie.results import DynamicResult
 from pipeline.report.inputs import ReportInputs
+from pipeline.report.style import GROUPS
 from pipeline.report.tables import summary_numbers
 
 __all__ = ["Context", "Page"]
@@ -54,7 +55,7 @@ class Context:
     def of(cls, inputs: ReportInputs, runs: Mapping[str, DynamicResult]) -> Context:
         """The context of ``inputs`` and the reference ``runs``."""
         ok, cfg = inputs.ok, inputs.config
-        groups = [g for g in ("tandem", "triaxle") if g in set(ok["group"])]
+        groups = [g for g in GROUPS if g in set(ok["group"])]
         protocols = [p for p in cfg.protocol.run if p in set(ok["protocol"])]
         main = cfg.sensitivity.protocol if cfg.sensitivity.protocol in protocols else protocols[0]
         numbers = summary_numbers(inputs.survey_metrics, inputs.sensitivity_metrics)

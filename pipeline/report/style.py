@@ -2,16 +2,23 @@
 
 from __future__ import annotations
 
+from typing import NamedTuple
+
 import numpy as np
+
+from pipeline.constants import GROUP_AXLES
 
 __all__ = [
     "AXLE_COLOR",
     "FACTOR_LABEL",
+    "GROUPS",
     "GROUP_COLOR",
     "GROUP_LABEL",
     "MEASURE_LABEL",
     "PROTOCOL_LABEL",
     "PROTOCOL_LINE",
+    "QUANTITY",
+    "Quantity",
     "SOURCE_COLOR",
     "SOURCE_LABEL",
     "STYLE",
@@ -38,22 +45,60 @@ STYLE = {
     "pdf.fonttype": 42,
     "image.cmap": "RdYlGn",
 }
-GROUP_LABEL = {"tandem": "tandem", "triaxle": "tri-axle"}
-GROUP_COLOR = {"tandem": "C0", "triaxle": "C1"}
+#: the axle groups in the report's order (the order of pipeline.constants.GROUP_AXLES)
+GROUPS: tuple[str, ...] = tuple(GROUP_AXLES)
+GROUP_LABEL = dict(zip(GROUPS, ("tandem", "tri-axle"), strict=True))
+GROUP_COLOR = dict(zip(GROUPS, ("C0", "C1"), strict=True))
 PROTOCOL_LABEL = {"static": "static weighbridge", "wim": "weigh-in-motion"}
 PROTOCOL_LINE = {"static": "-", "wim": "--"}
 AXLE_COLOR = {"front": "C2", "middle": "C4", "rear": "C3"}
 #: the sides of the observed page: an observed survey, the simulated fleet's two protocols
 SOURCE_LABEL = {"observed": "observed", "static": "simulated static", "wim": "simulated WIM"}
 SOURCE_COLOR = {"observed": "0.15", "static": "C0", "wim": "C1"}
+
+
+class Quantity(NamedTuple):
+    """The report's one name of a sampled or designed quantity, its unit and how a value is written.
+
+    ``name``: in prose, table rows and axis labels; ``short``: in a table header or a panel title, where the name
+    does not fit; ``scale``: SI value -> value in ``unit``; ``fmt``: a value in ``unit`` as text.
+    """
+
+    name: str
+    unit: str
+    scale: float = 1.0
+    fmt: str = "{:g}"
+    short: str = ""
+
+    @property
+    def label(self) -> str:
+        """Axis label: ``contact roll radius [mm]``."""
+        return f"{self.name} [{self.unit}]"
+
+    def value(self, si: float) -> str:
+        """A value given in SI, in ``unit`` and without it: ``value(0.04)`` of a radius in mm is "40"."""
+        return self.fmt.format(si * self.scale)
+
+
+#: every quantity the report names, by its name in bogie.params / the samples (one label per quantity: the same
+#: words in the Sobol' table, the ablation, Appendix A, the fleet correlations and the design guidance).
+#: contact_roll_radius is named as in bogie.params: the radius of the cylindrical spring-end/pad contact, whose
+#: product with the relative rotation is what the TRRL study calls the movement of the contact point.
+QUANTITY: dict[str, Quantity] = {
+    "bush_stiffness": Quantity("bush stiffness", "N m/rad", 1.0, "{:.0f}", "bush"),
+    "bush_damping": Quantity("bush damping", "N m s/rad", 1.0, "{:.0f}", "damping"),
+    "contact_roll_radius": Quantity("contact roll radius", "mm", 1e3, "{:.0f}", "roll radius"),
+    "equaliser_arm": Quantity("equaliser arm", "mm", 1e3, "{:.0f}", "arm"),
+    "friction_coefficient": Quantity("spring-end friction coefficient", "-", 1.0, "{:.2f}", "friction"),
+    "spring_friction_band": Quantity("leaf-spring friction band", "kN", 1e-3, "{:.1f}", "band"),
+    "spring_friction_decay": Quantity("leaf-spring friction decay", "mm", 1e3, "{:.1f}", "decay"),
+    "tyre_wear": Quantity("tyre wear", "mm", 1e3, "{:.1f}", "wear"),
+    "chassis_tilt": Quantity("chassis tilt", "degree", float(np.degrees(1.0)), "{:.2f}", "tilt"),
+    "payload_fraction": Quantity("payload", "-", 1.0, "{:.2f}", "payload"),
+}
+#: the names of the sensitivity's factors and the ablation's variants: a quantity by its one name
 FACTOR_LABEL = {
-    "bush_stiffness": "bush stiffness",
-    "bush_damping": "bush damping",
-    "contact_roll_radius": "contact movement",
-    "friction_coefficient": "spring-end friction",
-    "spring_friction_band": "spring hysteresis",
-    "chassis_tilt": "chassis tilt",
-    "tyre_wear": "tyre wear",
+    **{key: q.name for key, q in QUANTITY.items()},
     "baseline": "none removed",
     "all": "all five removed",
 }

@@ -16,7 +16,7 @@ import pandas as pd
 
 from pipeline.config import Config
 from pipeline.constants import PROTOCOLS
-from pipeline.report.style import GROUP_LABEL, factor_label
+from pipeline.report.style import GROUP_LABEL, QUANTITY, factor_label
 from pipeline.sample import STUDIES, TYRE_WEAR_COLUMNS
 from pipeline.survey_design import DESIGN_BINS
 
@@ -131,13 +131,9 @@ def plot_series(
 
 
 # ---- design guidance -----------------------------------------------------------------------------------------------
-#: the words for the design guidance's parameters
-DESIGN_NAMES = {
-    "bush_stiffness": "bush stiffness",
-    "equaliser_arm": "equaliser arm",
-    "friction_coefficient": "friction coefficient",
-    "contact_roll_radius": "contact roll radius",
-}
+#: the words for the design guidance's parameters: their one name (:data:`pipeline.report.style.QUANTITY`)
+DESIGN_NAMES = {key: QUANTITY[key].name for key in ("bush_stiffness", "equaliser_arm", "friction_coefficient",
+                                                    "contact_roll_radius")}  # fmt: skip
 
 
 @dataclass(frozen=True)
@@ -222,18 +218,19 @@ def design_quotes(
 
 
 # ---- Appendix A ----------------------------------------------------------------------------------------------------
-#: sampled quantities shown in Appendix A: column (or columns), params.yaml key, label, edge unit, SI -> edge, log
-SAMPLED: tuple[tuple[str, str, str, str, float, bool], ...] = (
-    ("bush_stiffness", "bush_stiffness", "bush stiffness", "N m/rad", 1.0, True),
-    ("bush_damping", "bush_damping", "bush damping", "N m s/rad", 1.0, True),
-    ("friction_coefficient", "friction_coefficient", "spring-end friction coefficient", "-", 1.0, False),
-    ("contact_roll_radius", "contact_roll_radius_mm", "contact roll radius", "mm", 1e3, False),
-    ("equaliser_arm", "equaliser_arm_mm", "equaliser arm", "mm", 1e3, False),
-    ("spring_friction_band", "spring_friction_band_kn", "leaf-spring friction band", "kN", 1e-3, False),
-    ("spring_friction_decay", "spring_friction_decay_mm", "leaf-spring friction decay", "mm", 1e3, False),
-    ("tyre_wear", "tyre_wear_mm", "tyre wear, every tyre", "mm", 1e3, False),
-    ("chassis_tilt", "chassis_tilt_deg", "chassis tilt, nose up +", "degree", float(np.degrees(1.0)), False),
-    ("payload_fraction", "payload_fraction", "payload, fraction of the legal group load", "-", 1.0, False),
+#: sampled quantities shown in Appendix A: column, params.yaml key, what the title adds to the quantity's one name
+#: (:data:`pipeline.report.style.QUANTITY`, with its unit and scale), log axis
+SAMPLED: tuple[tuple[str, str, str, bool], ...] = (
+    ("bush_stiffness", "bush_stiffness", "", True),
+    ("bush_damping", "bush_damping", "", True),
+    ("friction_coefficient", "friction_coefficient", "", False),
+    ("contact_roll_radius", "contact_roll_radius_mm", "", False),
+    ("equaliser_arm", "equaliser_arm_mm", "", False),
+    ("spring_friction_band", "spring_friction_band_kn", "", False),
+    ("spring_friction_decay", "spring_friction_decay_mm", "", False),
+    ("tyre_wear", "tyre_wear_mm", ", every tyre", False),
+    ("chassis_tilt", "chassis_tilt_deg", ", nose up +", False),
+    ("payload_fraction", "payload_fraction", ", fraction of the legal group load", False),
 )
 
 
@@ -262,13 +259,15 @@ def parameter_panels(fleet: pd.DataFrame, raw: Mapping[str, Any], config: Config
     """
     dists = raw.get("distributions", {})
     panels: list[dict[str, Any]] = []
-    for column, key, label, unit, scale, log in SAMPLED:
+    for column, key, qualifier, log in SAMPLED:
+        q = QUANTITY[column]
+        label = q.name + qualifier
         if column == "tyre_wear":
             values = np.concatenate([fleet.loc[fleet["n_axles"] > i, c] for i, c in enumerate(TYRE_WEAR_COLUMNS)])
         else:
             values = fleet[column].to_numpy(dtype=float)
         title = f"{label}\n{distribution_text(dists.get(key))}"
-        panels.append({"title": title, "xlabel": f"{label} [{unit}]", "values": scale * values, "log": log})
+        panels.append({"title": title, "xlabel": f"{label} [{q.unit}]", "values": q.scale * values, "log": log})
     road = dists.get("road_class", {})
     weights = np.asarray(road.get("weights") or [1.0] * len(road.get("values", [])), dtype=float)
     expected = dict(zip(road.get("values", []), len(fleet) * weights / weights.sum())) if weights.size else None

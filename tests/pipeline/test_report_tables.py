@@ -72,7 +72,7 @@ def test_failures_table_shortens_long_id_lists_and_names_the_variant():
     assert rows[0][5].replace("\n", " ") == "0 1 2 3 4 5 6 7 8 9 10 11 ... (20 in all)"
     assert all(len(line) <= 24 for line in rows[0][5].split("\n"))
     assert all(len(line) <= 50 for line in rows[0][6].split("\n"))
-    assert rows[1][3] == "contact\nmovement" and rows[1][5] == "5"
+    assert rows[1][3] == "contact roll\nradius" and rows[1][5] == "5"
 
 
 # ---- summary -------------------------------------------------------------------------------------------------------
@@ -104,9 +104,11 @@ def test_summary_table_formats_indices_and_ablation_without_units():
     header, rows = summary_table(numbers)
     assert len(header) == 7 == len(rows[0])
     assert rows[0] == [
-        "contact movement", "1", "0.24 (0.19 to 0.29)", "0.20 (0.16 to 0.24)", "1.50", "1.71 (1.61 to 1.81)", "25.0"
+        "contact roll radius", "1", "0.24 (0.19 to 0.29)", "0.20 (0.16 to 0.24)", "1.50", "1.71 (1.61 to 1.81)", "25.0"
     ]  # fmt: skip
-    assert rows[1] == ["spring-end friction", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"]
+    assert rows[1] == [
+        "spring-end friction coefficient", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"
+    ]  # fmt: skip
     assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71 (1.61 to 1.81)", "0.0"]
     assert rows[3] == ["none removed", "", "", "", "3.21", "", "62.5"]
 
@@ -212,7 +214,7 @@ def test_design_quotes_pick_the_cells_at_target_and_the_trends():
     assert trends["equaliser arm"] == {"tandem": (0.5, 1.0)}
     groups, trends = tables.design_quotes(grids, lines, target=0.95, min_cell=2)
     assert groups == {"tandem": None}
-    assert trends["bush stiffness"] == {"tandem": (1.0, 1.0)} and "friction coefficient" not in trends
+    assert trends["bush stiffness"] == {"tandem": (1.0, 1.0)} and "spring-end friction coefficient" not in trends
 
 
 def test_distribution_text_of_params_entries():

@@ -145,9 +145,11 @@ def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
         "By the total Sobol index ST of max_deviation, with 95 % intervals, the five inhibitors (the reference's four "
         "and its preface's leaf-spring hysteresis) rank: "
     )
-    assert "rank: 1. contact movement, ST 0.24 (0.19 to 0.29); 2. bush stiffness, ST 0.03 (0.02 to 0.04). " in paras[1]
+    assert (
+        "rank: 1. contact roll radius, ST 0.24 (0.19 to 0.29); 2. bush stiffness, ST 0.03 (0.02 to 0.04). " in paras[1]
+    )
     assert "external causes in the same design: chassis tilt 0.78. As the reference concluded" in paras[1]
-    assert paras[1].endswith("contact movement, and the intervals separate them.")
+    assert paras[1].endswith("contact roll radius, and the intervals separate them.")
     assert paras[2] == "## What a roadside survey of the fleet finds"
     assert paras[3].startswith("Static weighbridge: 12.3 % of tandem and n/a of tri-axle groups are outside 5 %")
     assert "312 kg (4.57 % of the mean axle load) more than the lightest on tandem groups and 312 kg" in paras[3]
@@ -158,9 +160,11 @@ def test_summary_gives_the_ranking_the_survey_and_the_ablation_in_words():
     assert paras[5] == "## What removing each inhibitor buys"
     assert paras[6] == (
         "Static weighbridge, 40 fleet bogies: the fleet mean of the maximum deviation from the mean axle load, 3.21 % "
-        "with every inhibitor present, becomes 1.50 % without contact movement (reduction 1.71 points, 1.61 to 1.81), "
+        "with every inhibitor present, becomes 1.50 % without contact roll radius (reduction 1.71 points, 1.61 to "
+        "1.81), "
         "3.00 % without bush stiffness (reduction 0.21 points, 0.11 to 0.31); and 0.12 % with all five removed. "
-        "The largest single gain is from removing contact movement: the share outside 5 % goes from 62.5 % to 25.0 %."
+        "The largest single gain is from removing contact roll radius: the share outside 5 % goes from 62.5 % to "
+        "25.0 %."
     )
     assert len(paras) == 7
 
@@ -177,7 +181,7 @@ def test_summary_gives_the_design_studys_advice_when_there_is_some():
     ("agrees", "resolved", "verdict"),
     [
         (True, False, "; but the intervals overlap, so at base size 64 the ordering is not resolved."),
-        (False, False, "Unlike the reference's conclusion, spring-end friction does not rank below both"),
+        (False, False, "Unlike the reference's conclusion, spring-end friction coefficient does not rank below both"),
         (None, None, "The reference's claim could not be checked (an index is missing)."),
     ],
 )
@@ -197,7 +201,7 @@ def test_summary_notes_and_sensitivity_caption():
     assert (
         "of the tri-axle bogie's axle loads at the static weighbridge (63 Saltelli blocks, base size 64)" in caption[0]
     )
-    assert caption[0].endswith("the inhibitors rank by P1: bush stiffness > contact movement.")
+    assert caption[0].endswith("the inhibitors rank by P1: bush stiffness > contact roll radius.")
     assert caption[1].startswith("Bottom: the ablation, 40 fleet bogies (static), each with one inhibitor")
 
 

@@ -23,7 +23,8 @@ from pipeline.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page
-from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, factor_label, load_share_axes
+from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, GROUPS, factor_label, load_share_axes
+from pipeline.report.style import QUANTITY as SAMPLED_QUANTITY
 
 __all__ = [
     "CHECK_SIDES", "QUANTITY", "SIZES", "check_page", "fit_page", "fit_rows", "page", "quantity_label",
@@ -31,11 +32,12 @@ __all__ = [
 ]  # fmt: skip
 
 #: the group sizes compared
-SIZES: tuple[str, ...] = ("tandem", "triaxle")
-#: each fitted quantity's name in the report and its unit
+SIZES: tuple[str, ...] = GROUPS
+_TILT = SAMPLED_QUANTITY["chassis_tilt"]
+#: each fitted quantity's name in the report and its unit (chassis tilt's: its one name, pipeline.report.style)
 QUANTITY: dict[str, tuple[str, str]] = {
-    "chassis_tilt_mean_deg": ("chassis tilt, centre", "degree"),
-    "chassis_tilt_sd_deg": ("chassis tilt, spread (sd)", "degree"),
+    "chassis_tilt_mean_deg": (f"{_TILT.name}, centre", _TILT.unit),
+    "chassis_tilt_sd_deg": (f"{_TILT.name}, spread (sd)", _TILT.unit),
     "air_share": ("air-sprung share", "-"),
     "site_iri_m_km": ("WIM site roughness (IRI)", "m/km"),
     "sensor_error_pct": ("sensor error (sd)", "%"),

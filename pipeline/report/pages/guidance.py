@@ -4,10 +4,11 @@ Two pages when the study ran. The experiment: per group, every design's share wi
 operating conditions against how far it lies from today's typical design (the Pareto front joined, the air-sprung
 group as a reference line), the share within 5 % against chassis tilt of the typical design, the design with the
 widest tilt tolerance and the air group, and a table of each group's Pareto front. The tilt tolerance: the
-tolerated nose-up and nose-down tilt of the grid's representative designs against bush stiffness, a panel per pad
-radius and a line per arm length, and a table. The sentences under them are ``metrics/design.json``'s
-``guidance``, generated from the numbers by :func:`pipeline.design.guidance`. When the stage was skipped, one page
-says why.
+tolerated nose-up and nose-down tilt of the grid's representative designs against bush stiffness, a panel per
+contact roll radius and a line per arm length, and a table. The sentences under them are ``metrics/design.json``'s
+``guidance``, generated from the numbers by :func:`pipeline.design.guidance`, each put on its page by its kind
+(:func:`sentence_kinds`, :data:`SENTENCE_PAGE`). The prose is in ``templates/guidance_*.j2``. When the stage was
+skipped, one page says why.
 """
 
 from __future__ import annotations
@@ -22,20 +23,20 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from pipeline.design import tolerance_width
+from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page
-from pipeline.report.style import GROUP_COLOR, GROUP_LABEL
+from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, GROUPS, QUANTITY
 
-__all__ = ["design_cells", "experiment_page", "front_rows", "pages", "tolerance_page", "tolerance_rows"]
+__all__ = [
+    "FACTORS", "SENTENCE_PAGE", "design_cells", "experiment_page", "front_rows", "pages", "sentence_kinds",
+    "sentences", "tolerance_page", "tolerance_rows",
+]  # fmt: skip
 
-#: each design factor's axis label, its unit's scale from SI and the format of a value
-FACTOR_AXIS: dict[str, tuple[str, float, str]] = {
-    "bush_stiffness": ("bush stiffness [N m/rad]", 1.0, "{:.0f}"),
-    "equaliser_arm": ("equaliser arm [mm]", 1e3, "{:.0f}"),
-    "contact_roll_radius": ("pad radius [mm]", 1e3, "{:.0f}"),
-    "friction_coefficient": ("spring-end friction [-]", 1.0, "{:.2f}"),
-    "spring_friction_band": ("springs' band [kN]", 1e-3, "{:.1f}"),
-}
+#: the five design factors in the tables' order (names, units and formats: :data:`pipeline.report.style.QUANTITY`)
+FACTORS: tuple[str, ...] = (
+    "bush_stiffness", "equaliser_arm", "contact_roll_radius", "friction_coefficient", "spring_friction_band",
+)  # fmt: skip
 KIND_MARKER = {"typical": "*", "grid": "o", "space": "s"}
 KIND_LABEL = {"typical": "today's typical", "grid": "grid design", "space": "space-filling design"}
 
@@ -59,11 +60,52 @@ def design_cells(row: Mapping[str, Any]) -> list[str]:
     group has none of them."""
     if row["suspension"] == "air":
         return ["air-sprung", "-", "-", "-", "-", "-"]
-    return [
-        {"typical": "typical", "grid": "grid", "space": "space-filling"}[row["kind"]],
-        f"{row['bush_stiffness']:.0f}", f"{1e3 * row['equaliser_arm']:.0f}", f"{1e3 * row['contact_roll_radius']:.0f}",
-        f"{row['friction_coefficient']:.2f}", f"{row['spring_friction_band'] / 1e3:.1f}",
-    ]  # fmt: skip
+    kind = {"typical": "typical", "grid": "grid", "space": "space-filling"}[row["kind"]]
+    return [kind, *(QUANTITY[f].value(row[f]) for f in FACTORS)]
+
+
+# ---- the design stage's sentences -----------------------------------------------------------------------------------
+#: the page each kind of guidance sentence goes under. Per group, :func:`pipeline.design.guidance` writes, in this
+#: order: ``tolerance`` (the widest tilt tolerance, or that none is tolerated), ``typical`` (today's typical design,
+#: when the group has one), ``fleet`` (the best design across the fleet's own conditions), ``air`` (the air-sprung
+#: group, when it ran)
+SENTENCE_PAGE: dict[str, str] = {"tolerance": "tolerance", "typical": "tolerance", "fleet": "experiment",
+                                 "air": "experiment"}  # fmt: skip
+
+
+def sentence_kinds(m: Mapping[str, Any]) -> list[tuple[str, str]]:
+    """(group, kind) of each of ``metrics/design.json``'s ``guidance`` sentences, in their order, from the keys
+    that say which sentences the design stage wrote: the groups of ``designs``, the ``typical`` kind among
+    ``design_summaries`` (one per entry of ``designs``), the groups of ``air``.
+
+    Raises
+    ------
+    ValueError
+        When the sentences are not as many as those keys give (metrics written by another version of the stage).
+    """
+    summaries = m["design_summaries"]
+    if len(summaries) != len(m["designs"]):
+        raise ValueError(f"design.json: {len(m['designs'])} designs but {len(summaries)} design_summaries")
+    typical = {d["group"] for d, s in zip(m["designs"], summaries, strict=True) if s["kind"] == "typical"}
+    kinds: list[tuple[str, str]] = []
+    for group in dict.fromkeys(d["group"] for d in m["designs"]):
+        kinds.append((group, "tolerance"))
+        if group in typical:
+            kinds.append((group, "typical"))
+        kinds.append((group, "fleet"))
+        if group in m["air"]:
+            kinds.append((group, "air"))
+    if len(kinds) != len(m["guidance"]):
+        raise ValueError(
+            f"design.json: {len(m['guidance'])} guidance sentences, but its designs and air references give "
+            f"{len(kinds)} ({', '.join(f'{g} {k}' for g, k in kinds)})"
+        )
+    return kinds
+
+
+def sentences(m: Mapping[str, Any], page: str) -> list[str]:
+    """The guidance sentences that go under ``page`` (``experiment`` or ``tolerance``), in the stage's order."""
+    return [s for (_, kind), s in zip(sentence_kinds(m), m["guidance"], strict=True) if SENTENCE_PAGE[kind] == page]
 
 
 # ---- page 1: the experiment ---------------------------------------------------------------------------------------
@@ -118,9 +160,9 @@ def _curves(ax, group: str, designs: pd.DataFrame, curves: pd.DataFrame, target:
     ax.legend(loc="lower center", fontsize=6.8)
 
 
-#: the design's columns in the tables: bush [N m/rad], arm [mm], pad radius [mm], friction [-], band [kN]
-DESIGN_HEADER = ["design", "bush\n[N m/rad]", "arm\n[mm]", "pad\n[mm]", "friction\n[-]", "band\n[kN]"]
-DESIGN_WIDTHS = [0.1, 0.08, 0.06, 0.06, 0.07, 0.06]
+#: the design's columns in the tables: its kind, then each factor's short name and unit
+DESIGN_HEADER = ["design", *(f"{QUANTITY[f].short}\n[{QUANTITY[f].unit}]" for f in FACTORS)]
+DESIGN_WIDTHS = [0.1, 0.08, 0.06, 0.08, 0.07, 0.06]
 FRONT_HEADER = [
     "group",
     *DESIGN_HEADER,
@@ -153,24 +195,8 @@ def experiment_page(tables: Mapping[str, pd.DataFrame], m: Mapping[str, Any], gr
     """Page 1: the designs against their distance from the typical one, the tilt curves, the Pareto fronts."""
     designs, curves = tables["designs.csv"], tables["tilt_curves.csv"]
     target = float(m["target_share"])
-    check = m["interpolation_check"]
-    intro = [
-        f"A controlled experiment (static weighbridge): every design runs over the same {m['n_conditions']} operating "
-        "conditions, drawn from the fleet's distributions of chassis tilt, tyre wear, payload and approach road "
-        "(common random numbers), once at each condition's own tilt (the shares, with "
-        f"{100 * m['confidence_level']:.0f} % Wilson intervals) and on a grid of tilts "
-        f"({', '.join(f'{t:g}' for t in m['tilt_grid_deg'])} degree) for the tilt tolerance, the loads interpolated "
-        f"between ({m['runs']} runs, {m['failed']} failed). Distance: how far into the tails of today's fleet a design "
-        "lies, sqrt(sum (F(x) - 1/2)^2) over the five factors, F the fleet's distribution of each (0: the fleet's "
-        "medians; 1.12: a corner of its ranges).",
-    ]
-    notes = [*[s for s in m["guidance"] if "fleet's own" in s or "air-sprung" in s]]
-    if check["pairs"]:
-        notes.append(
-            f"Interpolation check: at the {check['pairs']} conditions' own tilts the interpolated loads differ from "
-            f"the runs by at most {check['largest_max_deviation_difference_pct']:.2f} points of max_deviation, and "
-            f"disagree on within 5 % in {check['within_5pct_disagreements']} cases."
-        )
+    intro = text.render("guidance_experiment.j2", m=m)
+    notes = [*sentences(m, "experiment"), *text.render("guidance_check.j2", check=m["interpolation_check"])]
     rows = front_rows(designs)
 
     def draw(option: tuple[float, float]) -> tuple[Figure, float]:
@@ -203,23 +229,21 @@ EXPERIMENT_FITS = ((0.5, 7.8), (0.52, 7.5), (0.55, 7.2), (0.58, 6.9), (0.6, 6.6)
 
 # ---- page 2: the tilt tolerance -------------------------------------------------------------------------------------
 def _axes_factors(grid: Sequence[str]) -> tuple[str, str | None, str | None]:
-    """The chart's x axis, panels and lines among the grid's factors: bush, pad radius and arm when the grid has
-    them, else the grid's own order."""
+    """The chart's x axis, panels and lines among the grid's factors: bush, contact roll radius and arm when the
+    grid has them, else the grid's own order."""
     preferred = [f for f in ("bush_stiffness", "contact_roll_radius", "equaliser_arm") if f in grid]
     order = [*preferred, *[f for f in grid if f not in preferred]]
     return order[0], order[1] if len(order) > 1 else None, order[2] if len(order) > 2 else None
 
 
 def _level(factor: str, value: float, short: bool = False) -> str:
-    """``pad radius 40 mm`` (``pad 40 mm`` if ``short``): a factor's level in its report unit."""
-    label, scale, fmt = FACTOR_AXIS[factor]
-    name, unit = label.split(" [")
-    name = name.split()[-2] if short and " " in name and name.endswith("radius") else name
-    return f"{name} {fmt.format(value * scale)} {unit.rstrip(']')}"
+    """``contact roll radius 40 mm`` (``roll radius 40 mm`` if ``short``): a factor's level in its report unit."""
+    q = QUANTITY[factor]
+    return f"{q.short if short else q.name} {q.value(value)} {q.unit}"
 
 
 def _tolerance_panel(ax, grid_rows: pd.DataFrame, x: str, line: str | None, color: str, air: pd.DataFrame) -> None:
-    xs, scale, _ = FACTOR_AXIS[x]
+    xs, scale = QUANTITY[x].label, QUANTITY[x].scale
     levels = sorted(set(grid_rows[line])) if line else [None]
     styles = ["-", "--", "-.", ":"]
     for k, level in enumerate(levels):
@@ -269,19 +293,11 @@ def tolerance_page(tables: Mapping[str, pd.DataFrame], m: Mapping[str, Any], gri
     """Page 2: the tolerated tilt of the representative designs, and the table."""
     designs = tables["designs.csv"]
     x, panel, line = _axes_factors(grid)
-    target = float(m["target_share"])
     lo, hi = m["tilt_range_deg"]
     grid_designs = designs[designs["kind"] == "grid"]
     panels = sorted(set(grid_designs[panel])) if panel else [None]
-    intro = [
-        f"Tilt tolerance: the largest nose-up (triangles up, above zero) and nose-down tilt (below zero) at which at "
-        f"least {100 * target:.0f} % of the bogies, over the {m['n_conditions']} conditions' tyre wear, payload and "
-        f"road, stay within 5 %, for the grid's designs (the other factors at today's typical values). A cross: "
-        f"fewer than {100 * target:.0f} % within 5 % even on level ground. Grey band: the air-sprung group's "
-        f"tolerance. The tilts studied end at {lo:g} and {hi:g} degree (the fleet's range): a tolerance there is at "
-        "least that.",
-    ]
-    notes = [s for s in m["guidance"] if "fleet's own" not in s and "air-sprung" not in s]
+    intro = text.render("guidance_tolerance.j2", m=m, lo=lo, hi=hi)
+    notes = sentences(m, "tolerance")
     rows = tolerance_rows(designs)
 
     def draw(option: tuple[float, float]) -> tuple[Figure, float]:
@@ -321,15 +337,10 @@ def pages(ctx: Context) -> list[Page]:
     """The design-guidance pages of the ``design`` stage, or one page saying it did not run."""
     m, tables = ctx.inputs.design_metrics, ctx.inputs.design
     if m.get("skipped"):
-        text = [
-            f"No design study: {m['skipped']}.",
-            "Give params.yaml a design: section (docs/design.md) and run make repro: the design stage runs every "
-            "design over the same operating conditions and this section then shows which designs keep 95 % of "
-            "bogies within 5 % and how much chassis tilt each tolerates.",
-        ]
-        return [Page("Design guidance", "", text_page("Design guidance", text, size=9.0))]
-    groups = [g for g in ("tandem", "triaxle") if g in set(tables["designs.csv"]["group"])]
-    grid = list(ctx.inputs.config.design.grid) if ctx.inputs.config.design else list(FACTOR_AXIS)[:3]
+        paras = text.render("guidance_skipped.j2", reason=m["skipped"])
+        return [Page("Design guidance", "", text_page("Design guidance", paras, size=9.0))]
+    groups = [g for g in GROUPS if g in set(tables["designs.csv"]["group"])]
+    grid = list(ctx.inputs.config.design.grid) if ctx.inputs.config.design else list(FACTORS)[:3]
     return [
         Page("Design guidance", "design_experiment", experiment_page(tables, m, groups)),
         Page("", "design_tolerance", tolerance_page(tables, m, grid, groups)),

@@ -18,12 +18,12 @@ from pipeline.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, text_block
-from pipeline.report.style import GROUP_LABEL, SOURCE_COLOR, SOURCE_LABEL, load_share_axes
+from pipeline.report.style import GROUP_LABEL, GROUPS, SOURCE_COLOR, SOURCE_LABEL, load_share_axes
 
 __all__ = ["SIZES", "SOURCES", "observed_page", "page", "sources"]
 
 #: the group sizes compared
-SIZES: tuple[str, ...] = ("tandem", "triaxle")
+SIZES: tuple[str, ...] = GROUPS
 #: the sides compared, in the order drawn
 SOURCES: tuple[str, ...] = ("observed", "static", "wim")
 
