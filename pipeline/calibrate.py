@@ -47,7 +47,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import yaml
-from joblib import Parallel, delayed
 from scipy.optimize import differential_evolution
 from scipy.stats import energy_distance, truncnorm
 
@@ -66,6 +65,7 @@ from pipeline.observed import _by_size
 from pipeline.protocol import weigh
 from pipeline.resources import worker_count
 from pipeline.sample import bogie_from_sample, sample_fleet, suspension_draw
+from pipeline.simulate import local_executor
 
 __all__ = [
     "Calibration", "CalibrationError", "Observed", "Table", "build_table", "calibrate", "distance", "main",
@@ -215,8 +215,8 @@ def _weigh_many(tasks: Sequence[tuple[dict, str, Any]], n_jobs: int) -> np.ndarr
 
     if n_jobs == 1:
         results = [run(p) for p in parts]
-    else:
-        results = Parallel(n_jobs=n_jobs, backend="loky")(delayed(run)(p) for p in parts)
+    else:  # simulate's pool of loky workers (one executor); map keeps the parts' order
+        results = list(local_executor(n_jobs).map(run, parts))
     return np.concatenate(results) if results else np.zeros((0, 3))
 
 

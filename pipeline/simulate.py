@@ -44,6 +44,7 @@ from collections.abc import Iterator, Mapping, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import pandas as pd
 import pyarrow as pa
@@ -237,6 +238,17 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Re
         yield from Parallel(return_as="generator_unordered", batch_size=1)(tasks)
 
 
+def local_executor(max_workers: int) -> Any:
+    """The one pool of local loky worker processes every stage that weighs uses (simulate's chunks, the calibration's
+    table): one thread each (:data:`ONE_THREAD_ENV`), ended with the main process (:func:`_watch_main_process`), an
+    idle one after :data:`WORKER_IDLE_TIMEOUT`. loky's reusable executor: a second stage in the same process (a test
+    session) gets the same pool, resized, and never one that joblib's ``Parallel`` set up otherwise."""
+    return get_reusable_executor(
+        max_workers=max_workers, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
+        initializer=_watch_main_process, initargs=(os.getpid(),),
+    )  # fmt: skip
+
+
 def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
     """The chunks on this machine, ``n_jobs - 1`` loky worker processes and this one, each result as it is done.
 
@@ -256,10 +268,7 @@ def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
         while todo:
             yield _task(*arguments(todo.popleft()))
         return
-    executor = get_reusable_executor(
-        max_workers=n_jobs - 1, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
-        initializer=_watch_main_process, initargs=(os.getpid(),),
-    )  # fmt: skip
+    executor = local_executor(n_jobs - 1)
     returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or an error of a submission
     lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
     in_flight = 0
