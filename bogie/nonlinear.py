@@ -341,25 +341,62 @@ def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArra
     return mass, data_f, data_i
 
 
-#: the bogies :func:`_packed` packed last, by identity (a frozen Bogie's pack never changes), with their pack
-_PACKED: dict[int, tuple[Bogie, tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]]] = {}
-#: how many bogies :data:`_PACKED` keeps
-_PACKED_SIZE = 4
-_PACKED_LOCK = threading.Lock()
+@dataclass(frozen=True)
+class Constants:
+    """What the solvers need of a bogie that nothing changes (:func:`constants`): its pack (:func:`pack`; the mass
+    matrix is diagonal, the kernels use only its diagonal), the axles' offsets behind the front axle, each
+    freedom's lever, residual tolerance and limit, and the king pin's height offset."""
+
+    mass: NDArray[np.float64]
+    data_f: NDArray[np.float64]
+    data_i: NDArray[np.int64]
+    offsets: NDArray[np.float64]
+    levers: NDArray[np.float64]
+    r_tol: NDArray[np.float64]
+    u_limit: NDArray[np.float64]
+    kingpin: float
+
+
+#: the bogies :func:`constants` computed last with their constants, by identity: the one cache of a bogie's pack,
+#: for the equilibrium (:func:`_packed`) and the phases (:func:`bogie.phases.run`). Each entry holds its bogie, so
+#: while it lives no other object can take that id() (the ``is`` test says so too). Not by equality: two equal
+#: bogies (0.0 == -0.0) may pack other bits, and hashing every field would cost more than the lookup saves.
+_CONSTANTS: dict[int, tuple[Bogie, Constants]] = {}
+#: how many bogies :data:`_CONSTANTS` keeps
+_CONSTANTS_SIZE = 4
+_CONSTANTS_LOCK = threading.Lock()
+
+
+def constants(bogie: Bogie) -> Constants:
+    """The bogie's :class:`Constants`, computed once for the phases and the equilibrium of its weighings (issue 15:
+    a static weighing packed the same bogie four times). Shared: do not change the arrays (:func:`_packed` copies)."""
+    hit = _CONSTANTS.get(id(bogie))
+    if hit is not None and hit[0] is bogie:
+        return hit[1]
+    mass, data_f, data_i = pack(bogie)
+    levers = _levers(bogie)
+    found = Constants(
+        mass=mass,
+        data_f=data_f,
+        data_i=data_i,
+        offsets=np.asarray(bogie.axle_x, dtype=float) - bogie.axle_x[0],
+        levers=levers,
+        r_tol=_tolerance(bogie, levers),
+        u_limit=limits(bogie),
+        kingpin=float(bogie.kingpin_height_offset),
+    )
+    with _CONSTANTS_LOCK:  # threads weighing side by side: one of them drops the oldest entry
+        while len(_CONSTANTS) >= _CONSTANTS_SIZE:
+            del _CONSTANTS[next(iter(_CONSTANTS))]
+        _CONSTANTS[id(bogie)] = (bogie, found)
+    return found
 
 
 def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """:func:`pack` of ``bogie``, packed once for the phases and the equilibrium of a weighing (issue 15: a static
-    weighing packed the same bogie four times). Fresh copies: the caller may change them."""
-    hit = _PACKED.get(id(bogie))
-    if hit is None or hit[0] is not bogie:
-        hit = (bogie, pack(bogie))
-        with _PACKED_LOCK:  # threads weighing side by side: one of them drops the oldest entry
-            while len(_PACKED) >= _PACKED_SIZE:
-                del _PACKED[next(iter(_PACKED))]
-            _PACKED[id(bogie)] = hit
-    mass, data_f, data_i = hit[1]
-    return mass.copy(), data_f.copy(), data_i.copy()
+    """:func:`pack` of ``bogie`` from :func:`constants`, packed once per bogie. Fresh copies: the caller may change
+    them."""
+    c = constants(bogie)
+    return c.mass.copy(), c.data_f.copy(), c.data_i.copy()
 
 
 #: where the relaxed equilibrium zeroes the friction in ``data_f`` (friction_coefficient and spring_friction_band

@@ -2,10 +2,11 @@
 
 numba invalidates a cached function only when its own file changes, not when a compiled function it calls (in
 another module) does, so ``import bogie`` points ``NUMBA_CACHE_DIR`` at a directory of its own per version of the
-sources (:func:`source_digest`): ``<root>/<digest>/``, the root ``$XDG_CACHE_HOME/bogie-numba`` (``~/.cache``
-without it, :func:`cache_root`). numba keys what it caches there by the path of each source file too (one
-subdirectory per clone, its index stamped with the file's modification time), so two clones of one version share the
-directory but not the files; sharing those would make each clone overwrite the other's index on every start.
+sources (:func:`source_digest`: every module below ``bogie/``, subpackages included): ``<root>/<digest>/``, the root
+``$XDG_CACHE_HOME/bogie-numba`` (``~/.cache`` without it, :func:`cache_root`). numba keys what it caches there by
+the path of each source file too (one subdirectory per clone, its index stamped with the file's modification time),
+so two clones of one version share the directory but not the files; sharing those would make each clone overwrite
+the other's index on every start.
 
 Every edit of a source is a new version, and nothing removed the old ones: the root grew by a directory per version
 and clone (75 MB after a day's work). So each process that sets the directory claims it (:func:`claim`: a shared
@@ -24,6 +25,7 @@ import hashlib
 import os
 import shutil
 import time
+from collections.abc import Iterable
 from pathlib import Path
 
 try:
@@ -31,7 +33,7 @@ try:
 except ImportError:  # no flock (Windows): claim nothing, prune nothing
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["GRACE", "KEEP", "cache_root", "claim", "prune", "source_digest"]
+__all__ = ["GRACE", "KEEP", "cache_root", "claim", "hash_sources", "prune", "source_digest"]
 
 #: the cache directories kept, the most recently used first, this process's own among them: the versions a day's
 #: switching between branches and clones comes back to (each is 0.5-25 MB; one not kept costs a recompilation,
@@ -51,11 +53,27 @@ def cache_root() -> Path:
     return Path(os.environ.get("XDG_CACHE_HOME") or Path.home() / ".cache") / "bogie-numba"
 
 
+def hash_sources(digest: hashlib._Hash, paths: Iterable[Path], root: Path) -> None:
+    """Feed each source file to ``digest``: its path relative to ``root`` (POSIX), a NUL, its bytes, a NUL.
+
+    The one way bogie's sources are hashed: for numba's cache directory (:func:`source_digest`) and for the
+    simulate stage's code version (:func:`pipeline.chunks.code_version`). The name counts, so a module moved or
+    renamed is another version; the caller gives the order.
+    """
+    for path in paths:
+        digest.update(path.relative_to(root).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+
+
 def source_digest(package: Path) -> str:
-    """A 16-hex-digit hash of the package's modules (``package/*.py``, by name order): a cache directory's name."""
+    """A 16-hex-digit hash of every module of the package, its subpackages' included: a cache directory's name.
+
+    Every ``.py`` file below ``package`` (recursively), in the order of their relative paths, each with its relative
+    path (:func:`hash_sources`): a kernel inlines compiled functions from other modules, a subpackage's too, and
+    numba does not see their changes.
+    """
     digest = hashlib.sha256()
-    for path in sorted(package.glob("*.py")):
-        digest.update(path.read_bytes())
+    paths = sorted(package.rglob("*.py"), key=lambda path: path.relative_to(package).as_posix())
+    hash_sources(digest, paths, package)
     return digest.hexdigest()[:16]
 
 

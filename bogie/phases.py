@@ -14,7 +14,6 @@ the tool for time histories.
 from __future__ import annotations
 
 import math
-import threading
 from dataclasses import dataclass
 
 import numpy as np
@@ -230,52 +229,11 @@ class PhasesRun:
         return self.status == "ok"
 
 
-@dataclass(frozen=True)
-class _Constants:
-    """What the kernel needs of a bogie that no phase changes."""
-
-    mass: NDArray[np.float64]
-    data_f: NDArray[np.float64]
-    data_i: NDArray[np.int64]
-    offsets: NDArray[np.float64]
-    levers: NDArray[np.float64]
-    r_tol: NDArray[np.float64]
-    u_limit: NDArray[np.float64]
-    kingpin: float
-
-
-_CONSTANTS: dict[int, tuple[Bogie, _Constants]] = {}
-_CONSTANTS_SIZE = 4
-_CONSTANTS_LOCK = threading.Lock()
 _RELAXED_SLOTS = np.asarray(nl._FRICTION_SLOTS, dtype=np.int64)
 _SCHEME = (0.25, 0.5, 0.0, 0.0)  # Newmark's average acceleration: (beta, gamma, alpha_m, alpha_f)
 
 
-def _constants(bogie: Bogie) -> _Constants:
-    """The bogie's packed parameters and tolerances, computed once for the phases of its weighings."""
-    hit = _CONSTANTS.get(id(bogie))
-    if hit is not None and hit[0] is bogie:
-        return hit[1]
-    mass, data_f, data_i = nl.pack(bogie)  # its mass matrix is diagonal: the kernel uses only the diagonal
-    levers = nl._levers(bogie)
-    constants = _Constants(
-        mass=mass,
-        data_f=data_f,
-        data_i=data_i,
-        offsets=np.asarray(bogie.axle_x, dtype=float) - bogie.axle_x[0],
-        levers=levers,
-        r_tol=nl._tolerance(bogie, levers),
-        u_limit=nl.limits(bogie),
-        kingpin=float(bogie.kingpin_height_offset),
-    )
-    with _CONSTANTS_LOCK:
-        while len(_CONSTANTS) >= _CONSTANTS_SIZE:
-            del _CONSTANTS[next(iter(_CONSTANTS))]
-        _CONSTANTS[id(bogie)] = (bogie, constants)
-    return constants
-
-
-def _rows(phases: list[Phase], c: _Constants) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
+def _rows(phases: list[Phase], c: nl.Constants) -> tuple[NDArray[np.float64], NDArray[np.float64]]:
     """The kernel's phase rows and the concatenated road tables."""
     rows = np.zeros((len(phases), len(pc.PHASE_COLUMNS)))
     tables = []
@@ -323,7 +281,7 @@ def _rows(phases: list[Phase], c: _Constants) -> tuple[NDArray[np.float64], NDAr
     return rows, road_h
 
 
-def _first_drive_row(phase: Phase, c: _Constants, n: int) -> NDArray[np.float64]:
+def _first_drive_row(phase: Phase, c: nl.Constants, n: int) -> NDArray[np.float64]:
     """The drive row at a phase's start, as :func:`bogie._phases_core._drive` computes it (for the Python
     equilibrium the kernel falls back on)."""
     drv = np.zeros(2 * n + 2)
@@ -370,7 +328,7 @@ def run(
         raise ValueError("phases is empty: give at least one Phase")
     if isinstance(check_every, bool) or not isinstance(check_every, int) or check_every < 1:
         raise ValueError(f"check_every = {check_every!r} is out of range: must be an integer >= 1 (steps)")
-    c = _constants(bogie)
+    c = nl.constants(bogie)  # the bogie's pack, tolerances and limits, computed once per bogie
     n = bogie.n_axles
     rows, road_h = _rows(phases, c)
     ndof = 2 * n

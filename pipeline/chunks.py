@@ -31,6 +31,7 @@ import pyarrow.parquet as pq
 import scipy
 
 from bogie.digest import numerics_digest
+from bogie.numba_cache import hash_sources
 from bogie.numerics import compile_target
 from pipeline.atomic import LockedError, atomic_file, output_lock, temporary_name
 from pipeline.config import StaticProtocol, WimProtocol
@@ -64,12 +65,12 @@ def code_version() -> str:
     pyarrow, and the numerics digest of this process (:func:`bogie.digest.numerics_digest`: a machine that computes
     other last bits has another, and recomputes every part; :func:`process_numerics`). Any edit to those files
     invalidates every part file: a cosmetic edit costs a rerun, a missed physics change would cost a wrong dataset.
-    An edit elsewhere (the CLI, the plotting, the report) changes nothing here.
+    An edit elsewhere (the CLI, the plotting, the report) changes nothing here. Each file is hashed with its path as
+    numba's cache directory hashes bogie's (:func:`bogie.numba_cache.hash_sources`); the import graph follows
+    subpackages, so a module of one that the stage imports is covered.
     """
     digest = hashlib.sha256()
-    for path in project_files("pipeline.simulate"):
-        name = path.relative_to(ROOT).as_posix()
-        digest.update(name.encode() + b"\0" + path.read_bytes() + b"\0")
+    hash_sources(digest, project_files("pipeline.simulate"), ROOT)
     for module in (np, scipy, numba, pd, pa):
         digest.update(f"{module.__name__}={module.__version__}\0".encode())
     digest.update(f"numerics={process_numerics()}\0".encode())

@@ -93,3 +93,46 @@ def test_two_pruners_at_once_remove_each_directory_once_and_a_claim_survives_a_r
         assert fd is not None and os.fstat(fd).st_ino == (entry / LOCK_NAME).stat().st_ino
     finally:
         os.close(fd)
+
+
+def test_the_cache_key_covers_every_module_below_bogie_subpackages_included(tmp_path):
+    """A kernel may inline a compiled function from a subpackage: an edit there is a new cache directory (issue 29)."""
+    from bogie.numba_cache import source_digest
+
+    package = tmp_path / "bogie"
+    shutil.copytree(ROOT / "bogie", package, ignore=shutil.ignore_patterns("__pycache__"))
+    assert source_digest(package) == source_digest(ROOT / "bogie")  # the key depends on the files, not where they lie
+    before = source_digest(package)
+
+    nested = package / "weighings" / "stats.py"
+    nested.write_text(nested.read_text() + "\n# an edit in a subpackage\n")
+    edited = source_digest(package)
+    assert edited != before
+
+    (package / "physics" / "steel").mkdir(parents=True)
+    (package / "physics" / "steel" / "kernel.py").write_text("X = 1\n")
+    deeper = source_digest(package)
+    assert deeper != edited
+    (package / "physics" / "steel" / "kernel.py").write_text("X = 2\n")
+    assert source_digest(package) != deeper
+
+    moved = package / "physics" / "kernel.py"  # the same bytes under another name: another version
+    (package / "physics" / "steel" / "kernel.py").rename(moved)
+    assert source_digest(package) not in (deeper, edited, before)
+
+
+def test_the_simulate_code_version_hashes_its_sources_as_the_cache_key_does():
+    """pipeline.chunks.code_version and the cache key hash source files one way (bogie.numba_cache.hash_sources)."""
+    import hashlib
+
+    from bogie.numba_cache import hash_sources
+    from pipeline.deps import project_files
+
+    paths = project_files("pipeline.simulate")
+    assert ROOT / "bogie" / "numba_cache.py" in paths
+    digest = hashlib.sha256()
+    hash_sources(digest, paths, ROOT)
+    expected = hashlib.sha256()
+    for path in paths:  # the format code_version has always hashed: a part file's hash does not move with this change
+        expected.update(path.relative_to(ROOT).as_posix().encode() + b"\0" + path.read_bytes() + b"\0")
+    assert digest.hexdigest() == expected.hexdigest()

@@ -64,3 +64,25 @@ def test_iso8608_grid_heights_are_the_profiles_own_at_the_grid_points():
         k = np.arange(k_from, k_to + 1)
         assert np.array_equal(profile.grid_heights(k_from, k_to), profile(np.mod(k, 16384) * dx))
     assert dx == 50.0 / 16384
+
+
+def test_one_cache_of_a_bogies_pack_serves_the_equilibrium_and_the_phases():
+    """issue 29: nonlinear and phases kept one id()-keyed cache each of the same pack; now nl.constants is the one."""
+    from bogie import phases
+
+    assert not hasattr(phases, "_CONSTANTS") and not hasattr(nl, "_PACKED")
+    bogie = preset("tandem_trrl", chassis_tilt=0.01)
+    c = nl.constants(bogie)
+    assert nl.constants(bogie) is c
+    assert nl._CONSTANTS[id(bogie)][0] is bogie  # the entry holds its bogie: its id() cannot pass to another object
+    mass, data_f, data_i = nl._packed(bogie)
+    packed = nl.pack(bogie)
+    assert data_f.tobytes() == c.data_f.tobytes() == packed[1].tobytes() and data_f is not c.data_f
+    assert np.array_equal(mass, packed[0]) and np.array_equal(data_i, packed[2])
+    data_f[:] = 0.0
+    assert nl.constants(bogie).data_f.tobytes() == packed[1].tobytes()  # the equilibrium's copy, not the cache
+    levers = nl._levers(bogie)
+    assert c.r_tol.tobytes() == nl._tolerance(bogie).tobytes() == nl._tolerance(bogie, levers).tobytes()
+    assert c.u_limit.tobytes() == nl.limits(bogie).tobytes()
+    twin = preset("tandem_trrl", chassis_tilt=0.01)  # equal, another object: an entry of its own, never by equality
+    assert twin == bogie and nl.constants(twin) is not c
