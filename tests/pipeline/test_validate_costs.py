@@ -94,14 +94,15 @@ def test_an_absurd_worker_count_is_refused(raw):
 def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
     seen = []
 
-    class FakeParallel:
-        def __init__(self, n_jobs, backend):
-            seen.append(n_jobs)
+    class FakePool:  # simulate's pool of loky workers, as pipeline.simulate.local_executor gives it
+        def map(self, f, parts):
+            return [f(p) for p in parts]
 
-        def __call__(self, tasks):
-            return [f(*a, **k) for f, a, k in tasks]
+    def fake_executor(max_workers):
+        seen.append(max_workers)
+        return FakePool()
 
-    monkeypatch.setattr(calibrate, "Parallel", FakeParallel)
+    monkeypatch.setattr(calibrate, "local_executor", fake_executor)
     monkeypatch.setattr(calibrate, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
     monkeypatch.setattr(calibrate, "worker_count", lambda n, log, stage: worker_count(n, log, stage, cores=2))
     loads = calibrate._weigh_many([({}, "static", None)] * 40, 16)
