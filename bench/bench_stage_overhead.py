@@ -42,7 +42,7 @@ ROOT = Path(__file__).resolve().parent.parent
 BASE = "b59bc51"
 
 #: installed in every process of a measurement (main and loky workers) through PYTHONPATH
-SITECUSTOMIZE = '''
+SITECUSTOMIZE = """
 import os
 
 if os.environ.get("BENCH_STUB_WEIGH"):
@@ -61,7 +61,7 @@ if os.environ.get("BENCH_STUB_WEIGH"):
         return dict(_ROWS[key])
 
     protocol.weigh = simulate.weigh = _stub
-'''
+"""
 
 
 def _child_samples():
@@ -183,9 +183,7 @@ def _load() -> str:
 
 def _row(name: str, base: float, new: float, chunks: int) -> str:
     ratio = f"{new / base:.2f}" if base > 0 else "-"
-    return (
-        f"| {name} | {1000 * base / chunks:.2f} | {1000 * new / chunks:.2f} | {base:.3f} | {new:.3f} | {ratio} |"
-    )
+    return f"| {name} | {1000 * base / chunks:.2f} | {1000 * new / chunks:.2f} | {base:.3f} | {new:.3f} | {ratio} |"
 
 
 def main() -> None:
@@ -236,7 +234,9 @@ def main() -> None:
             "weigh (stub)": first["weigh"],
             "the rest of a task": task,
             "write_part (main process)": first["write_part"],
-            "the rest (reconcile, progress, counts)": first["cpu"] - first["plan_chunks"] - first["_task"]
+            "the rest (reconcile, progress, counts)": first["cpu"]
+            - first["plan_chunks"]
+            - first["_task"]
             - first["write_part"],
             "**total**": first["cpu"],
         }
@@ -256,8 +256,10 @@ def main() -> None:
     print(f"| import pipeline.simulate (a worker's imports), CPU | {imports['base']:.2f} | {imports['new']:.2f} | "
           f"{imports['new'] / imports['base']:.2f} |")  # fmt: skip
     kernels = sum(t for k, t in startup.items() if k.startswith("first"))
-    print(f"\nworker start-up, this checkout, CPU: import {startup['import']:.2f} s, first weighings beyond a second "
-          f"{kernels:.2f} s (" + ", ".join(f"{k[6:]} {t:.3f}" for k, t in startup.items() if k != "import") + ")")
+    print(
+        f"\nworker start-up, this checkout, CPU: import {startup['import']:.2f} s, first weighings beyond a second "
+        f"{kernels:.2f} s (" + ", ".join(f"{k[6:]} {t:.3f}" for k, t in startup.items() if k != "import") + ")"
+    )
     print(f"{_load()} at the end")
 
 

@@ -201,8 +201,10 @@ def test_the_kernels_reproduce_the_stored_run_bit_for_bit(computed, key):
     there, here = _stored_machine(), fingerprint()
     if there == here or stored.dtype.kind in "biu":
         same = np.array_equal(got, stored, equal_nan=stored.dtype.kind == "f")
-        assert same, f"{key}: {got!r} against {stored!r}" if stored.dtype.kind in "biu" else (
-            f"{key}: largest difference {np.nanmax(np.abs(got - stored), initial=0.0):.3g}"
+        assert same, (
+            f"{key}: {got!r} against {stored!r}"
+            if stored.dtype.kind in "biu"
+            else (f"{key}: largest difference {np.nanmax(np.abs(got - stored), initial=0.0):.3g}")
         )
         return
     # another machine or library build: the same runs to FOREIGN_RTOL of each array's scale

@@ -91,8 +91,10 @@ def main() -> None:
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     print(f"static step_tolerance {getattr(static, 'step_tolerance', None)} m, dt {static.dt} s; reference: fixed "
           f"steps of dt / {DT_DIVISOR}; load average {load}")  # fmt: skip
-    print("| protocol | study | bogies | axle load max [N] | p90 [N] | group load max [N] | max_deviation max "
-          "[points] | outside_5pct flags differing | worst sample | force evaluations / weighing (reference) |")
+    print(
+        "| protocol | study | bogies | axle load max [N] | p90 [N] | group load max [N] | max_deviation max "
+        "[points] | outside_5pct flags differing | worst sample | force evaluations / weighing (reference) |"
+    )
     print("|---|---|---|---|---|---|---|---|---|---|")
     for which, name, records, spec in (("static", "fleet", fleet, static), ("wim", "fleet", fleet,
                                           config.protocol.wim), ("static", "sensitivity", design, static)):  # fmt: skip
