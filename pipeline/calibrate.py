@@ -57,7 +57,7 @@ from bogie.weighings.stats import at_resolution, group_inequality, survey_statis
 from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
 from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
-from pipeline.config import CalibrateConfig, Config, ConfigError, load_config, observed_file
+from pipeline.config import CalibrateConfig, Config, ConfigError, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.config.schema import CALIBRATION_QUANTITIES
 from pipeline.distributions import TruncNormal
@@ -65,7 +65,7 @@ from pipeline.observed import _by_size
 from pipeline.protocol import weigh
 from pipeline.resources import worker_count
 from pipeline.sample import bogie_from_sample, sample_fleet, suspension_draw
-from pipeline.simulate import local_executor
+from pipeline.simulate import map_ordered
 
 __all__ = [
     "Calibration", "CalibrationError", "Observed", "Table", "build_table", "calibrate", "distance", "main",
@@ -204,20 +204,22 @@ def _weigh_kg(sample: Mapping[str, Any], protocol: str, spec: Any) -> np.ndarray
     return out
 
 
-def _weigh_many(tasks: Sequence[tuple[dict, str, Any]], n_jobs: int) -> np.ndarray:
-    # the same cap as simulate's: at most this machine's cores, and what its free memory holds
-    n_jobs = worker_count(n_jobs, lambda text: print(text, file=sys.stderr, flush=True), "calibrate")
-    chunk = max(1, len(tasks) // (8 * max(n_jobs, 1)) or 1)
+def _weigh_many(tasks: Sequence[tuple[dict, str, Any]], execution: ExecutionConfig) -> np.ndarray:
+    """Each task's readings [kg], shape (tasks, 3), weighed on the stage's workers: simulate's pool of loky workers
+    on this machine (``n_jobs`` capped as simulate's), or the dask cluster of ``execution.backend: dask``
+    (:func:`pipeline.simulate.map_ordered`, the one executor); the same numbers either way."""
+    if execution.backend != "dask":
+        log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - the cap's warning to the log
+        execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log, "calibrate"))
+    chunk = max(1, len(tasks) // (8 * max(execution.n_jobs, 1)) or 1)
     parts = [tasks[i : i + chunk] for i in range(0, len(tasks), chunk)]
-
-    def run(part):
-        return np.array([_weigh_kg(*t) for t in part]).reshape(len(part), 3)
-
-    if n_jobs == 1:
-        results = [run(p) for p in parts]
-    else:  # simulate's pool of loky workers (one executor); map keeps the parts' order
-        results = list(local_executor(n_jobs).map(run, parts))
+    results = map_ordered(_weigh_part, parts, execution, "calibration")
     return np.concatenate(results) if results else np.zeros((0, 3))
+
+
+def _weigh_part(part: Sequence[tuple[dict, str, Any]]) -> np.ndarray:
+    """The readings [kg] of a part of the calibration's weighings, shape (len(part), 3)."""
+    return np.array([_weigh_kg(*t) for t in part]).reshape(len(part), 3)
 
 
 def calibration_samples(config: Config) -> pd.DataFrame:
@@ -266,7 +268,7 @@ def build_table(config: Config, progress: Callable[[str], None] = print) -> Tabl
         f"{len(iris)} site roughnesses)"
     )
     start = time.perf_counter()
-    loads = _weigh_many(tasks, config.execution.n_jobs).reshape(2, n, len(tilts), len(iris), 3)
+    loads = _weigh_many(tasks, config.execution).reshape(2, n, len(tilts), len(iris), 3)
     progress(f"calibrate: table done in {time.perf_counter() - start:.0f} s")
     failed = int(np.isnan(loads[..., 0]).sum())
     return dataclasses.replace(base, loads=loads, n_failed=failed)
@@ -589,7 +591,7 @@ def simulate_fleet(
                     sample[name] = ideal
         tasks.append((sample, config.calibrate.protocol, spec))
         keep.append(i)
-    loads = _weigh_many(tasks, config.execution.n_jobs)
+    loads = _weigh_many(tasks, config.execution)
     if config.calibrate.protocol == "wim":
         loads = loads * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep])
     loads = at_resolution(loads, weight_step_kg)

@@ -40,7 +40,7 @@ import queue
 import sys
 import threading
 import time
-from collections.abc import Iterator, Mapping, Sequence
+from collections.abc import Callable, Iterator, Mapping, Sequence
 from concurrent.futures import Future
 from dataclasses import dataclass
 from pathlib import Path
@@ -247,6 +247,31 @@ def local_executor(max_workers: int) -> Any:
         max_workers=max_workers, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
         initializer=_watch_main_process, initargs=(os.getpid(),),
     )  # fmt: skip
+
+
+def _numbered(func: Callable[[Any], Any], item: Any) -> tuple[Any, str]:
+    """``func(item)`` and the numerics of the process that computed it (:func:`process_numerics`)."""
+    return func(item), process_numerics()
+
+
+def map_ordered(func: Callable[[Any], Any], items: Sequence[Any], execution: ExecutionConfig, what: str) -> list:
+    """``[func(item) for item in items]`` on the workers of ``execution``, in the items' order: simulate's pool of
+    loky workers on this machine (:func:`local_executor`, ``n_jobs`` capped as simulate's), or the dask.distributed
+    cluster at ``execution.dask_scheduler``, whose every result is checked to come from a worker with this process's
+    numerics (:func:`check_numerics`, ``what`` naming the work in the message). The one executor of the stages that
+    weigh besides simulate's chunks (the calibration's table)."""
+    if execution.backend == "dask":
+        from dask.distributed import Client
+
+        here = process_numerics()
+        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+            done = Parallel(batch_size=1)(delayed(_numbered)(func, item) for item in items)
+        for index, (_, numerics) in enumerate(done):
+            check_numerics(numerics, here, what, index)
+        return [value for value, _ in done]
+    if execution.n_jobs <= 1:
+        return [func(item) for item in items]
+    return list(local_executor(execution.n_jobs).map(func, items))
 
 
 def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:

@@ -6,6 +6,7 @@ and read back as a real survey would be.
 """
 
 import copy
+import dataclasses
 import json
 from pathlib import Path
 
@@ -228,3 +229,19 @@ def test_a_survey_that_is_a_symlink_out_of_the_project_is_refused_before_it_is_r
     (tmp_path / "observed" / "s.csv").symlink_to(outside)
     words = ["observed.path = 'observed/s.csv'", f"points to {outside}", "observed/"]
     _refused(tmp_path, raw_params(20), capsys, words)
+
+
+# ---- one executor (issue 29 Must 6) ------------------------------------------------------------------------------
+def test_the_calibration_table_on_a_local_dask_cluster_is_the_table_on_this_machine():
+    from dask.distributed import LocalCluster
+
+    config = parse_config(raw_params(20, tilt_step_deg=1.0))
+    loky = C.build_table(config, progress=lambda text: None)
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        execution = dataclasses.replace(config.execution, backend="dask", dask_scheduler=cluster.scheduler_address)
+        dask = C.build_table(dataclasses.replace(config, execution=execution), progress=lambda text: None)
+    # the same weighings, bit for bit, whoever computed them (each worker's numerics checked against this process's)
+    np.testing.assert_array_equal(dask.loads, loky.loads)
+    assert loky.loads.shape[:2] == (2, 20) and np.isfinite(loky.loads[..., 0]).mean() > 0.9

@@ -2,12 +2,13 @@
 reports the rules between keys with the other errors, caps the workers, and refuses hostile YAML quickly."""
 
 import copy
+import dataclasses
 import time
 from pathlib import Path
 
 import pytest
 
-from pipeline import calibrate
+from pipeline import calibrate, simulate
 from pipeline.config import ConfigError, load_config, load_params, parse_config
 from pipeline.config.schema import Params
 from pipeline.resources import MAX_JOBS, MEMORY_BUDGET, worker_count
@@ -102,10 +103,11 @@ def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
         seen.append(max_workers)
         return FakePool()
 
-    monkeypatch.setattr(calibrate, "local_executor", fake_executor)
+    monkeypatch.setattr(simulate, "local_executor", fake_executor)
     monkeypatch.setattr(calibrate, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
     monkeypatch.setattr(calibrate, "worker_count", lambda n, log, stage: worker_count(n, log, stage, cores=2))
-    loads = calibrate._weigh_many([({}, "static", None)] * 40, 16)
+    execution = load_config(PARAMS).execution
+    loads = calibrate._weigh_many([({}, "static", None)] * 40, dataclasses.replace(execution, n_jobs=16))
     assert loads.shape == (40, 3)
     assert seen == [2]  # 16 asked, 2 cores: 2 workers, not 16
 
