@@ -43,6 +43,7 @@ test: $(STAMP)
 
 lint: $(STAMP)
 	$(BIN)/ruff check bogie pipeline tests bench tools
+	$(BIN)/ruff format --check bogie pipeline tests bench tools
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -56,6 +56,8 @@ SOBOL_MEASURES: tuple[str, ...] = ("max_deviation", "p1", "road_wear_factor")
 RANKING_MEASURE = "max_deviation"
 #: most Saltelli blocks that failed runs may remove before the Sobol' analysis refuses [-]
 MAX_DROPPED_FRACTION = 0.05
+
+
 def bootstrap_seed(seed: int, name: str) -> int:
     """A positive seed for one bootstrap stream, from the master seed (SALib treats a seed of 0 as none)."""
     return max(1, design_seed(seed, name))

@@ -64,9 +64,7 @@ def title_page(
         mono = {"family": "DejaVu Sans Mono", "fontsize": 8.5} if "sha" in key else {"fontsize": 9.5}
         fig.text(0.3, y, value, va="top", **mono)
         y -= 0.026
-    rows = [
-        [r.study, f"{r.n_runs:,}", f"{r.n_ok:,}", f"{r.n_failed:,}"] for r in counts.itertuples()
-    ]
+    rows = [[r.study, f"{r.n_runs:,}", f"{r.n_ok:,}", f"{r.n_failed:,}"] for r in counts.itertuples()]
     fig.text(LEFT, y - 0.01, "Runs by study", fontsize=11, weight="bold", va="top")
     header = ["study", "runs", "succeeded", "failed"]
     y = table_axes(fig, y - 0.035, header, rows, [0.28, 0.22, 0.24, 0.22], 8.5) - 0.05
