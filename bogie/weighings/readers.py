@@ -115,7 +115,12 @@ class ReadResult:
     skipped: Counter = field(default_factory=Counter)
     bad_lines: dict[str, list[int]] = field(default_factory=dict)
     weight_step_kg: float | None = None
-    format_step_kg: float | None = None
+
+    @property
+    def format_step_kg(self) -> float | None:
+        """The step of the format's weight field [kg]: 1 for MON, 100 for CASTOR, BeDIT and DITIS (kg/100), None
+        for CSV (decimal numbers)."""
+        return None if self.format == "csv" else LAYOUTS[self.format].axle_field("axle_load").scale
 
     @property
     def n_read(self) -> int:
@@ -598,7 +603,21 @@ class _Cells:
         m = len(body)
         self.body, self.width = body, width
         quoted = _count_per_line(body, 34) > 0
-        self.simple = ~quoted & (_count_per_line(body, 44) == width - 1)  # the commas, counted
+        # one pass over the commas, in chunks of lines: each line's count (the header's width makes a simple row) and
+        # the places of a simple row's commas, from its start [bytes]: (simple rows, width - 1)
+        self.simple = np.zeros(m, bool)
+        parts = []
+        for a in range(0, m, _CHUNK_LINES):
+            b = min(a + _CHUNK_LINES, m)
+            where = np.flatnonzero(body.buf[body.start[a] : body.end[b - 1]] == 44) + body.start[a]
+            row = np.searchsorted(body.start[a:b], where, side="right") - 1 + a
+            inside = where < body.end[row]
+            where, row = where[inside], row[inside]
+            self.simple[a:b] = ~quoted[a:b] & (np.bincount(row - a, minlength=b - a) == width - 1)
+            keep = self.simple[row]
+            parts.append((where[keep] - body.start[row[keep]]).astype(np.int32).reshape(-1, max(width - 1, 0)))
+        self.commas = np.concatenate(parts) if parts else np.zeros((0, max(width - 1, 0)), np.int32)
+        self.rows = np.flatnonzero(self.simple)
         self.unreadable = np.zeros(m, bool)
         self.right = self.simple.copy()
         self.quoted_rows: dict[int, list[str]] = {}
@@ -611,16 +630,6 @@ class _Cells:
             if len(row) == width:
                 self.quoted_rows[int(k)] = row
                 self.right[k] = True
-        # the commas of each simple row, from its start [bytes]: (simple rows, width - 1)
-        self.rows = np.flatnonzero(self.simple)
-        parts = []
-        for a in range(0, m, _CHUNK_LINES):
-            b = min(a + _CHUNK_LINES, m)
-            where = np.flatnonzero(body.buf[body.start[a] : body.end[b - 1]] == 44) + body.start[a]
-            row = np.searchsorted(body.start[a:b], where, side="right") - 1 + a
-            keep = self.simple[row] & (where < body.end[row])
-            parts.append((where[keep] - body.start[row[keep]]).astype(np.int32).reshape(-1, max(width - 1, 0)))
-        self.commas = np.concatenate(parts) if parts else np.zeros((0, max(width - 1, 0)), np.int32)
 
     def __call__(self, j: int) -> tuple[np.ndarray, np.ndarray]:
         """Column ``j``: its cells as byte strings (at most :data:`_CELL_MAX` long) and which cells are longer."""
@@ -883,8 +892,7 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
         found = "a header and no record" if parsed or _head(data, 1).strip() else "an empty file"
         raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
     skipped, bad_lines = parsed["reasons"].counted(parsed["line"])
-    format_step = None if fmt == "csv" else LAYOUTS[fmt].axle_field("axle_load").scale
-    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["step"], format_step)
+    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["step"])
     total = result.n_read + result.n_skipped
     if result.n_skipped > MAX_BAD_FRACTION * total:
         first = _head(data, 1).decode("utf-8", errors="replace").rstrip()

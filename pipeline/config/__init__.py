@@ -9,58 +9,7 @@ keys and the bounds on the costs, :mod:`~pipeline.config.errors` words every bad
 The stages import from here: ``from pipeline.config import Config, ConfigError, load_config``.
 """
 
-from pipeline.config.settings import (
-    BACKENDS,
-    GROUP_AXLES,
-    OTHER_SECTIONS,
-    PROTOCOLS,
-    QUANTITIES,
-    ROAD_CLASSES,
-    SAMPLINGS,
-    AblationConfig,
-    CalibrateConfig,
-    Config,
-    ConfigError,
-    DesignConfig,
-    ExecutionConfig,
-    FleetConfig,
-    FrozenMap,
-    ObservedConfig,
-    ProtocolConfig,
-    Quantity,
-    SensitivityConfig,
-    StaticProtocol,
-    WimProtocol,
-    load_config,
-    load_params,
-    observed_file,
-    parse_config,
-)
+from pipeline.config import settings
+from pipeline.config.settings import *  # noqa: F403 - the public names of settings, listed once there
 
-__all__ = [
-    "BACKENDS",
-    "GROUP_AXLES",
-    "OTHER_SECTIONS",
-    "PROTOCOLS",
-    "QUANTITIES",
-    "ROAD_CLASSES",
-    "SAMPLINGS",
-    "AblationConfig",
-    "CalibrateConfig",
-    "DesignConfig",
-    "Config",
-    "ConfigError",
-    "ExecutionConfig",
-    "FleetConfig",
-    "FrozenMap",
-    "ObservedConfig",
-    "ProtocolConfig",
-    "Quantity",
-    "SensitivityConfig",
-    "StaticProtocol",
-    "WimProtocol",
-    "load_config",
-    "load_params",
-    "observed_file",
-    "parse_config",
-]
+__all__ = settings.__all__
