@@ -123,17 +123,23 @@ def prune(root: Path, keep: int = KEEP, grace: float = GRACE, now: float | None 
     if fcntl is None:
         return []
     now = time.time() if now is None else now
-    try:
-        entries = [p for p in root.iterdir() if not p.name.startswith(".") and p.is_dir()]
-    except OSError:
-        return []
-    used = {entry: _mtime(entry) for entry in entries}
-    ranked = sorted(entries, key=lambda entry: (used[entry], entry.name), reverse=True)
+    # a directory another pruner renames away between the listing and its stat is no candidate, and holds no place
+    # among the kept: ranked as used now (or never), it would push a kept one out (issue 28's CI failure)
+    used = {entry: mtime for entry in _entries(root) if (mtime := _mtime(entry)) != float("inf")}
+    ranked = sorted(used, key=lambda entry: (used[entry], entry.name), reverse=True)
     removed = [entry for entry in ranked[keep:] if now - used[entry] >= grace and _remove(entry, root)]
     for leftover in root.glob(f"{_REMOVING}*"):
         if now - _mtime(leftover) >= grace:
             shutil.rmtree(leftover, ignore_errors=True)
     return removed
+
+
+def _entries(root: Path) -> list[Path]:
+    """The cache directories in ``root`` (leftovers and lock files excluded); none if it cannot be read."""
+    try:
+        return [p for p in root.iterdir() if not p.name.startswith(".") and p.is_dir()]
+    except OSError:
+        return []
 
 
 def _mtime(path: Path) -> float:
