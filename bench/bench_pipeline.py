@@ -21,9 +21,10 @@ import numba
 import numpy as np
 import pandas as pd
 
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.weighing import weigh
 from pipeline.config import Config, load_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet, sample_studies
+from pipeline.sample import sample_fleet, sample_studies
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parent.parent

@@ -2,7 +2,7 @@
 
 ``python -m bench.bench_stage_overhead [--base REV] [--repeats N]`` runs the default params.yaml's studies (15 608
 runs in chunks of ``execution.chunk_size``) through :func:`pipeline.simulate.simulate_samples` with
-:func:`pipeline.protocol.weigh` replaced by a stub that returns a precomputed valid row, so that only the stage's own
+:func:`bogie.fleet.weighing.weigh` replaced by a stub that returns a precomputed valid row, so that only the stage's own
 work runs: planning and hashing the chunks, building each chunk's rows (``bogie_from_sample`` included), passing
 them between processes, writing and checking the part files, and verifying them on a rerun. Each measurement is a
 fresh process (the stub is installed in it and in its loky workers by a ``sitecustomize`` module), alternately for
@@ -48,7 +48,7 @@ import os
 if os.environ.get("BENCH_STUB_WEIGH"):
     import numpy as np
 
-    import pipeline.protocol as protocol
+    import bogie.fleet.protocols as protocol
     import pipeline.simulate as simulate
 
     _ROWS = {}
@@ -136,8 +136,8 @@ def _child_import() -> dict:
 def _child_startup() -> dict:
     """A fresh worker's imports and first weighings (real ones), beyond a second weighing of each kind [s]."""
     result = _child_import()
-    from pipeline.protocol import weigh
-    from pipeline.sample import bogie_from_sample
+    from bogie.fleet.sampling import bogie_from_sample
+    from bogie.fleet.weighing import weigh
 
     config, samples, protocols = _child_samples()
     fleet = samples["fleet"]

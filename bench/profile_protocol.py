@@ -6,7 +6,7 @@ Measured on the first tandem and the first tri-axle bogie of a fixed fleet sampl
 1. **Work per phase** (counts from the kernel, exact): accepted and rejected steps, force evaluations (the 2n + 1
    of each tangent included), tangents formed, factorisations of the iteration matrix and steps whose first
    correction was accepted unchecked (``bogie.phases.PhaseOutcome``), and the evaluations per step.
-2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``pipeline.protocol.weigh``, the compiled
+2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigh``, the compiled
    call (``bogie._phases_core.run_phases``) within it, and so the Python around it (the road tables, the phases,
    the result row); the time per step and per force evaluation of the compiled call.
 3. **Unit costs** (compiled loops, no Python in between, best of 5): one force evaluation with the record (the
@@ -46,8 +46,8 @@ def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
     """Best-of-REPEATS time of ``weigh`` and of its compiled call [s], and the phases' outcomes."""
     from bogie import _phases_core as pc
     from bogie import phases
-    from pipeline import protocol
-    from pipeline.sample import bogie_from_sample
+    from bogie.fleet import protocols as protocol
+    from bogie.fleet.sampling import bogie_from_sample
 
     bogie = bogie_from_sample(record)
     inner = {"t": 0.0}
@@ -85,7 +85,7 @@ def _unit_costs(record: dict) -> dict[str, float]:
     from bogie import _nonlinear_core as nlc
     from bogie import nonlinear as nl
     from bogie._lu import lu_factor, lu_solve
-    from pipeline.sample import bogie_from_sample
+    from bogie.fleet.sampling import bogie_from_sample
 
     @njit
     def force_loop(count, u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, work):

@@ -2,7 +2,7 @@
 
 ``python -m bench.profile_stage [--fraction F]`` weighs the first fraction ``F`` (default 0.1) of each study of this
 checkout's ``data/samples`` (run ``make repro`` or ``dvc repro sample`` first) by the study's protocols, serially in
-one process, as a chunk of the stage does (:func:`pipeline.protocol.weigh`, the road tables' cache emptied first),
+one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigh`, the road tables' cache emptied first),
 after an untimed warm-up that loads the kernels. For each (study, protocol, group) it prints the runs, the time per
 run, the compiled call's share (``bogie._phases_core.run_phases``, timed around each call), the Python around it
 (road tables, phases, packing, result row), ``bogie_from_sample`` per run, the step attempts per run (accepted
@@ -36,9 +36,9 @@ def main(argv: list[str] | None = None) -> None:
     import pandas as pd
 
     from bogie import _phases_core as pc
-    from pipeline import protocol
+    from bogie.fleet import protocols as protocol
+    from bogie.fleet.sampling import bogie_from_sample
     from pipeline.config import load_config
-    from pipeline.sample import bogie_from_sample
     from pipeline.simulate import study_protocols
 
     config = load_config(ROOT / "params.yaml")

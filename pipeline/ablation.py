@@ -14,9 +14,10 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
+from bogie.fleet.sampling import VARIANTS
+from bogie.fleet.survey import inequality_columns
 from bogie.params import INHIBITORS
-from pipeline.sample import VARIANTS
-from pipeline.survey import RunsError, inequality_columns, rounded
+from pipeline.survey import RunsError, rounded
 
 __all__ = [
     "ABLATION_STATISTICS",

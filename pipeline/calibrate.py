@@ -9,7 +9,7 @@ under the same filters (``observed:``). The method and its checks are ``docs/cal
    both as its steel group and as the air-sprung group on the same trailer. Everything but the fitted quantities is
    the bogie's own sample (payload, tyre wear, road, inhibitors). Common random numbers: each bogie keeps one
    uniform for its tilt (its tilt's rank under the fleet's distribution), one for its suspension (its
-   :func:`pipeline.sample.suspension_draw`) and one standard normal per axle for the sensor (its ``sensor_seed``).
+   :func:`bogie.fleet.sampling.suspension_draw`) and one standard normal per axle for the sensor (its ``sensor_seed``).
 2. **A table of readings**: every calibration group weighed (error free) at every tilt of a grid over the tilt
    distribution's bounds and, for WIM, at every site roughness of ``site_iri_levels_m_km``. A fleet of given
    quantities then costs no simulation: each bogie's tilt is the quantile of its uniform, its readings are
@@ -51,6 +51,10 @@ from scipy.optimize import differential_evolution
 from scipy.stats import energy_distance, truncnorm
 
 from bogie import wim
+from bogie.fleet.distributions import TruncNormal
+from bogie.fleet.observed import by_size
+from bogie.fleet.sampling import bogie_from_sample, suspension_draw
+from bogie.fleet.weighing import weigh
 from bogie.metrics import max_deviation
 from bogie.params import GRAVITY, INHIBITORS
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
@@ -60,11 +64,8 @@ from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
 from pipeline.config import CalibrateConfig, Config, ConfigError, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.config.schema import CALIBRATION_QUANTITIES
-from pipeline.distributions import TruncNormal
-from pipeline.observed import _by_size
-from pipeline.protocol import weigh
 from pipeline.resources import worker_count
-from pipeline.sample import bogie_from_sample, sample_fleet, suspension_draw
+from pipeline.sample import sample_fleet
 from pipeline.simulate import map_ordered
 
 __all__ = [
@@ -408,7 +409,7 @@ class Problem:
     fitted: tuple[str, ...]
     bounds: tuple[tuple[float, float], ...]
     base: dict[str, float]
-    tilt_distribution: Any  # the fleet's (pipeline.distributions), SI
+    tilt_distribution: Any  # the fleet's (bogie.fleet.distributions), SI
     min_load_kg: float
     weight_step_kg: float | None = None  # the observed file's resolution [kg]
 
@@ -621,8 +622,8 @@ def groups_stats(loads_by_size: Mapping[str, np.ndarray]) -> dict[str, Any]:
             rows.append({"group": size, "n_axles": SIZES[size], **{f"axle_load_{i}": w[i] for i in range(len(w))}})
     frame = pd.DataFrame(rows)
     if frame.empty:
-        return _by_size(pd.DataFrame())
-    return _by_size(survey_statistics(frame, by="group"))
+        return by_size(pd.DataFrame())
+    return by_size(survey_statistics(frame, by="group"))
 
 
 def frame_stats(frame: pd.DataFrame) -> dict[str, Any]:

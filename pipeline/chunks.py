@@ -31,17 +31,13 @@ import pyarrow.parquet as pq
 import scipy
 
 from bogie.digest import numerics_digest
+from bogie.fleet.sampling import COLUMNS
+from bogie.fleet.weighing import Protocols
 from bogie.numba_cache import hash_sources
 from bogie.numerics import compile_target
 from pipeline.atomic import LockedError, atomic_file, output_lock, temporary_name
-from pipeline.config import StaticProtocol, WimProtocol
 from pipeline.deps import ROOT, project_files
-from pipeline.sample import COLUMNS
 from pipeline.schema import RunsFileError, failed_runs, read_runs_content, runs_file_content, write_file
-
-Spec = StaticProtocol | WimProtocol
-#: a study's protocols in run order: (name, settings) pairs
-Protocols = tuple[tuple[str, Spec], ...]
 
 #: Parquet metadata key of a part file's content hash
 HASH_KEY = b"bogie.simulate.hash"
@@ -108,7 +104,7 @@ def chunk_hash(study: str, rows: Mapping[str, np.ndarray], protocols: Protocols,
     study
         Study name.
     rows
-        The chunk's sample rows: each column of :data:`pipeline.sample.COLUMNS` as an array.
+        The chunk's sample rows: each column of :data:`bogie.fleet.sampling.COLUMNS` as an array.
     protocols
         The study's protocols in run order, each with its settings (SI).
     code
@@ -131,7 +127,7 @@ def chunk_hash(study: str, rows: Mapping[str, np.ndarray], protocols: Protocols,
 class Chunk:
     """One task and its part file (compared by identity: it holds the sample rows).
 
-    ``rows`` holds the chunk's samples column by column, each column of :data:`pipeline.sample.COLUMNS` a list of
+    ``rows`` holds the chunk's samples column by column, each column of :data:`bogie.fleet.sampling.COLUMNS` a list of
     Python values (what ``to_dict("records")`` gives): a task's argument that pickles in a tenth of the time a frame
     of the same rows takes, and that a worker reads without pandas.
     """

@@ -40,17 +40,18 @@ import pandas as pd
 import yaml
 from scipy.stats import qmc
 
+from bogie.fleet.constants import GROUP_AXLES
+from bogie.fleet.design_table import wilson_interval
+from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, design_seed, road_seed, sensor_seed
 from bogie.metrics import max_deviation
 from bogie.weighings.stats import group_inequality
 from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
-from pipeline.constants import GROUP_AXLES
-from pipeline.sample import COLUMNS, TYRE_WEAR_COLUMNS, _frame, design_seed, road_seed, sensor_seed
+from pipeline.sample import _frame
 from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
 from pipeline.survey import rounded
-from pipeline.survey_design import wilson_interval
 
 __all__ = [
     "FACTORS", "DesignError", "analyse", "conditions", "design_points", "design_samples", "main", "run",
@@ -182,7 +183,7 @@ def design_points(config: Config) -> pd.DataFrame:
 
 
 def design_samples(config: Config, designs: pd.DataFrame, conds: pd.DataFrame, tilts: np.ndarray) -> pd.DataFrame:
-    """The sample rows of the experiment (columns of :data:`pipeline.sample.COLUMNS`, then ``design``,
+    """The sample rows of the experiment (columns of :data:`bogie.fleet.sampling.COLUMNS`, then ``design``,
     ``condition`` and ``slot``): each design at each condition's own tilt (slot :data:`FLEET_SLOT`) and at each tilt
     of ``tilts`` (slot = its index); ``base_id`` is the condition."""
     n_c, n_t = len(conds), len(tilts)

@@ -19,8 +19,8 @@ from typing import Any
 
 import pandas as pd
 
+from bogie.fleet.constants import GROUP_AXLES, PROTOCOLS
 from pipeline.atomic import atomic_file, io_error
-from pipeline.constants import GROUP_AXLES, PROTOCOLS
 from pipeline.schema import read_runs_frame
 
 __all__ = ["headline", "main"]

@@ -29,21 +29,19 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import numpy as np
 import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 import yaml
 
-from bogie.params import GRAVITY
-from bogie.weighings.stats import (
-    STATISTICS_COLUMNS,
-    at_resolution,
-    group_inequality,
-    statistics_dict,
-    survey_statistics,
+from bogie.fleet.observed import (
+    READING_RUN_COLUMNS,
+    SIMULATED_POSITIONS,
+    simulated_readings,
+    simulated_statistics,
+    with_inequality,
 )
-from bogie.weighings.survey import SURVEYED, observed_survey
+from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
@@ -53,14 +51,8 @@ __all__ = [
     "simulated_readings", "simulated_statistics", "wim_model",
 ]  # fmt: skip
 
-#: the positions a simulated group has: every simulated bogie is a semi-trailer's group
-SIMULATED_POSITIONS: tuple[str, ...] = ("all", "trailer")
 #: the axle columns of the group tables (the widest group surveyed is a tri-axle)
 _AXLES = 3
-_RUN_COLUMNS = (
-    "sample_id", "group", "n_axles", "protocol", "status", "wheel_airborne", "group_load",
-    *(f"axle_load_{i}" for i in range(_AXLES)),
-)  # fmt: skip
 
 
 def _field(name: str, kind: pa.DataType, unit: str) -> pa.Field:
@@ -92,29 +84,6 @@ SIMULATED_SCHEMA = pa.schema([
     *(_field(f"axle_load_{i}", pa.float64(), "kg") for i in range(_AXLES)),
     *_INEQUALITY,
 ])  # fmt: skip
-
-
-def with_inequality(groups: pd.DataFrame) -> pd.DataFrame:
-    """``groups`` (wide: ``n_axles``, ``axle_load_0..2``) with each group's load shares, spread [kg, %] and flags.
-
-    Groups of more than three axles or single axles (``other``) get NaN shares and spread and False flags: the survey
-    statistics cover tandems and tri-axles.
-    """
-    out = groups.reset_index(drop=True).copy()
-    n = out["n_axles"].to_numpy(dtype=np.int64)
-    surveyed = (n >= 2) & (n <= _AXLES)
-    loads = out[[f"axle_load_{i}" for i in range(_AXLES)]].to_numpy(dtype=float)[surveyed]
-    ineq = group_inequality(loads, n[surveyed])
-    for i in range(_AXLES):
-        out[f"load_share_{i}"] = np.nan
-        out.loc[surveyed, f"load_share_{i}"] = ineq["load_share"][:, i]
-    for name, column in (("spread", "spread_kg"), ("spread_pct", "spread_pct")):
-        out[column] = np.nan
-        out.loc[surveyed, column] = ineq[name]
-    for name, column in (("outside_5pct", "outside_5pct"), ("over_10pct", "over_10pct")):
-        out[column] = False
-        out.loc[surveyed, column] = ineq[name]
-    return out
 
 
 def _table(frame: pd.DataFrame, schema: pa.Schema) -> pa.Table:
@@ -159,89 +128,6 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
     }  # fmt: skip
     return with_inequality(survey.groups), {**header, **stats}
-
-
-# ---- the simulated side ------------------------------------------------------------------------------------------
-def simulated_readings(
-    runs: pd.DataFrame, min_group_load: float, position: str, weight_step_kg: float | None = None
-) -> tuple[pd.DataFrame, dict[str, dict[str, int]]]:
-    """The fleet's readings under the observed survey's filters, and what was left out, per protocol.
-
-    Every reading (each protocol's) is first read at the observed file's weight resolution ``weight_step_kg``
-    (:func:`bogie.weighings.stats.at_resolution`): each axle load rounded to the step, the group load their sum, as
-    the observed groups' are; then the filters apply.
-
-    Parameters
-    ----------
-    runs
-        The fleet study's runs (every protocol, failed rows included).
-    min_group_load
-        Smallest group load kept [kg] (the runs' loads are in N: kg x GRAVITY).
-    position
-        The survey's position filter: ``all`` and ``trailer`` keep every simulated group, ``steer`` and ``drive``
-        none (:data:`SIMULATED_POSITIONS`).
-    weight_step_kg
-        The observed file's weight resolution [kg]; None reads the simulated loads as they are (no survey, or a file
-        of loads that are not whole kilograms).
-
-    Returns
-    -------
-    readings : pandas.DataFrame
-        The columns of :data:`SIMULATED_SCHEMA`, loads in kg, sorted by protocol and sample.
-    counts : dict
-        Per protocol: ``n_runs``, ``n_failed``, ``n_airborne`` (a WIM reading with a wheel in the air), ``n_light``
-        (below ``min_group_load``), ``n_position`` (left out by the position filter) and ``n_kept``.
-    """
-    failed = runs["status"].astype(str) != "ok"
-    airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
-    usable = ~failed & ~airborne
-    n_axles = runs["n_axles"].to_numpy(dtype=np.int64)
-    # each axle's reading [kg] at the file's resolution; a tandem's third load is no axle: NaN, as in the observed table
-    loads = np.column_stack([
-        np.where(n_axles > i, runs[f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY, np.nan) for i in range(_AXLES)
-    ])  # fmt: skip
-    if weight_step_kg is not None:
-        loads = at_resolution(loads, weight_step_kg)
-        group_load = np.nansum(loads, axis=1)
-    else:
-        group_load = runs["group_load"].to_numpy(dtype=float) / GRAVITY
-    light = usable & (group_load < min_group_load)
-    by_position = usable & ~light & (position not in SIMULATED_POSITIONS)
-    kept = usable & ~light & ~by_position
-    protocol = runs["protocol"].astype(str)
-    counts = {}
-    for name in sorted(set(protocol)):
-        sel = protocol == name
-        counts[name] = {
-            "n_runs": int(sel.sum()), "n_failed": int((sel & failed).sum()), "n_airborne": int((sel & airborne).sum()),
-            "n_light": int((sel & light).sum()), "n_position": int((sel & by_position).sum()),
-            "n_kept": int((sel & kept).sum()),
-        }  # fmt: skip
-    frame = runs.loc[kept, list(_RUN_COLUMNS[:4])].astype({"group": str, "protocol": str})
-    kept_rows = np.asarray(kept, dtype=bool)
-    frame["group_load"] = group_load[kept_rows]
-    for i in range(_AXLES):
-        frame[f"axle_load_{i}"] = loads[kept_rows, i]
-    frame = frame.sort_values(["protocol", "sample_id"], kind="stable")
-    return with_inequality(frame)[SIMULATED_SCHEMA.names], counts
-
-
-def _by_size(stats: pd.DataFrame) -> dict[str, dict]:
-    """:func:`statistics_dict` of one side, with an entry (``n_groups`` 0, nulls) for a size with no group."""
-    found = statistics_dict(stats) if len(stats) else {}
-    empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
-    return {size: found.get(size, empty) for size in SURVEYED}
-
-
-def simulated_statistics(readings: pd.DataFrame, counts: Mapping[str, Mapping[str, int]]) -> dict[str, Any]:
-    """Per protocol: the runs left out (``runs``) and the survey statistics of the readings kept (``groups``)."""
-    out = {}
-    for protocol, count in counts.items():
-        sub = readings[readings["protocol"] == protocol]
-        # survey_statistics takes loads in kg here (unit_per_kg 1): the table is converted already
-        stats = survey_statistics(sub, by="group") if len(sub) else pd.DataFrame()
-        out[protocol] = {"runs": dict(count), "groups": _by_size(stats)}
-    return out
 
 
 def wim_model(wim: WimProtocol) -> dict[str, Any]:
@@ -331,7 +217,7 @@ def main(argv: list[str] | None = None) -> int:
         observed = config.observed
         # the project root is where params.yaml is: observed.path is relative to it
         path = observed_file(observed, Path(args.params).resolve().parent)
-        runs = read_runs(args.runs, SURVEY_STUDY, _RUN_COLUMNS)
+        runs = read_runs(args.runs, SURVEY_STUDY, READING_RUN_COLUMNS)
         check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
         groups, observed_stats = observed_table(path, observed)
     except (ConfigError, RunsError, OSError, ValueError, yaml.YAMLError) as exc:

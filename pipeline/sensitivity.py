@@ -32,6 +32,8 @@ import yaml
 from SALib.analyze import sobol
 from SALib.util import extract_group_names
 
+from bogie.fleet.sampling import TYRE_WEAR_COLUMNS, design_seed
+from bogie.fleet.survey import AXLE_LOAD_COLUMNS
 from pipeline.ablation import (
     INHIBITOR_NAMES,
     SensitivityDataError,
@@ -41,14 +43,8 @@ from pipeline.ablation import (
 )
 from pipeline.atomic import io_error
 from pipeline.config import Config, ConfigError, load_config
-from pipeline.sample import TYRE_WEAR_COLUMNS, design_seed, sensitivity_problem
-from pipeline.survey import (
-    AXLE_LOAD_COLUMNS,
-    RunsError,
-    read_runs,
-    rounded,
-    write_outputs,
-)
+from pipeline.sample import sensitivity_problem
+from pipeline.survey import RunsError, read_runs, rounded, write_outputs
 
 #: inequality measures (result columns) whose Sobol' indices are computed
 SOBOL_MEASURES: tuple[str, ...] = ("max_deviation", "p1", "road_wear_factor")

@@ -34,7 +34,6 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import math
 import os
 import queue
 import sys
@@ -52,6 +51,8 @@ import yaml
 from joblib import Parallel, delayed, parallel_config
 from joblib.externals.loky import get_reusable_executor
 
+from bogie.fleet.sampling import COLUMNS
+from bogie.fleet.weighing import weigh_rows
 from pipeline.chunks import (
     Chunk,
     Log,
@@ -70,13 +71,9 @@ from pipeline.chunks import (
 )
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.portable import warn_if_unportable
-from pipeline.protocol import Outcome, result_rows, weighing
 from pipeline.resources import worker_count
-from pipeline.sample import COLUMNS, STUDIES, bogie_from_sample
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS, failed_runs, runs_frame, table_from_rows
-
-#: the numerical result columns: a successful row with a non-finite one is a failed run
-_NUMBERS: tuple[str, ...] = tuple(c for c in RESULT_COLUMNS if RUN_COLUMNS[c] == "float64")
+from pipeline.sample import STUDIES
+from pipeline.schema import failed_runs, runs_frame, table_from_rows
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -86,64 +83,31 @@ def study_protocols(config: Config, study: str) -> Protocols:
 
 
 # ---- one chunk: the work of one task ---------------------------------------------------------------------------
-def _weighed_rows(rows: Mapping[str, Sequence], protocols: Protocols) -> list[dict]:
-    """Weigh every sample of ``rows`` (column name -> the samples' Python values) by every protocol: one dict of
-    run columns per (sample, protocol). The result columns of the whole chunk come from one
-    :func:`pipeline.protocol.result_rows`."""
-    names = list(rows)
-    samples, outcomes = [], []
-    for values in zip(*rows.values()):
-        sample = dict(zip(names, values))
-        try:
-            bogie_ = bogie_from_sample(sample)
-            invalid = None
-        except (ValueError, TypeError) as exc:
-            bogie_, invalid = None, f"invalid bogie: {type(exc).__name__}: {exc}"
-        sample["chassis_tilt_deg"] = math.degrees(float(sample["chassis_tilt"]))
-        for name, spec in protocols:
-            if bogie_ is None:
-                outcomes.append(Outcome(name, int(sample["n_axles"]), None, status="failed", message=invalid))
-            else:
-                outcomes.append(weighing(bogie_, sample, name, spec))
-            samples.append(sample)
-    out = []
-    for sample, outcome, result in zip(samples, outcomes, result_rows(outcomes)):
-        # math.isfinite: np.isfinite's ufunc call on each of the ~40 numbers cost a tenth of a ms a row
-        bad = [c for c in _NUMBERS if not math.isfinite(result[c])] if result["status"] == "ok" else []
-        if bad:
-            # a successful row has no null: a non-finite metric is a failed run, not a number
-            failed = Outcome(outcome.protocol, outcome.n_axles, None, status="failed",
-                             message=f"non-finite result in {', '.join(bad)}")  # fmt: skip
-            result = result_rows([failed])[0]
-        out.append({**sample, **result})
-    return out
-
-
 def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
     """Weigh every sample of ``rows`` by every protocol: the rows of one part file as a typed DataFrame.
 
     Parameters
     ----------
     rows
-        Sample rows (columns of :data:`pipeline.sample.COLUMNS`), in ``sample_id`` order.
+        Sample rows (columns of :data:`bogie.fleet.sampling.COLUMNS`), in ``sample_id`` order.
     protocols
         (name, settings) pairs, in the order their rows appear for each sample.
 
     Returns
     -------
     pandas.DataFrame
-        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`pipeline.schema.RUN_COLUMNS`.
+        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`bogie.fleet.runs.RUN_COLUMNS`.
         A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
         reason in ``message`` and nulls in every result column.
     """
     # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
-    return runs_frame(_weighed_rows({c: rows[c].tolist() for c in rows.columns}, protocols))
+    return runs_frame(weigh_rows({c: rows[c].tolist() for c in rows.columns}, protocols))
 
 
 def chunk_table(rows: Mapping[str, Sequence], protocols: Protocols) -> pa.Table:
     """:func:`run_chunk`'s rows as the Arrow table a part file holds (:func:`pipeline.schema.table_from_rows`),
     built without pandas from the samples column by column (a :class:`pipeline.chunks.Chunk`'s ``rows``)."""
-    return table_from_rows(_weighed_rows(rows, protocols))
+    return table_from_rows(weigh_rows(rows, protocols))
 
 
 #: how often a loky worker looks whether the main process that started it still runs [s]
@@ -420,7 +384,7 @@ def simulate_samples(
     Parameters
     ----------
     samples
-        Sample table of each study to simulate (columns of :data:`pipeline.sample.COLUMNS`). Parts of studies not
+        Sample table of each study to simulate (columns of :data:`bogie.fleet.sampling.COLUMNS`). Parts of studies not
         in this mapping are deleted from ``out``.
     protocols
         The protocols of each study (:func:`study_protocols`).

@@ -8,8 +8,6 @@ import pytest
 
 from bogie.params import GRAVITY
 from bogie.weighings.stats import (
-    PAIR_TOLERANCE,
-    SHARE_TOLERANCE,
     group_inequality,
     statistics_dict,
     survey_statistics,
@@ -84,14 +82,8 @@ def test_a_table_without_axle_loads_is_refused():
         survey_statistics(pd.DataFrame({"group": ["tandem"], "n_axles": [2], "load_1": [1.0]}))
 
 
-def test_the_pipeline_keeps_the_same_tolerances():
-    from pipeline import constants
-
-    assert (constants.PAIR_TOLERANCE, constants.SHARE_TOLERANCE) == (PAIR_TOLERANCE, SHARE_TOLERANCE)
-
-
 def test_the_survey_stage_summary_uses_these_statistics():
-    from pipeline.survey import inequality_columns, summary_table
+    from bogie.fleet.survey import inequality_columns, summary_table
 
     rng = np.random.default_rng(4)
     loads = 80e3 * (1 + 0.06 * rng.standard_normal((12, 3)))

@@ -26,9 +26,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from pipeline import protocol  # noqa: E402
+from bogie.fleet import protocols as protocol  # noqa: E402
+from bogie.fleet.sampling import bogie_from_sample  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
-from pipeline.sample import bogie_from_sample, sample_fleet, sample_sensitivity  # noqa: E402
+from pipeline.sample import sample_fleet, sample_sensitivity  # noqa: E402
 
 #: the reference's time step is the protocol's divided by this, in fixed steps
 DT_DIVISOR = 4

@@ -17,10 +17,10 @@ import sys
 
 import numpy as np
 
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.weighing import weigh
 from pipeline import design
 from pipeline.config import load_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample
 
 BUSHES = (1.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)  # [N m/rad]
 

@@ -26,12 +26,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.survey import readings
+from bogie.fleet.weighing import weigh
 from bogie.params import GRAVITY
 from bogie.weighings.stats import survey_statistics
 from pipeline.config import WimProtocol, load_params, parse_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet
-from pipeline.survey import readings
+from pipeline.sample import sample_fleet
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "wim-site.md"

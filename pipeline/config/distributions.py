@@ -1,9 +1,9 @@
 """The params.yaml form of a distribution: one pydantic model per ``kind``, a union tagged by ``kind``.
 
 Each model holds the parameters exactly as written in params.yaml, in the unit of the quantity's key; its
-:meth:`DistributionSpec.build` makes the sampling class of :mod:`pipeline.distributions` from them, which checks
+:meth:`DistributionSpec.build` makes the sampling class of :mod:`bogie.fleet.distributions` from them, which checks
 the rules that span parameters (``low < high``, one weight per value) and raises
-:class:`~pipeline.distributions.ParameterError`. The conversion to SI and the check against the physical range of
+:class:`~bogie.fleet.distributions.ParameterError`. The conversion to SI and the check against the physical range of
 the quantity are done per quantity by :mod:`pipeline.config.schema`.
 """
 
@@ -14,8 +14,17 @@ from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
+from bogie.fleet.distributions import (
+    Choice,
+    Constant,
+    Distribution,
+    LogNormal,
+    LogUniform,
+    Normal,
+    TruncNormal,
+    Uniform,
+)
 from bogie.road import ISO8608_CLASSES
-from pipeline.distributions import Choice, Constant, Distribution, LogNormal, LogUniform, Normal, TruncNormal, Uniform
 
 #: ISO 8608 road roughness classes, smoothest first
 #: the ISO 8608 road classes, as bogie.road defines them
@@ -46,7 +55,7 @@ class DistributionSpec(Strict):
 
         Raises
         ------
-        pipeline.distributions.ParameterError
+        bogie.fleet.distributions.ParameterError
             If the parameters do not make a distribution (``high <= low``, a weight per value missing...).
         """
         args = {name: getattr(self, name) for name in type(self).model_fields if name != "kind"}

@@ -19,10 +19,10 @@ from typing import Any
 
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
+from bogie.fleet.distributions import ParameterError
 from bogie.params import INHIBITORS
 from pipeline.config.distributions import NumericSpec
 from pipeline.config.errors import locate
-from pipeline.distributions import ParameterError
 from pipeline.resources import MEMORY_BUDGET
 
 __all__ = [

@@ -26,13 +26,13 @@ from pydantic import (
     model_validator,
 )
 
+from bogie.fleet.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
+from bogie.fleet.distributions import Choice, Constant, Distribution, ParameterError
 from bogie.params import AXLE_RANGES, PRESETS, SCALAR_RANGES, FieldRange, preset
 from bogie.wim import ACCURACY_CLASSES
 from pipeline.config.distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.rules import rule_errors
-from pipeline.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
-from pipeline.distributions import Choice, Constant, Distribution, ParameterError
 from pipeline.resources import MAX_JOBS
 
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")

@@ -20,8 +20,9 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
+from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
+from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.params import GRAVITY
-from bogie.wim import axle_error_sd
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
 from pipeline.config.rules import rule_errors
@@ -37,7 +38,6 @@ from pipeline.config.schema import (
     si_distribution,
 )
 from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
-from pipeline.constants import GROUP_AXLES, SUSPENSIONS
 
 __all__ = [
     "BACKENDS",
@@ -151,59 +151,6 @@ class FleetConfig:
     def groups(self) -> tuple[str, ...]:
         """The axle groups in a fixed order (fewest axles first), whatever the order in params.yaml."""
         return tuple(self.axle_mix)
-
-
-@dataclass(frozen=True)
-class StaticProtocol:
-    """Static weighbridge: load [s], crawl over an approach [m] at walking pace [m/s], settle [s]; time step [s].
-
-    ``step_tolerance`` [m]: the local error allowed per adaptive step on the approach (the load ramp and the settle
-    take a share of it, :mod:`pipeline.protocol`); None: fixed steps of ``dt``, which is also the first adaptive step.
-    """
-
-    load_time: float
-    approach_length: float
-    crawl_speed: float
-    settle_time: float
-    dt: float
-    step_tolerance: float | None = None
-
-
-@dataclass(frozen=True)
-class WimProtocol:
-    """Weigh-in-motion pass: road speed [m/s] over an approach [m]; time step [s]; the site and the sensor.
-
-    Attributes
-    ----------
-    site_before, site_after
-        Length of the smooth WIM site ahead of and past the sensor [m] (both 0: the sensor lies in the sampled road).
-    site_iri
-        International Roughness Index of the site's pavement [m/km] (the IRI's own unit, ASTM E1926; not SI m/m).
-    sensor_length
-        The sensor's weighing length along the road [m] (0: a point sensor).
-    contact_length
-        The tyres' contact patch length [m].
-    accuracy_class
-        COST 323 accuracy class of the sensor's axle readings (``none``: no error), :data:`bogie.wim.ACCURACY_CLASSES`.
-    confidence_level
-        Confidence level at which the class's tolerance holds [-].
-    """
-
-    speed: float
-    approach_length: float
-    dt: float
-    site_before: float = 0.0
-    site_after: float = 0.0
-    site_iri: float = 1.3
-    sensor_length: float = 0.0
-    contact_length: float = 0.0
-    accuracy_class: str = "none"
-    confidence_level: float = 0.95
-
-    @property
-    def axle_error_sd(self) -> float:
-        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.wim.axle_error_sd`)."""
-        return axle_error_sd(self.accuracy_class, self.confidence_level)
 
 
 @dataclass(frozen=True)

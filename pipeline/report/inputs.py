@@ -15,9 +15,10 @@ import pandas as pd
 
 import bogie
 import pipeline
+from bogie.fleet.survey import REQUIRED_COLUMNS, inequality_columns, readings
 from pipeline.config import Config, load_config, load_params
 from pipeline.schema import SchemaError, read_runs_frame
-from pipeline.survey import REQUIRED_COLUMNS, RunsError, inequality_columns, read_runs, readings
+from pipeline.survey import RunsError, read_runs
 
 __all__ = [
     "ReportInputs", "build_date", "calibration_inputs", "code_digest", "design_inputs", "read_inputs", "read_tables",

@@ -6,7 +6,7 @@ from typing import NamedTuple
 
 import numpy as np
 
-from pipeline.constants import GROUP_AXLES
+from bogie.fleet.constants import GROUP_AXLES
 
 __all__ = [
     "AXLE_COLOR",
@@ -45,7 +45,7 @@ STYLE = {
     "pdf.fonttype": 42,
     "image.cmap": "RdYlGn",
 }
-#: the axle groups in the report's order (the order of pipeline.constants.GROUP_AXLES)
+#: the axle groups in the report's order (the order of bogie.fleet.constants.GROUP_AXLES)
 GROUPS: tuple[str, ...] = tuple(GROUP_AXLES)
 GROUP_LABEL = dict(zip(GROUPS, ("tandem", "tri-axle"), strict=True))
 GROUP_COLOR = dict(zip(GROUPS, ("C0", "C1"), strict=True))

@@ -14,11 +14,12 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie.fleet.constants import PROTOCOLS
+from bogie.fleet.design_table import DESIGN_BINS
+from bogie.fleet.sampling import TYRE_WEAR_COLUMNS
 from pipeline.config import Config
-from pipeline.constants import PROTOCOLS
 from pipeline.report.style import GROUP_LABEL, QUANTITY, factor_label
-from pipeline.sample import STUDIES, TYRE_WEAR_COLUMNS
-from pipeline.survey_design import DESIGN_BINS
+from pipeline.sample import STUDIES
 
 __all__ = [
     "DESIGN_NAMES",

@@ -25,10 +25,11 @@ from pathlib import Path
 
 import pytest
 
+from bogie.fleet.constants import MAX_AXLES
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.weighing import weigh
 from pipeline.config import load_config
-from pipeline.constants import MAX_AXLES
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet
+from pipeline.sample import sample_fleet
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the reference runs at the protocol's time step divided by this, in fixed steps [-]

@@ -9,9 +9,9 @@ import numpy as np
 import pytest
 from scipy import stats
 
+from bogie.fleet.distributions import Choice, Constant, LogNormal, LogUniform, Normal, TruncNormal, Uniform
 from bogie.params import GRAVITY
 from pipeline.config import ConfigError, load_config, load_params, parse_config
-from pipeline.distributions import Choice, Constant, LogNormal, LogUniform, Normal, TruncNormal, Uniform
 
 PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
 _DELETE = object()

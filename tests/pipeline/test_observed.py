@@ -18,13 +18,13 @@ import pytest
 import yaml
 from _flips import PLACES, flip
 
+from bogie.fleet.weighing import result_row
 from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
 from bogie.weighings.groups import POSITIONS
 from pipeline.config import load_params, parse_config
 from pipeline.config.schema import OBSERVED_FORMATS, OBSERVED_POSITIONS
 from pipeline.observed import GROUPS_SCHEMA, SIMULATED_SCHEMA, main, simulated_readings, simulated_statistics
-from pipeline.protocol import result_row
 from pipeline.sample import sample_studies
 from pipeline.schema import runs_frame, write_runs_file
 

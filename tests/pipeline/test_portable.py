@@ -23,9 +23,9 @@ from scipy.stats import truncnorm
 
 from bogie import numerics
 from bogie.digest import numerics_digest
+from bogie.fleet.distributions import truncated_standard_normal_ppf
 from pipeline import portable
 from pipeline.deps import ROOT
-from pipeline.distributions import truncated_standard_normal_ppf
 
 X86 = numerics.is_x86_64()
 V3_HOST = X86 and numerics.V3_FLAGS <= numerics.cpu_flags()

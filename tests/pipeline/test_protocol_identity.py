@@ -21,9 +21,10 @@ from pathlib import Path
 import pytest
 from _fingerprint import describe, fingerprint
 
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.weighing import weigh
 from pipeline.config import load_config
-from pipeline.protocol import weigh
-from pipeline.sample import bogie_from_sample, sample_fleet
+from pipeline.sample import sample_fleet
 
 ROOT = Path(__file__).resolve().parents[2]
 REFERENCE = json.loads((ROOT / "tests" / "data" / "protocol_identity" / "reference.json").read_text())

@@ -7,10 +7,12 @@ import numpy as np
 import pytest
 
 from bogie import nonlinear
+from bogie.fleet.protocols import wim_pass
+from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.weighing import weigh
 from bogie.wim import axle_errors
 from pipeline.config import load_config
-from pipeline.protocol import weigh, wim_pass
-from pipeline.sample import bogie_from_sample, sample_fleet
+from pipeline.sample import sample_fleet
 
 ROOT = Path(__file__).resolve().parents[2]
 

@@ -13,10 +13,11 @@ from _flips import PLACES, flip
 from SALib.sample import sobol as sobol_sample
 from SALib.test_functions import Ishigami
 
+from bogie.fleet.sampling import VARIANTS
+from bogie.fleet.weighing import result_row
 from pipeline.ablation import SensitivityDataError, ablation_effects, ablation_pairs
 from pipeline.config import load_params, parse_config
-from pipeline.protocol import result_row
-from pipeline.sample import VARIANTS, sample_studies, sensitivity_problem
+from pipeline.sample import sample_studies, sensitivity_problem
 from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.sensitivity import (
     bootstrap_seed,

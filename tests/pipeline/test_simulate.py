@@ -23,6 +23,7 @@ import yaml
 from _flips import flip
 
 from bogie import numerics
+from bogie.fleet.sampling import COLUMNS
 from pipeline.chunks import (
     HASH_KEY,
     NUMERICS_KEY,
@@ -34,7 +35,7 @@ from pipeline.chunks import (
 )
 from pipeline.config import load_params, parse_config
 from pipeline.resources import worker_count
-from pipeline.sample import COLUMNS, sample_studies, write_parquet_atomic
+from pipeline.sample import sample_studies, write_parquet_atomic
 from pipeline.schema import CATEGORICAL, RESULT_COLUMNS, RUN_COLUMNS, SAMPLE_COLUMNS, write_runs_file
 from pipeline.simulate import chunk_table, run_chunk, simulate_samples, study_protocols
 

@@ -13,30 +13,26 @@ import pytest
 import yaml
 from _flips import PLACES, flip
 
-from bogie.params import GRAVITY
-from pipeline.config import load_params, parse_config
-from pipeline.protocol import result_row
-from pipeline.sample import sample_studies
-from pipeline.schema import RUNS_SCHEMA, checksummed_content, read_runs_file, runs_frame, write_runs_file
-from pipeline.survey import (
-    RunsError,
+from bogie.fleet.survey import (
     band,
     distribution_stats,
     failure_table,
-    headline_metrics,
     histograms,
     inequality_columns,
     legal_limits,
-    main,
-    read_runs,
     run_counts,
     split_failed,
     static_vs_wim,
-    survey,
+    survey_tables,
     tilt_table,
     wear_table,
-    write_outputs,
 )
+from bogie.fleet.weighing import result_row
+from bogie.params import GRAVITY
+from pipeline.config import load_params, parse_config
+from pipeline.sample import sample_studies
+from pipeline.schema import RUNS_SCHEMA, checksummed_content, read_runs_file, runs_frame, write_runs_file
+from pipeline.survey import RunsError, headline_metrics, main, read_runs, write_outputs
 
 ROOT = Path(__file__).resolve().parents[2]
 TONNE = 1000.0 * GRAVITY  # [N]
@@ -81,7 +77,7 @@ def test_shares_outside_the_5_and_10_percent_tolerances_count_exactly_those_grou
     ok = derived(tolerance_fleet())
     assert ok["outside_5pct"].tolist() == [True, True, True] + [False] * 7
     assert ok["outside_10pct"].tolist() == [True] + [False] * 9
-    tables = survey(frame(tolerance_fleet()), 10 * TONNE, LEGAL_GROUP)
+    tables = survey_tables(frame(tolerance_fleet()), 10 * TONNE, LEGAL_GROUP)
     summary = tables["summary.csv"].iloc[0]
     assert summary["share_outside_5pct"] == pytest.approx(0.3)
     assert summary["share_outside_10pct"] == pytest.approx(0.1)
@@ -150,7 +146,7 @@ def test_tilt_table_assigns_rows_to_bins_and_finds_the_rear_overload_nose_up():
     assert table.loc["[-1, -0.5)", "rear_heaviest_share"] == 0.0
     assert table.loc["[0.5, 1)", "mean_load_share_2"] == pytest.approx(np.mean([90 / 80, 85 / 80, 75 / 80]))
     assert table.loc["[0.5, 1)", "tilt_deg_low"] == 0.5
-    summary = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary.csv"].iloc[0]
+    summary = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary.csv"].iloc[0]
     # nose up beyond 0.5 degree: rows 0 and 2 (row 1 sits on 0.5, not above)
     assert summary["rear_overload_share_nose_up"] == pytest.approx(0.5)
     assert summary["n_nose_up"] == 2
@@ -220,8 +216,8 @@ def test_failed_rows_are_excluded_from_statistics_but_counted_with_their_message
         run(21, [0, 0, 0], status="failed", message="Newton failed at t = 1.2 s"),
         run(22, [0, 0, 0], status="failed", message="wheel off the ground"),
     ]
-    clean = survey(frame(good), 10 * TONNE, LEGAL_GROUP)
-    mixed = survey(frame(good + failed), 10 * TONNE, LEGAL_GROUP)
+    clean = survey_tables(frame(good), 10 * TONNE, LEGAL_GROUP)
+    mixed = survey_tables(frame(good + failed), 10 * TONNE, LEGAL_GROUP)
     pd.testing.assert_frame_equal(mixed["distributions.csv"], clean["distributions.csv"])
     pd.testing.assert_frame_equal(mixed["tilt.csv"], clean["tilt.csv"])
     counts = run_counts(frame(good + failed)).iloc[0]
@@ -237,7 +233,7 @@ def test_failed_rows_are_excluded_from_statistics_but_counted_with_their_message
 
 def test_a_protocol_and_group_where_every_run_failed_still_has_its_counts():
     rows = tolerance_fleet() + [run(50, [0, 0], "wim", status="failed", message="diverged")]
-    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    tables = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)
     metrics = headline_metrics(tables)
     assert metrics["wim"]["tandem"]["n_failed"] == 1 and metrics["wim"]["tandem"]["n_ok"] == 0
     assert metrics["wim"]["tandem"]["share_outside_5pct"] is None
@@ -252,7 +248,7 @@ def test_headline_metrics_keys_and_rounding():
         tilt = rng.uniform(-2, 2)
         shares = 1 + 0.04 * tilt * np.array([-1.0, 0.0, 1.0]) + 0.01 * rng.standard_normal(3)
         rows += [run(i, 80e3 * shares, tilt_deg=tilt), run(i, 80e3 * shares * (1 + 0.02 * rng.random(3)), "wim")]
-    metrics = headline_metrics(survey(frame(rows), 10 * TONNE, LEGAL_GROUP))
+    metrics = headline_metrics(survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP))
     expected = {"n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim", "by_suspension"}
     assert set(metrics) == expected
     entry = metrics["static"]["triaxle"]
@@ -275,7 +271,7 @@ def test_the_suspension_table_splits_the_survey_into_steel_and_air_groups():
     steel = [run(i, [76e3, 80e3, 84e3]) for i in range(6)]
     air = [run(6 + i, [80e3, 80e3, 80e3]) for i in range(4)] + [run(10, [80e3] * 3, status="failed", message="x")]
     rows = [{**r, "suspension": "steel"} for r in steel] + [{**r, "suspension": "air"} for r in air]
-    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    tables = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)
     table = tables["by_suspension.csv"].set_index("suspension")
     assert table.loc["steel", "share_outside_5pct"] == 1.0 and table.loc["air", "share_outside_5pct"] == 0.0
     assert table.loc["steel", "mean_spread_kg"] == pytest.approx(8e3 / GRAVITY)
@@ -418,7 +414,7 @@ def test_a_reading_with_a_wheel_in_the_air_is_counted_and_kept_out_of_the_statis
     rows = [run(i, [80e3, 80.5e3, 81e3], "wim") for i in range(9)] + [run(9, [25e3, 0.0, 0.0], "wim")]
     assert [r["wheel_airborne"] for r in rows] == [False] * 9 + [True]
     assert rows[-1]["max_deviation"] == pytest.approx(2.0)  # what an unflagged reading would add to the mean
-    tables = survey(frame(rows), 10 * TONNE, LEGAL_GROUP)
+    tables = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)
     summary = tables["summary.csv"].iloc[0]
     assert (summary["n_ok"], summary["n_airborne"]) == (10, 1)
     assert summary["share_outside_5pct"] == 0.0  # the nine real readings, all within 5 %
@@ -441,8 +437,8 @@ def export_dir(stage_dir, fmt):
 def test_the_fleets_wim_readings_are_written_as_records_that_read_back_at_the_formats_resolution(
     stage_dir, fmt, step_kg, step_m
 ):
+    from bogie.fleet.sampling import bogie_from_sample
     from bogie.weighings.readers import read_weighings
-    from pipeline.sample import bogie_from_sample
 
     fleet, argv = export_dir(stage_dir, fmt)
     assert main(argv) == 0

@@ -8,8 +8,9 @@ import pytest
 import yaml
 
 from bogie.air import AirBogie
+from bogie.fleet.sampling import bogie_from_sample
 from pipeline.config import ConfigError, parse_config
-from pipeline.sample import bogie_from_sample, sample_ablation, sample_fleet
+from pipeline.sample import sample_ablation, sample_fleet
 from pipeline.simulate import run_chunk, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]

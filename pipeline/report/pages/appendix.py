@@ -10,13 +10,13 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
-from pipeline.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
+from bogie.fleet.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
+from bogie.fleet.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, table_pages, text_block, text_page
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import failed_runs, parameter_panels
-from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["definitions", "failures", "failures_table", "parameters", "parameters_page"]
 

@@ -19,7 +19,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.patches import Patch, Rectangle
 
-from pipeline.constants import n_axles
+from bogie.fleet.constants import n_axles
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page

@@ -9,13 +9,13 @@ from typing import Any
 import pandas as pd
 from matplotlib.figure import Figure
 
+from bogie.fleet.sampling import VARIANTS
+from bogie.fleet.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import A4, LEFT, RIGHT, first_fit, page_header, table_axes, text_block
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import run_counts
-from pipeline.sample import VARIANTS
-from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["SUBTITLE", "TITLE", "summary", "summary_page", "summary_table", "title", "title_facts", "title_page"]
 

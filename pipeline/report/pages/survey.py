@@ -13,12 +13,12 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from pipeline.constants import n_axles
+from bogie.fleet.constants import n_axles
+from bogie.fleet.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, text_block
 from pipeline.report.style import AXLE_COLOR, GROUP_COLOR, GROUP_LABEL, PROTOCOL_LABEL, PROTOCOL_LINE, axle_name
-from pipeline.survey import NOSE_UP_DEG
 
 __all__ = ["load_share", "load_share_page", "tilt", "tilt_page"]
 

@@ -17,9 +17,10 @@ sys.path.insert(0, str(ROOT / "tests"))
 
 from _fingerprint import fingerprint  # noqa: E402
 
+from bogie.fleet.sampling import bogie_from_sample  # noqa: E402
+from bogie.fleet.weighing import weigh  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
-from pipeline.protocol import weigh  # noqa: E402
-from pipeline.sample import bogie_from_sample, sample_fleet  # noqa: E402
+from pipeline.sample import sample_fleet  # noqa: E402
 
 #: fleet sample indices (params.yaml): three tandem, three tri-axle
 INDICES = (3, 8, 11, 0, 1, 2)

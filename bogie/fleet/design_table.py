@@ -15,7 +15,7 @@ import pandas as pd
 from scipy.stats import binomtest
 
 from bogie import numerics
-from pipeline.constants import GROUP_AXLES
+from bogie.fleet.constants import GROUP_AXLES
 
 __all__ = ["DESIGN_BINS", "DESIGN_COLUMNS", "DESIGN_CONFIDENCE", "DESIGN_GRID", "design_table", "wilson_interval"]
 

@@ -1,8 +1,9 @@
-"""The one home of the constants that several stages share (axle groups, the loading protocol's tare)."""
+"""The constants of a fleet study that several parts share: the axle groups, the suspensions, the protocols."""
 
 from __future__ import annotations
 
 from bogie.params import TARE_FRACTION
+from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
 __all__ = [
     "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN",
@@ -31,13 +32,8 @@ ROUTE_MARGIN: float = 4.0
 #: the weighing protocols: static weighbridge, weigh-in-motion pass
 PROTOCOLS: tuple[str, ...] = ("static", "wim")
 
-# The survey statistics (bogie.weighings.stats) hold the same two tolerances for observed groups; they are not
-# imported from there because the simulate stage's chunk hash covers every file protocol.py imports
-# (tests/test_weighings_stats.py checks the two pairs agree).
-#: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
-PAIR_TOLERANCE: float = 0.05
-#: load-sharing suspension rule: no axle more than 10 % over its equal share, max LSC <= 1.10 [-]
-SHARE_TOLERANCE: float = 0.10
+# PAIR_TOLERANCE (VSB 11: no axle more than 5 % from any other) and SHARE_TOLERANCE (no axle more than 10 % over its
+# equal share) are the survey statistics' (bogie.weighings.stats): one home for simulated and observed groups
 
 
 def n_axles(group: str) -> int:

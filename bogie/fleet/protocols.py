@@ -25,21 +25,19 @@ from __future__ import annotations
 import dataclasses
 import functools
 import math
-from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import air_dynamics, metrics, nonlinear, numerics, wim
+from bogie import air_dynamics, nonlinear, numerics, wim
 from bogie import phases as phases_mod
 from bogie.air import AirBogie
-from bogie.params import GRAVITY, Bogie
+from bogie.fleet.constants import READ_TIME, TARE_FRACTION
+from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.params import Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile
-from pipeline.config import StaticProtocol, WimProtocol
-from pipeline.constants import MAX_AXLES, PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
-from pipeline.schema import RESULT_COLUMNS, RUN_COLUMNS
 
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
@@ -394,118 +392,3 @@ def _air_wim(bogie: AirBogie, payload_fraction: float, road_class: str, road_see
         for i in range(bogie.n_axles)
     ])  # fmt: skip
     return Weighing("ok", "ok", passage, passage, False, float(run.extras["chassis_pitch"][-1]))
-
-
-def result_row(
-    protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float, on_stop: bool = False
-) -> dict[str, Any]:
-    """The result columns of one weighing (:data:`pipeline.schema.RESULT_COLUMNS`) with ``protocol``.
-
-    Axle loads [N] are twice the wheel loads (both sides); an axle the group does not have reads 0. With no
-    ``wheel_loads`` (a failed weighing) every result is null: NaN for the numbers, None for the two flags.
-    ``outside_5pct`` is (max W - min W) / max W > :data:`~pipeline.constants.PAIR_TOLERANCE` (VSB 11) and
-    ``over_10pct`` the largest load share n W / sum W above 1 + :data:`~pipeline.constants.SHARE_TOLERANCE`.
-    ``wheel_airborne``: some axle reads 0 N, its wheels in the air over their whole passage across the WIM sensor
-    (the tyres are unilateral). A real WIM system records such a vehicle with a warning flag rather than dropping
-    it; the row stays ``ok`` (the simulation succeeded) and the survey keeps it out of its statistics, counting it.
-    ``equaliser_on_stop``: an equaliser bears on its bump stop while the protocol reads (a valid reading).
-    The row also has ``status`` and ``message``, "ok" both (:func:`result_rows` of one :class:`Outcome`).
-    """
-    return result_rows([Outcome(protocol, int(n_axles), wheel_loads, pitch, on_stop)])[0]
-
-
-@dataclass(frozen=True)
-class Outcome:
-    """What one weighing of :func:`weighing` gives: its protocol and group size, the reading of each wheel [N] (None
-    if it failed), the chassis pitch [rad], whether an equaliser bore on its stop, and its status and message."""
-
-    protocol: str
-    n_axles: int
-    wheel_loads: NDArray[np.float64] | None
-    pitch: float = 0.0
-    on_stop: bool = False
-    status: str = "ok"
-    message: str = "ok"
-
-
-def result_rows(outcomes: Sequence[Outcome]) -> list[dict[str, Any]]:
-    """:func:`result_row` of each weighing, with its ``status`` and ``message``: one numpy pass over the weighings
-    of each group size instead of a dozen small numpy calls a weighing (issue 15: they cost a tenth of a ms a run).
-
-    The same arithmetic as the :mod:`bogie.metrics` functions on each weighing alone (they reduce along the axles,
-    the last axis, row by row), so every value is the one they give for that weighing by itself.
-    """
-    rows: list[dict[str, Any]] = []
-    groups: dict[int, list[int]] = {}
-    for k, o in enumerate(outcomes):
-        row: dict[str, Any] = {"protocol": o.protocol, "n_axles": int(o.n_axles)}
-        if o.wheel_loads is None:
-            row.update(_NULL_RESULTS)
-        else:
-            groups.setdefault(int(o.n_axles), []).append(k)
-        row.update(status=o.status, message=o.message)
-        rows.append(row)
-    for n, members in groups.items():
-        loads = 2.0 * np.array([outcomes[k].wheel_loads for k in members], dtype=float).reshape(len(members), n)
-        total = loads.sum(axis=-1)
-        relative = loads / loads.mean(axis=-1, keepdims=True)
-        heaviest, lightest = loads.max(axis=-1), loads.min(axis=-1)
-        spread = metrics.spread(loads)
-        share = metrics.lsc(loads)
-        columns: dict[str, list] = {
-            "group_load": total.tolist(),
-            "p": metrics.p(relative).tolist(),
-            "p1": metrics.p1(relative).tolist(),
-            "max_deviation": metrics.max_deviation(loads).tolist(),
-            "spread": spread.tolist(),
-            "spread_kg": (spread / GRAVITY).tolist(),
-            "road_wear_factor": metrics.road_wear_factor(loads).tolist(),
-            "chassis_pitch": [float(outcomes[k].pitch) for k in members],
-            "outside_5pct": ((heaviest - lightest) / heaviest > PAIR_TOLERANCE).tolist(),
-            "over_10pct": (heaviest / (total / n) > 1.0 + SHARE_TOLERANCE).tolist(),
-            "wheel_airborne": (lightest <= 0.0).tolist(),
-            "equaliser_on_stop": [bool(outcomes[k].on_stop) for k in members],
-        }
-        for i in range(MAX_AXLES):
-            columns[f"axle_load_{i}"] = loads[:, i].tolist() if i < n else [0.0] * len(members)
-            columns[f"load_share_{i}"] = share[:, i].tolist() if i < n else [0.0] * len(members)
-        names = list(columns)
-        for k, values in zip(members, zip(*columns.values())):
-            rows[k].update(zip(names, values))
-    return rows
-
-
-#: a failed weighing's results: NaN for the numbers, None for the flags
-_NULL_RESULTS: dict[str, Any] = {c: None if RUN_COLUMNS[c] == "boolean" else math.nan for c in RESULT_COLUMNS}
-
-
-def weighing(
-    bogie: Bogie | AirBogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol
-) -> Outcome:
-    """Weigh one sampled bogie by ``protocol``: its reading, never an exception for a failed simulation (see the
-    module text); :func:`result_rows` makes the run rows of many such weighings."""
-    try:
-        args = (bogie, float(sample["payload_fraction"]), str(sample["road_class"]), int(sample["road_seed"]), spec)
-        if protocol == "static":
-            run = static_weighbridge(*args)
-        else:
-            run = wim_pass(*args, sensor_seed=int(sample["sensor_seed"]))
-        if not run.success:
-            return Outcome(protocol, bogie.n_axles, None, status="failed", message=run.message)
-        if run.reading is None or not np.all(np.isfinite(run.reading)):
-            return Outcome(protocol, bogie.n_axles, None, status="failed", message="the reading is not finite")
-        # a wheel in the air as it crosses a WIM sensor is a real reading (zero load), not a failure
-        if np.sum(run.reading) <= 0.0:
-            return Outcome(protocol, bogie.n_axles, None, status="failed",
-                           message="the group carries no load at the reading")  # fmt: skip
-        return Outcome(protocol, bogie.n_axles, run.reading, run.chassis_pitch, run.on_stop)
-    except Exception as exc:  # noqa: BLE001 - any error of one bogie (MemoryError included) fails its row only
-        return Outcome(protocol, bogie.n_axles, None, status="failed", message=f"{type(exc).__name__}: {exc}")
-
-
-def weigh(
-    bogie: Bogie | AirBogie, sample: Mapping[str, Any], protocol: str, spec: StaticProtocol | WimProtocol
-) -> dict:
-    """Weigh one sampled bogie by ``protocol``: its result columns (:func:`result_row`) with ``status`` and
-    ``message``; never raises for a failed simulation (see the module text)."""
-    return result_rows([weighing(bogie, sample, protocol, spec)])[0]
