@@ -44,7 +44,7 @@ ROUNDS = 3
 #: where reference trees are extracted (one directory per commit hash)
 TREE_CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "bogie-bench-trees"
 PROTOCOLS = ("static", "wim")
-#: the float result columns compared (pipeline.schema.RESULT_COLUMNS without the flags)
+#: the float result columns compared (bogie.fleet.runs.RESULT_COLUMNS without the flags)
 FLOAT_COLUMNS = (
     *(f"axle_load_{i}" for i in range(6)), *(f"load_share_{i}" for i in range(6)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",

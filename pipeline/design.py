@@ -42,13 +42,13 @@ from scipy.stats import qmc
 
 from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.design_table import wilson_interval
-from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, design_seed, road_seed, sensor_seed
+from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, design_seed, road_seed, sensor_seed, study_frame
 from bogie.metrics import max_deviation
 from bogie.weighings.stats import group_inequality
 from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
-from pipeline.sample import _frame
+from pipeline.sample import fleet_model
 from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
 from pipeline.survey import rounded
@@ -198,9 +198,8 @@ def design_samples(config: Config, designs: pd.DataFrame, conds: pd.DataFrame, t
     values["chassis_tilt"] = tilt
     for c in ("payload_fraction", *TYRE_WEAR_COLUMNS, "road_class", "road_seed", "sensor_seed"):
         values[c] = conds[c].to_numpy()[c_idx]
-    frame = _frame(
-        config, "design", groups, values, c_idx.astype(np.int64), designs["suspension"].to_numpy(dtype=object)[d_idx]
-    )
+    suspension = designs["suspension"].to_numpy(dtype=object)[d_idx]
+    frame = study_frame(fleet_model(config), "design", groups, values, c_idx.astype(np.int64), suspension)
     frame["design"] = designs["design"].to_numpy(dtype=object)[d_idx]
     frame["condition"] = c_idx.astype(np.int64)
     frame["slot"] = slot.astype(np.int64)

@@ -11,7 +11,7 @@ then the other two parts alone, then the defaults with another sensor or class. 
 sensor seeds in every configuration (common random numbers), so a difference between two rows is the
 configurations' difference, not another draw. The statistics are the survey's
 (:func:`bogie.weighings.stats.survey_statistics`) over the readings without an axle at 0 N
-(:func:`pipeline.survey.readings`). One process: the machine is shared.
+(:func:`bogie.fleet.survey.readings`). One process: the machine is shared.
 """
 
 from __future__ import annotations

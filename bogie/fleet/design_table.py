@@ -1,6 +1,6 @@
 """The survey's design-guidance table: the share of groups within 5 % binned by the design parameters.
 
-Part of the ``survey`` stage (:func:`pipeline.survey.survey` writes it as ``data/survey/design_guidance.csv``); the
+Part of the ``survey`` stage (:func:`pipeline.survey.main` writes it as ``data/survey/design_guidance.csv``); the
 report only reads and draws it. These are the fleet's correlations, not a controlled experiment: every other factor
 varies as sampled.
 """
