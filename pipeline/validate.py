@@ -21,6 +21,7 @@ from typing import Any
 
 import yaml
 
+from bogie.fleet.distributions import Distribution
 from pipeline.atomic import atomic_file, io_error
 from pipeline.config import ConfigError, load_config, observed_file
 
@@ -31,9 +32,9 @@ def as_json(value: Any) -> Any:
     """A validated configuration (dataclasses, maps, tuples) as plain JSON values; a distribution gets its ``kind``."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
         fields = {f.name: as_json(getattr(value, f.name)) for f in dataclasses.fields(value)}
-        # a section of the configuration (a dataclass of pipeline.config.settings), not a distribution
-        section = type(value).__module__ == "pipeline.config.settings"
-        return fields if section else {"kind": type(value).__name__.lower(), **fields}
+        # a distribution gets its kind; a section of the configuration (or a protocol's settings) does not
+        distribution = isinstance(value, Distribution)
+        return {"kind": type(value).__name__.lower(), **fields} if distribution else fields
     if isinstance(value, Mapping):
         return {str(k): as_json(v) for k, v in value.items()}
     if isinstance(value, list | tuple):

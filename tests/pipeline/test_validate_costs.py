@@ -182,3 +182,15 @@ def test_a_rule_between_keys_is_reported_with_the_other_errors(raw):
 def test_the_schema_alone_enforces_the_rules(raw):
     with pytest.raises(ValueError, match="must not exceed fleet.n_bogies = 2000: the calibration fleet"):
         Params.model_validate(changed(raw, calibrate__n_bogies=3000, **SURVEY))
+
+
+def test_config_json_gives_each_distribution_its_kind_and_no_section_or_protocol_one():
+    """data/config.json's shape: a distribution is tagged by its kind; the sections and the protocols' settings (now
+    bogie.fleet classes, not pipeline.config.settings ones) are plain objects, as before they moved."""
+    from pipeline.validate import as_json
+
+    config = as_json(load_config(Path(__file__).resolve().parents[2] / "params.yaml"))
+    assert config["distributions"]["chassis_tilt"]["kind"] == "truncnormal"
+    assert config["distributions"]["road_class"]["kind"] == "choice"
+    assert "kind" not in config["protocol"]["static"] and "kind" not in config["protocol"]["wim"]
+    assert "kind" not in config["fleet"] and config["protocol"]["wim"]["accuracy_class"] == "B(10)"
