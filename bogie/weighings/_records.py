@@ -1,0 +1,195 @@
+"""What the readers of weighings share (:mod:`bogie.weighings.readers`): the plausible ranges, the reasons a record
+is skipped, a file's bytes as lines, and the calendar checks. Private: the public names are re-exported by the readers.
+"""
+
+from __future__ import annotations
+
+import gzip
+import zlib
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+
+from bogie.weighings.formats import KMH
+
+#: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
+#: Higgins (2008, quoted by OpenWIM) reject an axle as a WIM error; the EU's heaviest legal axle is 11.5 t
+AXLE_LOAD_RANGE: tuple[float, float] = (100.0, 22_680.0)
+#: plausible spacing of consecutive axles [m]: no two axles closer than a small tyre's diameter, none further
+#: apart than a vehicle is long (the EU maximum length is 18.75 m, Directive 96/53/EC)
+SPACING_RANGE: tuple[float, float] = (0.6, 18.75)
+#: plausible speed [m/s]: 0 (a static weighbridge) to 160 km/h (Elkins and Higgins reject above 99 mph)
+SPEED_RANGE: tuple[float, float] = (0.0, 160.0 * KMH)
+#: plausible year of a record [-]: the hundred years a two-digit year can name under the POSIX ``%y`` rule (69-99
+#: are 1969-1999, 00-68 are 2000-2068: strptime's pivot), applied to the four-digit years of MON, DITIS and CSV too,
+#: so that a record reads the same in every format. Engineering judgement (an assumption: the reference has no
+#: range); it refuses the year 2999 of a mistyped record (issue 27) and admits every WIM record since 1969
+YEAR_RANGE: tuple[int, int] = (1969, 2068)
+#: the two-digit year pivot: yy >= this is 19yy, below it 20yy (POSIX strptime ``%y``) [-]
+TWO_DIGIT_PIVOT: int = 69
+#: a CSV lane: a whole number 1-9, the range of the fixed-width formats' one-digit lane field, so that every CSV file
+#: can be written in every format [-]
+CSV_LANE_RANGE: tuple[int, int] = (1, 9)
+#: most axles of one vehicle in any format [-] (MON's 2-digit count); each fixed-width format has its own limit too
+#: (``FixedWidthLayout.max_axles``: CASTOR 9, BeDIT 20, DITIS 20, MON 99)
+MAX_AXLES: int = 99
+#: most axles of one vehicle in the CSV layout [-] (a plausibility bound: no road vehicle has more)
+CSV_MAX_AXLES: int = 20
+#: a file with more than this fraction of bad records is refused, not read [-]
+MAX_BAD_FRACTION: float = 0.5
+#: gross weight against the sum of the axle loads: allowed difference, a fraction of the sum plus half a weight
+#: step for the gross weight and for each axle (a WIM system's gross weight is the sum of its axle weights,
+#: Enright and OBrien 2011) [-]
+GROSS_TOLERANCE: float = 0.02
+#: the weight steps a file's resolution is detected among [kg]: the largest that divides every axle load of the
+#: good records (MON files are seen at 10 kg and at 100 kg; CASTOR, BeDIT and DITIS write kg/100)
+WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+#: line numbers of bad records shown per reason
+EXAMPLES: int = 5
+#: non-blank lines ``fmt="auto"`` tries every layout on [-]
+SNIFF_LINES: int = 50
+
+# reasons a record is bad (docs/weighings.md, "Bad records and refused files")
+SHORT_HEADER = "record shorter than the header"
+TOO_SHORT = "record too short for its stated axles"
+NON_NUMERIC = "non-numeric field"
+NO_AXLES = "no axles"
+BAD_DATE = "invalid date or time"
+DUPLICATE = "repeat of an earlier record (same time, lane, direction, speed, axle loads and spacings)"
+
+
+class _Reasons:
+    """The first reason each record is bad (0: good), flagged check by check in the order of the checks."""
+
+    def __init__(self, m: int) -> None:
+        self.code = np.zeros(m, np.int16)
+        self.names: list[str] = [""]
+
+    @property
+    def ok(self) -> np.ndarray:
+        return self.code == 0
+
+    def flag(self, mask: np.ndarray, reason: str) -> None:
+        mask = np.asarray(mask, bool) & (self.code == 0)
+        if mask.any():
+            if reason not in self.names:
+                self.names.append(reason)
+            self.code[mask] = self.names.index(reason)
+
+    def counted(self, line: np.ndarray) -> tuple[Counter, dict[str, list[int]]]:
+        skipped: Counter = Counter()
+        bad_lines: dict[str, list[int]] = {}
+        for k, reason in enumerate(self.names[1:], start=1):
+            where = np.flatnonzero(self.code == k)
+            if len(where):
+                skipped[reason] = len(where)
+                bad_lines[reason] = [int(x) for x in line[where[:EXAMPLES]]]
+        return skipped, bad_lines
+
+
+# ---- the bytes of a file ---------------------------------------------------------------------------------------------
+#: bytes a blank line may hold: tab, vertical tab, form feed, carriage return, space (and the line end)
+_BLANK = np.zeros(256, bool)
+_BLANK[[9, 10, 11, 12, 13, 32]] = True
+#: bytes a fixed-width record may hold: ASCII digits, the space, the line end (a trailing carriage return apart)
+_FIELD_BYTE = np.zeros(256, bool)
+_FIELD_BYTE[[10, 32, *range(48, 58)]] = True
+_GZIP_MAGIC = b"\x1f\x8b"
+_BOM = b"\xef\xbb\xbf"
+
+
+def _file_bytes(path: Path) -> bytes:
+    """The file's bytes: gunzipped if it starts with gzip's magic number, without a UTF-8 byte order mark."""
+    data = path.read_bytes()
+    if data[:2] == _GZIP_MAGIC:
+        try:
+            data = gzip.decompress(data)
+        except (OSError, EOFError, zlib.error) as exc:
+            raise ValueError(f"{path}: starts as a gzip file but does not decompress: {exc}") from None
+    return data[3:] if data[:3] == _BOM else data
+
+
+@dataclass
+class _Lines:
+    """The non-blank lines of a file: offsets ``[start, end)`` into ``buf`` (line end and trailing ``\\r`` not
+    included) and their 1-based line numbers."""
+
+    buf: np.ndarray
+    start: np.ndarray
+    end: np.ndarray
+    line: np.ndarray
+
+    def __len__(self) -> int:
+        return len(self.start)
+
+    def take(self, rows: np.ndarray) -> _Lines:
+        return _Lines(self.buf, self.start[rows], self.end[rows], self.line[rows])
+
+    def text(self, k: int) -> str:
+        return self.buf[self.start[k] : self.end[k]].tobytes().decode("utf-8", errors="replace")
+
+
+def _split(data: bytes) -> _Lines:
+    buf = np.frombuffer(data, np.uint8)
+    ends = np.flatnonzero(buf == 10)
+    starts = np.concatenate(([0], ends + 1))
+    ends = np.concatenate((ends, [len(buf)]))
+    if starts[-1] == len(buf):  # the file ends with a line end (or is empty): no last line
+        starts, ends = starts[:-1], ends[:-1]
+    if not len(starts):
+        return _Lines(buf, starts, ends, starts + 1)
+    # segment i of reduceat is [start_i, start_i+1): line i and its line end
+    mask = _BLANK[buf]
+    np.logical_not(mask, out=mask)
+    nonblank = np.logical_or.reduceat(mask, starts)
+    del mask
+    cr = (ends > starts) & (buf[np.maximum(ends - 1, 0)] == 13)
+    ends = ends - cr
+    keep = np.flatnonzero(nonblank)
+    return _Lines(buf, starts[keep], ends[keep], keep.astype(np.int64) + 1)
+
+
+def _head(data: bytes, n: int) -> bytes:
+    """The first ``n`` non-blank lines of ``data``, without reading the rest."""
+    lines, pos = [], 0
+    while len(lines) < n and pos < len(data):
+        end = data.find(b"\n", pos)
+        end = len(data) if end < 0 else end
+        line = data[pos:end]
+        if line.strip(b" \t\r\x0b\x0c"):
+            lines.append(line)
+        pos = end + 1
+    return b"\n".join(lines) + b"\n"
+
+
+def _days_in_month(year: np.ndarray, month: np.ndarray) -> np.ndarray:
+    leap = ((year % 4 == 0) & (year % 100 != 0)) | (year % 400 == 0)
+    days = np.array([31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31])[np.clip(month, 1, 12) - 1]
+    return days + ((month == 2) & leap)
+
+
+def _timestamps(ok: np.ndarray, year, month, day, hour, minute, microsecond) -> np.ndarray:
+    """datetime64[us] of each record's calendar fields; NaT where not ``ok`` (fields checked before)."""
+    year, month, day = (np.where(ok, x, d) for x, d in ((year, 1970), (month, 1), (day, 1)))
+    months = ((year - 1970) * 12 + month - 1).astype("datetime64[M]")
+    stamp = months.astype("datetime64[D]").astype("datetime64[us]") + ((day - 1) * 86_400_000_000).astype(
+        "timedelta64[us]"
+    )
+    stamp = stamp + ((hour * 3600 + minute * 60) * 1_000_000 + microsecond).astype("timedelta64[us]")
+    return np.where(ok, stamp, np.datetime64("NaT", "us"))
+
+
+def _check_calendar(reasons: _Reasons, year, month, day, hour, minute, microsecond) -> None:
+    valid = (
+        (month >= 1) & (month <= 12) & (day >= 1) & (day <= _days_in_month(year, month)) & (hour <= 23)
+        & (minute <= 59) & (microsecond >= 0) & (microsecond < 60_000_000)
+    )  # fmt: skip
+    reasons.flag(~valid, BAD_DATE)
+    low, high = YEAR_RANGE
+    reasons.flag((year < low) | (year > high), f"implausible year (allowed {low}-{high})")
+
+
+def _shown(text: str, limit: int = 60) -> str:
+    return repr(text if len(text) <= limit else text[: limit - 1] + "…")
