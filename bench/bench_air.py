@@ -1,4 +1,4 @@
-"""Air groups: the compiled RK4 of ``bogie._air_core`` against the LSODA reference, measured in one process.
+"""Air groups: the compiled RK4 of ``bogie.air._core`` against the LSODA reference, measured in one process.
 
 Two scenarios on the tri-axle (1 degree tilt, wear 0 / 5 / 10 mm): a 3 s WIM pass at 22 m/s over ISO 8608 class B
 at 1 ms rows, and the static-weighbridge chain (load ramp 0.2 to 0.8 in 2 s, crawl 1.4 m/s for ~8 m, hold 3 s,
@@ -15,7 +15,9 @@ import time
 
 import numpy as np
 
-from bogie import air, air_dynamics, air_static, nonlinear
+from bogie import air, nonlinear
+from bogie.air import dynamics as air_dynamics
+from bogie.air import static as air_static
 from bogie.road import ISO8608Profile
 
 DT = 1e-3

@@ -1,4 +1,4 @@
-"""The compiled RK4 integrator of air groups (bogie._air_core) against the LSODA reference (docs/air-suspension.md).
+"""The compiled RK4 integrator of air groups (bogie.air._core) against the LSODA reference (docs/air-suspension.md).
 
 Tolerances measured on this commit: wheel loads agree to 6e-7 of the static load on a rough-road WIM pass at 1 ms
 rows and to about 1e-5 on the 25 mm road step at 5 ms rows (RK4 substeps of 1 ms); the tests allow 1e-3 (0.1 %).
@@ -9,7 +9,9 @@ import math
 import numpy as np
 import pytest
 
-from bogie import air, air_dynamics, air_static, nonlinear
+from bogie import air, nonlinear
+from bogie.air import dynamics as air_dynamics
+from bogie.air import static as air_static
 from bogie.road import ISO8608Profile, RampedStep
 
 MAKERS = [air.air_tandem, air.air_triaxle]

@@ -47,8 +47,8 @@ def test_every_bogie_module_imports_and_runs_with_the_pipeline_packages_missing(
                     raise ImportError(f"{{name}} is not installed (blocked by the test)")
         sys.meta_path.insert(0, Block())
         import bogie
-        for info in pkgutil.iter_modules(bogie.__path__):
-            importlib.import_module(f"bogie.{{info.name}}")
+        for info in pkgutil.walk_packages(bogie.__path__, "bogie."):  # subpackages too (air, fleet, weighings)
+            importlib.import_module(info.name)
         from bogie import triaxle_stage1
         from bogie.static import wheel_loads
         loads = wheel_loads(triaxle_stage1(), 0.057, 0.0174533)

@@ -12,7 +12,7 @@ and a random error on each axle reading from the sensor's COST 323 accuracy clas
 ``sensor_seed`` (:func:`bogie.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
 instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
-Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air_dynamics`
+Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air.dynamics`
 for an air-sprung one (:class:`bogie.air.AirBogie`: the same loading, roads, site, sensor and readings; its bags
 start levelled and equalised, its valve and pipe work throughout). One side of the bogie is modelled; axle loads are
 twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
@@ -31,9 +31,10 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import air_dynamics, nonlinear, numerics, wim
+from bogie import nonlinear, numerics, wim
 from bogie import phases as phases_mod
 from bogie.air import AirBogie
+from bogie.air import dynamics as air_dynamics
 from bogie.fleet.constants import READ_TIME, TARE_FRACTION
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.params import Bogie
@@ -142,7 +143,7 @@ class Weighing:
         Chassis pitch at the end [rad], nose up positive.
     run
         A steel group's run of :func:`bogie.phases.run`: each phase's work (steps, force evaluations, ...) and, if
-        asked for, the history of the wheel loads; None for an air-sprung group, which :mod:`bogie.air_dynamics`
+        asked for, the history of the wheel loads; None for an air-sprung group, which :mod:`bogie.air.dynamics`
         steps.
     """
 
@@ -250,7 +251,7 @@ def static_weighbridge(
 def _air_static(
     bogie: AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
 ) -> Weighing:
-    """The static protocol of an air-sprung group (:mod:`bogie.air_dynamics`, fixed steps of ``spec.dt``)."""
+    """The static protocol of an air-sprung group (:mod:`bogie.air.dynamics`, fixed steps of ``spec.dt``)."""
     dt = spec.dt
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     load = nonlinear.load_ramp(bogie, TARE_FRACTION, payload_fraction, spec.load_time, dt)
@@ -379,7 +380,7 @@ def wim_pass(
 
 
 def _air_wim(bogie: AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol) -> Weighing:
-    """The WIM pass of an air-sprung group (:mod:`bogie.air_dynamics`, fixed steps of ``spec.dt``), error free."""
+    """The WIM pass of an air-sprung group (:mod:`bogie.air.dynamics`, fixed steps of ``spec.dt``), error free."""
     _, road, duration, crossing, half, _ = _wim_route(bogie, road_class, road_seed, spec)
     inputs = nonlinear.road_inputs(bogie, road, spec.speed, duration, spec.dt, 0.0, load_factor=payload_fraction)
     run = _simulate(bogie, inputs)  # at rest at the first row: the bags levelled and equalised

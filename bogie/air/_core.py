@@ -1,10 +1,10 @@
 """Compiled fixed-step integrator of the air-sprung group (``docs/air-suspension.md``, "Numerics").
 
-The equations are those of :func:`bogie.air_dynamics._forces` and ``_rates``, re-derived here on packed arrays
+The equations are those of :func:`bogie.air.dynamics._forces` and ``_rates``, re-derived here on packed arrays
 (the bag's area and volume, p = K (m / V)^n and the specific enthalpy of :mod:`bogie.air`). State y (4n + 9 for n
 axles): ``[theta, z (n), theta_dot, z_dot (n), gas mass (n), the 7 running integrals of WORK_TERMS]``.
 
-Packed parameters (built by :func:`bogie.air_dynamics._pack`): ``par`` the scalars of :data:`SCALARS` in that
+Packed parameters (built by :func:`bogie.air.dynamics._pack`): ``par`` the scalars of :data:`SCALARS` in that
 order, ``x`` the axle positions, ``wear`` the tyre wear. Drive: ``road`` (rows, n), ``load`` (rows,), ``rise``
 (rows,), the king pin's total rise; each is linear in time between rows.
 
@@ -40,7 +40,7 @@ SCALARS = (
     "gravity",
 )
 _A0, _AR, _V0, _N, _K, _PA, _C, _BAND, _TAUV, _PS, _CD, _KT, _CT, _C0, _MA, _WX, _I, _G = range(len(SCALARS))
-#: number of running work integrals (WORK_TERMS of bogie.air_dynamics)
+#: number of running work integrals (WORK_TERMS of bogie.air.dynamics)
 N_WORK = 7
 #: status codes
 OK, EMPTIED, NOT_FINITE = 0, 1, 2

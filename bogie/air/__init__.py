@@ -6,8 +6,8 @@ levelling valve with a dead band, a viscous damper per axle, the steel model's t
 about the king pin, payload and tilt as in :mod:`bogie.nonlinear`. The derivation is ``docs/air-suspension.md``.
 
 This module holds the parameters (:class:`AirBogie`, validated), the bag's and the gas's relations, the
-closed-form equalisation time constants and the presets; :mod:`bogie.air_static` the state at rest and
-:mod:`bogie.air_dynamics` the time simulation.
+closed-form equalisation time constants and the presets; :mod:`bogie.air.static` the state at rest and
+:mod:`bogie.air.dynamics` the time simulation.
 """
 
 from __future__ import annotations

@@ -1,7 +1,7 @@
 """Air-sprung groups in motion: the time simulation, its energy terms and its result.
 
 The state is the chassis pitch, the axle displacements, their rates, the air in each bag and the running
-integrals of the dissipations and works; a compiled RK4 (:mod:`bogie._air_core`, the default) or scipy's LSODA
+integrals of the dissipations and works; a compiled RK4 (:mod:`bogie.air._core`, the default) or scipy's LSODA
 (the reference) integrates it over :class:`bogie.nonlinear.Inputs` (``docs/air-suspension.md``, "Numerics").
 The result is a :class:`~bogie.results.DynamicResult`, as the steel model's.
 """
@@ -14,7 +14,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import _air_core, air, air_static
+from bogie import air
+from bogie.air import _core as _air_core
+from bogie.air import static as air_static
 from bogie.nonlinear import Inputs
 from bogie.params import GRAVITY
 from bogie.results import DynamicResult
@@ -139,7 +141,7 @@ def rk4_substeps(dt: float) -> int:
 
 
 def _pack(bogie: air.AirBogie) -> NDArray[np.float64]:
-    """The scalars of :data:`bogie._air_core.SCALARS`, in that order."""
+    """The scalars of :data:`bogie.air._core.SCALARS`, in that order."""
     values = {
         "gas_constant": bogie.gas_constant,
         "design_tyre_compression": bogie.design_tyre_compression,
@@ -243,7 +245,7 @@ def simulate(
     rtol
         Relative tolerance of the integrator [-]; used by ``method="lsoda"`` only.
     method
-        "rk4" (default): the compiled fixed-step classical Runge-Kutta of :mod:`bogie._air_core`, with
+        "rk4" (default): the compiled fixed-step classical Runge-Kutta of :mod:`bogie.air._core`, with
         :func:`rk4_substeps` equal steps per input row; "lsoda": scipy's LSODA on the same equations, the
         reference (about a thousand times slower).
 
