@@ -98,7 +98,7 @@ class MeanReading:
 
 @dataclass(frozen=True)
 class SensorReading:
-    """A WIM sensor's reading of each tyre's passage (:func:`bogie.wim.sensor_reading`).
+    """A WIM sensor's reading of each tyre's passage (:func:`bogie.road.wim.sensor_reading`).
 
     ``front_centre`` [s] from the phase's start: the front tyre's patch centre is over the sensor's centre; each
     trailing axle passes its spacing / speed later. ``half`` = (S + L) / 2v and ``flat`` = |S - L| / 2v [s] for

@@ -50,13 +50,13 @@ import yaml
 from scipy.optimize import differential_evolution
 from scipy.stats import energy_distance, truncnorm
 
-from bogie import wim
 from bogie.fleet.distributions import TruncNormal
 from bogie.fleet.observed import by_size
 from bogie.fleet.sampling import bogie_from_sample, suspension_draw
 from bogie.fleet.weighing import weigh
 from bogie.metrics import max_deviation
 from bogie.params import GRAVITY, INHIBITORS
+from bogie.road import wim
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
 from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
@@ -243,7 +243,7 @@ def crn_table(config: Config) -> Table:
     truncated = isinstance(dist, TruncNormal)
     tilt_u = np.clip(_cdf(dist, tilt), 1e-12, 1 - 1e-12) if truncated else np.full(len(tilt), np.nan)
     air_u = np.array([suspension_draw(config.seed, "fleet", int(i)) for i in samples["sample_id"]])
-    # the sensor's normals: those of bogie.wim.axle_errors for the bogie's sensor_seed
+    # the sensor's normals: those of bogie.road.wim.axle_errors for the bogie's sensor_seed
     z = np.array([np.random.default_rng(int(s)).standard_normal(3) for s in samples["sensor_seed"]])
     iris = np.asarray(config.calibrate.site_iri_levels, dtype=float) if config.calibrate.protocol == "wim" else [np.nan]
     size = samples["group"].astype(str).to_numpy()

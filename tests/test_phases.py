@@ -9,7 +9,7 @@ from bogie import nonlinear as nl
 from bogie import phases as ph
 from bogie.params import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile, Sinusoid
-from bogie.wim import sensor_reading
+from bogie.road.wim import sensor_reading
 
 
 @pytest.fixture(scope="module")
@@ -82,7 +82,7 @@ def test_a_bogie_at_rest_stays_there_in_a_few_long_steps(bogie):
 
 
 def test_a_sensor_reads_the_patch_weighted_mean_of_the_history(bogie):
-    # a sinusoidal road at 20 m/s: the kernel's sensor integral equals bogie.wim.sensor_reading on its own history
+    # a sinusoidal road at 20 m/s: the kernel's sensor integral equals bogie.road.wim.sensor_reading on its own history
     table = ph.RoadTable.from_profile(Sinusoid(0.004, 1.7, start=2.0), -5.0, 50.0, 0.003)
     speed, sensor_length, contact_length = 20.0, 0.5, 0.2
     half = 0.5 * (sensor_length + contact_length) / speed

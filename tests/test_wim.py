@@ -1,4 +1,4 @@
-"""The WIM site and sensor sub-model (bogie.wim): accuracy classes, the weighing length, the site's pavement."""
+"""The WIM site and sensor sub-model (bogie.road.wim): accuracy classes, the weighing length, the site's pavement."""
 
 import math
 
@@ -7,7 +7,7 @@ import pytest
 from scipy import signal
 
 from bogie.road import ISO8608Profile
-from bogie.wim import (
+from bogie.road.wim import (
     ACCURACY_CLASSES,
     COST323_TOLERANCES,
     SITE_BLEND_LENGTH,

@@ -11,8 +11,8 @@ import math
 from dataclasses import dataclass
 from typing import Any
 
-from bogie import wim
-from bogie.wim import axle_error_sd
+from bogie.road import wim
+from bogie.road.wim import axle_error_sd
 
 __all__ = ["StaticProtocol", "WimProtocol"]
 
@@ -65,7 +65,8 @@ class WimProtocol:
     contact_length
         The tyres' contact patch length [m].
     accuracy_class
-        COST 323 accuracy class of the sensor's axle readings (``none``: no error), :data:`bogie.wim.ACCURACY_CLASSES`.
+        COST 323 accuracy class of the sensor's axle readings (``none``: no error),
+        :data:`bogie.road.wim.ACCURACY_CLASSES`.
     confidence_level
         Confidence level at which the class's tolerance holds [-].
     """
@@ -97,5 +98,5 @@ class WimProtocol:
 
     @property
     def axle_error_sd(self) -> float:
-        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.wim.axle_error_sd`)."""
+        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.road.wim.axle_error_sd`)."""
         return axle_error_sd(self.accuracy_class, self.confidence_level)

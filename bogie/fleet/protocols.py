@@ -6,10 +6,10 @@ class and seed) onto a level weighbridge, stops and settles; the axle loads are 
 second. The load history and the approach leave friction forces locked in, as on a real weighbridge.
 
 ``wim``: the laden trailer passes at road speed over the random approach road and a WIM site at its end: the road
-made smoother over the site's length before and after the sensor (:class:`bogie.wim.SiteRoad`), a sensor that reads
-each tyre's force averaged over its passage across the sensor's weighing length (:func:`bogie.wim.sensor_reading`),
+made smoother over the site's length before and after the sensor (:class:`bogie.road.wim.SiteRoad`), a sensor that reads
+each tyre's force averaged over its passage across the sensor's weighing length (:func:`bogie.road.wim.sensor_reading`),
 and a random error on each axle reading from the sensor's COST 323 accuracy class, drawn from the sample's
-``sensor_seed`` (:func:`bogie.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
+``sensor_seed`` (:func:`bogie.road.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
 instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
 Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air.dynamics`
@@ -31,14 +31,14 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import nonlinear, numerics, wim
+from bogie import nonlinear, numerics
 from bogie import phases as phases_mod
 from bogie.air import AirBogie
 from bogie.air import dynamics as air_dynamics
 from bogie.fleet.constants import READ_TIME, TARE_FRACTION
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.params import Bogie
-from bogie.road import ISO8608_CLASSES, ISO8608Profile
+from bogie.road import ISO8608_CLASSES, ISO8608Profile, wim
 
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
@@ -97,7 +97,7 @@ def _zoned(
     b = (1 - cos(pi r)) / 2, r the ramp clipped to [0, 1] that ``ramp(x)`` gives over each blend interval (start,
     end, ramp) [m], b = 0 before the first interval and after the last and 1 between. The cosine only over the
     intervals (and a point either side): the arithmetic of :meth:`ApproachRoad.taper` and
-    :meth:`bogie.wim.SiteRoad.site_weight`, value for value, on a table of thousands of points at the cost of a few
+    :meth:`bogie.road.wim.SiteRoad.site_weight`, value for value, on a table of thousands of points at the cost of a few
     hundred."""
     n = k1 - k0 + 1
 
@@ -278,9 +278,9 @@ def _air_static(
 def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.SiteRoad:
     """The approach road with the WIM site of ``spec`` around the sensor, at ``spec.approach_length`` [m].
 
-    The site's heights are the sampled road's scaled by r = min(1, sqrt(G_site / G_road)) (:class:`bogie.wim.SiteRoad`),
-    G_site the ISO 8608 G_d(n0) of the site's IRI (:func:`bogie.wim.gd_n0_for_iri`) and G_road that of the
-    sampled class.
+    The site's heights are the sampled road's scaled by r = min(1, sqrt(G_site / G_road))
+    (:class:`bogie.road.wim.SiteRoad`), G_site the ISO 8608 G_d(n0) of the site's IRI
+    (:func:`bogie.road.wim.gd_n0_for_iri`) and G_road that of the sampled class.
     """
     scale = min(1.0, math.sqrt(wim.gd_n0_for_iri(spec.site_iri) / ISO8608_CLASSES[road_class.upper()]))
     return wim.SiteRoad(road, spec.approach_length, spec.site_before, spec.site_after, scale)
@@ -355,7 +355,7 @@ def wim_pass(
     """Run the WIM protocol; the reading is each wheel's load read by the sensor [N].
 
     ``reading_error_free`` is the same before the sensor's error, each tyre's force averaged over its passage across
-    the sensor (:func:`bogie.wim.sensor_reading`). ``sensor_seed`` seeds the errors of ``spec.accuracy_class``; it
+    the sensor (:func:`bogie.road.wim.sensor_reading`). ``sensor_seed`` seeds the errors of ``spec.accuracy_class``; it
     may be None only for class ``none``. ``history``: as :func:`static_weighbridge`.
     """
     if spec.accuracy_class == "none":

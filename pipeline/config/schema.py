@@ -27,7 +27,7 @@ from pydantic import (
 from bogie.fleet.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
 from bogie.fleet.sampling import SAMPLINGS
 from bogie.params import PRESETS, preset
-from bogie.wim import ACCURACY_CLASSES
+from bogie.road.wim import ACCURACY_CLASSES
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.quantities import QUANTITIES, Distributions

@@ -10,7 +10,7 @@ from bogie import nonlinear
 from bogie.fleet.protocols import wim_pass
 from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.weighing import weigh
-from bogie.wim import axle_errors
+from bogie.road.wim import axle_errors
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
 
