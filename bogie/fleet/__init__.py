@@ -33,7 +33,9 @@ _EXPORTS: dict[str, str] = {
         ("DesignExperiment", "DesignSettings", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"),
         "design",
     ),
-    **dict.fromkeys(("DesignAnalysis", "DesignError", "analyse_designs", "guidance_sentences"), "design_analysis"),
+    **dict.fromkeys(
+        ("DesignAnalysis", "DesignError", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "design_analysis"
+    ),
     **dict.fromkeys(
         ("Choice", "Constant", "Distribution", "LogNormal", "LogUniform", "Normal", "ParameterError", "TruncNormal",
          "Uniform"),
