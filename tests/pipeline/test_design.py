@@ -8,6 +8,7 @@ that is |t| <= 0.05 / (1.95 a).
 """
 
 import copy
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -209,3 +210,34 @@ def test_a_null_design_section_skips_the_stage_with_one_line(tmp_path, capsys):
     assert D.main(args) == 0
     assert "design: skipped" in capsys.readouterr().out
     assert json.loads((tmp_path / "design.json").read_text())["designs"] == []
+
+
+# ---- one executor (issue 29) ---------------------------------------------------------------------------------------
+def test_the_design_runs_on_a_local_dask_cluster_are_the_runs_on_this_machine(tmp_path):
+    from dask.distributed import LocalCluster
+
+    from pipeline.schema import read_runs_frame
+
+    config = parse_config(raw_params(groups=["tandem"], n_conditions=2, tilt_step_deg=2.0, n_space_filling=0,
+                                     grid={"bush_stiffness": [1.0, 3000.0]}))  # fmt: skip
+    quiet = lambda text: None  # noqa: E731
+    here, _, here_metrics = D.run(config, tmp_path / "loky", quiet)
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        execution = dataclasses.replace(config.execution, backend="dask", dask_scheduler=cluster.scheduler_address)
+        there, _, there_metrics = D.run(dataclasses.replace(config, execution=execution), tmp_path / "dask", quiet)
+    runs = read_runs_frame(tmp_path / "loky", "design")
+    assert len(runs) == 4 * 2 * 4 and (runs["status"] == "ok").all()  # typical, 2 grid, air x 2 conditions x 4 tilts
+    # the same runs, bit for bit, whoever computed them; so the same tables and metrics
+    pd.testing.assert_frame_equal(read_runs_frame(tmp_path / "dask", "design"), runs, check_exact=True)
+    for name in ("designs", "curves", "check"):
+        pd.testing.assert_frame_equal(getattr(there, name), getattr(here, name), check_exact=True)
+    assert there_metrics == here_metrics
+    # the library's own weighing of the same rows (bogie.fleet.weigh_designs) gives the stage's analysis
+    exp = D.experiment(config)
+    spec = config.design
+    mine = A.analyse_designs(L.weigh_designs(exp, config.protocol.static), exp.designs, exp.tilts, spec.target_share,
+                             spec.confidence_level)  # fmt: skip
+    for name in ("designs", "curves", "check"):
+        pd.testing.assert_frame_equal(getattr(mine, name), getattr(here, name), check_exact=True)
