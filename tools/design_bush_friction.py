@@ -17,10 +17,12 @@ import sys
 
 import numpy as np
 
+from bogie.fleet.design import FLEET_SLOT, conditions, design_points, design_samples, typical_design
 from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.weighing import weigh
 from pipeline import design
 from pipeline.config import load_config
+from pipeline.sample import fleet_model
 
 BUSHES = (1.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)  # [N m/rad]
 
@@ -32,14 +34,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tilt", type=float, default=0.75, help="nose-up chassis tilt [degree] (default 0.75)")
     args = parser.parse_args(argv)
     config = load_config(args.params)
-    designs = design.design_points(config)
-    conds = design.conditions(config)
-    samples = design.design_samples(config, designs, conds.iloc[: args.conditions], np.zeros(1))
-    rows = samples[(samples["group"] == "triaxle") & (samples["slot"] == design.FLEET_SLOT)]
+    fleet, spec = fleet_model(config), design.settings(config)
+    designs = design_points(fleet, spec, config.seed)
+    conds = conditions(fleet, spec.n_conditions, config.seed)
+    samples = design_samples(fleet, designs, conds.iloc[: args.conditions], np.zeros(1))
+    rows = samples[(samples["group"] == "triaxle") & (samples["slot"] == FLEET_SLOT)]
     rows = rows[rows["design"] == rows["design"].iloc[0]].to_dict("records")
     print(f"tri-axle, fixed contact points, 250 mm arms, {args.tilt:g} degree nose up, {len(rows)} conditions")
     print("friction  band [kN]  bush [N m/rad]  mean max_deviation [%]  largest [%]")
-    typical = design.typical_design(config)
+    typical = typical_design(fleet)
     for mu, band in ((typical["friction_coefficient"], typical["spring_friction_band"]), (0.0, 0.0)):
         for bush in BUSHES:
             dev = []

@@ -8,6 +8,9 @@ The steps of the project's pipeline as plain functions (``docs/tutorial.md`` run
   and by a weigh-in-motion pass over a random ISO 8608 road, one run row each, a failure a row with its reason
   (:mod:`.protocols`, :mod:`.weighing`, :mod:`.runs`);
 - :func:`survey_tables`: the roadside-survey statistics of the runs (:mod:`.survey`);
+- :class:`DesignSettings` and :func:`study_designs`: the design guidance's controlled experiment, every design over
+  the same operating conditions, its shares within 5 %, tilt tolerances and Pareto fronts (:mod:`.design`,
+  :mod:`.design_analysis`; ``docs/design.md``);
 - :func:`compare`: the runs' readings and an observed survey (:func:`bogie.weighings.survey.observed_survey`)
   through the one definition of the survey statistics (:mod:`.observed`).
 
@@ -26,6 +29,13 @@ from typing import Any
 
 #: each public name -> the submodule that defines it
 _EXPORTS: dict[str, str] = {
+    **dict.fromkeys(
+        ("DesignExperiment", "DesignSettings", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"),
+        "design",
+    ),
+    **dict.fromkeys(
+        ("DesignAnalysis", "DesignError", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "design_analysis"
+    ),
     **dict.fromkeys(
         ("Choice", "Constant", "Distribution", "LogNormal", "LogUniform", "Normal", "ParameterError", "TruncNormal",
          "Uniform"),

@@ -1,12 +1,14 @@
 """The design stage: tolerances and shares against hand-worked answers, common random numbers, bad input, a run.
 
-The analysis tests feed :func:`pipeline.design.analyse` runs whose axle loads are linear in tilt with known slopes,
-so the share within 5 % against tilt, and the tolerance where it falls below the target, are worked out by hand:
+The analysis tests feed :func:`bogie.fleet.design_analysis.analyse_designs` runs whose axle loads are linear in tilt
+with known slopes, so the share within 5 % against tilt, and the tolerance where it falls below the target, are worked
+out by hand:
 a tandem with loads W0 = 1 + a t, W1 = 1 - a t is within 5 % while (W0 - W1) / max = 2 a |t| / (1 + a |t|) <= 0.05,
 that is |t| <= 0.05 / (1.95 a).
 """
 
 import copy
+import dataclasses
 import json
 import math
 from pathlib import Path
@@ -16,8 +18,11 @@ import pandas as pd
 import pytest
 import yaml
 
+from bogie.fleet import design as L
+from bogie.fleet import design_analysis as A
 from pipeline import design as D
 from pipeline.config import ConfigError, parse_config
+from pipeline.sample import fleet_model
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -40,18 +45,19 @@ def test_tolerance_is_where_the_share_first_falls_below_the_target_on_each_side(
     fine = np.round(np.arange(-2.0, 2.0 + 1e-9, 0.01), 6)
     share = np.where((fine >= -0.4) & (fine <= 0.6), 1.0, 0.5)
     share[fine > 1.2] = 1.0  # a recovery beyond a gap does not extend the tolerance: it must hold all the way
-    assert D.tolerance(fine, share, 0.95) == (0.6, 0.4, 1.0)
+    assert A.tilt_tolerance(fine, share, 0.95) == (0.6, 0.4, 1.0)
     only_up = np.where((fine >= 0.0) & (fine <= 0.3), 1.0, 0.5)
-    up, down, _ = D.tolerance(fine, only_up, 0.95)
+    up, down, _ = A.tilt_tolerance(fine, only_up, 0.95)
     assert (up, down) == (0.3, 0.0) and math.copysign(1.0, down) == 1.0  # no nose-down tolerance reads 0, not -0
     level_fails = np.where(np.abs(fine) < 0.2, 0.9, 1.0)
-    assert D.tolerance(fine, level_fails, 0.95) == (None, None, 0.9)
+    assert A.tilt_tolerance(fine, level_fails, 0.95) == (None, None, 0.9)
 
 
 def test_tilt_grid_steps_outward_from_level_and_keeps_the_ends():
     raw = raw_params(tilt_step_deg=0.75)
     config = parse_config(raw)
-    np.testing.assert_allclose(D.tilt_grid(config), [-2.0, -1.5, -0.75, 0.0, 0.75, 1.5, 2.0])
+    tilts = L.tilt_grid(fleet_model(config), config.design.tilt_step)
+    np.testing.assert_allclose(tilts, [-2.0, -1.5, -0.75, 0.0, 0.75, 1.5, 2.0])
     raw["distributions"]["chassis_tilt_deg"] = {"kind": "uniform", "low": 0.5, "high": 2.0}
     # refused by the schema, before any stage runs (pipeline.config.rules)
     with pytest.raises(ConfigError, match="chassis_tilt_deg.*must include level"):
@@ -62,14 +68,14 @@ def test_pareto_front_keeps_the_designs_nothing_beats_on_share_and_distance():
     share = np.array([0.5, 0.8, 0.7, 0.8, 0.95])
     distance = np.array([0.0, 0.3, 0.2, 0.5, 0.9])
     # 3 is beaten by 1 (same share, nearer); every other is best at its distance
-    assert D._pareto(share, distance).tolist() == [True, True, True, False, True]
+    assert A.pareto_front(share, distance).tolist() == [True, True, True, False, True]
 
 
 def _runs(slopes, tilts, fleet_tilts, design="tandem-typical", failed=()):
     """Runs of one tandem design: loads 1 +- a t [N] at each grid tilt and at each condition's own tilt."""
     rows = []
     for c, a in enumerate(slopes):
-        for slot, t in [(D.FLEET_SLOT, fleet_tilts[c]), *enumerate(tilts)]:
+        for slot, t in [(A.FLEET_SLOT, fleet_tilts[c]), *enumerate(tilts)]:
             w0, w1 = 1e4 * (1 + a * t), 1e4 * (1 - a * t)
             bad = (c, slot) in failed
             rows.append({
@@ -95,7 +101,7 @@ def test_analysis_recovers_the_hand_worked_tolerance_and_shares():
     tilts = np.array([-2.0, -1.0, 0.0, 1.0, 2.0])
     slopes = [0.02] * 19 + [0.1]  # 19 conditions within 5 % to 1.282 degree, one only to 0.256 degree
     fleet_tilts = [0.1] * 10 + [0.5] * 9 + [0.5]
-    a = D.analyse(_runs(slopes, tilts, fleet_tilts), _designs(), tilts, 0.95, 0.95)
+    a = A.analyse_designs(_runs(slopes, tilts, fleet_tilts), _designs(), tilts, 0.95, 0.95)
     row = a.designs.iloc[0]
     # the share is 20/20 to 0.256, 19/20 = 0.95 to 1.282, then 0: the tolerance ends at 1.28 (0.01 steps) both ways
     assert row["tilt_tolerance_nose_up_deg"] == pytest.approx(math.floor(100 * limit(0.02)) / 100)
@@ -114,7 +120,8 @@ def test_analysis_recovers_the_hand_worked_tolerance_and_shares():
 def test_a_failed_run_is_counted_and_leaves_its_condition_out_not_read_as_zero():
     tilts = np.array([-1.0, 0.0, 1.0])
     slopes = [0.02] * 9 + [0.1]
-    a = D.analyse(_runs(slopes, tilts, [0.2] * 10, failed={(9, 1), (8, D.FLEET_SLOT)}), _designs(), tilts, 0.95, 0.95)
+    runs = _runs(slopes, tilts, [0.2] * 10, failed={(9, 1), (8, A.FLEET_SLOT)})
+    a = A.analyse_designs(runs, _designs(), tilts, 0.95, 0.95)
     row = a.designs.iloc[0]
     assert row["n_failed"] == 2
     assert row["n_conditions"] == 9  # the failed run at its own tilt is not a sample
@@ -126,10 +133,8 @@ def test_a_failed_run_is_counted_and_leaves_its_condition_out_not_read_as_zero()
 # ---- the experiment's samples: common random numbers -------------------------------------------------------------
 def test_every_design_runs_over_the_same_conditions_and_tilts():
     config = parse_config(raw_params(n_conditions=5, n_space_filling=2, grid={"bush_stiffness": [1.0, 3000.0]}))
-    tilts = D.tilt_grid(config)
-    designs = D.design_points(config)
-    conds = D.conditions(config)
-    samples = D.design_samples(config, designs, conds, tilts)
+    exp = D.experiment(config)
+    tilts, designs, conds, samples = exp.tilts, exp.designs, exp.conditions, exp.samples
     assert len(samples) == len(designs) * 5 * (len(tilts) + 1)
     assert set(designs["kind"]) == {"typical", "grid", "space", "air"}
     per = samples.groupby("design")
@@ -139,7 +144,7 @@ def test_every_design_runs_over_the_same_conditions_and_tilts():
             values = rows.sort_values(["condition", "slot"])[column].tolist()
             first = values if first is None else first
             assert values == first, column
-    own = samples[samples["slot"] == D.FLEET_SLOT].drop_duplicates("condition").sort_values("condition")
+    own = samples[samples["slot"] == A.FLEET_SLOT].drop_duplicates("condition").sort_values("condition")
     np.testing.assert_array_equal(own["chassis_tilt"].to_numpy(), conds["chassis_tilt"].to_numpy())
     grid = samples[samples["slot"] >= 0]
     np.testing.assert_allclose(np.degrees(grid["chassis_tilt"]), tilts[grid["slot"]])
@@ -205,3 +210,34 @@ def test_a_null_design_section_skips_the_stage_with_one_line(tmp_path, capsys):
     assert D.main(args) == 0
     assert "design: skipped" in capsys.readouterr().out
     assert json.loads((tmp_path / "design.json").read_text())["designs"] == []
+
+
+# ---- one executor (issue 29) ---------------------------------------------------------------------------------------
+def test_the_design_runs_on_a_local_dask_cluster_are_the_runs_on_this_machine(tmp_path):
+    from dask.distributed import LocalCluster
+
+    from pipeline.schema import read_runs_frame
+
+    config = parse_config(raw_params(groups=["tandem"], n_conditions=2, tilt_step_deg=2.0, n_space_filling=0,
+                                     grid={"bush_stiffness": [1.0, 3000.0]}))  # fmt: skip
+    quiet = lambda text: None  # noqa: E731
+    here, _, here_metrics = D.run(config, tmp_path / "loky", quiet)
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        execution = dataclasses.replace(config.execution, backend="dask", dask_scheduler=cluster.scheduler_address)
+        there, _, there_metrics = D.run(dataclasses.replace(config, execution=execution), tmp_path / "dask", quiet)
+    runs = read_runs_frame(tmp_path / "loky", "design")
+    assert len(runs) == 4 * 2 * 4 and (runs["status"] == "ok").all()  # typical, 2 grid, air x 2 conditions x 4 tilts
+    # the same runs, bit for bit, whoever computed them; so the same tables and metrics
+    pd.testing.assert_frame_equal(read_runs_frame(tmp_path / "dask", "design"), runs, check_exact=True)
+    for name in ("designs", "curves", "check"):
+        pd.testing.assert_frame_equal(getattr(there, name), getattr(here, name), check_exact=True)
+    assert there_metrics == here_metrics
+    # the library's own weighing of the same rows (bogie.fleet.weigh_designs) gives the stage's analysis
+    exp = D.experiment(config)
+    spec = config.design
+    mine = A.analyse_designs(L.weigh_designs(exp, config.protocol.static), exp.designs, exp.tilts, spec.target_share,
+                             spec.confidence_level)  # fmt: skip
+    for name in ("designs", "curves", "check"):
+        pd.testing.assert_frame_equal(getattr(mine, name), getattr(here, name), check_exact=True)

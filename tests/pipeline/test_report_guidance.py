@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from pipeline import design as D
+from bogie.fleet.design_analysis import guidance_sentences
 from pipeline.report import text
 from pipeline.report.pages import guidance as G
 from pipeline.report.style import QUANTITY
@@ -28,7 +28,7 @@ def _metrics(table: pd.DataFrame) -> dict:
         "designs": [{"group": r["group"]} for r in steel],
         "design_summaries": [{"kind": r["kind"]} for r in steel],
         "air": {r["group"]: {} for r in table[table["suspension"] == "air"].to_dict("records")},
-        "guidance": D.guidance(table, np.array([-2.0, 0.0, 2.0]), 0.95),
+        "guidance": guidance_sentences(table, np.array([-2.0, 0.0, 2.0]), 0.95),
     }
 
 
