@@ -39,6 +39,7 @@ FIT = {
 
 
 def main(argv: list[str] | None = None) -> None:
+    from bogie.fleet import calibration_checks as K
     from pipeline import calibrate as C
     from pipeline.config import parse_config
 
@@ -58,8 +59,9 @@ def main(argv: list[str] | None = None) -> None:
         start = time.perf_counter()
         truth = parse_config(truth_raw)
         known = {**C.defaults(truth), **TRUTH}  # the sensor's error: the protocol's class, as the fit keeps it
-        frame = C.filtered(C.simulate_fleet(C.crn_table(truth), known, truth), 0.0)
-        C.write_csv_survey(frame, survey)
+        mapper = C.workers_map(truth.execution)
+        frame = K.filtered(K.simulate_fleet(C.crn_table(truth), known, executor=mapper), 0.0)
+        K.write_csv_survey(frame, survey)
         print(f"synthetic survey: {len(frame)} groups in {time.perf_counter() - start:.0f} s (not part of the cost)")
         raw["observed"].update(path="observed/synthetic.csv", format="csv")
         config = parse_config(raw)
@@ -78,7 +80,7 @@ def main(argv: list[str] | None = None) -> None:
         table = C.crn_table(config)
         values = {**C.defaults(config), **{q: e["value"] for q, e in metrics["fitted"].items()}}
         t0 = time.perf_counter()
-        C.simulate_fleet(table, values, config)
+        K.simulate_fleet(table, values, executor=C.workers_map(config.execution))
         direct = time.perf_counter() - t0
     per_eval = next(float(t.split(" of ")[1].split()[0]) for t, _ in marks if "evaluations of" in t) / 1000.0
     print(f"calibration of a {len(frame)}-group survey, {len(FIT)} quantities, {config.calibrate.n_bogies} "

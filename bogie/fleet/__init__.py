@@ -13,6 +13,9 @@ The steps of the project's pipeline as plain functions (``docs/tutorial.md`` run
   :mod:`.design_analysis`; ``docs/design.md``);
 - :func:`compare`: the runs' readings and an observed survey (:func:`bogie.weighings.survey.observed_survey`)
   through the one definition of the survey statistics (:mod:`.observed`).
+- :func:`calibrate_survey`: the fleet quantities (tilt, air share, WIM site roughness, sensor error) fitted to an
+  observed survey on a table of readings (:func:`build_table`), with its intervals and checks (:mod:`.calibration`,
+  :mod:`.calibration_checks`, ``docs/calibration.md``).
 
 Every quantity is SI unless its name says otherwise (``_kg``, ``_t``, ``_deg``, ``_pct``). Same arguments and seed,
 same table: whatever the executor, the number of workers or the CPU.
@@ -41,6 +44,12 @@ _EXPORTS: dict[str, str] = {
          "Uniform"),
         "distributions",
     ),
+    **dict.fromkeys(
+        ("CalibrationError", "CalibrationSettings", "Observed", "Table", "base_values", "build_table", "calibrate",
+         "make_problem", "observed_groups"),
+        "calibration",
+    ),
+    **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "calibration_checks"),
     **dict.fromkeys(("compare", "simulated_readings"), "observed"),
     **dict.fromkeys(("StaticProtocol", "WimProtocol"), "protocol_settings"),
     **dict.fromkeys(

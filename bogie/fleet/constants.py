@@ -6,8 +6,9 @@ from bogie.params import TARE_FRACTION
 from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
 __all__ = [
-    "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN",
-    "SHARE_TOLERANCE", "SUSPENSIONS", "TARE_FRACTION", "n_axles",
+    "CALIBRATION_QUANTITIES", "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS",
+    "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION", "WIM_QUANTITIES",
+    "n_axles",
 ]  # fmt: skip
 
 #: axles in each axle group the fleet is made of [-]
@@ -31,6 +32,22 @@ ROUTE_MARGIN: float = 4.0
 
 #: the weighing protocols: static weighbridge, weigh-in-motion pass
 PROTOCOLS: tuple[str, ...] = ("static", "wim")
+
+#: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``), each with its
+#: physical range and unit
+CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
+    "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg
+    "chassis_tilt_sd_deg": (0.01, 5.0, "degree"),  # its spread (parent sd)
+    "air_share": (0.0, 1.0, "-"),  # fraction of air-sprung groups, every axle group alike
+    "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
+    "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's relative error on an axle reading
+}
+#: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
+#: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's
+#: site classes end at 4 m/km, so no WIM site is rougher than 10
+SITE_IRI_RANGE: tuple[float, float] = CALIBRATION_QUANTITIES["site_iri_m_km"][:2]
+#: the quantities that belong to the WIM protocol
+WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct")
 
 # PAIR_TOLERANCE (VSB 11: no axle more than 5 % from any other) and SHARE_TOLERANCE (no axle more than 10 % over its
 # equal share) are the survey statistics' (bogie.weighings.stats): one home for simulated and observed groups

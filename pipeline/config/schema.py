@@ -24,7 +24,17 @@ from pydantic import (
     model_validator,
 )
 
-from bogie.fleet.constants import GROUP_AXLES, MAX_PHASE_STEPS, PROTOCOLS, READ_TIME, ROUTE_MARGIN, SUSPENSIONS
+from bogie.fleet.constants import (
+    CALIBRATION_QUANTITIES,
+    GROUP_AXLES,
+    MAX_PHASE_STEPS,
+    PROTOCOLS,
+    READ_TIME,
+    ROUTE_MARGIN,
+    SITE_IRI_RANGE,
+    SUSPENSIONS,
+    WIM_QUANTITIES,
+)
 from bogie.fleet.sampling import SAMPLINGS
 from bogie.params import PRESETS, preset
 from bogie.road.wim import ACCURACY_CLASSES
@@ -345,22 +355,6 @@ class Survey(Strict):
 
     # null: nothing; a format: data/survey/fleet_wim.<format>, the fleet study's WIM readings as records
     export_format: Literal[EXPORT_FORMATS] | None = named("record format")  # type: ignore[valid-type]
-
-
-#: the fleet quantities ``calibrate`` can fit, each with its physical range and unit (``docs/calibration.md``)
-CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
-    "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg
-    "chassis_tilt_sd_deg": (0.01, 5.0, "degree"),  # its spread (parent sd)
-    "air_share": (0.0, 1.0, "-"),  # fraction of air-sprung groups, every axle group alike
-    "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
-    "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's relative error on an axle reading
-}
-#: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
-#: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's
-#: site classes end at 4 m/km, so no WIM site is rougher than 10
-SITE_IRI_RANGE: tuple[float, float] = CALIBRATION_QUANTITIES["site_iri_m_km"][:2]
-#: the quantities that belong to the WIM protocol
-WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct")
 
 
 class Calibrate(Strict):

@@ -15,6 +15,8 @@ import pytest
 import yaml
 from scipy.stats import truncnorm
 
+from bogie.fleet import calibration as L
+from bogie.fleet import calibration_checks as K
 from bogie.params import INHIBITORS
 from pipeline import calibrate as C
 from pipeline.config import ConfigError, parse_config
@@ -48,8 +50,8 @@ def synthetic_survey(path, n_vehicles=300, seed=777):
     raw = raw_params(n_vehicles)
     raw["seed"] = seed
     config = parse_config(raw)
-    frame = C.filtered(C.simulate_fleet(C.crn_table(config), TRUTH, config), 0.0)
-    C.write_csv_survey(frame, path)
+    frame = K.filtered(K.simulate_fleet(C.crn_table(config), TRUTH, executor=C.workers_map(config.execution)), 0.0)
+    K.write_csv_survey(frame, path)
     return frame
 
 
@@ -89,11 +91,11 @@ def test_the_fit_is_closer_to_the_survey_than_the_default_fleet(recovered):
     config = parse_config(yaml.safe_load((root / "params.yaml").read_text()))
     observed, _ = C.observed_groups(root / "observed" / "s.csv", config)
     # the default fleet (all steel, tilt 0.3 +- 0.8 degree, class B(10) sensor) weighed directly, same filters
-    weighed = C.simulate_fleet(C.crn_table(config), C.defaults(config), config)
-    default = C.filtered(weighed, config.observed.min_group_load)
-    problem_obs = {k: C.observed_quantities(v) for k, v in observed.loads.items() if len(v) >= C.MIN_GROUPS}
+    weighed = K.simulate_fleet(C.crn_table(config), C.defaults(config), executor=C.workers_map(config.execution))
+    default = K.filtered(weighed, config.observed.min_group_load)
+    problem_obs = {k: L.observed_quantities(v) for k, v in observed.loads.items() if len(v) >= L.MIN_GROUPS}
     scales = {k: np.std(v, axis=0) for k, v in problem_obs.items()}
-    assert metrics["distance_direct"] < C.frame_distance(default, problem_obs, scales)
+    assert metrics["distance_direct"] < K.frame_distance(default, problem_obs, scales)
 
 
 def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
@@ -126,32 +128,32 @@ def test_readings_interpolate_the_table_linearly_in_tilt_and_roughness():
     # loads linear in tilt and roughness: 5000 + 100 tilt + 10 iri on every axle, any bogie
     grid = 5000.0 + 100.0 * tilts[:, None] + 10.0 * iris[None, :]
     loads = np.broadcast_to(grid[None, None, :, :, None], table.loads.shape).copy()
-    table = C.Table(table.samples, table.size, table.tilt_u, table.air_u, table.z, tilts, iris, loads, 0)
+    table = dataclasses.replace(table, loads=loads, n_failed=0)
     values = {**C.defaults(config), "site_iri_m_km": 2.5, "sensor_error_pct": 0.0}
-    got = C.fleet_readings(table, values, config.distributions["chassis_tilt"])
+    got = L.fleet_readings(table, values)
     mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
     tilt = truncnorm.ppf(table.tilt_u, (-2 - mu) / sd, (2 - mu) / sd, loc=mu, scale=sd)
     np.testing.assert_allclose(got[0, :, 0], 5000.0 + 100.0 * tilt + 25.0, rtol=1e-12)
     # the sensor's error multiplies each axle by 1 + s z with the bogie's own normals
-    noisy = C.fleet_readings(table, {**values, "sensor_error_pct": 2.0}, config.distributions["chassis_tilt"])
+    noisy = L.fleet_readings(table, {**values, "sensor_error_pct": 2.0})
     np.testing.assert_allclose(noisy / got, np.broadcast_to(1.0 + 0.02 * table.z, got.shape), rtol=1e-12)
 
 
 def test_the_distance_is_zero_between_equal_samples_and_grows_with_a_shift():
     rng = np.random.default_rng(1)
     loads = 8000.0 * (1.0 + 0.05 * rng.standard_normal((200, 3)))
-    q = C.observed_quantities(loads)
+    q = L.observed_quantities(loads)
     obs, w = {"triaxle": q}, {"triaxle": np.ones(len(q))}
     scales = {"triaxle": q.std(axis=0)}
-    assert C.distance(obs, w, C.Simulated(obs, w), scales) == pytest.approx(0.0, abs=1e-12)
+    assert L.distance(obs, w, L.Simulated(obs, w), scales) == pytest.approx(0.0, abs=1e-12)
     shifted = loads * np.array([0.95, 1.0, 1.05])
-    near = C.distance(obs, w, C.Simulated({"triaxle": C.observed_quantities(shifted)}, w), scales)
+    near = L.distance(obs, w, L.Simulated({"triaxle": L.observed_quantities(shifted)}, w), scales)
     far = loads * np.array([0.9, 1.0, 1.1])
-    assert 0.0 < near < C.distance(obs, w, C.Simulated({"triaxle": C.observed_quantities(far)}, w), scales)
+    assert 0.0 < near < L.distance(obs, w, L.Simulated({"triaxle": L.observed_quantities(far)}, w), scales)
 
 
 def test_observed_quantities_are_the_survey_statistics_definitions():
-    q = C.observed_quantities(np.array([[7600.0, 8000.0, 8400.0]]))
+    q = L.observed_quantities(np.array([[7600.0, 8000.0, 8400.0]]))
     np.testing.assert_allclose(q, [[0.95, 1.0, 1.05, 10.0]])
 
 

@@ -8,6 +8,7 @@ from pathlib import Path
 
 import pytest
 
+from bogie.fleet import calibration_table
 from pipeline import calibrate, simulate
 from pipeline.config import ConfigError, load_config, load_params, parse_config
 from pipeline.config.schema import Params
@@ -104,10 +105,11 @@ def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
         return FakePool()
 
     monkeypatch.setattr(simulate, "local_executor", fake_executor)
-    monkeypatch.setattr(calibrate, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
+    monkeypatch.setattr(calibration_table, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
     monkeypatch.setattr(calibrate, "worker_count", lambda n, log, stage: worker_count(n, log, stage, cores=2))
     execution = load_config(PARAMS).execution
-    loads = calibrate._weigh_many([({}, "static", None)] * 40, dataclasses.replace(execution, n_jobs=16))
+    mapper = calibrate.workers_map(dataclasses.replace(execution, n_jobs=16))
+    loads = calibration_table.weigh_readings([({}, "static", None)] * 40, mapper)
     assert loads.shape == (40, 3)
     assert seen == [2]  # 16 asked, 2 cores: 2 workers, not 16
 

@@ -1,0 +1,497 @@
+"""Calibration to an observed survey: the fleet quantities that make the simulated readings the observed ones.
+
+The method of ``docs/calibration.md``, with plain arguments (the DVC stage ``pipeline/calibrate.py`` reads them from
+params.yaml). The fitted quantities are those of :data:`bogie.fleet.constants.CALIBRATION_QUANTITIES`: the chassis
+tilt distribution's centre and spread [degree], the air share [-], the WIM site's roughness [m/km] and the sensor's
+error [%]. In short:
+
+1. **The calibration fleet** (:func:`crn_table`): sampled bogies, each both as its steel group and as the air-sprung
+   group on the same trailer, with common random numbers: one uniform for its tilt (its tilt's rank under the
+   fleet's distribution), one for its suspension (:func:`bogie.fleet.sampling.suspension_draw`) and one standard
+   normal per axle for the sensor (its ``sensor_seed``).
+2. **A table of readings** (:func:`build_table`): every group weighed, error free, at every tilt of a grid and, for
+   WIM, at every site roughness; a fleet of given quantities is then interpolated (:func:`fleet_readings`).
+3. **The distance** (:func:`distance`): over laden tandem and tri-axle groups, the sum over each axle position's
+   load share and the spread [%] of the energy distance between the observed and the simulated distribution, each
+   over the observed quantity's standard deviation.
+4. **The fit** (:func:`calibrate`): scipy's seeded ``differential_evolution``; intervals from a bootstrap of the
+   observed records and of the calibration bogies together; trade-offs, the valley and the profiles.
+
+The checks of a calibration (the fleet simulated directly, a held-out half, the ablation) and the whole calibration
+of a survey in one call are :mod:`bogie.fleet.calibration_checks`. Same arguments, same numbers: whatever the
+executor or the number of workers.
+"""
+
+from __future__ import annotations
+
+import math
+import time
+from collections.abc import Callable, Mapping, Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.optimize import differential_evolution
+from scipy.stats import energy_distance
+
+from bogie.fleet.calibration_table import (
+    SIZES,
+    CalibrationError,
+    Mapper,
+    Table,
+    _quiet,
+    _whole,
+    base_values,
+    build_table,
+    crn_table,
+    fleet_readings,
+)
+from bogie.fleet.constants import CALIBRATION_QUANTITIES, WIM_QUANTITIES
+from bogie.fleet.distributions import TruncNormal
+from bogie.weighings.stats import at_resolution, group_inequality
+from bogie.weighings.survey import ObservedSurvey
+
+__all__ = [
+    "MIN_GROUPS", "ORDER", "SIZES", "Calibration", "CalibrationError", "CalibrationSettings", "Mapper", "Observed",
+    "Problem", "Simulated", "Table", "base_values", "build_table", "calibrate", "check_fit", "crn_table", "distance",
+    "fit", "fleet_readings", "make_problem", "observed_groups", "observed_quantities", "simulated",
+]  # fmt: skip
+
+#: the fitted quantities in the order of the optimiser's vector
+ORDER: tuple[str, ...] = tuple(CALIBRATION_QUANTITIES)
+#: the fewest observed groups of one size that enter the distance (fewer: that size is left out, and said so)
+MIN_GROUPS = 10
+#: the distance over the valley's pair of quantities is evaluated on this many points per side [-]
+VALLEY_POINTS = 21
+#: points of each quantity's profile [-]
+PROFILE_POINTS = 25
+#: bootstrap correlation from which two fitted quantities are reported as trading off [-]
+TRADE_OFF = 0.5
+
+
+def check_fit(fit: Mapping[str, Sequence[float]]) -> None:
+    """Refuse bounds that are not ``{quantity: (low, high)}`` within the quantity's range, naming them and the unit.
+
+    Raises
+    ------
+    CalibrationError
+        If ``fit`` is empty, names a quantity not in :data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`, or has
+        bounds that are not two finite numbers ``low < high`` within the quantity's range.
+    """
+    if not fit:
+        raise CalibrationError(f"fit = {dict(fit)!r}: name at least one quantity to fit: {', '.join(ORDER)}")
+    for name, bounds in fit.items():
+        if name not in CALIBRATION_QUANTITIES:
+            allowed = ", ".join(ORDER)
+            raise CalibrationError(f"fit[{name!r}]: not a fleet quantity calibration can fit; allowed: {allowed}")
+        low, high, unit = CALIBRATION_QUANTITIES[name]
+        numbers = len(bounds) == 2 and all(
+            not isinstance(b, bool) and isinstance(b, (int, float)) and math.isfinite(b) for b in bounds
+        )
+        if not numbers or not bounds[0] < bounds[1] or bounds[0] < low or bounds[1] > high:
+            expected = f"must be (low, high), low < high, within [{low:g}, {high:g}] [{unit}]"
+            raise CalibrationError(f"fit[{name!r}] = {tuple(bounds)!r}: {expected}")
+
+
+@dataclass(frozen=True)
+class CalibrationSettings:
+    """How a calibration fits: the quantities and their bounds, the optimiser's settings, the bootstrap.
+
+    Attributes
+    ----------
+    fit
+        Quantity -> (low, high): the bounds of each fitted quantity in the unit of its name
+        (:data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`).
+    seed
+        Seed of the differential evolution (the fit's; resample ``b`` of the bootstrap is fitted with ``seed + 1 + b``)
+        and of the bootstrap's resampling [-], >= 0.
+    maxiter, popsize
+        Of scipy's ``differential_evolution`` [-]: generations >= 1, population multiplier >= 2.
+    bootstrap_resamples
+        Bootstrap resamples for the intervals and trade-offs [-], >= 0 (0: no intervals).
+    confidence_level
+        Of the intervals [-], in (0, 1).
+    """
+
+    fit: Mapping[str, tuple[float, float]]
+    seed: int
+    maxiter: int = 40
+    popsize: int = 8
+    bootstrap_resamples: int = 50
+    confidence_level: float = 0.9
+
+    def __post_init__(self) -> None:
+        check_fit(self.fit)
+        object.__setattr__(self, "fit", {q: (float(b[0]), float(b[1])) for q, b in self.fit.items()})
+        _whole("seed", self.seed, 0)
+        _whole("maxiter", self.maxiter, 1)
+        _whole("popsize", self.popsize, 2)
+        _whole("bootstrap_resamples", self.bootstrap_resamples, 0)
+        level = self.confidence_level
+        if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
+            raise CalibrationError(f"confidence_level = {level!r}: must lie in (0, 1) [-]")
+
+
+# ---- the observed side -------------------------------------------------------------------------------------------
+@dataclass(frozen=True)
+class Observed:
+    """Per size: the observed groups' loads [kg] (rows, front first), and each group's record rank (for halves);
+    the file's weight resolution [kg] (None: not whole kilograms), at which the simulated readings are read."""
+
+    loads: Mapping[str, np.ndarray]
+    record: Mapping[str, np.ndarray]
+    weight_step_kg: float | None = None
+
+    def half(self, parity: int) -> Observed:
+        """The groups of alternate records: even (0) or odd (1) ranks."""
+        keep = {k: self.record[k] % 2 == parity for k in self.loads}
+        return Observed(
+            {k: v[keep[k]] for k, v in self.loads.items()}, {k: v[keep[k]] for k, v in self.record.items()},
+            self.weight_step_kg,
+        )  # fmt: skip
+
+
+def observed_groups(survey: ObservedSurvey) -> Observed:
+    """The laden tandem and tri-axle groups of an observed survey (:func:`bogie.weighings.survey.observed_survey`,
+    filtered as wanted), and the file's weight resolution.
+
+    Raises
+    ------
+    CalibrationError
+        If fewer than :data:`MIN_GROUPS` groups of either size passed the survey's filters.
+    """
+    groups = survey.groups
+    # alternate records, not alternate groups: the rank of each group's record in the file
+    rank = pd.factorize(groups["line"], sort=True)[0] if len(groups) else np.zeros(0, dtype=int)
+    loads, record = {}, {}
+    for size, n in SIZES.items():
+        sel = (groups["group"] == size).to_numpy()
+        loads[size] = groups.loc[sel, [f"axle_load_{i}" for i in range(n)]].to_numpy(dtype=float)
+        record[size] = np.asarray(rank)[sel]
+    if not any(len(v) >= MIN_GROUPS for v in loads.values()):
+        counts = ", ".join(f"{len(v)} {k}" for k, v in loads.items())
+        raise CalibrationError(
+            f"the survey has {counts} groups after its filters; calibration needs at least {MIN_GROUPS} laden tandem "
+            "or tri-axle groups"
+        )
+    return Observed(loads, record, survey.read.weight_step_kg)
+
+
+def observed_quantities(loads: np.ndarray) -> np.ndarray:
+    """Per group (rows of ``loads`` [any unit], front first): each axle's load share W_i / mean(W), then the spread
+    (max - min) / mean [%], from :func:`bogie.weighings.stats.group_inequality`, shape (groups, n + 1)."""
+    n = loads.shape[1]
+    ineq = group_inequality(loads, np.full(len(loads), n))
+    return np.column_stack([ineq["load_share"][:, :n], ineq["spread_pct"]])
+
+
+# ---- a fleet of given quantities, from the table -----------------------------------------------------------------
+def _values(theta: Sequence[float], fitted: Sequence[str], base: Mapping[str, float]) -> dict[str, float]:
+    values = dict(base)
+    values.update(zip(fitted, (float(t) for t in theta)))
+    return values
+
+
+@dataclass(frozen=True)
+class Simulated:
+    """Per size: each calibration group's quantities (rows), its mixture weight, for steel then air stacked."""
+
+    quantities: Mapping[str, np.ndarray]
+    weights: Mapping[str, np.ndarray]
+
+
+def simulated(
+    table: Table, values: Mapping[str, float], min_load_kg: float, slot_counts: np.ndarray | None = None,
+    weight_step_kg: float | None = None,
+) -> Simulated:  # fmt: skip
+    """The simulated survey: the calibration groups that pass the filters (every axle read and loaded, the group at
+    least ``min_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
+    bootstrap count ``slot_counts``, None: 1); every reading first read at the observed file's resolution
+    ``weight_step_kg`` [kg] (None: as it is)."""
+    readings = at_resolution(fleet_readings(table, values), weight_step_kg)
+    share = values["air_share"]
+    counts = np.ones(len(table.size)) if slot_counts is None else slot_counts
+    quantities, weights = {}, {}
+    for size, n in SIZES.items():
+        sel = table.size == size
+        loads = readings[:, sel, :n].reshape(-1, n)
+        w = np.concatenate([(1.0 - share) * counts[sel], share * counts[sel]])
+        keep = np.all(np.isfinite(loads), axis=1) & np.all(loads > 0.0, axis=1) & (loads.sum(axis=1) >= min_load_kg)
+        keep &= w > 0.0
+        quantities[size] = observed_quantities(loads[keep]) if keep.any() else np.zeros((0, n + 1))
+        weights[size] = w[keep]
+    return Simulated(quantities, weights)
+
+
+def distance(
+    obs: Mapping[str, np.ndarray], obs_weights: Mapping[str, np.ndarray], sim: Simulated,
+    scales: Mapping[str, np.ndarray],
+) -> float:  # fmt: skip
+    """Sum over sizes and quantities (:func:`observed_quantities`' columns) of the energy distance between the
+    observed and the simulated distribution, each over its scale (the observed sd): a dimensionless number, inf when
+    a size has no simulated group."""
+    total = 0.0
+    for size, q in obs.items():
+        s = sim.quantities[size]
+        if len(s) == 0 or sim.weights[size].sum() <= 0.0:
+            return math.inf
+        for c in range(q.shape[1]):
+            total += energy_distance(q[:, c], s[:, c], obs_weights[size], sim.weights[size]) / scales[size][c]
+    return float(total)
+
+
+# ---- the fit -----------------------------------------------------------------------------------------------------
+@dataclass
+class Problem:
+    """Everything one evaluation of the distance needs (:func:`make_problem`)."""
+
+    table: Table
+    obs: dict[str, np.ndarray]  # per size used: quantities (groups, n + 1)
+    scales: dict[str, np.ndarray]
+    fitted: tuple[str, ...]
+    bounds: tuple[tuple[float, float], ...]
+    base: dict[str, float]
+    min_load_kg: float
+    weight_step_kg: float | None = None  # the observed file's resolution [kg]
+
+    def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
+        def f(theta: np.ndarray) -> float:
+            values = _values(theta, self.fitted, self.base)
+            sim = simulated(self.table, values, self.min_load_kg, slot_counts, self.weight_step_kg)
+            return distance(self.obs, obs_weights, sim, self.scales)
+
+        return f
+
+    def unit_weights(self) -> dict[str, np.ndarray]:
+        return {k: np.ones(len(v)) for k, v in self.obs.items()}
+
+
+def _check_problem(table: Table, fit: Mapping[str, Sequence[float]], base: Mapping[str, float], min_load_kg: float):
+    check_fit(fit)
+    if table.protocol != "wim" and any(q in WIM_QUANTITIES for q in fit):
+        wim_only = [q for q in fit if q in WIM_QUANTITIES]
+        raise CalibrationError(f"fit: {', '.join(wim_only)} belong to the WIM protocol; the table is {table.protocol}")
+    if not isinstance(table.tilt_distribution, TruncNormal) and any(q.startswith("chassis_tilt") for q in fit):
+        dist = table.tilt_distribution
+        raise CalibrationError(f"fit: the chassis tilt's centre and spread are fitted; tilt_distribution = {dist!r}"
+                               " must then be a TruncNormal")  # fmt: skip
+    iri = fit.get("site_iri_m_km")
+    if iri is not None and not table.iris[0] <= iri[0] < iri[1] <= table.iris[-1]:
+        raise CalibrationError(f"fit['site_iri_m_km'] = {tuple(iri)!r}: must lie within the table's site_iri_levels, "
+                               f"[{table.iris[0]:g}, {table.iris[-1]:g}] [m/km]")  # fmt: skip
+    missing = [q for q in ORDER if q not in base]
+    if missing:
+        raise CalibrationError(f"base: no value for {', '.join(missing)} (base_values gives every quantity)")
+    if isinstance(min_load_kg, bool) or not isinstance(min_load_kg, (int, float)) or not 0.0 <= min_load_kg < math.inf:
+        raise CalibrationError(f"min_load_kg = {min_load_kg!r}: must be a finite number >= 0 [kg]")
+
+
+def make_problem(
+    table: Table, observed: Observed, fit: Mapping[str, Sequence[float]], base: Mapping[str, float],
+    min_load_kg: float = 0.0,
+) -> Problem:  # fmt: skip
+    """The fit of the quantities ``fit`` to ``observed`` on ``table`` (sizes with fewer than :data:`MIN_GROUPS`
+    groups left out).
+
+    Parameters
+    ----------
+    table
+        The calibration fleet's table (:func:`build_table`).
+    observed
+        The observed groups (:func:`observed_groups`).
+    fit
+        Quantity -> (low, high), in the unit of its name (:class:`CalibrationSettings`' ``fit``).
+    base
+        Every quantity's value in the fleet (:func:`base_values`): what an unfitted quantity keeps.
+    min_load_kg
+        Smallest simulated group load kept [kg]: the survey's own filter.
+
+    Raises
+    ------
+    CalibrationError
+        If ``fit`` is not as :func:`check_fit` wants, fits a WIM quantity on a static table, the tilt's centre or
+        spread of a tilt distribution that is not a TruncNormal, the site roughness outside the table's levels; if
+        ``base`` lacks a quantity or ``min_load_kg`` is not a finite number >= 0.
+    """
+    _check_problem(table, fit, base, min_load_kg)
+    obs = {k: observed_quantities(v) for k, v in observed.loads.items() if len(v) >= MIN_GROUPS}
+    scales = {k: np.maximum(np.std(v, axis=0), 1e-9) for k, v in obs.items()}
+    fitted = tuple(q for q in ORDER if q in fit)
+    bounds = tuple(tuple(fit[q]) for q in fitted)
+    return Problem(table, obs, scales, fitted, bounds, dict(base), min_load_kg, observed.weight_step_kg)
+
+
+def fit(
+    problem: Problem, seed: int, maxiter: int, popsize: int, obs_weights=None, slot_counts=None,
+    progress: Callable[[str], None] | None = None, label: str = "fit",
+) -> tuple[np.ndarray, float, int]:  # fmt: skip
+    """Minimise the distance by differential evolution (seeded, Sobol' initial population, no polish): the best
+    values (in the order of ``problem.fitted``, their units), the distance [-] and the evaluations [-].
+
+    ``obs_weights`` (per size, each observed group's count) and ``slot_counts`` (each calibration bogie's) weigh a
+    bootstrap resample; None: every one once. ``progress`` is told each generation (None: nothing)."""
+    f = problem.objective(obs_weights or problem.unit_weights(), slot_counts)
+    evaluations = [0]
+
+    def counted(theta):
+        evaluations[0] += 1
+        return f(theta)
+
+    generation = [0]
+
+    def callback(intermediate_result):
+        generation[0] += 1
+        if progress is not None:
+            progress(f"calibrate: {label}: generation {generation[0]}/{maxiter}, {evaluations[0]} evaluations, "
+                     f"best distance {intermediate_result.fun:.5f}")  # fmt: skip
+
+    result = differential_evolution(
+        counted, problem.bounds, seed=seed, maxiter=maxiter, popsize=popsize, tol=1e-6, polish=False,
+        init="sobol", callback=callback,
+    )  # fmt: skip
+    return np.asarray(result.x, dtype=float), float(result.fun), evaluations[0]
+
+
+@dataclass
+class Calibration:
+    """The outcome of :func:`calibrate`.
+
+    Attributes
+    ----------
+    fitted
+        Per fitted quantity: ``value``, the interval ``low`` and ``high`` (None without a bootstrap of 2 or more) and
+        its ``bounds``, in the unit of its name.
+    distance, evaluations, seconds_per_evaluation
+        The best distance [-], the evaluations of the fit [-] and the wall time of one [s].
+    bootstrap
+        One row per resample: ``resample``, each fitted quantity and the ``distance``.
+    correlation, trade_offs
+        The bootstrap correlation of the fitted quantities; the pairs correlated by :data:`TRADE_OFF` or more.
+    valley, profiles
+        The distance over the most correlated pair's bounds (``quantity_x``, ``x``, ``quantity_y``, ``y``,
+        ``distance``) and along each quantity with the others at their best (``quantity``, ``value``, ``distance``).
+    values
+        Every quantity's value in the calibrated fleet (the base's for an unfitted one).
+    """
+
+    fitted: dict[str, dict[str, float]]
+    distance: float
+    evaluations: int
+    seconds_per_evaluation: float
+    bootstrap: pd.DataFrame
+    correlation: pd.DataFrame
+    trade_offs: list[dict[str, Any]]
+    valley: pd.DataFrame
+    profiles: pd.DataFrame
+    values: dict[str, float]
+
+
+def _bootstrap(problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None]) -> pd.DataFrame:
+    """The fit on each resample of the observed groups and of the calibration bogies together."""
+    seed = settings.seed
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
+    rows = []
+    for b in range(settings.bootstrap_resamples):
+        obs_w = {
+            k: rng.multinomial(len(v), np.full(len(v), 1.0 / len(v))).astype(float) for k, v in problem.obs.items()
+        }
+        n = len(problem.table.size)
+        slots = rng.multinomial(n, np.full(n, 1.0 / n)).astype(float)
+        theta, d, _ = fit(problem, seed + 1 + b, settings.maxiter, settings.popsize, obs_w, slots)
+        rows.append({"resample": b, **dict(zip(problem.fitted, theta)), "distance": d})
+        progress(f"calibrate: bootstrap {b + 1}/{settings.bootstrap_resamples}: distance {d:.5f}")
+    return pd.DataFrame(rows, columns=["resample", *problem.fitted, "distance"])
+
+
+def _intervals(problem: Problem, best: np.ndarray, boot: pd.DataFrame, level: float) -> dict[str, dict[str, Any]]:
+    alpha = 1.0 - level
+    fitted = {}
+    for i, q in enumerate(problem.fitted):
+        entry = {"value": float(best[i]), "low": None, "high": None, "bounds": list(problem.bounds[i])}
+        if len(boot) >= 2:
+            entry["low"], entry["high"] = (float(np.quantile(boot[q], p)) for p in (alpha / 2, 1 - alpha / 2))
+            # a basic interval must hold the estimate: the fit on all the data is one of the bootstrap's worlds
+            entry["low"], entry["high"] = min(entry["low"], entry["value"]), max(entry["high"], entry["value"])
+        fitted[q] = entry
+    return fitted
+
+
+def _trade_offs(fitted: Sequence[str], corr: pd.DataFrame) -> list[dict[str, Any]]:
+    trade = []
+    for i, a in enumerate(fitted):
+        for b_ in fitted[i + 1 :]:
+            r = corr.loc[a, b_] if not corr.empty else math.nan
+            if np.isfinite(r) and abs(r) >= TRADE_OFF:
+                trade.append({"quantities": [a, b_], "correlation": round(float(r), 3)})
+    return trade
+
+
+def calibrate(
+    problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None] | None = None
+) -> Calibration:
+    """Fit, then the bootstrap intervals, the trade-offs, the valley and the profiles.
+
+    Parameters
+    ----------
+    problem
+        What is fitted to what (:func:`make_problem`).
+    settings
+        The optimiser's seed and settings, the bootstrap's resamples and confidence level (its ``fit`` made the
+        problem).
+    progress
+        Told each generation of the fit and each resample (None: nothing).
+    """
+    progress = progress or _quiet
+    start = time.perf_counter()
+    best, dist_best, evaluations = fit(problem, settings.seed, settings.maxiter, settings.popsize, progress=progress)
+    per_eval = (time.perf_counter() - start) / max(evaluations, 1)
+    boot = _bootstrap(problem, settings, progress)
+    fitted = _intervals(problem, best, boot, settings.confidence_level)
+    corr = boot[list(problem.fitted)].corr() if len(boot) >= 3 else pd.DataFrame()
+    trade = _trade_offs(problem.fitted, corr)
+    pair = _valley_pair(problem.fitted, corr)
+    f = problem.objective(problem.unit_weights(), None)
+    valley = _valley(problem, f, best, pair) if pair else pd.DataFrame(columns=["x", "y", "distance"])
+    profiles = _profiles(problem, f, best)
+    return Calibration(
+        fitted, dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
+        _values(best, problem.fitted, problem.base),
+    )  # fmt: skip
+
+
+def _valley_pair(fitted: Sequence[str], corr: pd.DataFrame) -> tuple[str, str] | None:
+    if len(fitted) < 2:
+        return None
+    if corr.empty or not np.isfinite(corr.to_numpy()).any():
+        return (fitted[0], fitted[1])
+    best, pair = -1.0, (fitted[0], fitted[1])
+    for i, a in enumerate(fitted):
+        for b in fitted[i + 1 :]:
+            r = abs(corr.loc[a, b])
+            if np.isfinite(r) and r > best:
+                best, pair = r, (a, b)
+    return pair
+
+
+def _valley(problem: Problem, f: Callable, best: np.ndarray, pair: tuple[str, str]) -> pd.DataFrame:
+    ia, ib = problem.fitted.index(pair[0]), problem.fitted.index(pair[1])
+    xa = np.linspace(*problem.bounds[ia], VALLEY_POINTS)
+    xb = np.linspace(*problem.bounds[ib], VALLEY_POINTS)
+    rows = []
+    for a in xa:
+        for b in xb:
+            theta = best.copy()
+            theta[ia], theta[ib] = a, b
+            rows.append({"quantity_x": pair[0], "x": a, "quantity_y": pair[1], "y": b, "distance": f(theta)})
+    return pd.DataFrame(rows)
+
+
+def _profiles(problem: Problem, f: Callable, best: np.ndarray) -> pd.DataFrame:
+    rows = []
+    for i, q in enumerate(problem.fitted):
+        for x in np.linspace(*problem.bounds[i], PROFILE_POINTS):
+            theta = best.copy()
+            theta[i] = x
+            rows.append({"quantity": q, "value": x, "distance": f(theta)})
+    return pd.DataFrame(rows)

@@ -1,0 +1,336 @@
+"""The checks of a calibration, and a whole calibration of an observed survey in one call (``docs/calibration.md``).
+
+:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration.calibrate`) and checks: the calibrated fleet simulated
+directly, not through the table, under the survey's filters (``calibrated``); a fit on alternate records held
+against the other half (``held_out``); the ablation re-run on the calibrated fleet's steel groups. Its metrics are
+those of ``metrics/calibration.json`` (the DVC stage ``pipeline/calibrate.py`` writes them). :func:`write_csv_survey`
+writes simulated groups as a survey file, a synthetic survey to calibrate to. Loads in kg.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Callable, Mapping
+from concurrent.futures import Executor
+from pathlib import Path
+from typing import Any
+
+import numpy as np
+import pandas as pd
+
+from bogie.fleet.calibration import (
+    SIZES,
+    CalibrationError,
+    CalibrationSettings,
+    Mapper,
+    Observed,
+    Simulated,
+    Table,
+    _values,
+    calibrate,
+    distance,
+    fit,
+    make_problem,
+    observed_quantities,
+)
+from bogie.fleet.calibration_table import _quiet, bogie_tilts, protocol_spec, weigh_readings
+from bogie.fleet.observed import by_size
+from bogie.metrics import max_deviation
+from bogie.params import INHIBITORS
+from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
+from bogie.weighings.writers import write_weighings
+
+__all__ = [
+    "SYNTHETIC_TRACTOR", "ablation", "calibrate_survey", "filtered", "frame_distance", "frame_stats", "groups_stats",
+    "held_out", "observed_distance", "simulate_fleet", "write_csv_survey",
+]  # fmt: skip
+
+
+# ---- the calibrated fleet, simulated directly -------------------------------------------------------------------
+def simulate_fleet(
+    table: Table, values: Mapping[str, float], variant: str = "baseline", steel_only: bool = False,
+    weight_step_kg: float | None = None, executor: Executor | Mapper | None = None,
+) -> pd.DataFrame:  # fmt: skip
+    """The calibration fleet with the quantities ``values``, weighed directly (no table): one row per group kept
+    (``slot``, ``group``, ``n_axles``, ``suspension``, ``tilt_deg`` [degree], wide loads ``axle_load_0..2`` [kg]),
+    with the sensor's error, before the filters.
+
+    ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``);
+    ``weight_step_kg`` reads the loads at the observed file's resolution [kg] (None: as they are; the ablation's
+    physics is read so); ``executor`` is where the weighings run
+    (:func:`bogie.fleet.calibration_table.weigh_readings`).
+    """
+    if variant not in ("baseline", *INHIBITORS, "all"):
+        raise CalibrationError(f"variant = {variant!r}: must be baseline, all or one of {', '.join(INHIBITORS)}")
+    tilt = bogie_tilts(table, values)
+    kinds = np.where(table.air_u < values["air_share"], "air", "steel")
+    iri = values["site_iri_m_km"] if table.protocol == "wim" else math.nan
+    spec = protocol_spec(table, iri)
+    tasks, keep = [], []
+    for i, row in enumerate(table.samples.to_dict("records")):
+        if steel_only and kinds[i] != "steel":
+            continue
+        sample = {**row, "suspension": kinds[i], "chassis_tilt": math.radians(float(tilt[i]))}
+        if variant != "baseline":
+            for name, ideal in INHIBITORS.items():
+                if variant in (name, "all"):
+                    sample[name] = ideal
+        tasks.append((sample, table.protocol, spec))
+        keep.append(i)
+    loads = weigh_readings(tasks, executor)
+    if table.protocol == "wim":
+        loads = loads * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep])
+    loads = at_resolution(loads, weight_step_kg)
+    frame = pd.DataFrame({
+        "slot": keep, "group": table.size[keep], "n_axles": [SIZES[s] for s in table.size[keep]],
+        "suspension": kinds[keep], "tilt_deg": tilt[keep],
+        **{f"axle_load_{i}": loads[:, i] for i in range(3)},
+    })  # fmt: skip
+    return frame
+
+
+def filtered(frame: pd.DataFrame, min_load_kg: float) -> pd.DataFrame:
+    """The groups a survey keeps: weighed, every wheel on the road, laden (at least ``min_load_kg`` [kg])."""
+    n = frame["n_axles"].to_numpy()
+    loads = frame[[f"axle_load_{i}" for i in range(3)]].to_numpy()
+    present = np.arange(3)[None, :] < n[:, None]
+    ok = np.all(np.where(present, np.isfinite(loads) & (loads > 0.0), True), axis=1)
+    total = np.nansum(np.where(present, loads, 0.0), axis=1)
+    return frame[ok & (total >= min_load_kg)].reset_index(drop=True)
+
+
+def groups_stats(loads_by_size: Mapping[str, np.ndarray]) -> dict[str, Any]:
+    """``bogie weighings --json``'s ``groups`` object of per-size load tables [kg]."""
+    rows = []
+    for size, loads in loads_by_size.items():
+        for w in loads:
+            rows.append({"group": size, "n_axles": SIZES[size], **{f"axle_load_{i}": w[i] for i in range(len(w))}})
+    frame = pd.DataFrame(rows)
+    if frame.empty:
+        return by_size(pd.DataFrame())
+    return by_size(survey_statistics(frame, by="group"))
+
+
+def frame_stats(frame: pd.DataFrame) -> dict[str, Any]:
+    """:func:`groups_stats` of a simulated frame (:func:`simulate_fleet`)."""
+    return groups_stats({
+        size: frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+        for size, n in SIZES.items()
+    })  # fmt: skip
+
+
+def frame_distance(frame: pd.DataFrame, obs: Mapping[str, np.ndarray], scales: Mapping[str, np.ndarray]) -> float:
+    """The distance [-] of a directly simulated (unweighted) survey to observed quantities
+    (:func:`bogie.fleet.calibration.observed_quantities` per size) over their ``scales``."""
+    q, w = {}, {}
+    for size, n in SIZES.items():
+        loads = frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+        q[size] = observed_quantities(loads) if len(loads) else np.zeros((0, n + 1))
+        w[size] = np.ones(len(loads))
+    return distance(obs, {k: np.ones(len(v)) for k, v in obs.items()}, Simulated(q, w), scales)
+
+
+def observed_distance(
+    a: Mapping[str, np.ndarray], b: Mapping[str, np.ndarray], scales: Mapping[str, np.ndarray]
+) -> float:
+    """The distance [-] between two observed halves' quantities: the floor a held-out distance can reach."""
+    sim = Simulated({k: b.get(k, np.zeros((0, v.shape[1]))) for k, v in a.items()},
+                    {k: np.ones(len(b.get(k, []))) for k in a})  # fmt: skip
+    return distance(a, {k: np.ones(len(v)) for k, v in a.items()}, sim, scales)
+
+
+def ablation(
+    table: Table, values: Mapping[str, float], min_load_kg: float, executor: Executor | Mapper | None = None
+) -> pd.DataFrame:
+    """The calibrated fleet's steel groups with each inhibitor removed, groups of at least ``min_load_kg`` [kg]: per
+    variant and size, ``n_groups``, the mean max deviation [%], the share outside 5 % [-] and the points [%] the
+    variant buys against the baseline."""
+    rows = []
+    for variant in ("baseline", *INHIBITORS, "all"):
+        frame = filtered(simulate_fleet(table, values, variant, steel_only=True, executor=executor), min_load_kg)
+        for size, n in SIZES.items():
+            loads = frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+            if len(loads) == 0:
+                continue
+            max_dev = max_deviation(loads)
+            outside = group_inequality(loads, np.full(len(loads), n))["outside_5pct"]
+            rows.append({
+                "variant": variant, "group": size, "n_groups": len(loads),
+                "mean_max_deviation_pct": 100.0 * float(max_dev.mean()), "share_outside_5pct": float(outside.mean()),
+            })  # fmt: skip
+    table_ = pd.DataFrame(rows)
+    base = table_[table_["variant"] == "baseline"].set_index("group")
+    table_["buys_points"] = [
+        base.loc[g, "mean_max_deviation_pct"] - m for g, m in zip(table_["group"], table_["mean_max_deviation_pct"])
+    ]
+    return table_
+
+
+# ---- held out, and the whole calibration of a survey ---------------------------------------------------------------
+def _round(x: Any, digits: int = 4) -> Any:
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return None
+    return round(float(x), digits) + 0.0
+
+
+def held_out(
+    table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float], min_load_kg: float,
+    executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """A fit on the even records, the odd ones held against the fleet it calibrates (values rounded for a metrics
+    file): the half's fitted values, its distance, the held-out distance of the odd half to the fleet simulated
+    directly and the distance between the halves (its floor), the odd half's and the calibrated fleet's statistics.
+    With a ``reason`` instead when the half cannot be fitted."""
+    even, odd = observed.half(0), observed.half(1)
+    held: dict[str, Any] = {"fit_on": "even records", "held_out": "odd records"}
+    try:
+        half = make_problem(table, even, settings.fit, base, min_load_kg)
+        theta, d_half, _ = fit(half, settings.seed, settings.maxiter, settings.popsize, progress=progress,
+                               label="half fit")  # fmt: skip
+        values_half = _values(theta, half.fitted, half.base)
+        step = observed.weight_step_kg
+        direct_half = filtered(simulate_fleet(table, values_half, weight_step_kg=step, executor=executor), min_load_kg)
+        odd_q = {k: observed_quantities(v) for k, v in odd.loads.items() if k in half.obs and len(v)}
+        held.update(
+            fitted={q: _round(values_half[q]) for q in half.fitted},
+            distance_fit_half=_round(d_half, 5),
+            distance_held_out=_round(frame_distance(direct_half, odd_q, half.scales), 5),
+            distance_halves=_round(observed_distance(half.obs, odd_q, half.scales), 5),
+            groups=groups_stats(odd.loads),
+            calibrated_groups=frame_stats(direct_half),
+        )
+    except CalibrationError as exc:
+        held.update(reason=str(exc), groups=None)
+    return held
+
+
+def calibrate_survey(
+    table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float],
+    min_load_kg: float = 0.0, executor: Executor | Mapper | None = None,
+    progress: Callable[[str], None] | None = None,
+) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:  # fmt: skip
+    """The whole calibration of an observed survey: the fit, its intervals and trade-offs, and its checks.
+
+    Parameters
+    ----------
+    table
+        The calibration fleet's table (:func:`bogie.fleet.calibration.build_table`).
+    observed
+        The observed groups (:func:`bogie.fleet.calibration.observed_groups`).
+    settings
+        The quantities fitted, their bounds, the optimiser's and the bootstrap's settings.
+    base
+        Every quantity's value in the fleet (:func:`bogie.fleet.calibration.base_values`), kept if not fitted.
+    min_load_kg
+        Smallest group load kept [kg], the survey's own filter.
+    executor
+        Where the direct simulations (the checks) are weighed (:func:`~bogie.fleet.calibration_table.weigh_readings`).
+    progress
+        Told the fit's generations, the resamples and the cost of an evaluation (None: nothing).
+
+    Returns
+    -------
+    metrics : dict
+        JSON-ready, values rounded: ``protocol``, ``method``, ``fitted`` (value, interval, bounds), ``fixed``,
+        ``distance``, ``distance_direct``, the table's size, the observed, calibrated and held-out statistics, the
+        ablation (``docs/calibration.md``, ``docs/outputs.md``).
+    tables : dict
+        ``bootstrap.csv``, ``valley.csv``, ``profiles.csv``, ``calibrated.csv`` (the calibrated fleet simulated
+        directly and filtered) and ``ablation.csv`` as DataFrames.
+
+    Raises
+    ------
+    CalibrationError
+        If the arguments are not what :func:`bogie.fleet.calibration.make_problem` wants.
+    """
+    progress = progress or _quiet
+    problem = make_problem(table, observed, settings.fit, base, min_load_kg)
+    result = calibrate(problem, settings, progress)
+    step = observed.weight_step_kg
+    direct = filtered(simulate_fleet(table, result.values, weight_step_kg=step, executor=executor), min_load_kg)
+    held = held_out(table, observed, settings, base, min_load_kg, executor, progress)
+    abl = ablation(table, result.values, min_load_kg, executor)
+    metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
+    progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
+    tables = {
+        "bootstrap.csv": result.bootstrap, "valley.csv": result.valley, "profiles.csv": result.profiles,
+        "calibrated.csv": direct, "ablation.csv": abl,
+    }  # fmt: skip
+    return metrics, tables
+
+
+def _metrics(
+    table: Table, observed: Observed, settings: CalibrationSettings, result: Any, obs: Mapping[str, np.ndarray],
+    scales: Mapping[str, np.ndarray], direct: pd.DataFrame, held: dict[str, Any], abl: pd.DataFrame,
+) -> dict[str, Any]:  # fmt: skip
+    """The metrics of :func:`calibrate_survey`."""
+    return {
+        "protocol": table.protocol,
+        "method": "differential evolution on the energy distance, common random numbers, tabulated readings",
+        "fitted": {
+            q: {k: (_round(v) if not isinstance(v, list) else v) for k, v in e.items()}
+            for q, e in result.fitted.items()
+        },  # fmt: skip
+        "fixed": {q: _round(v) for q, v in result.values.items() if q not in result.fitted},
+        "confidence_level": settings.confidence_level,
+        "bootstrap_resamples": settings.bootstrap_resamples,
+        "distance": _round(result.distance, 5),
+        "distance_direct": _round(frame_distance(direct, obs, scales), 5),
+        "sizes_fitted": sorted(obs),
+        "evaluations": result.evaluations,
+        "trade_offs": result.trade_offs,
+        "table": {
+            "n_bogies": len(table.size),
+            "tilts_deg": [_round(t, 3) for t in table.tilts],
+            "site_iri_levels_m_km": [None if math.isnan(x) else x for x in table.iris],
+            "n_weighings": int(np.prod(table.loads.shape[:4])),
+            "n_failed": table.n_failed,
+        },  # fmt: skip
+        "observed": {"groups": groups_stats(observed.loads), "weight_step_kg": observed.weight_step_kg},
+        "calibrated": {"groups": frame_stats(direct)},
+        "held_out": held,
+        "ablation": {
+            f"{r.variant}/{r.group}": {
+                "mean_max_deviation_pct": _round(r.mean_max_deviation_pct),
+                "share_outside_5pct": _round(r.share_outside_5pct),
+                "buys_points": _round(r.buys_points),
+                "n_groups": int(r.n_groups),
+            }
+            for r in abl.itertuples()
+        },  # fmt: skip
+    }
+
+
+# ---- a synthetic survey -----------------------------------------------------------------------------------------
+#: the tractor a synthetic survey puts in front of each simulated group (:func:`write_csv_survey`): a 4x2 tractor,
+#: steer and drive axle [kg] and the spacings steer-drive and drive-group [m]. Placeholders that make the group the
+#: vehicle's third, a trailer group (bogie.weighings.groups); single axles, so no statistic of tandems or tri-axles
+#: reads them
+SYNTHETIC_TRACTOR = {"loads_kg": (6500.0, 10500.0), "spacings_m": (3.6, 6.0)}
+
+
+def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 80.0, spacing_m: float = 1.31) -> None:
+    """Write simulated groups (:func:`simulate_fleet`'s wide loads [kg]) as a survey in the ``csv`` weighings format
+    (``docs/weighings.md``), one semi-trailer a record, a second apart, at ``speed_kmh`` [km/h] and axle spacing
+    ``spacing_m`` [m] within the group: a synthetic survey read as a real one
+    (:func:`bogie.weighings.survey.observed_survey`). Each group is the trailer group of a vehicle behind
+    :data:`SYNTHETIC_TRACTOR`; loads in whole kilograms."""
+    steer, drive = SYNTHETIC_TRACTOR["loads_kg"]
+    n_group = frame["n_axles"].to_numpy(dtype=np.int64)
+    width = 2 + int(n_group.max()) if len(frame) else 5
+    vehicles = pd.DataFrame({
+        "timestamp": pd.Timestamp("2026-01-05T06:00:00") + pd.to_timedelta(np.arange(len(frame)), unit="s"),
+        "speed": speed_kmh / 3.6, "lane": 1, "n_axles": 2 + n_group,
+    })  # fmt: skip
+    for i in range(width):
+        if i < 2:
+            load = np.full(len(frame), (steer, drive)[i])
+        else:
+            column = frame[f"axle_load_{i - 2}"].to_numpy(dtype=float) if i - 2 < 3 else np.zeros(len(frame))
+            load = np.where(n_group > i - 2, np.round(column), np.nan)
+        vehicles[f"axle_load_{i}"] = load
+    for i in range(width - 1):
+        gap = SYNTHETIC_TRACTOR["spacings_m"][i] if i < 2 else spacing_m
+        vehicles[f"spacing_{i}"] = np.where(2 + n_group - 1 > i, gap, np.nan)
+    Path(path).parent.mkdir(parents=True, exist_ok=True)
+    write_weighings(vehicles, path, "csv")

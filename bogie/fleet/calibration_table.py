@@ -1,0 +1,309 @@
+"""The calibration fleet and its table of readings (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``).
+
+The one simulation a calibration needs: every calibration bogie weighed, error free, as its steel group and as the
+air-sprung group on the same trailer, at every tilt of a grid and (WIM) every site roughness (:func:`build_table`);
+a fleet of given quantities is then read off the table (:func:`fleet_readings`) through each bogie's common random
+numbers (:func:`crn_table`). Loads in kg, tilts in degrees, roughness in m/km.
+"""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+import os
+import time
+from collections.abc import Callable, Iterable, Mapping, Sequence
+from concurrent.futures import Executor
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+import pandas as pd
+from scipy.stats import truncnorm
+
+from bogie.fleet.distributions import Distribution, TruncNormal
+from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.fleet.sampling import bogie_from_sample, suspension_draw
+from bogie.fleet.weighing import weigh
+from bogie.params import GRAVITY
+from bogie.road import wim
+
+__all__ = [
+    "SIZES", "CalibrationError", "Mapper", "Table", "base_values", "bogie_tilts", "build_table", "crn_table",
+    "fleet_readings", "protocol_spec", "weigh_reading", "weigh_readings",
+]  # fmt: skip
+
+#: the axle groups a calibration covers, and their axles
+SIZES: dict[str, int] = {"tandem": 2, "triaxle": 3}
+
+#: a map-like callable: ``mapper(func, items)`` gives ``func(item)`` of every item, in the items' order
+Mapper = Callable[[Callable[[Any], Any], Sequence[Any]], Iterable[Any]]
+
+
+class CalibrationError(ValueError):
+    """An input that calibration cannot use (named, with what was expected)."""
+
+
+def _quiet(text: str) -> None:
+    """A progress callback that says nothing."""
+
+
+def _whole(name: str, value: Any, low: int) -> None:
+    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
+        raise CalibrationError(f"{name} = {value!r}: must be a whole number >= {low} [-]")
+
+
+# ---- the calibration fleet and its table of readings -------------------------------------------------------------
+@dataclass(frozen=True)
+class Table:
+    """The calibration fleet's error-free readings on the grid, its common random numbers, and how it is weighed.
+
+    ``loads`` has shape (2, n, K, J, 3): suspension (steel, air), bogie, tilt, site roughness, axle [kg]; NaN for
+    a weighing that failed or read a wheel in the air, and past a tandem's second axle.
+    """
+
+    samples: pd.DataFrame
+    size: np.ndarray  # (n,) "tandem" | "triaxle"
+    tilt_u: np.ndarray  # (n,) the tilt's uniform
+    air_u: np.ndarray  # (n,) the suspension's uniform
+    z: np.ndarray  # (n, 3) the sensor's standard normals
+    tilts: np.ndarray  # (K,) [degree]
+    iris: np.ndarray  # (J,) [m/km]; one NaN entry for the static protocol
+    loads: np.ndarray
+    n_failed: int
+    protocol: str = "wim"  # whose readings: "static" or "wim"
+    settings: StaticProtocol | WimProtocol | None = None  # the protocol's (the sensor's class is not used: error free)
+    tilt_distribution: Distribution | None = None  # the fleet's chassis tilt distribution [rad]
+
+
+def base_values(
+    tilt_distribution: Distribution, air_share: float, wim_settings: WimProtocol | None
+) -> dict[str, float]:
+    """The value of each quantity of :data:`ORDER` in a fleet (what an unfitted quantity keeps).
+
+    Parameters
+    ----------
+    tilt_distribution
+        The fleet's chassis tilt distribution [rad]: its ``mean`` and ``sd`` give the tilt's centre and spread in
+        degrees (0 and 1 degree for a distribution without them).
+    air_share
+        Fraction of air-sprung groups [-].
+    wim_settings
+        The WIM protocol's settings: the site's roughness [m/km] and the sensor's error sd [%] of its accuracy class
+        (:func:`bogie.road.wim.axle_error_sd`); None: both NaN (a static calibration uses neither).
+    """
+    return {
+        "chassis_tilt_mean_deg": math.degrees(getattr(tilt_distribution, "mean", 0.0)),
+        "chassis_tilt_sd_deg": math.degrees(getattr(tilt_distribution, "sd", 1.0)),
+        "air_share": float(air_share),
+        "site_iri_m_km": math.nan if wim_settings is None else wim_settings.site_iri,
+        "sensor_error_pct": math.nan if wim_settings is None else 100.0 * wim.axle_error_sd(
+            wim_settings.accuracy_class, wim_settings.confidence_level
+        ),
+    }  # fmt: skip
+
+
+def protocol_spec(table: Table, iri: float) -> StaticProtocol | WimProtocol:
+    """The settings a calibration weighing uses: the static protocol's, or the WIM protocol's with no sensor error
+    and, unless ``iri`` is NaN, the site roughness ``iri`` [m/km]."""
+    if table.protocol == "static":
+        return table.settings
+    spec = dataclasses.replace(table.settings, accuracy_class="none")
+    return spec if math.isnan(iri) else dataclasses.replace(spec, site_iri=float(iri))
+
+
+def _weigh_kg(sample: Mapping[str, Any], protocol: str, spec: Any) -> np.ndarray:
+    """A sample's error-free axle loads [kg] (3 entries, NaN past the group's axles), all NaN if the weighing
+    failed or read a wheel in the air."""
+    out = np.full(3, np.nan)
+    try:
+        bogie = bogie_from_sample(sample)
+    except (ValueError, TypeError):
+        return out
+    row = weigh(bogie, sample, protocol, spec)
+    if row["status"] != "ok" or row["wheel_airborne"]:
+        return out
+    n = int(sample["n_axles"])
+    out[:n] = [row[f"axle_load_{i}"] / GRAVITY for i in range(n)]
+    return out
+
+
+def weigh_reading(task: tuple[Mapping[str, Any], str, Any]) -> np.ndarray:
+    """The readings [kg] of one weighing task ``(sample, protocol, settings)``, 3 entries (NaN: none)."""
+    return _weigh_kg(*task)
+
+
+def weigh_readings(tasks: Sequence[tuple[dict, str, Any]], executor: Executor | Mapper | None = None) -> np.ndarray:
+    """Each task's readings [kg], shape (tasks, 3), in the tasks' order.
+
+    ``executor``: None weighs in this process; a :class:`concurrent.futures.Executor` maps the tasks over its
+    workers in chunks; a map-like callable (:data:`Mapper`, e.g. the pipeline's, which chunks and checks its
+    workers itself) is called as ``executor(weigh_reading, tasks)``. The same numbers whichever.
+    """
+    if executor is None:
+        results: Iterable[Any] = map(weigh_reading, tasks)
+    elif isinstance(executor, Executor):
+        workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
+        results = executor.map(weigh_reading, tasks, chunksize=max(1, len(tasks) // (8 * workers)))
+    else:
+        results = executor(weigh_reading, tasks)
+    out = [np.asarray(r, dtype=float) for r in results]
+    return np.array(out).reshape(len(tasks), 3) if out else np.zeros((0, 3))
+
+
+def _increasing(name: str, values: Any, unit: str, positive: bool = False) -> np.ndarray:
+    out = np.asarray(values, dtype=float)
+    bad = out.ndim != 1 or len(out) < 2 or not np.all(np.isfinite(out)) or np.any(np.diff(out) <= 0.0)
+    if bad or (positive and out[0] <= 0.0):
+        sign = " positive" if positive else ""
+        raise CalibrationError(f"{name} = {values!r}: must be two or more finite{sign} increasing values [{unit}]")
+    return out
+
+
+#: the sample columns a calibration fleet needs besides those of bogie_from_sample
+_CRN_COLUMNS: tuple[str, ...] = ("sample_id", "group", "chassis_tilt", "sensor_seed")
+
+
+def _check_fleet(samples: pd.DataFrame, tilt_distribution: Any, protocol: str, settings: Any) -> None:
+    kinds = {"static": StaticProtocol, "wim": WimProtocol}
+    if protocol not in kinds:
+        raise CalibrationError(f"protocol = {protocol!r}: must be one of {', '.join(kinds)}")
+    if not isinstance(settings, kinds[protocol]):
+        raise CalibrationError(f"settings = {settings!r}: must be a {kinds[protocol].__name__} for protocol {protocol}")
+    if not isinstance(tilt_distribution, Distribution):
+        raise CalibrationError(f"tilt_distribution = {tilt_distribution!r}: must be a bogie.fleet distribution [rad]")
+    missing = [c for c in _CRN_COLUMNS if c not in samples.columns]
+    if missing or not len(samples):
+        raise CalibrationError(f"samples: {len(samples)} rows, missing {missing}: give one or more sample rows "
+                               f"(bogie.fleet.sample_fleet) with the columns {', '.join(_CRN_COLUMNS)}")  # fmt: skip
+    sizes = set(samples["group"].astype(str))
+    if not sizes <= set(SIZES):
+        raise CalibrationError(f"samples['group'] has {sorted(sizes - set(SIZES))}: must be {' or '.join(SIZES)}")
+
+
+def crn_table(
+    samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
+    settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
+    study: str = "fleet",
+) -> Table:  # fmt: skip
+    """The calibration fleet and its common random numbers, with no reading yet (``loads`` zeros).
+
+    Parameters
+    ----------
+    samples
+        The calibration bogies: sample rows of :func:`bogie.fleet.sample_fleet` (their own samples, whatever
+        suspension the fleet gave them; each becomes a steel and an air group).
+    tilt_distribution
+        The fleet's chassis tilt distribution [rad]; a truncated normal's centre and spread can be fitted (each
+        bogie keeps its tilt's rank under it), another kind keeps each bogie's sampled tilt.
+    seed, study
+        The fleet's master seed [-] and study name, of each bogie's suspension draw
+        (:func:`bogie.fleet.sampling.suspension_draw`).
+    protocol, settings
+        ``static`` with a :class:`StaticProtocol` or ``wim`` with a :class:`WimProtocol`: the readings the survey is
+        held against (error free in the table; the sensor's error is a fitted quantity).
+    tilts
+        The grid of chassis tilts the readings are tabulated on [degree], increasing, covering the tilts a fitted
+        distribution gives (its support).
+    site_iri_levels
+        The WIM site roughnesses the readings are tabulated at [m/km], increasing (``wim`` only).
+
+    Raises
+    ------
+    CalibrationError
+        If an argument is not of the kind or in the range said above (named, with its value and unit).
+    """
+    _check_fleet(samples, tilt_distribution, protocol, settings)
+    _whole("seed", seed, 0)
+    grid = _increasing("tilts", tilts, "degree")
+    iris = _increasing("site_iri_levels", site_iri_levels, "m/km", True) if protocol == "wim" else [np.nan]
+    # each bogie's rank under its own distribution: the uniform a refitted distribution maps to its tilt
+    tilt = samples["chassis_tilt"].to_numpy(dtype=float)
+    truncated = isinstance(tilt_distribution, TruncNormal)
+    tilt_u = np.clip(_cdf(tilt_distribution, tilt), 1e-12, 1 - 1e-12) if truncated else np.full(len(tilt), np.nan)
+    air_u = np.array([suspension_draw(seed, study, int(i)) for i in samples["sample_id"]])
+    # the sensor's normals: those of bogie.road.wim.axle_errors for the bogie's sensor_seed
+    z = np.array([np.random.default_rng(int(s)).standard_normal(3) for s in samples["sensor_seed"]])
+    size = samples["group"].astype(str).to_numpy()
+    loads = np.zeros((2, len(samples), len(grid), len(iris), 3))
+    return Table(
+        samples, size, tilt_u, air_u, z, grid, np.asarray(iris, dtype=float), loads, 0, protocol, settings,
+        tilt_distribution,
+    )  # fmt: skip
+
+
+def build_table(
+    samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
+    settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
+    executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None, study: str = "fleet",
+) -> Table:  # fmt: skip
+    """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs.
+
+    The arguments are :func:`crn_table`'s; ``executor`` is where the weighings run (:func:`weigh_readings`) and
+    ``progress`` is called with a line before and after (None: silent).
+
+    Returns
+    -------
+    Table
+        ``loads`` [kg] of shape (2, n, tilts, roughnesses, 3) and ``n_failed``, the weighings that gave no reading.
+    """
+    progress = progress or _quiet
+    base = crn_table(samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study)
+    n, tilts, iris = len(base.size), base.tilts, base.iris
+    tasks, records = [], base.samples.to_dict("records")
+    for kind in ("steel", "air"):
+        for row in records:
+            for tilt in tilts:
+                for iri in iris:
+                    sample = {**row, "suspension": kind, "chassis_tilt": math.radians(float(tilt))}
+                    tasks.append((sample, protocol, protocol_spec(base, iri)))
+    progress(
+        f"calibrate: weighing {len(tasks)} calibration groups ({n} bogies x steel, air x {len(tilts)} tilts x "
+        f"{len(iris)} site roughnesses)"
+    )
+    start = time.perf_counter()
+    loads = weigh_readings(tasks, executor).reshape(2, n, len(tilts), len(iris), 3)
+    progress(f"calibrate: table done in {time.perf_counter() - start:.0f} s")
+    failed = int(np.isnan(loads[..., 0]).sum())
+    return dataclasses.replace(base, loads=loads, n_failed=failed)
+
+
+def _cdf(dist: TruncNormal, x: np.ndarray) -> np.ndarray:
+    a, b = (dist.low - dist.mean) / dist.sd, (dist.high - dist.mean) / dist.sd
+    return truncnorm.cdf(x, a, b, loc=dist.mean, scale=dist.sd)
+
+
+def bogie_tilts(table: Table, values: Mapping[str, float]) -> np.ndarray:
+    """Each calibration bogie's tilt [degree] in a fleet of ``values``: the quantile of its uniform under the
+    fleet's truncated normal with the centre and spread of ``values`` [degree]; its own sampled tilt when the
+    fleet's tilt distribution is of another kind (then its centre and spread cannot be fitted)."""
+    dist = table.tilt_distribution
+    if not isinstance(dist, TruncNormal):
+        return np.degrees(table.samples["chassis_tilt"].to_numpy(dtype=float))
+    mean, sd = math.radians(values["chassis_tilt_mean_deg"]), math.radians(values["chassis_tilt_sd_deg"])
+    return np.degrees(dataclasses.replace(dist, mean=mean, sd=sd).ppf(table.tilt_u))
+
+
+def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:
+    """The calibration fleet's readings [kg] with the quantities ``values``: shape (2, n, 3), steel and air.
+
+    Each bogie's tilt is :func:`bogie_tilts`, its readings interpolated linearly in tilt and in site roughness
+    (``site_iri_m_km`` [m/km], clipped to the table's levels), then, for WIM, multiplied by 1 + s z (s the sensor
+    error ``sensor_error_pct`` / 100, z the bogie's normals).
+    """
+    tilt = bogie_tilts(table, values)
+    grid = table.tilts
+    k = np.clip(np.searchsorted(grid, tilt, side="right") - 1, 0, len(grid) - 2)
+    f = ((tilt - grid[k]) / (grid[k + 1] - grid[k]))[None, :, None, None]
+    idx = np.arange(len(tilt))
+    at = table.loads[:, idx, k] * (1.0 - f) + table.loads[:, idx, k + 1] * f  # (2, n, J, 3)
+    if len(table.iris) > 1:
+        iri = float(np.clip(values["site_iri_m_km"], table.iris[0], table.iris[-1]))
+        j = int(np.clip(np.searchsorted(table.iris, iri, side="right") - 1, 0, len(table.iris) - 2))
+        g = (iri - table.iris[j]) / (table.iris[j + 1] - table.iris[j])
+        at = at[:, :, j] * (1.0 - g) + at[:, :, j + 1] * g
+    else:
+        at = at[:, :, 0]
+    if not math.isnan(table.iris[0]):
+        at = at * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[None, :, :])
+    return at

@@ -1,0 +1,179 @@
+"""bogie.fleet.calibration with plain arguments (issue 29): known fleet values recovered, the table, bad arguments.
+
+The recovery test needs no simulation: the calibration fleet's table holds readings that are a known function of the
+tilt (a steel group's outer axles share its load 1 -+ 0.02 per degree of tilt, an air group's axles equally), and the
+observed survey is drawn from the same functions for an independent fleet of known tilt distribution and air share.
+The fit must find those values back from the distributions of the load shares and the spread alone.
+"""
+
+import dataclasses
+import math
+from concurrent.futures import ProcessPoolExecutor
+
+import numpy as np
+import pandas as pd
+import pytest
+
+import bogie.fleet as bf
+from bogie.fleet import calibration as L
+from bogie.fleet import calibration_checks as K
+from bogie.params import GRAVITY
+from bogie.weighings.survey import observed_survey
+
+STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
+WIM = bf.WimProtocol(speed=22.0, approach_length=30.0, dt=1e-3, accuracy_class="B(10)")
+#: the fleet's tilt distribution [rad]: centre 0.3 degree, spread 0.8 degree, within +-2 degrees
+TILT = bf.TruncNormal(math.radians(0.3), math.radians(0.8), math.radians(-2.0), math.radians(2.0))
+GRID = np.linspace(-2.0, 2.0, 17)  # [degree]
+#: the observed fleet's values: what the fit must find
+TRUTH = {"chassis_tilt_mean_deg": 0.8, "chassis_tilt_sd_deg": 0.5, "air_share": 0.3}
+FIT = {"chassis_tilt_mean_deg": (-1.0, 1.5), "chassis_tilt_sd_deg": (0.1, 1.5), "air_share": (0.0, 1.0)}
+#: the outer axles' load share per degree of tilt of a steel tri-axle [1/degree]
+SLOPE = 0.02
+
+
+def steel_loads(tilt_deg):
+    """A steel tri-axle's axle loads [kg] at a tilt [degree]: 8 t an axle, the front and rear -+ SLOPE a degree."""
+    return 8000.0 * (1.0 + SLOPE * np.multiply.outer(tilt_deg, [-1.0, 0.0, 1.0]))
+
+
+def analytic_table(n=400, seed=11):
+    """A static calibration table of ``n`` tri-axles whose readings are :func:`steel_loads` (air: 8 t each axle)."""
+    rng = np.random.default_rng(seed)
+    samples = pd.DataFrame({
+        "sample_id": np.arange(n), "group": "triaxle", "chassis_tilt": TILT.ppf(rng.random(n)),
+        "sensor_seed": 1000 + np.arange(n),
+    })  # fmt: skip
+    table = L.crn_table(samples, TILT, seed=1, protocol="static", settings=STATIC, tilts=GRID)
+    loads = np.full(table.loads.shape, np.nan)
+    loads[0, :, :, 0, :] = steel_loads(GRID)[None, :, :]
+    loads[1, :, :, 0, :] = 8000.0
+    return dataclasses.replace(table, loads=loads)
+
+
+def synthetic_observed(n=1500, seed=12):
+    """``n`` tri-axle groups of an independent fleet with the values of TRUTH."""
+    rng = np.random.default_rng(seed)
+    dist = dataclasses.replace(
+        TILT, mean=math.radians(TRUTH["chassis_tilt_mean_deg"]), sd=math.radians(TRUTH["chassis_tilt_sd_deg"])
+    )
+    tilt = np.degrees(dist.ppf(rng.random(n)))
+    air = rng.random(n) < TRUTH["air_share"]
+    loads = np.where(air[:, None], 8000.0, steel_loads(tilt))
+    return L.Observed({"tandem": np.zeros((0, 2)), "triaxle": loads}, {"tandem": np.zeros(0), "triaxle": np.arange(n)})
+
+
+@pytest.fixture(scope="module")
+def recovered():
+    table, observed = analytic_table(), synthetic_observed()
+    settings = L.CalibrationSettings(FIT, seed=3, maxiter=30, popsize=8, bootstrap_resamples=8)
+    problem = L.make_problem(table, observed, settings.fit, L.base_values(TILT, 0.0, None))
+    return problem, L.calibrate(problem, settings)
+
+
+def test_known_fleet_values_are_fitted_back_from_the_load_shares_and_spread(recovered):
+    problem, result = recovered
+    # Monte Carlo error of the estimates: about 0.5 degree x sqrt(1/400 + 1/1500) = 0.03 degree for the tilt's
+    # centre and spread, sqrt(0.3 x 0.7 / 1500) = 0.012 for the air share; the tolerances are some 5 of those
+    tolerance = {"chassis_tilt_mean_deg": 0.15, "chassis_tilt_sd_deg": 0.15, "air_share": 0.06}
+    for name, entry in result.fitted.items():
+        assert abs(entry["value"] - TRUTH[name]) < tolerance[name], (name, entry)
+        assert entry["low"] <= entry["value"] <= entry["high"] and list(FIT[name]) == entry["bounds"]
+    # the fleet the fit started from (params: 0.3 +- 0.8 degree, all steel) is no answer: outside every tolerance
+    base = problem.base
+    assert all(abs(base[q] - TRUTH[q]) > tolerance[q] for q in TRUTH)
+    # the optimiser found at least the truth's distance, and the truth is far closer than the base fleet
+    f = problem.objective(problem.unit_weights(), None)
+    at_truth = f(np.array([TRUTH[q] for q in problem.fitted]))
+    at_base = f(np.array([base[q] for q in problem.fitted]))
+    assert result.distance <= at_truth < 0.2 * at_base
+
+
+def test_the_bootstrap_the_valley_and_the_profiles_are_around_the_fit(recovered):
+    problem, result = recovered
+    assert list(result.bootstrap.columns) == ["resample", *problem.fitted, "distance"]
+    assert len(result.bootstrap) == 8 and np.isfinite(result.bootstrap["distance"]).all()
+    assert len(result.valley) == L.VALLEY_POINTS**2 and result.valley["distance"].min() >= result.distance - 1e-12
+    for name, profile in result.profiles.groupby("quantity"):
+        # each profile is lowest at the grid point next to the fitted value (the others at theirs)
+        step = (FIT[name][1] - FIT[name][0]) / (L.PROFILE_POINTS - 1)
+        lowest = profile.loc[profile["distance"].idxmin(), "value"]
+        assert abs(lowest - result.fitted[name]["value"]) <= step + 1e-12, (name, lowest)
+    assert result.values == {**problem.base, **{q: e["value"] for q, e in result.fitted.items()}}
+
+
+def test_a_survey_file_gives_its_groups_their_records_and_halves(tmp_path):
+    rng = np.random.default_rng(4)
+    loads = np.round(8000.0 + 500.0 * rng.standard_normal((12, 3)))
+    frame = pd.DataFrame({"n_axles": 3, "group": "triaxle", **{f"axle_load_{i}": loads[:, i] for i in range(3)}})
+    K.write_csv_survey(frame, tmp_path / "s.csv")
+    observed = L.observed_groups(observed_survey(tmp_path / "s.csv", "csv", position="trailer"))
+    np.testing.assert_array_equal(observed.loads["triaxle"], loads)  # whole kilograms, as written
+    assert observed.loads["tandem"].shape == (0, 2) and list(observed.record["triaxle"]) == list(range(12))
+    np.testing.assert_array_equal(observed.half(1).loads["triaxle"], loads[1::2])
+    K.write_csv_survey(frame.iloc[:9], tmp_path / "few.csv")
+    with pytest.raises(L.CalibrationError, match="0 tandem, 9 triaxle groups .* at least 10 laden"):
+        L.observed_groups(observed_survey(tmp_path / "few.csv", "csv", position="trailer"))
+
+
+def test_the_table_of_real_weighings_is_the_same_on_worker_processes():
+    fleet = bf.Fleet(
+        distributions={
+            "bush_stiffness": bf.LogUniform(1.0, 3000.0), "bush_damping": bf.LogUniform(1.0, 300.0),
+            "friction_coefficient": bf.TruncNormal(0.25, 0.12, 0.05, 0.6), "contact_roll_radius": bf.Uniform(0.0, 0.12),
+            "tyre_wear": bf.Uniform(0.0, 0.012), "chassis_tilt": TILT, "payload_fraction": bf.Uniform(0.5, 1.0),
+            "equaliser_arm": bf.Uniform(0.12, 0.28), "spring_friction_band": bf.Uniform(0.0, 4000.0),
+            "spring_friction_decay": bf.Uniform(0.002, 0.008), "road_class": bf.Choice(("A", "B")),
+        },
+        axle_mix={"tandem": 0.5, "triaxle": 0.5}, presets={"tandem": "tandem_trrl", "triaxle": "triaxle_stage1"},
+        legal_group_load={"tandem": 18e3 * GRAVITY, "triaxle": 24e3 * GRAVITY},
+    )  # fmt: skip
+    samples = bf.sample_fleet(fleet, n_bogies=4, seed=5)
+    tilts = [-2.0, 0.0, 2.0]
+    here = L.build_table(samples, TILT, 5, "static", STATIC, tilts)
+    with ProcessPoolExecutor(2) as pool:
+        there = L.build_table(samples, TILT, 5, "static", STATIC, tilts, executor=pool)
+    np.testing.assert_array_equal(there.loads, here.loads)
+    assert here.loads.shape == (2, 4, 3, 1, 3) and here.n_failed == 0
+    tandem = here.size == "tandem"
+    assert tandem.any() and np.isnan(here.loads[:, tandem, :, :, 2]).all()
+    present = ~np.isnan(here.loads)
+    assert (here.loads[present] > 0.0).all() and present.sum() == 2 * 3 * (2 * tandem.sum() + 3 * (~tandem).sum())
+    # the tilt moves load: every bogie's front axle reads differently at each tilt of the grid [kg]
+    assert (np.abs(np.diff(here.loads[:, :, :, 0, 0], axis=2)) > 1.0).all()
+
+
+def settings(**changes):
+    return L.CalibrationSettings(**{"fit": FIT, "seed": 1, **changes})
+
+
+def crn(protocol="static", spec=STATIC, tilts=GRID, levels=()):
+    return L.crn_table(analytic_table(5).samples, TILT, 1, protocol, spec, tilts, levels)
+
+
+def problem(fit=FIT, min_load_kg=0.0):
+    return L.make_problem(analytic_table(5), synthetic_observed(20), fit, L.base_values(TILT, 0.0, None), min_load_kg)
+
+
+@pytest.mark.parametrize(
+    ("make", "words"),
+    [
+        (lambda: settings(fit={"air_share": (0.0, 1.5)}), ["fit['air_share']", "(0.0, 1.5)", "[0, 1]", "[-]"]),
+        (lambda: settings(fit={"chassis_tilt_sd_deg": (1.0, 0.5)}), ["chassis_tilt_sd_deg", "low < high", "[degree]"]),
+        (lambda: settings(fit={"payload": (0.0, 1.0)}), ["fit['payload']", "air_share"]),
+        (lambda: settings(maxiter=0), ["maxiter = 0", ">= 1"]),
+        (lambda: settings(popsize=1), ["popsize = 1", ">= 2"]),
+        (lambda: settings(confidence_level=1.0), ["confidence_level = 1.0", "(0, 1)"]),
+        (lambda: crn(tilts=[1.0, 0.0]), ["tilts = [1.0, 0.0]", "increasing", "[degree]"]),
+        (lambda: crn("wim", WIM, levels=[2.0, 1.0]), ["site_iri_levels = [2.0, 1.0]", "[m/km]"]),
+        (lambda: crn("dynamic"), ["protocol = 'dynamic'", "static, wim"]),
+        (lambda: crn("wim"), ["settings", "WimProtocol"]),
+        (lambda: problem({"sensor_error_pct": (0.0, 5.0)}), ["sensor_error_pct", "WIM protocol", "static"]),
+        (lambda: problem(min_load_kg=-1.0), ["min_load_kg = -1.0", ">= 0", "[kg]"]),
+    ],
+)
+def test_bad_arguments_are_refused_naming_the_argument_its_value_and_unit(make, words):
+    with pytest.raises(L.CalibrationError) as err:
+        make()
+    for word in words:
+        assert word in str(err.value), str(err.value)
