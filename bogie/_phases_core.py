@@ -15,6 +15,9 @@ reads as the tyres pass over it, and whether an equaliser bore on its bump stop 
 ``docs/phases.md``.
 
 Layout of a phase row (``phases[p]``, floats; :data:`PHASE_COLUMNS` names them): see the ``P_*`` constants.
+The kernel's functions pass their arrays grouped in records, tuples unpacked by name (the model, the phase's course,
+the state, the trial state, the saved state, Newton's work space and the phase's outputs): see the comment block "the
+records a phase is stepped with" below, and the ``J_*`` and ``C_*`` constants for the solver's memory and counts.
 
 References
 ----------
@@ -749,6 +752,8 @@ def _equilibrium(data_f, data_i, drv, u, hist_new, r_tol, u_limit, relaxed_slots
     (tangent at every iterate, steps limited to 0.05 rad or m, backtracking while the residual grows). Writes the
     solution to ``u`` and its history (each contact's slip where it carries no friction, each spring on its
     elastic line) to ``hist_new``; returns whether it converged inside the freedoms' limits."""
+    # longer than 60 lines: one Newton iteration with its singular-tangent fallback, step limit and backtracking, which
+    # share the step and the last step taken; it runs once per run, and reads as the Python one it follows
     n = u.shape[0]
     n_axles = data_i[0]
     relaxed = data_f.copy()
@@ -872,6 +877,8 @@ def run_phases(
     (status, phase index it stopped in, time in that phase [s], |r|, rows the trace needed); status 0 if every
     phase ran.
     """
+    # longer than 60 lines with its docstring: the start (the equilibrium, the force, the accelerations) and the loop
+    # over the phases share the records it makes; the steps are in _phase_loop
     n = u.shape[0]
     n_axles = data_i[0]
     trial, saved, newton, loads0, acc, trace_count = _work_records(
