@@ -15,6 +15,9 @@ reads as the tyres pass over it, and whether an equaliser bore on its bump stop 
 ``docs/phases.md``.
 
 Layout of a phase row (``phases[p]``, floats; :data:`PHASE_COLUMNS` names them): see the ``P_*`` constants.
+The kernel's functions pass their arrays grouped in records, tuples unpacked by name (the model, the phase's course,
+the state, the trial state, the saved state, Newton's work space and the phase's outputs): see the comment block "the
+records a phase is stepped with" below, and the ``J_*`` and ``C_*`` constants for the solver's memory and counts.
 
 References
 ----------
@@ -134,6 +137,41 @@ MAX_HALVINGS = 5
 _LOG2_MIN_STEP = math.log2(MIN_STEP)
 
 
+# ---- the records a phase is stepped with -----------------------------------------------------------------------
+# run_phases makes every array the steps use once and passes them on grouped in tuples, the records below (numba
+# passes a tuple's members as it passes arguments: the same arrays, the same arithmetic as when _phase_loop took them
+# as 46 arguments). Each function unpacks the members it uses by name, in this order:
+#   model  = (mass, data_f, data_i, r_tol, u_limit, scheme, max_iter): the bogie and the solver, read only. mass is
+#            the diagonal of the mass matrix (n), data_f / data_i the model's pack (bogie._nonlinear_core), r_tol the
+#            residual's tolerance of each freedom and u_limit its range (n each), scheme (beta, gamma, alpha_m,
+#            alpha_f), max_iter the Newton iterations a step may take
+#   course = (phase, road_h, offsets, levers): the phase's row (P_*), the concatenated road tables [m], each axle's
+#            distance behind the front one [m] and each freedom's lever to a wheel [m] (the adaptive error's), read
+#            only
+#   state  = (u, v, a, f, hist): the accepted state, the model force at it and the model's history, in place
+#   trial  = (u_new, v_new, a_new, f_new, hist_new): the state a step tries, the same layout
+#   saved  = (u_s, v_s, a_s, f_s, hist_s): a fixed step's starting state while it is retried in halves, the same
+#   newton = (drv, kt, ct, jac, keys, piv, res, rec, work, jst, du, corr, counts, err_scale): a step's work space and
+#            what steps keep for the next: the drive row (2 n_axles + 2), K_T and C_T (n, n), the kept inverses of
+#            the iteration matrices (RUNG_MATRICES + 1, n, n) and the step each was formed for, the pivots, residual,
+#            record (the tyre loads first) and work space of the force and the solve, the solver's memory jst (J_*),
+#            the Newton update du (n), corr = [the step's plain predictor, the last accepted step's correction] (2n),
+#            the work counts (C_*) and the adaptive error's scale of each freedom (n)
+#   out    = (loads0, acc, stats, trace, trace_count): the tyre loads at the step's start (n_axles), the phase's reading
+#            being summed (2 n_axles), its statistics (S_*), the trace rows (:func:`_trace`) and the rows used
+
+#: members of ``jst``, the solver's memory from step to step (floats)
+J_TANGENT = 0  # 1: K_T and C_T are a tangent of this phase; 0: form one at the next evaluation
+J_CONTRACTION = 1  # the contraction of the first correction measured at the last checked step
+J_SINCE_CHECK = 2  # steps since that one
+J_CHECK_EVERY = 3  # a first correction is checked at least every this many steps
+J_CHECKED_STEP = 4  # the length of the last checked step [s] (0: none)
+J_LAST_STEP = 5  # the length of the last accepted step [s], whose correction corr[n:] holds (0: none)
+JST_SIZE = 6
+#: members of ``counts``: force evaluations, tangents, factorisations, first corrections accepted unchecked
+C_EVALS, C_TANGENTS, C_FACTORS, C_UNCHECKED = range(4)
+
+
 # ---- drive -----------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _drive(phase, road_h, offsets, n, t, drv):
@@ -216,11 +254,20 @@ def _update(inv, k, res, du, u_new, u_limit):
 
 
 @njit(cache=True, inline="always")
-def _solve_step(
-    mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac, keys, slot, piv,
-    res, rec, work, jst, du, u_limit, counts, corr,
-):  # fmt: skip
-    """Newton-Raphson for one step of size ``h`` from (u, v, a) to the drive ``drv``; returns (status, |r|).
+def _form_matrix(jac, slot, kt, ct, mass, c_a, c_v, alpha_m, alpha_f):
+    """jac[slot] = (1 - alpha_f) (K_T + c_v C_T) + (1 - alpha_m) c_a M, the iteration matrix of a step (not yet
+    inverted); ``mass`` is the diagonal of M."""
+    n = mass.shape[0]
+    for i in range(n):
+        for j in range(n):
+            jac[slot, i, j] = (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
+        jac[slot, i, i] += (1.0 - alpha_m) * c_a * mass[i]
+
+
+@njit(cache=True, inline="always")
+def _solve_step(model, state, trial, newton, h, slot):
+    """Newton-Raphson for one step of size ``h`` from ``state`` to the drive ``drv`` into ``trial``; returns
+    (status, |r|). The records: see "the records a phase is stepped with" above.
 
     The iteration of :func:`bogie._newmark_core._attempt`: predictor of constant acceleration, the full residual,
     modified Newton with the iteration matrix kept while the residual falls at least fourfold, backtracking when
@@ -229,13 +276,17 @@ def _solve_step(
     ``jac[slot]``, formed only when it is missing or for another step, a formation being far cheaper than a
     tangent's 2n + 1 force evaluations. A new tangent drops them all. ``jac`` holds the matrices' inverses
     (:func:`bogie._lu.invert`): one is solved with at every iteration of many steps and formed rarely, and a solve
-    with the inverse is a matrix-vector product. ``jst`` = [tangent valid, contraction of the first correction at
-    the last checked step, steps since, check every, that step, the last accepted step]; ``corr`` = [this step's plain
-    predictor, the last accepted step's correction]. ``mass`` is the diagonal of the mass matrix.
-    ``counts`` = [evaluations, tangents, factorisations] is incremented.
+    with the inverse is a matrix-vector product. ``jst`` (:data:`J_TANGENT`...) is read and updated, ``corr`` =
+    [this step's plain predictor, the last accepted step's correction], ``counts`` (:data:`C_EVALS`...) incremented.
     """
-    beta, gamma, alpha_m, alpha_f = scheme
+    # longer than 60 lines: the iteration's branches (backtracking, a new tangent, a new matrix, a correction
+    # accepted unchecked) share its scalars (the last and the first residual, whether a tangent or a matrix is due,
+    # the backtracks); split into functions they would be passed in and returned at every iteration
+    mass, data_f, data_i, r_tol, u_limit, scheme, max_iter = model
+    u, v, a, f_old, hist = state
     u_new, v_new, a_new, f_new, hist_new = trial
+    drv, kt, ct, jac, keys, piv, res, rec, work, jst, du, corr, counts, _ = newton
+    beta, gamma, alpha_m, alpha_f = scheme
     n = u.shape[0]
     c_a = 1.0 / (beta * h * h)
     c_v = gamma / (beta * h)
@@ -244,42 +295,44 @@ def _solve_step(
     # next, so the iteration starts closer and more first corrections are accepted unchecked (a 20 s pass over a
     # class B road at 15 m/s: 1.15 force evaluations a step instead of 1.67). Scaled to a step of another length
     # it helped less than it cost: after a change of rung the plain predictor is used
-    scale = 1.0 if jst[5] == h else 0.0
+    scale = 1.0 if jst[J_LAST_STEP] == h else 0.0
     for i in range(n):
         u_new[i] = u[i] + h * v[i] + 0.5 * h * h * a[i] + scale * corr[n + i]
         corr[i] = u[i] + h * v[i] + 0.5 * h * h * a[i]
     rnorm = 0.0
     r_prev = 0.0
     r_first = 0.0
-    want = jst[0] == 0.0
+    want = jst[J_TANGENT] == 0.0
     refactor = keys[slot] != h
     fresh = want
     backtracks = 0
     # the contraction of the first correction measured at the last checked step, scaled to this step (the iteration
     # matrix is about M / (beta h^2): its relative error grows as h^2)
-    ratio = h / jst[4] if jst[4] > 0.0 else 1e30
-    rho = jst[1] * ratio * ratio
-    may_skip = jst[3] > 0.0 and jst[2] + 1.0 < jst[3] and alpha_f == 0.0 and not want
+    ratio = h / jst[J_CHECKED_STEP] if jst[J_CHECKED_STEP] > 0.0 else 1e30
+    rho = jst[J_CONTRACTION] * ratio * ratio
+    may_skip = (
+        jst[J_CHECK_EVERY] > 0.0 and jst[J_SINCE_CHECK] + 1.0 < jst[J_CHECK_EVERY] and alpha_f == 0.0 and not want
+    )
     for it in range(max_iter + 1):
         _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
         _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, want, work)
-        counts[0] += 1.0
+        counts[C_EVALS] += 1.0
         if want:
-            counts[0] += n
-            counts[1] += 1.0
-            jst[0] = 1.0
+            counts[C_EVALS] += n
+            counts[C_TANGENTS] += 1.0
+            jst[J_TANGENT] = 1.0
         rnorm, finite = _residual(mass, a, a_new, f_old, f_new, alpha_m, alpha_f, r_tol, res)
         if not finite:
             return STATUS_NOT_FINITE, rnorm
         if it == 0:
             r_first = rnorm
         elif it == 1 and r_first > 0.0:
-            jst[1] = rnorm / r_first
-            jst[2] = 0.0
-            jst[4] = h
+            jst[J_CONTRACTION] = rnorm / r_first
+            jst[J_SINCE_CHECK] = 0.0
+            jst[J_CHECKED_STEP] = h
         if rnorm <= 1.0 and it > 0:
             if it > 2:
-                jst[0] = 0.0
+                jst[J_TANGENT] = 0.0
             return STATUS_OK, rnorm
         if it == max_iter:
             break
@@ -290,8 +343,8 @@ def _solve_step(
         backtracks = 0
         if it > 0 and not fresh and rnorm > 0.25 * r_prev:
             _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, True, work)
-            counts[0] += n + 1
-            counts[1] += 1.0
+            counts[C_EVALS] += n + 1
+            counts[C_TANGENTS] += 1.0
             want = True
         if want or refactor:
             if want:
@@ -299,11 +352,8 @@ def _solve_step(
                 for k in range(keys.shape[0]):
                     keys[k] = 0.0
             keys[slot] = 0.0
-            for i in range(n):
-                for j in range(n):
-                    jac[slot, i, j] = (1.0 - alpha_f) * (kt[i, j] + c_v * ct[i, j])
-                jac[slot, i, i] += (1.0 - alpha_m) * c_a * mass[i]
-            counts[2] += 1.0
+            _form_matrix(jac, slot, kt, ct, mass, c_a, c_v, alpha_m, alpha_f)
+            counts[C_FACTORS] += 1.0
             if not invert(jac[slot], piv):
                 return STATUS_SINGULAR, rnorm
             keys[slot] = h
@@ -318,8 +368,8 @@ def _solve_step(
             # history of the predictor's evaluation (it differs from the corrected state's by the correction, far
             # below the tolerance); the readings are taken at the accepted state by the caller
             _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
-            jst[2] += 1.0
-            counts[3] += 1.0
+            jst[J_SINCE_CHECK] += 1.0
+            counts[C_UNCHECKED] += 1.0
             return STATUS_OK, rho * r_first
         fresh = False
     return STATUS_NO_CONVERGENCE, rnorm
@@ -332,13 +382,14 @@ def _keep_correction(corr, u_new, jst, h):
     n = u_new.shape[0]
     for i in range(n):
         corr[n + i] = u_new[i] - corr[i]
-    jst[5] = h
+    jst[J_LAST_STEP] = h
 
 
 @njit(cache=True, inline="always")
-def _commit(u, v, a, f, hist, trial):
-    """(u, v, a, f, hist) = the trial state, in place."""
-    u_new, v_new, a_new, f_new, hist_new = trial
+def _commit(state, source):
+    """``state`` = ``source``, in place: two records (u, v, a, f, hist) (a state, a trial or a saved state)."""
+    u, v, a, f, hist = state
+    u_new, v_new, a_new, f_new, hist_new = source
     for i in range(u.shape[0]):
         u[i] = u_new[i]
         v[i] = v_new[i]
@@ -477,93 +528,156 @@ def _next_boundary(phase, t):
     return duration
 
 
-@njit(cache=True, _nrt=False)
-def _phase_loop(
-    mass, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
-    u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work, jst,
-    du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats, trace, trace_count, t_offset, err_scale, corr,
-):  # fmt: skip
-    """Step one phase from (u, v, a, hist); returns (status, time reached [s], |r|, on_stop).
-
-    Fixed steps: round(duration / dt) steps of equal length; a step whose Newton iteration fails is retried as 2,
-    4, ... sub-steps (:data:`MAX_HALVINGS`). Adaptive steps: the local error of each step,
-    e_i = |beta - 1/6| h^2 |a_(n+1) - a_n| for freedom i, at its lever (``levers``: a displacement at a wheel), over
-    the tolerance must be at most 1, else the step is rejected and retried shorter; the PI controller picks the
-    next step from its own last step (at most the phase's largest step), which is taken rounded down to a rung of
-    the ladder 2^(k / :data:`RUNGS`) s: it stays on a rung, and keeps its iteration matrix, while the controller's
-    step moves inside the rung. Steps end exactly at the phase's end and at a mean reading's window. ``mass`` is the
-    diagonal of the mass matrix; ``err_scale`` (n) is work space.
-    """
+@njit(cache=True, inline="always")
+def _accepted(model, course, state, newton, out, t0, t1, h, margin, t_offset, on_stop):
+    """After a step [t0, t1] of ``h`` [s] is accepted (``state`` is its end): its readings where :func:`_reads_at`
+    asks for them (``margin`` [s]: at least the next step's length), its count and its trace row. Returns
+    ``on_stop`` or whether an equaliser bears on its stop at t1 in the window."""
+    _, data_f, data_i, _, _, _, _ = model
+    phase, _, offsets, _ = course
+    u, v, _, _, _ = state
+    drv, _, _, _, _, _, _, rec, _, _, _, _, _, _ = newton
+    loads0, acc, stats, trace, trace_count = out
     n_axles = data_i[0]
-    n = u.shape[0]
-    beta = scheme[0]
-    trial = (u_new, v_new, a_new, f_new, hist_new)
-    duration = phase[P_DURATION]
-    adaptive = phase[P_ADAPTIVE] != 0.0
-    max_step = phase[P_MAX_STEP]
-    if adaptive:
-        # e_i / h^2 / |a_(n+1) - a_n|, the same for every step of the phase
-        for i in range(n):
-            err_scale[i] = abs(beta - 1.0 / 6.0) * levers[i] / phase[P_TOL]
-    on_stop = False
-    tracing = trace.shape[0] > 0
+    if _reads_at(phase, t1, margin, trace.shape[0] > 0):
+        nlc.readings(u, v, drv, data_f, n_axles, rec)
+        _read_step(phase, n_axles, offsets, t0, t1, loads0, rec, acc)
+        on_stop = on_stop or _stop_in_window(phase, n_axles, t1, h, rec)
+        for i in range(n_axles):
+            loads0[i] = rec[i]
+    stats[S_STEPS] += 1.0
+    _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
+    return on_stop
+
+
+@njit(cache=True, inline="always")
+def _phase_loop(model, course, state, trial, saved, newton, out, t_offset):
+    """Step one phase (``course``) from ``state``; returns (status, time reached [s], |r|, on_stop). The records:
+    see "the records a phase is stepped with" above; ``t_offset`` [s] is the phase's start in the trace.
+
+    Fixed steps (:func:`_fixed_steps`): round(duration / dt) steps of equal length; a step whose Newton iteration
+    fails is retried as 2, 4, ... sub-steps (:data:`MAX_HALVINGS`). Adaptive steps (:func:`_adaptive_steps`): the
+    local error of each step, e_i = |beta - 1/6| h^2 |a_(n+1) - a_n| for freedom i, at its lever (``levers``: a
+    displacement at a wheel), over the tolerance must be at most 1, else the step is rejected and retried shorter;
+    the PI controller picks the next step from its own last step (at most the phase's largest step), which is taken
+    rounded down to a rung of the ladder 2^(k / :data:`RUNGS`) s: it stays on a rung, and keeps its iteration
+    matrix, while the controller's step moves inside the rung. Steps end exactly at the phase's end and at a mean
+    reading's window. Inlined into :func:`run_phases`: compiled on its own it only passed its records on, and took a
+    twentieth of the kernel's compile time (3 s).
+    """
+    _, _, data_i, _, _, _, _ = model
+    phase, _, _, _ = course
+    _, _, _, _, _, _, _, rec, _, _, _, _, _, _ = newton
+    loads0, acc, _, _, _ = out
     for i in range(acc.shape[0]):
         acc[i] = 0.0
-    for i in range(n_axles):
+    for i in range(data_i[0]):
         loads0[i] = rec[i]
+    if phase[P_ADAPTIVE] != 0.0:
+        return _adaptive_steps(model, course, state, trial, newton, out, t_offset)
+    return _fixed_steps(model, course, state, trial, saved, newton, out, t_offset)
+
+
+@njit(cache=True, _nrt=False)
+def _fixed_steps(model, course, state, trial, saved, newton, out, t_offset):
+    """The fixed steps of a phase (:func:`_phase_loop`): those of a table of rows at t = k dt (bogie.nonlinear's
+    inputs), round(duration / dt) of them. A step whose Newton iteration fails is taken again from its start (kept in
+    ``saved``) as 2, 4, ... sub-steps (2^:data:`MAX_HALVINGS` at most), the sub-steps of 2^j with matrix j: a step is
+    2^level sub-steps, level 0 the step itself, all solved at one place (a second call of the inlined
+    :func:`_solve_step` for the retries compiled 9 s longer, of 65)."""
+    _, _, data_i, _, _, _, _ = model
+    phase, road_h, offsets, _ = course
+    u_new, _, _, _, _ = trial
+    drv, _, _, _, _, _, _, _, _, jst, _, corr, _, _ = newton
+    _, _, stats, _, _ = out
+    n_axles = data_i[0]
+    on_stop = False
+    rnorm = 0.0
+    h = phase[P_DT]
+    n_steps = max(1, int(round(phase[P_DURATION] / h)))
+    for step in range(n_steps):
+        t0 = step * h
+        t1 = (step + 1) * h
+        level = 0
+        sub = 0
+        while True:
+            hs = h / (1 << level)
+            _drive(phase, road_h, offsets, n_axles, t1 if level == 0 else t0 + (sub + 1) * hs, drv)
+            status, rnorm = _solve_step(model, state, trial, newton, hs, level % RUNG_MATRICES)
+            if status == STATUS_OK:
+                _keep_correction(corr, u_new, jst, hs)
+                _commit(state, trial)
+                sub += 1
+                if sub == 1 << level:
+                    break
+                continue
+            if level == 0:
+                stats[S_REJECTED] += 1.0
+                _commit(saved, state)  # a failed step leaves the state as it was at the step's start
+            jst[J_TANGENT] = 0.0
+            if level == MAX_HALVINGS:
+                stats[S_END] = t0
+                return status, t0, rnorm, on_stop
+            level += 1
+            sub = 0
+            _commit(state, saved)
+        on_stop = _accepted(model, course, state, newton, out, t0, t1, h, 2.0 * h, t_offset, on_stop)
+    stats[S_END] = n_steps * h
+    return STATUS_OK, n_steps * h, rnorm, on_stop
+
+
+@njit(cache=True, inline="always")
+def _local_error(err_scale, a_new, a, h):
+    """The largest local error of a step of ``h`` [s] over the tolerance, err_scale_i h^2 |a_(n+1) - a_n|."""
+    err = 0.0
+    for i in range(a.shape[0]):
+        e = err_scale[i] * abs(a_new[i] - a[i])
+        if e > err:
+            err = e
+    return err * (h * h)
+
+
+@njit(cache=True, inline="always")
+def _next_log_step(l_err, le_prev, grow, cut_short, l_want, l_h):
+    """The PI controller's next step as log2(h / 1 s) after an accepted step of log2 ``l_h`` whose error's log2 is
+    ``l_err`` (``le_prev`` the last one's), from the controller's own step ``l_want``; ``grow``: the step may grow
+    (no rejection since the last accepted step); ``cut_short``: the step was cut short to meet a boundary."""
+    factor = _LOG2_SAFETY - (K_I + K_P) * l_err + K_P * le_prev
+    if factor > _LOG2_MAX_GROWTH:
+        factor = _LOG2_MAX_GROWTH
+    if not grow and factor > 0.0:
+        factor = 0.0
+    if cut_short:
+        # with room to spare: its error does not shorten the next
+        return max(l_want, l_h + factor) if factor >= 0.0 else l_h + factor
+    # from the controller's own step, not the rung below it: fed the rung, the controller would settle where its
+    # step stops growing past the next rung, up to a rung short of the step the tolerance allows
+    return l_want + factor
+
+
+@njit(cache=True, _nrt=False)
+def _adaptive_steps(model, course, state, trial, newton, out, t_offset):
+    """The adaptive steps of a phase (:func:`_phase_loop`), each ending at the next boundary at the latest
+    (:func:`_next_boundary`)."""
+    # longer than 60 lines: the controller's state (its step, the last error, the rung and the rung's step, whether
+    # the step may grow) lives across the loop's iterations and each outcome of a step (failed, rejected, accepted)
+    # updates part of it; split into functions, those scalars would be passed in and returned at every step
+    _, _, data_i, _, _, scheme, _ = model
+    phase, road_h, offsets, levers = course
+    _, _, a, _, _ = state
+    u_new, _, a_new, _, _ = trial
+    drv, _, _, _, _, _, _, _, _, jst, _, corr, _, err_scale = newton
+    _, _, stats, _, _ = out
+    beta, _, _, _ = scheme
+    n_axles = data_i[0]
+    duration = phase[P_DURATION]
+    max_step = phase[P_MAX_STEP]
+    # e_i / h^2 / |a_(n+1) - a_n|, the same for every step of the phase
+    for i in range(a.shape[0]):
+        err_scale[i] = abs(beta - 1.0 / 6.0) * levers[i] / phase[P_TOL]
+    on_stop = False
     t = 0.0
     rnorm = 0.0
-    if not adaptive:
-        # the steps of a table of rows at t = k dt (bogie.nonlinear's inputs): round(duration / dt) of them
-        h = phase[P_DT]
-        n_steps = max(1, int(round(duration / h)))
-        for step in range(n_steps):
-            t1 = (step + 1) * h
-            _drive(phase, road_h, offsets, n_axles, t1, drv)
-            status, rnorm = _solve_step(
-                mass, data_f, data_i, u, v, a, f_old, hist, h, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
-                keys, 0, piv, res, rec, work, jst, du, u_limit, counts, corr,
-            )  # fmt: skip
-            if status == STATUS_OK:
-                _keep_correction(corr, u_new, jst, h)
-                _commit(u, v, a, f_old, hist, trial)
-            else:
-                # retry as 2, 4, ... sub-steps from the step's start
-                stats[S_REJECTED] += 1.0
-                jst[0] = 0.0
-                _commit(u_s, v_s, a_s, f_s, h_s, (u, v, a, f_old, hist))
-                t0 = step * h
-                for level in range(1, MAX_HALVINGS + 1):
-                    n_sub = 1 << level
-                    hs = h / n_sub
-                    _commit(u, v, a, f_old, hist, (u_s, v_s, a_s, f_s, h_s))
-                    for sub in range(n_sub):
-                        _drive(phase, road_h, offsets, n_axles, t0 + (sub + 1) * hs, drv)
-                        status, rnorm = _solve_step(
-                            mass, data_f, data_i, u, v, a, f_old, hist, hs, scheme, r_tol, max_iter, trial, drv,
-                            kt, ct, jac, keys, level % RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit, counts,
-                            corr,
-                        )  # fmt: skip
-                        if status != STATUS_OK:
-                            jst[0] = 0.0
-                            break
-                        _keep_correction(corr, u_new, jst, hs)
-                        _commit(u, v, a, f_old, hist, trial)
-                    if status == STATUS_OK:
-                        break
-                if status != STATUS_OK:
-                    stats[S_END] = step * h
-                    return status, step * h, rnorm, on_stop
-            if _reads_at(phase, t1, 2.0 * h, tracing):
-                nlc.readings(u, v, drv, data_f, n_axles, rec)
-                _read_step(phase, n_axles, offsets, step * h, t1, loads0, rec, acc)
-                on_stop = on_stop or _stop_in_window(phase, n_axles, t1, h, rec)
-                for i in range(n_axles):
-                    loads0[i] = rec[i]
-            stats[S_STEPS] += 1.0
-            _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
-        stats[S_END] = n_steps * h
-        return STATUS_OK, n_steps * h, rnorm, on_stop
     # the controller's next step as lh = log2(h / 1 s), the error of the last accepted step as its log2
     lh = math.log2(phase[P_DT])
     l_max = math.log2(max_step)
@@ -595,27 +709,19 @@ def _phase_loop(
             hh = 0.5 * remaining  # two equal steps instead of a long one and a sliver
         t1 = target if last else t + hh
         _drive(phase, road_h, offsets, n_axles, t1, drv)
-        status, rnorm = _solve_step(
-            mass, data_f, data_i, u, v, a, f_old, hist, hh, scheme, r_tol, max_iter, trial, drv, kt, ct, jac,
-            keys, rung % RUNG_MATRICES if hh == natural else RUNG_MATRICES, piv, res, rec, work, jst, du, u_limit,
-            counts, corr,
-        )  # fmt: skip
+        slot = rung % RUNG_MATRICES if hh == natural else RUNG_MATRICES
+        status, rnorm = _solve_step(model, state, trial, newton, hh, slot)
         l_hh = l_natural if hh == natural else math.log2(hh)
         if status != STATUS_OK:
             stats[S_REJECTED] += 1.0
-            jst[0] = 0.0
+            jst[J_TANGENT] = 0.0
             lh = l_hh - 2.0
             grow = False
             if lh < _LOG2_MIN_STEP:
                 stats[S_END] = t
                 return status, t, rnorm, on_stop
             continue
-        err = 0.0
-        for i in range(n):
-            e = err_scale[i] * abs(a_new[i] - a[i])
-            if e > err:
-                err = e
-        err *= hh * hh
+        err = _local_error(err_scale, a_new, a, hh)
         l_err = math.log2(err if err > ERR_FLOOR else ERR_FLOOR)
         if err > 1.0:
             stats[S_REJECTED] += 1.0
@@ -627,31 +733,13 @@ def _phase_loop(
                 return STATUS_STEP_TOO_SMALL, t, err, on_stop
             continue
         _keep_correction(corr, u_new, jst, hh)
-        _commit(u, v, a, f_old, hist, trial)
+        _commit(state, trial)
         # the next step is at most max_step long (and ends on the window's start where it reaches it)
-        if _reads_at(phase, t1, max(2.0 * hh, max_step), tracing):
-            nlc.readings(u, v, drv, data_f, n_axles, rec)
-            _read_step(phase, n_axles, offsets, t, t1, loads0, rec, acc)
-            on_stop = on_stop or _stop_in_window(phase, n_axles, t1, hh, rec)
-            for i in range(n_axles):
-                loads0[i] = rec[i]
-        stats[S_STEPS] += 1.0
-        _trace(trace, trace_count, t_offset + t1, n_axles, rec, u)
+        on_stop = _accepted(model, course, state, newton, out, t, t1, hh, max(2.0 * hh, max_step), t_offset, on_stop)
         t = t1
-        factor = _LOG2_SAFETY - (K_I + K_P) * l_err + K_P * le_prev
+        lh = _next_log_step(l_err, le_prev, grow, hh < natural * (1.0 - 1e-9), l_want, l_hh)
         le_prev = l_err
-        if factor > _LOG2_MAX_GROWTH:
-            factor = _LOG2_MAX_GROWTH
-        if not grow and factor > 0.0:
-            factor = 0.0
         grow = True
-        if hh < natural * (1.0 - 1e-9):
-            # a step cut short to meet a boundary, with room to spare: its error does not shorten the next
-            lh = max(l_want, l_hh + factor) if factor >= 0.0 else l_hh + factor
-        else:
-            # from the controller's own step, not the rung below it: fed the rung, the controller would settle
-            # where its step stops growing past the next rung, up to a rung short of the step the tolerance allows
-            lh = l_want + factor
     stats[S_END] = duration
     return STATUS_OK, duration, rnorm, on_stop
 
@@ -664,6 +752,8 @@ def _equilibrium(data_f, data_i, drv, u, hist_new, r_tol, u_limit, relaxed_slots
     (tangent at every iterate, steps limited to 0.05 rad or m, backtracking while the residual grows). Writes the
     solution to ``u`` and its history (each contact's slip where it carries no friction, each spring on its
     elastic line) to ``hist_new``; returns whether it converged inside the freedoms' limits."""
+    # longer than 60 lines: one Newton iteration with its singular-tangent fallback, step limit and backtracking, which
+    # share the step and the last step taken; it runs once per run, and reads as the Python one it follows
     n = u.shape[0]
     n_axles = data_i[0]
     relaxed = data_f.copy()
@@ -740,6 +830,38 @@ def _equilibrium(data_f, data_i, drv, u, hist_new, r_tol, u_limit, relaxed_slots
 
 # ---- the whole run ---------------------------------------------------------------------------------------------
 @njit(cache=True)
+def _work_records(n, n_axles, n_hist, n_record, work_size, check_every):
+    """The records a run's steps work in (see "the records a phase is stepped with" above), zeros but for
+    jst[:data:`J_CHECK_EVERY`]: (trial, saved, newton, loads0, acc, trace_count)."""
+    trial = (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n_hist))
+    saved = (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n_hist))
+    jst = np.zeros(JST_SIZE)
+    jst[J_CHECK_EVERY] = check_every
+    newton = (
+        np.zeros(2 * n_axles + 2), np.zeros((n, n)), np.zeros((n, n)), np.zeros((RUNG_MATRICES + 1, n, n)),
+        np.zeros(RUNG_MATRICES + 1), np.zeros(n, dtype=np.int64), np.zeros(n), np.zeros(n_record),
+        np.zeros(work_size), jst, np.zeros(n), np.zeros(2 * n), np.zeros(4), np.zeros(n),
+    )  # fmt: skip
+    return trial, saved, newton, np.zeros(n_axles), np.zeros(2 * n_axles), np.zeros(1)
+
+
+@njit(cache=True, inline="always")
+def _fresh_phase(jst, keys, counts):
+    """Each phase starts afresh (a new tangent, no kept matrices, no measured contraction, no correction to
+    extrapolate, nothing counted), so that a phase is a function of its starting state alone: phases run in one call
+    or one by one from each other's final state agree exactly. jst[:data:`J_CHECK_EVERY`] stays."""
+    jst[J_TANGENT] = 0.0
+    jst[J_CONTRACTION] = 0.0
+    jst[J_SINCE_CHECK] = 0.0
+    jst[J_CHECKED_STEP] = 0.0
+    jst[J_LAST_STEP] = 0.0
+    for k in range(keys.shape[0]):
+        keys[k] = 0.0
+    for k in range(counts.shape[0]):
+        counts[k] = 0.0
+
+
+@njit(cache=True)
 def run_phases(
     mass, data_f, data_i, offsets, levers, phases, road_h, u, v, a, hist, at_rest, relaxed_slots, bogie_centre_x,
     r_tol, u_limit, max_iter, scheme, n_record, work_size, check_every, readings, on_stop, stats, trace,
@@ -755,77 +877,50 @@ def run_phases(
     (status, phase index it stopped in, time in that phase [s], |r|, rows the trace needed); status 0 if every
     phase ran.
     """
+    # longer than 60 lines with its docstring: the start (the equilibrium, the force, the accelerations) and the loop
+    # over the phases share the records it makes; the steps are in _phase_loop
     n = u.shape[0]
     n_axles = data_i[0]
-    work = np.zeros(work_size)
-    rec = np.zeros(n_record)
-    drv = np.zeros(2 * n_axles + 2)
+    trial, saved, newton, loads0, acc, trace_count = _work_records(
+        n, n_axles, hist.shape[0], n_record, work_size, check_every
+    )
+    drv, kt, ct, _, keys, _, _, rec, work, jst, _, _, counts, _ = newton
+    _, _, _, _, hist_new = trial
     f_old = np.zeros(n)
-    kt = np.zeros((n, n))
-    ct = np.zeros((n, n))
     m_diag = np.zeros(n)
     for i in range(n):
         m_diag[i] = mass[i, i]
+    model = (m_diag, data_f, data_i, r_tol, u_limit, scheme, max_iter)
+    state = (u, v, a, f_old, hist)
+    _drive(phases[0], road_h, offsets, n_axles, 0.0, drv)
     if at_rest:
-        _drive(phases[0], road_h, offsets, n_axles, 0.0, drv)
         if not _equilibrium(data_f, data_i, drv, u, hist, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec, work):
             return STATUS_NO_EQUILIBRIUM, 0, 0.0, 0.0, 0
         for i in range(n):
             v[i] = 0.0
-    else:
-        _drive(phases[0], road_h, offsets, n_axles, 0.0, drv)
-    hist_new = hist.copy()
+    for i in range(hist.shape[0]):
+        hist_new[i] = hist[i]
     nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
     if at_rest:
         # consistent accelerations: M a = -f (a massless freedom gets 0)
         for i in range(n):
             a[i] = -f_old[i] / m_diag[i] if m_diag[i] > 0.0 else 0.0
-    u_new, v_new, a_new, f_new = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n)
-    u_s, v_s, a_s, f_s, h_s = np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(hist.shape[0])
-    jac = np.zeros((RUNG_MATRICES + 1, n, n))
-    keys = np.zeros(RUNG_MATRICES + 1)
-    piv = np.zeros(n, dtype=np.int64)
-    res = np.zeros(n)
-    du = np.zeros(n)
-    jst = np.zeros(6)
-    jst[3] = check_every
-    corr = np.zeros(2 * n)
-    loads0 = np.zeros(n_axles)
-    acc = np.zeros(2 * n_axles)
-    counts = np.zeros(4)
-    err_scale = np.zeros(n)
-    trace_count = np.zeros(1)
     t_offset = 0.0
     _trace(trace, trace_count, 0.0, n_axles, rec, u)
     for p in range(phases.shape[0]):
-        phase = phases[p]
+        course = (phases[p], road_h, offsets, levers)
         if p > 0:
             # the drive may jump between phases (a new road, a new load): the force at the start of this one
-            _drive(phase, road_h, offsets, n_axles, 0.0, drv)
+            _drive(phases[p], road_h, offsets, n_axles, 0.0, drv)
             nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f_old, kt, ct, rec, True, False, work)
-        # each phase starts afresh (a new tangent, no kept matrices, no measured contraction), so that a phase is a
-        # function of its starting state alone: phases run in one call or one by one from each other's final state
-        # agree exactly
-        jst[0] = 0.0
-        jst[1] = 0.0
-        jst[2] = 0.0
-        jst[4] = 0.0
-        jst[5] = 0.0  # no correction to extrapolate
-        for k in range(keys.shape[0]):
-            keys[k] = 0.0
-        for k in range(4):
-            counts[k] = 0.0
-        status, t_end, rnorm, stop = _phase_loop(
-            m_diag, data_f, data_i, phase, road_h, offsets, levers, r_tol, u_limit, max_iter, scheme,
-            u, v, a, f_old, hist, u_new, v_new, a_new, f_new, hist_new, drv, kt, ct, jac, keys, piv, res, rec, work,
-            jst, du, u_s, v_s, a_s, f_s, h_s, loads0, acc, counts, stats[p], trace, trace_count, t_offset, err_scale,
-            corr,
-        )  # fmt: skip
+        _fresh_phase(jst, keys, counts)
+        out = (loads0, acc, stats[p], trace, trace_count)
+        status, t_end, rnorm, stop = _phase_loop(model, course, state, trial, saved, newton, out, t_offset)
         t_offset += t_end
-        stats[p, S_EVALS] = counts[0]
-        stats[p, S_TANGENTS] = counts[1]
-        stats[p, S_FACTORS] = counts[2]
-        stats[p, S_UNCHECKED] = counts[3]
+        stats[p, S_EVALS] = counts[C_EVALS]
+        stats[p, S_TANGENTS] = counts[C_TANGENTS]
+        stats[p, S_FACTORS] = counts[C_FACTORS]
+        stats[p, S_UNCHECKED] = counts[C_UNCHECKED]
         for i in range(2 * n_axles):
             readings[p, i] = acc[i]
         on_stop[p] = stop
