@@ -403,7 +403,7 @@ def _commit(state, source):
 @njit(cache=True, inline="always")
 def _sensor_weight(tau, half, flat):
     """The share of a tyre's force on the sensor [-], its patch centre ``tau`` [s] from the sensor's centre, over its
-    largest value (:func:`bogie.wim._weight` in time): 1 within ``flat``, falling linearly to 0 at ``half``."""
+    largest value (:func:`bogie.road.wim._weight` in time): 1 within ``flat``, falling linearly to 0 at ``half``."""
     x = abs(tau)
     if half - flat <= 1e-9 * half:  # patch or strip of no length: the box of the longer one
         return 1.0 if x <= half * (1.0 + 1e-9) else 0.0
@@ -417,7 +417,7 @@ def _sensor_weight(tau, half, flat):
 def _sensor_pass(t0, t1, f0, f1, centre, half, flat, acc, i):
     """Add int F o dt and int o dt over the step [t0, t1] to ``acc[i]`` and ``acc[n + i]``: F linear from f0 to f1,
     o the sensor's weight about ``centre``; Simpson's rule between the weight's knots is exact (products of two
-    linear functions), as in :func:`bogie.wim.sensor_reading`."""
+    linear functions), as in :func:`bogie.road.wim.sensor_reading`."""
     lo = centre - half
     hi = centre + half
     if t1 <= lo or t0 >= hi:
