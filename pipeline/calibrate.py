@@ -75,7 +75,7 @@ def calibration_samples(config: Config) -> pd.DataFrame:
 def _tilt_grid(config: Config) -> np.ndarray:
     dist = config.distributions["chassis_tilt"]
     low, high = (math.degrees(v) for v in dist.support)
-    return np.linspace(low, high, calibration_tilt_count(low, high, config.calibrate.tilt_step))
+    return np.linspace(low, high, calibration_tilt_count(low, high, config.calibrate.tilt_step_deg))
 
 
 def _fleet(config: Config) -> dict[str, Any]:

@@ -59,7 +59,7 @@ def settings(config: Config) -> DesignSettings:
         grid=dict(spec.grid),
         groups=tuple(spec.groups),
         n_conditions=spec.n_conditions,
-        tilt_step_deg=spec.tilt_step,
+        tilt_step_deg=spec.tilt_step_deg,
         n_space_filling=spec.n_space_filling,
         target_share=spec.target_share,
         confidence_level=spec.confidence_level,

@@ -134,14 +134,14 @@ def wim_model(wim: WimProtocol) -> dict[str, Any]:
     """What the simulated WIM reading includes, for the caveats (``docs/wim-site.md``): the speed; the smooth site
     (its lengths and IRI) if it has one; the weighing length (sensor plus tyre contact) if not a point; the sensor
     error's COST 323 class and confidence level if not ``none``."""
-    site = wim.site_before + wim.site_after > 0.0
+    site = wim.site_length_before + wim.site_length_after > 0.0
     length = wim.sensor_length + wim.contact_length > 0.0
     error = wim.accuracy_class != "none"
     return {
         "speed_m_s": wim.speed,
         "site_pavement": site,
-        "site_before_m": wim.site_before if site else None,
-        "site_after_m": wim.site_after if site else None,
+        "site_before_m": wim.site_length_before if site else None,
+        "site_after_m": wim.site_length_after if site else None,
         "site_iri_m_km": wim.site_iri if site else None,
         "weighing_length": length,
         "sensor_length_m": wim.sensor_length if length else None,

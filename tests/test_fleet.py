@@ -67,7 +67,10 @@ def test_bad_sampling_arguments_are_refused(kwargs, message):
         (lambda: dataclasses.replace(STATIC, dt=0.0), r"StaticProtocol.dt = 0.0: must be a finite number > 0 \[s\]"),
         (lambda: dataclasses.replace(STATIC, step_tolerance=-1e-7), "or None for fixed steps"),
         (lambda: dataclasses.replace(WIM, speed=math.nan), r"WimProtocol.speed = nan.*\[m/s\]"),
-        (lambda: dataclasses.replace(WIM, site_after=-5.0), r"site_after = -5.0: must be a finite number >= 0 \[m\]"),
+        (
+            lambda: dataclasses.replace(WIM, site_length_after=-5.0),
+            r"site_length_after = -5.0: must be a finite number >= 0 \[m\]",
+        ),
         (lambda: dataclasses.replace(WIM, accuracy_class="B10"), "must be one of none, A\\(5\\)"),
         (lambda: dataclasses.replace(WIM, confidence_level=1.0), "confidence_level = 1.0"),
     ],

@@ -56,7 +56,7 @@ class WimProtocol:
 
     Attributes
     ----------
-    site_before, site_after
+    site_length_before, site_length_after
         Length of the smooth WIM site ahead of and past the sensor [m] (both 0: the sensor lies in the sampled road).
     site_iri
         International Roughness Index of the site's pavement [m/km] (the IRI's own unit, ASTM E1926; not SI m/m).
@@ -74,8 +74,8 @@ class WimProtocol:
     speed: float
     approach_length: float
     dt: float
-    site_before: float = 0.0
-    site_after: float = 0.0
+    site_length_before: float = 0.0
+    site_length_after: float = 0.0
     site_iri: float = 1.3
     sensor_length: float = 0.0
     contact_length: float = 0.0
@@ -85,7 +85,7 @@ class WimProtocol:
     def __post_init__(self) -> None:
         for name, unit in (("speed", "m/s"), ("approach_length", "m"), ("dt", "s")):
             _positive(self, name, unit)
-        for name in ("site_before", "site_after", "sensor_length", "contact_length"):
+        for name in ("site_length_before", "site_length_after", "sensor_length", "contact_length"):
             _positive(self, name, "m", "or 0", zero=True)
         _positive(self, "site_iri", "m/km")
         if self.accuracy_class not in wim.ACCURACY_CLASSES:

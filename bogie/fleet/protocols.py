@@ -283,7 +283,7 @@ def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.Site
     (:func:`bogie.road.wim.gd_n0_for_iri`) and G_road that of the sampled class.
     """
     scale = min(1.0, math.sqrt(wim.gd_n0_for_iri(spec.site_iri) / ISO8608_CLASSES[road_class.upper()]))
-    return wim.SiteRoad(road, spec.approach_length, spec.site_before, spec.site_after, scale)
+    return wim.SiteRoad(road, spec.approach_length, spec.site_length_before, spec.site_length_after, scale)
 
 
 def _wim_route(

@@ -42,7 +42,9 @@ def dimensionless(**constraints: Any) -> Any:
 class Strict(BaseModel):
     """Base of every params.yaml model: exact types (no bool or text for a number), no unknown key, immutable."""
 
-    model_config = ConfigDict(strict=True, extra="forbid", frozen=True, allow_inf_nan=False)
+    model_config = ConfigDict(
+        strict=True, extra="forbid", frozen=True, allow_inf_nan=False, use_attribute_docstrings=True
+    )
 
 
 class DistributionSpec(Strict):

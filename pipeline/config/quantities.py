@@ -165,10 +165,9 @@ def si_distribution(spec: DistributionSpec, q: Quantity, raw: Any = None) -> Dis
 
 
 def _checked(q: Quantity) -> WrapValidator:
-    def check(raw: Any, handler: ValidatorFunctionWrapHandler) -> DistributionSpec:
-        spec = handler(raw)
-        si_distribution(spec, q, raw)
-        return spec
+    # the validated value is the distribution in SI, built once here (pipeline.config.si passes it on as it is)
+    def check(raw: Any, handler: ValidatorFunctionWrapHandler) -> Distribution:
+        return si_distribution(handler(raw), q, raw)
 
     return WrapValidator(check)
 
@@ -181,7 +180,8 @@ def distribution_field(q: Quantity) -> tuple[Any, Any]:
     return Annotated[spec, _checked(q)], Field(json_schema_extra=extra)
 
 
-#: ``distributions:``, one entry per quantity, each in the params.yaml unit of its key
+#: ``distributions:``, one entry per quantity, each written in the params.yaml unit of its key and validated into
+#: its SI sampling distribution (:func:`si_distribution`)
 Distributions = create_model(
     "Distributions",
     __base__=Strict,

@@ -85,6 +85,8 @@ class View:
 
     def __init__(self, schema: type[BaseModel], raw: Mapping[str, Any], bad: Sequence[str] = ()) -> None:
         self.schema, self.raw, self.bad = schema, raw, tuple(bad)
+        #: what the rules derive from the file more than once (the tilt distribution's bounds), by name
+        self.derived: dict[str, Any] = {}
 
     def get(self, path: str) -> Any:
         """The value at ``path``; raises :class:`Unavailable` if it is bad, or missing without a default."""
@@ -118,10 +120,13 @@ _SPEC = TypeAdapter(NumericSpec)
 
 def _tilt_support(view: View) -> tuple[float, float]:
     """The bounds of distributions.chassis_tilt_deg [degree]."""
-    try:
-        return _SPEC.validate_python(view.get("distributions.chassis_tilt_deg")).build().support
-    except (ValidationError, ParameterError):
-        raise Unavailable("distributions.chassis_tilt_deg") from None
+    if "tilt_support" not in view.derived:
+        try:
+            spec = _SPEC.validate_python(view.get("distributions.chassis_tilt_deg"))
+            view.derived["tilt_support"] = spec.build().support
+        except (ValidationError, ParameterError):
+            raise Unavailable("distributions.chassis_tilt_deg") from None
+    return view.derived["tilt_support"]
 
 
 def calibration_tilt_count(low: float, high: float, step: float) -> int:

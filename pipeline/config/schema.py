@@ -10,17 +10,13 @@ its ``unit`` (as in params.yaml), and ``what`` it is or the ``expected`` form in
 from __future__ import annotations
 
 import math
-from collections.abc import Callable
 from pathlib import PurePosixPath
-from typing import Annotated, Any, Literal
+from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import (
     AfterValidator,
     Field,
-    ValidationInfo,
     ValidatorFunctionWrapHandler,
-    create_model,
-    field_validator,
     model_validator,
 )
 
@@ -32,16 +28,28 @@ from bogie.fleet.constants import (
     READ_TIME,
     ROUTE_MARGIN,
     SITE_IRI_RANGE,
-    SUSPENSIONS,
     WIM_QUANTITIES,
 )
+from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
-from bogie.params import PRESETS, preset
+from bogie.params import preset
 from bogie.road.wim import ACCURACY_CLASSES
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
+from pipeline.config.fields import (
+    AxleMix,
+    GroupLoads,
+    GroupPresets,
+    SuspensionMix,
+    distinct,
+    integer,
+    named,
+    number,
+    power_of_two,
+)
 from pipeline.config.quantities import QUANTITIES, Distributions
 from pipeline.config.rules import rule_errors
+from pipeline.config.si import FrozenMap, ToConfig
 from pipeline.resources import MAX_JOBS
 
 BACKENDS: tuple[str, ...] = ("loky", "dask")
@@ -60,109 +68,26 @@ OBSERVED_DIR = "observed"
 OTHER_SECTIONS: tuple[str, ...] = ("figure2",)
 
 
-# ---- field helpers -----------------------------------------------------------------------------------------------
-def number(unit: str, **bounds: float) -> Any:
-    """A required number in ``unit`` within ``bounds`` (any of ``ge``, ``gt``, ``le``, ``lt``)."""
-    return Field(json_schema_extra={"unit": unit}, **bounds)
-
-
-def integer(low: int, high: int | None = None) -> Any:
-    """A required integer in [low, high] [-]."""
-    return Field(ge=low, le=high)
-
-
-def named(what: str, **constraints: Any) -> Any:
-    """A required name (or list of names) from a fixed set; ``what`` names one in the messages (``preset``)."""
-    return Field(json_schema_extra={"what": what}, **constraints)
-
-
-def _distinct(what: str) -> AfterValidator:
-    def check(names: list[str]) -> list[str]:
-        if len(set(names)) != len(names):
-            raise config_error("", names, f"lists a {what} twice")
-        return names
-
-    return AfterValidator(check)
-
-
-def _power_of_two(n: int) -> int:
-    if n & (n - 1):
-        raise config_error("", n, "must be a power of 2 (Sobol' sequences balance only then), e.g. 512")
-    return n
-
-
-def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any], doc: str) -> type[Strict]:
-    """A model with one field per axle group of :data:`GROUP_AXLES`, in that order."""
-    return create_model(name, __base__=base, __doc__=doc, **{group: (annotation, field()) for group in GROUP_AXLES})
-
-
-class _Mix(Strict):
-    @model_validator(mode="after")
-    def _sums_to_one(self) -> _Mix:
-        fractions = self.model_dump()
-        if abs(sum(fractions.values()) - 1.0) > 1e-9:
-            raise config_error("", fractions, f"the fractions must sum to 1, they sum to {sum(fractions.values()):g}")
-        return self
-
-
-class _Presets(Strict):
-    @field_validator("*")
-    @classmethod
-    def _axles_match(cls, name: str, info: ValidationInfo) -> str:
-        group, n_axles = info.field_name, GROUP_AXLES[info.field_name]
-        if preset(name).n_axles != n_axles:
-            raise config_error("", name, f"has {preset(name).n_axles} axles but a {group} has {n_axles}")
-        return name
-
-
-AxleMix = _group_map(
-    "AxleMix",
-    _Mix,
-    float,
-    lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
-    "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
-)
-SuspensionShares = create_model(
-    "SuspensionShares",
-    __base__=_Mix,
-    __doc__="One axle group's fractions of steel-equalised and air-sprung groups [-], summing to 1.",
-    **{kind: (float, number("[-] (a fraction)", ge=0.0, le=1.0)) for kind in SUSPENSIONS},
-)
-SuspensionMix = _group_map(
-    "SuspensionMix",
-    Strict,
-    SuspensionShares,
-    lambda: Field(default_factory=lambda: SuspensionShares(steel=1.0, air=0.0)),
-    "``fleet.suspension_mix``: per axle group, the fractions of steel-equalised and air-sprung groups [-].",
-)
-GroupPresets = _group_map(
-    "GroupPresets",
-    _Presets,
-    Literal[tuple(PRESETS)],
-    lambda: named("preset"),
-    "``fleet.presets``: the base bogie (a bogie.params preset with the group's number of axles) of each group.",
-)
-GroupLoads = _group_map(
-    "GroupLoads",
-    Strict,
-    float,
-    lambda: number("t", gt=0.0, le=200.0),
-    "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
-)
-
-
 # ---- sections ----------------------------------------------------------------------------------------------------
 class Fleet(Strict):
-    """``fleet:`` the fleet study (see :class:`pipeline.config.FleetConfig`)."""
+    """``fleet:`` the fleet study."""
 
     n_bogies: int = integer(1, 10_000_000)
+    """Number of bogies."""
     sampling: Literal[SAMPLINGS] = named("sampling method")  # type: ignore[valid-type]
+    """``lhs`` (Latin hypercube) or ``sobol`` (scrambled Sobol'), both from scipy.stats.qmc."""
     axle_mix: AxleMix  # type: ignore[valid-type]
+    """Fraction of the fleet in each axle group, summing to 1."""
     # all steel when not given: the study of the steel bogies the inhibitors belong to
     suspension_mix: SuspensionMix = Field(default_factory=lambda: SuspensionMix())  # type: ignore[valid-type]
+    """Per axle group, the fraction of its groups of each suspension (``steel``: leaf springs and equalisers, ``air``:
+    connected air springs), summing to 1."""
     presets: GroupPresets  # type: ignore[valid-type]
-    legal_group_load_t: GroupLoads  # type: ignore[valid-type]
-    legal_axle_load_t: float = number("t", gt=0.0, le=100.0)
+    """Name of the base bogie (a bogie.params preset) of each group."""
+    legal_group_load_t: GroupLoads = Field(json_schema_extra={"unit": "t", "si": "N"})  # type: ignore[valid-type]
+    """Legal load of each group, both sides together (a load: N in the config)."""
+    legal_axle_load_t: float = number("t", si="N", gt=0.0, le=100.0)
+    """Legal load of a single axle, both sides together (a load: N in the config)."""
 
     @model_validator(mode="after")
     def _payload_is_positive(self) -> Fleet:
@@ -190,6 +115,8 @@ def _check_steps(key: str, value: float, duration: float, dt: float) -> None:
 class Static(Strict):
     """``protocol.static:`` the static weighbridge (see :class:`pipeline.config.StaticProtocol`)."""
 
+    library_class: ClassVar[type] = StaticProtocol
+
     load_time_s: float = number("s", gt=0.0, le=600.0)
     approach_length_m: float = number("m", gt=0.0, le=1000.0)
     # walking pace or a little faster; more is not a static weighing
@@ -212,6 +139,8 @@ class Static(Strict):
 
 class Wim(Strict):
     """``protocol.wim:`` the weigh-in-motion pass (see :class:`pipeline.config.WimProtocol`)."""
+
+    library_class: ClassVar[type] = WimProtocol
 
     # 50 m/s = 180 km/h: above it the value was most likely given in km/h
     # 1 m/s: the slowest a low-speed WIM site weighs at (they run at 5-15 km/h); slower is a static weighing
@@ -249,9 +178,12 @@ Protocol = Literal[PROTOCOLS]  # type: ignore[valid-type]
 class Protocols(Strict):
     """``protocol:`` which protocols run, and the settings of each."""
 
-    run: Annotated[list[Protocol], _distinct("protocol")] = named("protocol", min_length=1)
+    run: Annotated[list[Protocol], distinct("protocol")] = named("protocol", min_length=1)
+    """The protocols the simulation runs: ``static`` and/or ``wim``."""
     static: Static
+    """The static weighbridge's settings."""
     wim: Wim
+    """The weigh-in-motion pass's settings."""
 
 
 def _numeric_factors(names: list[str]) -> list[str]:
@@ -267,23 +199,34 @@ def _numeric_factors(names: list[str]) -> list[str]:
 
 
 class Sensitivity(Strict):
-    """``sensitivity:`` the Sobol' design (see :class:`pipeline.config.SensitivityConfig`)."""
+    """``sensitivity:`` the Sobol' design."""
 
     group: Literal[tuple(GROUP_AXLES)] = named("axle group")  # type: ignore[valid-type]
-    base_size: Annotated[int, AfterValidator(_power_of_two)] = integer(2, 2**20)
+    """Axle group whose base bogie the design perturbs."""
+    base_size: Annotated[int, AfterValidator(power_of_two)] = integer(2, 2**20)
+    """Saltelli base sample size N, a power of 2."""
     # the factors are keys of distributions:
-    factors: Annotated[list[Literal[tuple(QUANTITIES)]], _distinct("factor"), AfterValidator(_numeric_factors)] = named(  # type: ignore[valid-type]
-        "factor", min_length=1
-    )
+    factors: Annotated[  # type: ignore[valid-type]
+        list[Literal[tuple(QUANTITIES)]],
+        distinct("factor"),
+        AfterValidator(_numeric_factors),
+        ToConfig(lambda keys: tuple(QUANTITIES[key].name for key in keys), "SI names of the quantities"),
+    ] = named("factor", min_length=1)
+    """The perturbed quantities, keys of ``distributions:``; in the config their SI names (``tyre_wear`` stands for
+    every axle's wear, one SALib group)."""
     bootstrap_resamples: int = integer(1, 100_000)
+    """Bootstrap resamples for the confidence intervals."""
     confidence_level: float = number("[-]", gt=0.0, lt=1.0)
+    """Confidence level of those intervals."""
     protocol: Protocol = named("protocol")
+    """Protocol whose results are analysed."""
 
 
 class Ablation(Strict):
     """``ablation:`` the switch-off ablation of the first ``n_bogies`` fleet bogies."""
 
     n_bogies: int = integer(1)
+    """The first ``n_bogies`` fleet bogies, each with the inhibitors removed in turn."""
 
 
 _ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
@@ -302,15 +245,19 @@ def _address(value: str | None) -> str | None:
 
 
 class Execution(Strict):
-    """``execution:`` how the simulation runs (see :class:`pipeline.config.ExecutionConfig`)."""
+    """``execution:`` how the simulation runs."""
 
     backend: Literal[BACKENDS] = named("backend")  # type: ignore[valid-type]
+    """``loky`` (processes on this machine) or ``dask`` (a dask.distributed cluster)."""
     # at most pipeline.resources.MAX_JOBS; each stage runs at most this machine's cores (resources.worker_count)
     n_jobs: int = integer(1, MAX_JOBS)
+    """Worker processes (at most this machine's cores are used)."""
     chunk_size: int = integer(1, 10_000_000)
+    """Samples per chunk of work, the unit of resume."""
     dask_scheduler: Annotated[str | None, AfterValidator(_address)] = Field(
         json_schema_extra={"expected": f"null or {_ADDRESS}"}
     )
+    """The dask scheduler's address (backend ``dask``), else None."""
 
     @model_validator(mode="after")
     def _dask_has_a_scheduler(self) -> Execution:
@@ -342,12 +289,18 @@ class Observed(Strict):
     path: Annotated[str | None, AfterValidator(_observed_path)] = Field(
         json_schema_extra={"expected": f"null or a file in {OBSERVED_DIR}/, e.g. {OBSERVED_DIR}/site.mon"}
     )
+    """The file of records, a POSIX path relative to the project root inside ``observed/``; None: no survey given."""
     format: Literal[OBSERVED_FORMATS] = named("record format")  # type: ignore[valid-type]
+    """Its record format: ``auto`` (the one layout the file's first lines fit), ``csv``, ``mon``, ``castor``, ``bedit``
+    or ``ditis`` (``docs/weighings.md``)."""
     # bogie.weighings.groups.filter_groups' range
-    min_group_load_t: float = number("t", ge=0.0, le=100.0)
+    min_group_load_t: float = number("t", si="kg", ge=0.0, le=100.0)
+    """Smallest group load kept, observed and simulated groups alike (a mass, as the weighings give it)."""
     # bogie.weighings.groups.axle_groups' range
     group_spacing_m: float = number("m", gt=0.0, le=5.0)
+    """Largest spacing of two axles of one observed group."""
     position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
+    """Group position kept: ``all``, ``steer``, ``drive`` or ``trailer``."""
 
 
 class Survey(Strict):
@@ -355,14 +308,21 @@ class Survey(Strict):
 
     # null: nothing; a format: data/survey/fleet_wim.<format>, the fleet study's WIM readings as records
     export_format: Literal[EXPORT_FORMATS] | None = named("record format")  # type: ignore[valid-type]
+    """None, or the record format (``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``) in which the fleet study's WIM
+    readings are written to ``data/survey/fleet_wim.<format>``."""
 
 
 class Calibrate(Strict):
-    """``calibrate:`` the fleet quantities fitted to the observed survey (:class:`pipeline.config.CalibrateConfig`)."""
+    """``calibrate:`` the fleet quantities fitted to the observed survey."""
 
     protocol: Literal[PROTOCOLS] = named("protocol")  # type: ignore[valid-type]
+    """The protocol whose readings are held against the survey: ``wim`` or ``static``."""
     n_bogies: int = integer(20, 100_000)
-    fit: dict[str, list[float]] = Field(
+    """The calibration fleet: the first ``n_bogies`` fleet bogies, each as a steel and an air group."""
+    fit: Annotated[
+        dict[str, list[float]],
+        ToConfig(lambda fit: FrozenMap({n: (float(b[0]), float(b[1])) for n, b in fit.items()}), "unit of each name"),
+    ] = Field(
         min_length=1,
         json_schema_extra={
             "expected": "a mapping naming at least one quantity to fit, each [low, high]: "
@@ -370,7 +330,9 @@ class Calibrate(Strict):
             "entry": "[low, high], two numbers in the unit of the quantity's name",
         },
     )
+    """Quantity -> (low, high): the bounds of each fitted quantity, in the unit of its name."""
     tilt_step_deg: float = number("degree", gt=0.0, le=1.0)
+    """Step of the chassis-tilt grid the readings are tabulated on."""
     # each level within the range calibrate fits the site's roughness over (CALIBRATION_QUANTITIES)
     site_iri_levels_m_km: list[Annotated[float, Field(ge=SITE_IRI_RANGE[0], le=SITE_IRI_RANGE[1])]] = Field(
         min_length=2,
@@ -380,10 +342,15 @@ class Calibrate(Strict):
             f"[{SITE_IRI_RANGE[0]:g}, {SITE_IRI_RANGE[1]:g}] m/km",
         },
     )
+    """The WIM site roughnesses the readings are tabulated at."""
     bootstrap_resamples: int = integer(0, 10_000)
+    """Bootstrap resamples of the fitted values' intervals (0: none)."""
     confidence_level: float = number("-", gt=0.0, lt=1.0)
+    """Confidence level of the fitted values' intervals."""
     maxiter: int = integer(1, 10_000)
+    """Generations of the differential evolution."""
     popsize: int = integer(2, 200)
+    """Population of the differential evolution, per fitted quantity."""
 
     @model_validator(mode="after")
     def _quantities(self) -> Calibrate:
@@ -422,13 +389,21 @@ DESIGN_FACTORS: tuple[str, ...] = (
 )
 
 
-class Design(Strict):
-    """``design:`` the controlled experiment over the design factors (:class:`pipeline.config.DesignConfig`)."""
+def _si_grid(grid: dict[str, list[float]]) -> FrozenMap:
+    """The design grid by the factors' SI names, its levels in SI."""
+    return FrozenMap({QUANTITIES[k].name: tuple(QUANTITIES[k].to_si(float(x)) for x in v) for k, v in grid.items()})
 
-    groups: Annotated[list[Literal[tuple(GROUP_AXLES)]], _distinct("axle group")] = named("axle group", min_length=1)  # type: ignore[valid-type]
+
+class Design(Strict):
+    """``design:`` the controlled experiment over the design factors."""
+
+    groups: Annotated[list[Literal[tuple(GROUP_AXLES)]], distinct("axle group")] = named("axle group", min_length=1)  # type: ignore[valid-type]
+    """The axle groups whose designs are studied."""
     n_conditions: int = integer(2, 100_000)
+    """Operating conditions (tilt, tyre wear, payload, approach road) every design runs over."""
     tilt_step_deg: float = number("degree", gt=0.0, le=2.0)
-    grid: dict[str, list[float]] = Field(
+    """Step of the chassis-tilt grid, outward from level over the tilt distribution's bounds."""
+    grid: Annotated[dict[str, list[float]], ToConfig(_si_grid, "SI, by SI name")] = Field(
         min_length=1,
         json_schema_extra={
             "expected": "a mapping naming at least one design factor, each with its levels: "
@@ -436,9 +411,15 @@ class Design(Strict):
             "entry": "a list of one or more levels, numbers in the unit of the factor's name",
         },
     )
+    """A design factor (a key of ``distributions:``) -> its levels, in the unit of its key; in the config by its SI
+    name, in SI. The representative designs are every combination, the other factors at today's typical values (the
+    fleet distributions' medians)."""
     n_space_filling: int = integer(0, 10_000)
+    """Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions."""
     target_share: float = number("-", gt=0.0, lt=1.0)
+    """The share of bogies within 5 % the guidance asks for."""
     confidence_level: float = number("-", gt=0.0, lt=1.0)
+    """Confidence level of the intervals."""
 
     @model_validator(mode="after")
     def _grid(self) -> Design:
@@ -458,18 +439,26 @@ class Design(Strict):
         return self
 
 
+def _si_distributions(section: Any) -> FrozenMap:
+    """The sampling distributions by the quantities' SI names (each validated into SI, :mod:`.quantities`)."""
+    return FrozenMap({q.name: getattr(section, key) for key, q in QUANTITIES.items()})
+
+
 class Params(Strict):
     """params.yaml: the sections of the Monte Carlo pipeline, and those other stages read themselves."""
 
     seed: int = integer(0, 2**63 - 1)
+    """Seed of every random draw of the pipeline."""
     fleet: Fleet
-    distributions: Distributions  # type: ignore[valid-type]
+    distributions: Annotated[Distributions, ToConfig(_si_distributions, "SI")]  # type: ignore[valid-type]
+    """The SI name of each sampled quantity (``bush_stiffness``, ``contact_roll_radius``, ``chassis_tilt`` [rad],
+    ...) -> its sampling distribution, in SI."""
     protocol: Protocols
     sensitivity: Sensitivity
     ablation: Ablation
     execution: Execution
     observed: Observed
-    survey: Survey | None = None
+    survey: Survey = Field(default_factory=lambda: Survey(export_format=None))
     calibrate: Calibrate | None = None
     design: Design | None = None
     figure2: Any = None

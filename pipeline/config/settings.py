@@ -19,12 +19,12 @@ from typing import Any
 import yaml
 from pydantic import ValidationError
 
-from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
+from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
-from bogie.params import GRAVITY
+from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
-from pipeline.config.quantities import QUANTITIES, Quantity, si_distribution
+from pipeline.config.quantities import QUANTITIES, Quantity
 from pipeline.config.rules import rule_errors
 from pipeline.config.schema import (
     BACKENDS,
@@ -69,6 +69,7 @@ __all__ = [
     "ProtocolConfig",
     "Quantity",
     "SensitivityConfig",
+    "SurveyConfig",
     "StaticProtocol",
     "WimProtocol",
     "load_config",
@@ -103,126 +104,10 @@ def load_params(path: str | Path = "params.yaml") -> dict[str, Any]:
     return data
 
 
-# ---- from the schema to the configuration -------------------------------------------------------------------
-def _fleet(fleet: Any) -> FleetConfig:
-    tonnes = fleet.legal_group_load_t
-    return FleetConfig(
-        n_bogies=fleet.n_bogies,
-        sampling=fleet.sampling,
-        axle_mix=FrozenMap({g: getattr(fleet.axle_mix, g) for g in GROUP_AXLES}),
-        suspension_mix=FrozenMap(
-            {g: FrozenMap({k: getattr(getattr(fleet.suspension_mix, g), k) for k in SUSPENSIONS}) for g in GROUP_AXLES}
-        ),
-        presets=FrozenMap({g: getattr(fleet.presets, g) for g in GROUP_AXLES}),
-        legal_group_load=FrozenMap({g: getattr(tonnes, g) * 1000.0 * GRAVITY for g in GROUP_AXLES}),
-        legal_axle_load=fleet.legal_axle_load_t * 1000.0 * GRAVITY,
-    )
-
-
-def _protocol(protocol: Any) -> ProtocolConfig:
-    st, wim = protocol.static, protocol.wim
-    return ProtocolConfig(
-        run=tuple(protocol.run),
-        static=StaticProtocol(
-            load_time=st.load_time_s,
-            approach_length=st.approach_length_m,
-            crawl_speed=st.crawl_speed_m_s,
-            settle_time=st.settle_time_s,
-            dt=st.dt_s,
-            step_tolerance=st.step_tolerance_m,
-        ),
-        wim=WimProtocol(
-            speed=wim.speed_m_s,
-            approach_length=wim.approach_length_m,
-            dt=wim.dt_s,
-            site_before=wim.site_length_before_m,
-            site_after=wim.site_length_after_m,
-            site_iri=wim.site_iri_m_km,
-            sensor_length=wim.sensor_length_m,
-            contact_length=wim.contact_length_m,
-            accuracy_class=wim.accuracy_class,
-            confidence_level=wim.confidence_level,
-        ),
-    )
-
-
-def _sensitivity(sens: Any) -> SensitivityConfig:
-    return SensitivityConfig(
-        group=sens.group,
-        base_size=sens.base_size,
-        factors=tuple(QUANTITIES[key].name for key in sens.factors),
-        bootstrap_resamples=sens.bootstrap_resamples,
-        confidence_level=sens.confidence_level,
-        protocol=sens.protocol,
-    )
-
-
-def _execution(execution: Any) -> ExecutionConfig:
-    return ExecutionConfig(
-        backend=execution.backend,
-        n_jobs=execution.n_jobs,
-        chunk_size=execution.chunk_size,
-        dask_scheduler=execution.dask_scheduler,
-    )
-
-
-def _observed(observed: Any) -> ObservedConfig:
-    return ObservedConfig(
-        path=observed.path,
-        format=observed.format,
-        min_group_load=observed.min_group_load_t * 1000.0,
-        group_spacing=observed.group_spacing_m,
-        position=observed.position,
-    )
-
-
-def _calibrate(calibrate: Any) -> CalibrateConfig | None:
-    if calibrate is None:
-        return None
-    return CalibrateConfig(
-        protocol=calibrate.protocol,
-        n_bogies=calibrate.n_bogies,
-        fit=FrozenMap({name: (float(b[0]), float(b[1])) for name, b in calibrate.fit.items()}),
-        tilt_step=calibrate.tilt_step_deg,
-        site_iri_levels=tuple(float(x) for x in calibrate.site_iri_levels_m_km),
-        bootstrap_resamples=calibrate.bootstrap_resamples,
-        confidence_level=calibrate.confidence_level,
-        maxiter=calibrate.maxiter,
-        popsize=calibrate.popsize,
-    )
-
-
-def _design(design: Any) -> DesignConfig | None:
-    if design is None:
-        return None
-    grid = design.grid
-    return DesignConfig(
-        groups=tuple(design.groups),
-        n_conditions=design.n_conditions,
-        tilt_step=design.tilt_step_deg,
-        grid=FrozenMap({QUANTITIES[k].name: tuple(QUANTITIES[k].to_si(float(x)) for x in v) for k, v in grid.items()}),
-        n_space_filling=design.n_space_filling,
-        target_share=design.target_share,
-        confidence_level=design.confidence_level,
-    )
-
-
 def to_config(params: Params) -> Config:
-    """The validated params.yaml sections (:class:`~pipeline.config.schema.Params`) as a :class:`Config`, SI."""
-    distributions = {q.name: si_distribution(getattr(params.distributions, key), q) for key, q in QUANTITIES.items()}
-    return Config(
-        seed=params.seed,
-        fleet=_fleet(params.fleet),
-        distributions=FrozenMap(distributions),
-        protocol=_protocol(params.protocol),
-        sensitivity=_sensitivity(params.sensitivity),
-        ablation=AblationConfig(n_bogies=params.ablation.n_bogies),
-        execution=_execution(params.execution),
-        observed=_observed(params.observed),
-        survey=SurveyConfig(export_format=params.survey.export_format if params.survey is not None else None),
-        calibrate=_calibrate(params.calibrate),
-        design=_design(params.design),
-    )
+    """The validated params.yaml sections (:class:`~pipeline.config.schema.Params`) as a :class:`Config`, SI
+    (:func:`pipeline.config.si.to_config`)."""
+    return si.to_config(params)
 
 
 def parse_config(raw: Mapping[str, Any]) -> Config:

@@ -60,7 +60,11 @@ def test_default_params_load_and_are_converted_to_si():
     )
     assert config.protocol.run == ("static", "wim")
     wim = config.protocol.wim
-    assert (wim.site_before, wim.site_after, wim.site_iri) == (50.0, 25.0, 1.3)  # COST 323 class I site [m, m/km]
+    assert (wim.site_length_before, wim.site_length_after, wim.site_iri) == (
+        50.0,
+        25.0,
+        1.3,
+    )  # COST 323 class I site [m, m/km]
     assert (wim.sensor_length, wim.contact_length, wim.accuracy_class) == (0.05, 0.2, "B(10)")
     assert config.execution.backend == "loky" and config.execution.n_jobs == 2
 

@@ -16,7 +16,8 @@ from pipeline.config.errors import (
     range_text,
     to_config_error,
 )
-from pipeline.config.schema import Params, named, number
+from pipeline.config.fields import named, number
+from pipeline.config.schema import Params
 
 
 class Wheel(Strict):

@@ -55,8 +55,9 @@ def test_the_road_tables_are_the_protocols_roads_value_for_value():
 
     config = load_config(ROOT / "params.yaml")
     fleet = sample_fleet(config)
-    wims = [config.protocol.wim, dataclasses.replace(config.protocol.wim, site_before=3.0, site_after=0.0),
-            dataclasses.replace(config.protocol.wim, site_before=0.0, site_after=0.0)]  # fmt: skip
+    wim = config.protocol.wim
+    wims = [wim, dataclasses.replace(wim, site_length_before=3.0, site_length_after=0.0),
+            dataclasses.replace(wim, site_length_before=0.0, site_length_after=0.0)]  # fmt: skip
     for i in range(4):
         sample = fleet.iloc[i].to_dict()
         bogie = bogie_from_sample(sample)

@@ -23,7 +23,7 @@ def setup():
     fleet = sample_fleet(config)
     # the old WIM model: the sensor in the sampled road, a point sensor, no error
     point = dataclasses.replace(
-        config.protocol.wim, site_before=0.0, site_after=0.0, sensor_length=0.0, contact_length=0.0,
+        config.protocol.wim, site_length_before=0.0, site_length_after=0.0, sensor_length=0.0, contact_length=0.0,
         accuracy_class="none",
     )  # fmt: skip
     return config, fleet, point
@@ -50,7 +50,7 @@ def test_a_smooth_site_and_a_long_sensor_lower_the_dynamic_scatter_on_a_rough_ro
     # the COST 323 class I site (IRI 1.3 m/km) has 0.15 of class C's heights over the last 50 m (sqrt of the PSD
     # ratio, 5.7e-6 / 256e-6 m^3), and the bogie's response is nearly linear in them; 0.5 leaves room for what the
     # rough approach still sets going (0.19 measured on these four bogies, 0.10-0.34 on the next twelve)
-    site = scatter(fleet, dataclasses.replace(point, site_before=50.0, site_after=25.0))
+    site = scatter(fleet, dataclasses.replace(point, site_length_before=50.0, site_length_after=25.0))
     assert site < 0.5 * rough
     # averaging over the passage: a cosine of frequency f keeps sinc(f S / v) sinc(f L / v) of its amplitude. Wheel
     # hop (10-15 Hz) keeps 0.8-0.9 over a 0.5 m bending plate and at most 0.2 over a 3 m weighing length; body

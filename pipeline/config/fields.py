@@ -1,0 +1,116 @@
+"""The field helpers of the params.yaml schema and its maps of fixed keys (axle groups, suspensions).
+
+:mod:`pipeline.config.schema` builds its sections from these: a number with its unit (and, for a unit with two SI
+forms, which: :mod:`pipeline.config.si`), an integer range, a name from a fixed set, and the models whose keys are
+the axle groups of :data:`bogie.fleet.constants.GROUP_AXLES` (``fleet.axle_mix`` ...), which the configuration
+holds as :class:`~pipeline.config.si.FrozenMap`.
+"""
+
+from __future__ import annotations
+
+from collections.abc import Callable
+from typing import Any, ClassVar, Literal
+
+from pydantic import AfterValidator, Field, ValidationInfo, create_model, field_validator, model_validator
+
+from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
+from bogie.params import PRESETS, preset
+from pipeline.config.distributions import Strict
+from pipeline.config.errors import config_error
+
+
+def number(unit: str, si: str | None = None, **bounds: float) -> Any:
+    """A required number in ``unit`` within ``bounds`` (any of ``ge``, ``gt``, ``le``, ``lt``); ``si``: the SI unit
+    of a unit that has two (``t``: ``N`` for a load, ``kg`` for a mass; :mod:`pipeline.config.si`)."""
+    return Field(json_schema_extra={"unit": unit, **({"si": si} if si else {})}, **bounds)
+
+
+def integer(low: int, high: int | None = None) -> Any:
+    """A required integer in [low, high] [-]."""
+    return Field(ge=low, le=high)
+
+
+def named(what: str, **constraints: Any) -> Any:
+    """A required name (or list of names) from a fixed set; ``what`` names one in the messages (``preset``)."""
+    return Field(json_schema_extra={"what": what}, **constraints)
+
+
+def distinct(what: str) -> AfterValidator:
+    def check(names: list[str]) -> list[str]:
+        if len(set(names)) != len(names):
+            raise config_error("", names, f"lists a {what} twice")
+        return names
+
+    return AfterValidator(check)
+
+
+def power_of_two(n: int) -> int:
+    if n & (n - 1):
+        raise config_error("", n, "must be a power of 2 (Sobol' sequences balance only then), e.g. 512")
+    return n
+
+
+def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any], doc: str) -> type[Strict]:
+    """A model with one field per axle group of :data:`GROUP_AXLES`, in that order."""
+    return create_model(name, __base__=base, __doc__=doc, **{group: (annotation, field()) for group in GROUP_AXLES})
+
+
+class _Map(Strict):
+    """A mapping of fixed keys (axle groups, suspensions): a :class:`~pipeline.config.si.FrozenMap` in the config."""
+
+    as_map: ClassVar[bool] = True
+
+
+class _Mix(_Map):
+    @model_validator(mode="after")
+    def _sums_to_one(self) -> _Mix:
+        fractions = self.model_dump()
+        if abs(sum(fractions.values()) - 1.0) > 1e-9:
+            raise config_error("", fractions, f"the fractions must sum to 1, they sum to {sum(fractions.values()):g}")
+        return self
+
+
+class _Presets(_Map):
+    @field_validator("*")
+    @classmethod
+    def _axles_match(cls, name: str, info: ValidationInfo) -> str:
+        group, n_axles = info.field_name, GROUP_AXLES[info.field_name]
+        if preset(name).n_axles != n_axles:
+            raise config_error("", name, f"has {preset(name).n_axles} axles but a {group} has {n_axles}")
+        return name
+
+
+AxleMix = _group_map(
+    "AxleMix",
+    _Mix,
+    float,
+    lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
+    "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
+)
+SuspensionShares = create_model(
+    "SuspensionShares",
+    __base__=_Mix,
+    __doc__="One axle group's fractions of steel-equalised and air-sprung groups [-], summing to 1.",
+    **{kind: (float, number("[-] (a fraction)", ge=0.0, le=1.0)) for kind in SUSPENSIONS},
+)
+SuspensionMix = _group_map(
+    "SuspensionMix",
+    _Map,
+    SuspensionShares,
+    lambda: Field(default_factory=lambda: SuspensionShares(steel=1.0, air=0.0)),
+    "``fleet.suspension_mix``: per axle group, the fractions of steel-equalised and air-sprung groups [-].",
+)
+GroupPresets = _group_map(
+    "GroupPresets",
+    _Presets,
+    Literal[tuple(PRESETS)],
+    lambda: named("preset"),
+    "``fleet.presets``: the base bogie (a bogie.params preset with the group's number of axles) of each group.",
+)
+GroupLoads = _group_map(
+    "GroupLoads",
+    _Map,
+    float,
+    lambda: number("t", si="N", gt=0.0, le=200.0),
+    "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
+)
