@@ -223,30 +223,20 @@ class _Cells:
         return chars.view(f"S{width}").ravel(), too_long
 
 
-def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
-    try:
-        header_cells = next(csv.reader([lines.text(0)]))
-    except csv.Error:
-        header_cells = [lines.text(0)]
-    columns = _csv_header(header_cells, path)
-    body = lines.take(np.arange(1, len(lines)))
-    line = body.line
-    m = len(body)
-    reasons = _Reasons(m)
-    width = len(header_cells)
-    cells = _Cells(data, body, width)
-    reasons.flag(cells.unreadable, "unreadable CSV row (an unclosed quote or a huge field)")
-    reasons.flag(~cells.right, "wrong length")
-
-    def number(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-        return _numbers(*cells(columns[name]))
-
-    n_value, n_blank, n_ok = number("n_axles")
+def _axle_count(n_axles: tuple[np.ndarray, np.ndarray, np.ndarray], reasons: _Reasons) -> np.ndarray:
+    """Each record's number of axles (0 for a bad record); flags a bad or implausible one."""
+    n_value, _, n_ok = n_axles
     reasons.flag(~n_ok | (n_value != np.round(n_value)), NON_NUMERIC)
     n = np.where(reasons.ok, np.nan_to_num(n_value), 0).astype(np.int64)
     reasons.flag(reasons.ok & (n == 0), NO_AXLES)
     reasons.flag((n < 2) | (n > CSV_MAX_AXLES), f"implausible number of axles (allowed 2-{CSV_MAX_AXLES})")
-    n = np.where(reasons.ok, n, 0)
+    return np.where(reasons.ok, n, 0)
+
+
+def _axle_cells(cells: _Cells, columns: dict[str, int], n: np.ndarray, reasons: _Reasons) -> tuple[dict, np.ndarray]:
+    """The axle loads and spacings by axle (NaN past a record's axles) and which records have a cell that is not a
+    number where an axle needs one; flags records with more axles than columns, or a value past their axles."""
+    m = len(n)
     load_cols = sorted(int(c[10:]) for c in columns if c.startswith("axle_load_") and c[10:].isdigit())
     spacing_cols = sorted(int(c[8:]) for c in columns if c.startswith("spacing_") and c[8:].isdigit())
     have_loads = max((k for i, k in enumerate(load_cols, start=1) if k == i), default=0)  # 1..k all there
@@ -267,6 +257,29 @@ def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
                 not_number |= need & ~ok
                 values[name][:, k - 1] = np.where(need, value, np.nan)
     reasons.flag(past, "axle load or spacing past the number of axles")
+    return values, not_number
+
+
+def _parse_csv(data: bytes, lines: _Lines, path: str) -> dict:
+    try:
+        header_cells = next(csv.reader([lines.text(0)]))
+    except csv.Error:
+        header_cells = [lines.text(0)]
+    columns = _csv_header(header_cells, path)
+    body = lines.take(np.arange(1, len(lines)))
+    line = body.line
+    m = len(body)
+    reasons = _Reasons(m)
+    width = len(header_cells)
+    cells = _Cells(data, body, width)
+    reasons.flag(cells.unreadable, "unreadable CSV row (an unclosed quote or a huge field)")
+    reasons.flag(~cells.right, "wrong length")
+
+    def number(name: str) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+        return _numbers(*cells(columns[name]))
+
+    n = _axle_count(number("n_axles"), reasons)
+    values, not_number = _axle_cells(cells, columns, n, reasons)
     # the timestamp: ISO 8601 local time, nothing else (no 'now', no 'today', no time zone)
     stamp_cells, stamp_long = cells(columns["timestamp"])
     stamps = _iso_local(np.char.strip(stamp_cells), stamp_long, reasons)

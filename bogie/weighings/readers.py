@@ -162,8 +162,20 @@ def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: in
 
 def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     """Every record of ``lines`` in ``layout``: the columns (values of bad records undefined) and the reasons."""
+    reasons = _Reasons(len(lines))
+    raw = _header_fields(lines, layout, reasons)
+    axles = _axle_fields(lines, layout, reasons, raw["n_axles"])
+    # any other byte but a digit or a space, in a field or in the padding past the last axle: a form feed, a tab,
+    # a Unicode line separator, binary data
+    reasons.flag(_stray_bytes(lines), NON_NUMERIC)
+    stamp = _checked_stamp(layout, reasons, raw)
+    return {"reasons": reasons, **_scaled(layout, raw, axles), "stamp": stamp}
+
+
+def _header_fields(lines: _Lines, layout: FixedWidthLayout, reasons: _Reasons) -> dict[str, np.ndarray]:
+    """The header's integer fields of every record (0 where unread); flags short records, bad digits and a number of
+    axles out of range, and a record too short for its axles."""
     m = len(lines)
-    reasons = _Reasons(m)
     length = lines.end - lines.start
     reasons.flag(length < layout.fixed_width, SHORT_HEADER)
     alive = np.flatnonzero(reasons.ok)
@@ -180,6 +192,12 @@ def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     reasons.flag((n < 2) | (n > most), f"implausible number of axles (allowed 2-{most})")
     last = max(f.end for f in layout.axles.fields if f.per == "axle")
     reasons.flag(length < layout.axles.start + layout.axles.stride * (n - 1) + last, TOO_SHORT)
+    return raw
+
+
+def _axle_fields(lines: _Lines, layout: FixedWidthLayout, reasons: _Reasons, n: np.ndarray) -> dict[str, np.ndarray]:
+    """Each per-axle (and per-spacing) field of the records still good, by axle (-1 where the record has none)."""
+    m = len(lines)
     alive_mask = reasons.ok
     width = int(n[alive_mask].max()) if alive_mask.any() else 2
     axles: dict[str, np.ndarray] = {}
@@ -194,9 +212,13 @@ def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
             bad[rows[~good]] = True
             reasons.flag(bad, NON_NUMERIC)
         axles[f.name] = values
-    # any other byte but a digit or a space, in a field or in the padding past the last axle: a form feed, a tab,
-    # a Unicode line separator, binary data
-    reasons.flag(_stray_bytes(lines), NON_NUMERIC)
+    return axles
+
+
+def _checked_stamp(layout: FixedWidthLayout, reasons: _Reasons, raw: dict[str, np.ndarray]) -> tuple:
+    """The records' time stamps (year, month, day, hour, minute, microsecond of the minute), their groups, direction
+    and calendar checked."""
+    n = raw["n_axles"]
     if "n_groups" in raw:
         reasons.flag((raw["n_groups"] < 1) | (raw["n_groups"] > n), "implausible number of axle groups")
     base = layout.direction_base
@@ -209,8 +231,15 @@ def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     else:
         micro = raw["second"] * 1_000_000 + raw["second_100"] * 10_000
     _check_calendar(reasons, year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro)
+    return (year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro)
+
+
+def _scaled(layout: FixedWidthLayout, raw: dict[str, np.ndarray], axles: dict[str, np.ndarray]) -> dict:
+    """The fields in the layout's units: the vehicle columns, the axle loads, spacings and widths (NaN where none)."""
+    m, n = len(raw["n_axles"]), raw["n_axles"]
     scale = layout.scales
     load_unit = layout.axle_field("axle_load").scale
+    base = layout.direction_base
     columns = {
         "head": raw["head"], "speed": raw["speed"] * scale["speed"],
         "gross_weight": raw["gross_weight"] * scale["gross_weight"], "length": raw["length"] * scale["length"],
@@ -224,8 +253,7 @@ def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     if "axle_width" in axles:
         widths = np.where(axles["axle_width"] >= 0, axles["axle_width"] * layout.axle_field("axle_width").scale, np.nan)
     return {
-        "reasons": reasons, "columns": columns, "loads": loads, "spacings": spacings, "widths": widths,
-        "stamp": (year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro),
+        "columns": columns, "loads": loads, "spacings": spacings, "widths": widths,
         "gross_step": scale["gross_weight"], "load_step": load_unit,
     }  # fmt: skip
 

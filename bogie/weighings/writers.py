@@ -261,17 +261,21 @@ def _time_fields(stamps: pd.DatetimeIndex, fmt: str, layout: FixedWidthLayout) -
 def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
     layout = LAYOUTS[fmt]
     header = {f.name: f for f in layout.header}
-    nrows = len(vehicles)
-    everyone = np.arange(nrows)
     stamps = _timestamps(vehicles, fmt)
     n = _axle_counts(vehicles, fmt, min(layout.max_axles, 10 ** header["n_axles"].width - 1))
-    base = layout.direction_base
     direction = _coded(vehicles, fmt, "direction", "1 or 2", lambda d: (d == 1) | (d == 2))
     lane_top = 10 ** header["lane"].width - 1
     lane = _coded(vehicles, fmt, "lane", f"1-{lane_top}, 1-based", lambda v: (v >= 1) & (v <= lane_top))
     _require(vehicles, fmt, "speed")
+    axle_ints = _axle_ints(vehicles, fmt, layout, n)
+    values = _time_fields(stamps, fmt, layout)
+    values.update(n_axles=n, direction=direction - 1 + layout.direction_base, lane=lane)
+    values.update(_header_values(vehicles, fmt, layout, n, axle_ints))
+    return _text(fmt, layout, values, axle_ints, n)
 
-    # per-axle fields, as written (integers), NaN-free: (rows, n_max) each
+
+def _axle_ints(vehicles: pd.DataFrame, fmt: str, layout: FixedWidthLayout, n: np.ndarray) -> dict[str, np.ndarray]:
+    """The per-axle fields as written (integers), NaN-free: (rows, n_max) each."""
     block = {f.name: f for f in layout.axles.fields}
     loads = _axle_values(vehicles, fmt, "axle_load", n, n)
     spacings = _axle_values(vehicles, fmt, "spacing", n, n - 1)
@@ -289,14 +293,21 @@ def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
             si = _optional(vehicles, f"axle_width_{i}", 0.0)[rows]
             widths[rows, i] = _scaled(fmt, f"axle_width_{i}", si, block["axle_width"], rows)
         axle_ints["axle_width"] = widths
+    return axle_ints
 
-    # header fields, as written
-    values = _time_fields(stamps, fmt, layout)
-    values["n_axles"] = n
-    values["direction"] = direction - 1 + base
-    values["lane"] = lane
-    values["head"] = _scaled(fmt, "head", _heads(vehicles, fmt), header["head"], everyone)
-    values["speed"] = _scaled(fmt, "speed", _column(vehicles, "speed"), header["speed"], everyone)
+
+def _header_values(
+    vehicles: pd.DataFrame, fmt: str, layout: FixedWidthLayout, n: np.ndarray, axle_ints: dict[str, np.ndarray]
+) -> dict[str, np.ndarray]:
+    """The header fields but the time, the axle count, direction and lane, as written (integers)."""
+    header = {f.name: f for f in layout.header}
+    block = {f.name: f for f in layout.axles.fields}
+    nrows = len(vehicles)
+    everyone = np.arange(nrows)
+    values = {
+        "head": _scaled(fmt, "head", _heads(vehicles, fmt), header["head"], everyone),
+        "speed": _scaled(fmt, "speed", _column(vehicles, "speed"), header["speed"], everyone),
+    }
     for name in ("length", "transverse_position"):  # 0: not given
         values[name] = _scaled(fmt, name, _optional(vehicles, name, 0.0), header[name], everyone)
     # gross weight: where absent or NaN, the sum of the axle loads as written (so the reader's check holds)
@@ -313,18 +324,24 @@ def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
         if len(bad):
             raise ValueError(f"{fmt}: n_groups = {_val(groups[bad[0]])} in {_rows(bad)} is not a whole number")
         values["n_groups"] = _scaled(fmt, "n_groups", groups, header["n_groups"], everyone)
+    return values
+
+
+def _text(fmt: str, layout: FixedWidthLayout, values: dict, axle_ints: dict, n: np.ndarray) -> list[str]:
+    """The records: zero-padded, right-aligned fields; the spacing slot after the last axle written as zeros. Every
+    header value is checked to fit its field first."""
     for f in layout.header:
         top = 10**f.width - 1
         bad = np.flatnonzero((values[f.name] < 0) | (values[f.name] > top))
         if len(bad):  # calendar fields and codes; the scaled ones are checked above
-            raise ValueError(f"{fmt}: {f.name} = {values[f.name][bad[0]]} in {_rows(bad)} does not fit its field")
-
-    # the text: zero-padded, right-aligned; the spacing slot after the last axle written as zeros
+            raise ValueError(
+                f"{layout.name}: {f.name} = {values[f.name][bad[0]]} in {_rows(bad)} does not fit its field"
+            )
     header_text = [[f"{v:0{f.width}d}" for v in values[f.name].tolist()] for f in sorted(layout.header, key=_start)]
-    heads = ["".join(parts) for parts in zip(*header_text)] if nrows else []
+    heads = ["".join(parts) for parts in zip(*header_text)] if len(n) else []
     ordered = sorted(layout.axles.fields, key=_start)
     lines = []
-    for j in range(nrows):
+    for j in range(len(n)):
         parts = [heads[j]]
         for i in range(int(n[j])):
             parts.extend(f"{int(axle_ints[f.name][j, i]) if i < axle_ints[f.name].shape[1] else 0:0{f.width}d}"
