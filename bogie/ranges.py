@@ -16,7 +16,7 @@ import numpy as np
 
 
 class FieldRange(NamedTuple):
-    """The allowed range of a :class:`Bogie` field: ``low < x <= high`` (``low <= x`` if ``low_inclusive``).
+    """The allowed range of a :class:`bogie.params.Bogie` field: ``low < x <= high`` (``low <= x`` if low_inclusive).
 
     Attributes
     ----------
