@@ -1,6 +1,6 @@
 """bogie: why mechanically equalised multi-axle trailer bogies do not share load equally.
 
-Modules: :mod:`bogie.params` (the bogie and its presets), :mod:`bogie.static` (Stage 2, Equation 1),
+Modules: :mod:`bogie.params` (the bogie), :mod:`bogie.presets` (its presets), :mod:`bogie.static` (Stage 2, Equation 1),
 :mod:`bogie.metrics` (p, P1, RMS, LSC, DLC, road-wear factor), :mod:`bogie.plotting` (figures).
 """
 

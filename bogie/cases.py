@@ -1,6 +1,6 @@
 """The reference's named runs, reproducible by name: ``bogie.cases.run("L01")``, ``bogie.cases.run("N10")``.
 
-* L01-L07 (Table 1): the Stage 3 linear model on :func:`~bogie.params.tandem_trrl` with Table 1's bush
+* L01-L07 (Table 1): the Stage 3 linear model on :func:`~bogie.presets.tandem_trrl` with Table 1's bush
   stiffness, bush damping, axle mass, number of steps, time step and speed, over the ramped step of Figure 4.
 * N01-N29 (Table 2): the Stage 4 non-linear model. "High" friction is 0.3 and "high" bush stiffness
   1000 N m/rad, as the reference states; "zero" is 0. Everything else the reference left open is stated in each
@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from bogie import linear, metrics, nonlinear, numerics
-from bogie.params import TARE_FRACTION, Bogie, design_spring_loads, tandem_trrl, with_equaliser_arms
+from bogie.params import TARE_FRACTION, Bogie, design_spring_loads, with_equaliser_arms
+from bogie.presets import tandem_trrl
 from bogie.results import DynamicResult
 from bogie.road import ISO8608Profile, RampedStep
 

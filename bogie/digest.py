@@ -17,7 +17,7 @@ import math
 import numpy as np
 
 from bogie import numerics, phases
-from bogie.params import triaxle_stage1
+from bogie.presets import triaxle_stage1
 
 __all__ = ["numerics_digest"]
 

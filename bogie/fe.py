@@ -22,7 +22,8 @@ from numpy.typing import ArrayLike, NDArray
 
 from bogie.frame import DOF_NAMES, FrameModel, FrameSolution, _positive, beam_local_stiffness
 from bogie.metrics import p as deviation_p
-from bogie.params import STAGE1_CHASSIS_DEFLECTION, Bogie, triaxle_stage1
+from bogie.params import Bogie
+from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
 
 __all__ = [
     "DOF_NAMES",
@@ -409,7 +410,7 @@ def figure2_points(
 
     Each point is the wheel load deviation p (Equation 2) of the non-dimensional loads W / (alpha K_S) of the
     Stage 1 model with the bed lowered by ``chassis_deflection`` and tipped nose up by the slope; q is the
-    bogie's b^2 K_S / (4 K_B). Defaults: :func:`~bogie.params.triaxle_stage1` (q = 4.3), alpha = 57 mm, the
+    bogie's b^2 K_S / (4 K_B). Defaults: :func:`~bogie.presets.triaxle_stage1` (q = 4.3), alpha = 57 mm, the
     five slopes of Figure 2 (the reference's five starred points), no drag links: with braked tyres our drag
     links roughly double p, which the reference's points do not show (``docs/fe-model.md``, "Drag links").
 

@@ -16,88 +16,22 @@ range, and raises ``ValueError`` naming the field, its value, the allowed range 
 from __future__ import annotations
 
 import dataclasses
-import functools
 import math
-import types
-from collections.abc import Mapping
 from dataclasses import dataclass, field
-from typing import Any, NamedTuple
+from typing import Any
 
 import numpy as np
+
+# the range table lives in bogie.ranges (shared with the air-sprung bogie); re-exported here, where callers look
+from bogie.ranges import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, _check_scalar, _check_vector
+from bogie.ranges import FieldRange as FieldRange
 
 GRAVITY = 9.81  # [m/s^2]
 #: the empty trailer's weight as a fraction of the design payload weight, where every loading starts [-]
 TARE_FRACTION = 0.25
 
-
-class FieldRange(NamedTuple):
-    """The allowed range of a :class:`Bogie` field: ``low < x <= high`` (``low <= x`` if ``low_inclusive``).
-
-    Attributes
-    ----------
-    low, high
-        Limits of the range [unit].
-    unit
-        SI unit of the field (``-`` for a dimensionless one).
-    low_inclusive
-        Whether ``low`` itself is allowed; ``high`` always is.
-    """
-
-    low: float
-    high: float
-    unit: str
-    low_inclusive: bool
-
-    def contains(self, value: float) -> bool:
-        """Whether ``value`` [unit] lies in the range (NaN never does)."""
-        return (value >= self.low if self.low_inclusive else value > self.low) and value <= self.high
-
-
-#: allowed range and unit of every scalar field, by field name
-SCALAR_RANGES: dict[str, FieldRange] = {
-    "road_spring_stiffness": FieldRange(0.0, 1e9, "N/m", False),
-    "tyre_stiffness": FieldRange(0.0, 1e10, "N/m", False),
-    "tyre_damping": FieldRange(0.0, 1e7, "N s/m", True),
-    "tyre_radius": FieldRange(0.05, 2.0, "m", True),
-    "axle_mass": FieldRange(0.0, 5000.0, "kg", True),
-    "equaliser_inertia": FieldRange(0.0, 100.0, "kg m^2", True),
-    "payload_mass": FieldRange(0.0, 1e6, "kg", False),
-    "payload_cg_x": FieldRange(0.0, 50.0, "m", False),
-    "chassis_pitch_inertia": FieldRange(0.0, 1e9, "kg m^2", False),
-    "pad_drop": FieldRange(0.0, 3.0, "m", True),
-    "equaliser_front_tip_drop": FieldRange(-0.5, 0.5, "m", True),
-    "equaliser_rear_tip_drop": FieldRange(-0.5, 0.5, "m", True),
-    "spring_length_rate": FieldRange(0.0, 2.0, "m/m", True),
-    "spring_end_slope_rate": FieldRange(-20.0, 20.0, "rad/m", True),
-    "contact_tangential_stiffness": FieldRange(0.0, 1e10, "N/m", False),
-    "chassis_tilt": FieldRange(-math.radians(10.0), math.radians(10.0), "rad", True),
-    "bush_stiffness": FieldRange(0.0, 1e7, "N m/rad", True),
-    "bush_damping": FieldRange(0.0, 1e6, "N m s/rad", True),
-    "contact_roll_radius": FieldRange(0.0, 0.5, "m", True),
-    "friction_coefficient": FieldRange(0.0, 1.5, "-", True),
-    "radius_rod_drop": FieldRange(-0.5, 0.5, "m", True),
-    "equaliser_stop": FieldRange(0.0, math.pi, "rad", False),
-    "equaliser_stop_stiffness": FieldRange(0.0, 1e9, "N m/rad", True),
-    "spring_friction_band": FieldRange(0.0, 2e4, "N", True),
-    "spring_friction_decay": FieldRange(1e-4, 0.05, "m", True),
-}
-
-#: allowed range and unit of each value of the per-axle fields (one value per axle), by field name
-AXLE_RANGES: dict[str, FieldRange] = {
-    "axle_x": FieldRange(0.0, 50.0, "m", False),
-    "spring_front_half_length": FieldRange(0.05, 2.0, "m", True),
-    "spring_rear_half_length": FieldRange(0.05, 2.0, "m", True),
-    "tyre_wear": FieldRange(0.0, 0.05, "m", True),
-    "radius_rod_length": FieldRange(0.2, 3.0, "m", True),
-}
 #: per-axle fields that may be left empty, with the rule that then gives their values (see the Bogie docstring)
 _AXLE_RULES = ("radius_rod_length",)
-#: allowed range and unit of each value of the per-equaliser fields (one value per equaliser), by field name
-EQUALISER_RANGES: dict[str, FieldRange] = {
-    "equaliser_front_arm": FieldRange(0.01, 1.0, "m", True),
-    "equaliser_rear_arm": FieldRange(0.01, 1.0, "m", True),
-}
-
 #: the inhibitors of equalisation and the value that switches each one off: the reference's four (bush stiffness
 #: and damping, contact movement, spring-end friction) and its preface's leaf-spring hysteresis
 INHIBITORS: dict[str, float] = {
@@ -107,11 +41,9 @@ INHIBITORS: dict[str, float] = {
     "friction_coefficient": 0.0,
     "spring_friction_band": 0.0,
 }
-#: the presets' interleaf friction band of a multi-leaf trailer spring: half the width of its load-deflection
-#: loop, about a tenth of the springs' 19-25 kN design load (``docs/presets.md``, "Leaf-spring hysteresis") [N]
-PRESET_SPRING_FRICTION_BAND = 2000.0
-#: the presets' decay length of that friction: the deflection over which the force crosses from one envelope to
-#: the other is a few of these (``docs/presets.md``) [m]
+#: the presets' decay length of the leaf springs' interleaf friction (its band is
+#: :data:`bogie.presets.PRESET_SPRING_FRICTION_BAND`): the deflection over which the force crosses from one envelope
+#: to the other is a few of these (``docs/presets.md``) [m]
 PRESET_SPRING_FRICTION_DECAY = 0.005
 
 #: an ``equaliser_stop`` that no equaliser can reach inside the freedoms' limits (relative rotation at most
@@ -124,58 +56,8 @@ PRESET_EQUALISER_STOP = math.radians(15.0)
 #: (``docs/models.md``, "Equaliser stops") [N m/rad]
 PRESET_EQUALISER_STOP_STIFFNESS = 8.4e4
 
-#: the reference's Stage 1 chassis downward displacement alpha [m] (Figure 2)
-STAGE1_CHASSIS_DEFLECTION = 0.057
-
 #: tolerance on the closure of the spring/equaliser chain [m]
 _CLOSURE_TOL = 1e-6
-
-
-def _range_text(low: float, high: float, unit: str, low_inclusive: bool) -> str:
-    bracket = "[" if low_inclusive else "("
-    return f"{bracket}{low:g}, {high:g}] {unit}"
-
-
-def _show(value: Any) -> str:
-    """A value as the user wrote it: ``0.001``, not numpy's ``np.float64(0.001)``."""
-    return repr(value.item()) if isinstance(value, np.generic) else repr(value)
-
-
-def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
-    if type(value) is float:
-        # the usual case, without the array round trip below (float(np.asarray(v)) is v itself): a bogie is
-        # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel
-        if math.isfinite(value) and (value >= low if low_inclusive else value > low) and value <= high:
-            return value
-        raise ValueError(
-            f"{name} = {value!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}"
-        )
-    # a real number: Python's or numpy's (a 0-d array too); not a bool (True is not 1 N m/rad) nor a numeric text
-    arr = None if isinstance(value, str | bytes) else np.asarray(value)
-    if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
-        kind = "text" if isinstance(value, str | bytes) else type(value).__name__
-        allowed = _range_text(low, high, unit, low_inclusive)
-        raise ValueError(f"{name} = {_show(value)} is not a number ({kind}): must be in {allowed}")
-    v = float(arr)
-    ok_low = v >= low if low_inclusive else v > low
-    if not math.isfinite(v) or not ok_low or v > high:
-        raise ValueError(f"{name} = {v!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}")
-    return v
-
-
-def _check_vector(
-    name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
-) -> tuple[float, ...]:
-    if type(value) is tuple and all(type(v) is float for v in value):
-        pass  # a tuple of floats (what validation stores): one dimension, no numpy round trip needed
-    elif isinstance(value, str | bytes) or np.ndim(value) == 0:
-        raise ValueError(f"{name} = {_show(value)} must be a sequence of {length} values (one per {what}) in {unit}")
-    values = tuple(value)
-    if len(values) != length:
-        raise ValueError(
-            f"{name} has {len(values)} values but the bogie has {length} {what}s: give one per {what} in {unit}"
-        )
-    return tuple(_check_scalar(f"{name}[{k}]", v, low, high, unit, low_inclusive) for k, v in enumerate(values))
 
 
 class AxleGroup:
@@ -518,101 +400,7 @@ def equaliser_arm_changes(bogie: Any, front: float, rear: float | None = None) -
     }
 
 
-# ---- presets --------------------------------------------------------------------------------------------------
-#: the presets' spring half-length: a 1.0 m slipper spring (``docs/presets.md``) [m]
-PRESET_SPRING_HALF_LENGTH = 0.5
-#: the presets' equaliser arm, front and rear: closes the chain 0.5 + 0.155 + 0.155 + 0.5 = 1.31 m [m]
-PRESET_EQUALISER_ARM = 0.155
-#: the presets' payload CG behind the king pin: a uniformly loaded 12 m trailer [m]
-PRESET_PAYLOAD_CG_X = 4.8
-#: the presets' chassis radius of gyration about the payload CG: L / sqrt(12) of a 12 m trailer [m]
-PRESET_RADIUS_OF_GYRATION = 3.5
-#: every field the two presets share, written once (provenance of each in ``docs/presets.md``); a preset adds its
-#: axle positions, its payload and its bush stiffness (:func:`_preset`), the per-axle fields follow its axle count
-PRESET_SHARED: Mapping[str, Any] = types.MappingProxyType(
-    {
-        "road_spring_stiffness": 0.6e6,
-        "tyre_stiffness": 1.6e6,
-        "tyre_damping": 2.0e3,
-        "tyre_radius": 0.5,
-        "axle_mass": 300.0,
-        "equaliser_inertia": 0.2,
-        "payload_cg_x": PRESET_PAYLOAD_CG_X,
-        "equaliser_front_tip_drop": 0.0,
-        "equaliser_rear_tip_drop": 0.0,
-        "spring_length_rate": 0.3,
-        "spring_end_slope_rate": 2.0,
-        "contact_tangential_stiffness": 5e6,
-        "bush_damping": 0.0,
-        "contact_roll_radius": 0.075,
-        "friction_coefficient": 0.3,
-        "equaliser_stop": PRESET_EQUALISER_STOP,
-        "equaliser_stop_stiffness": PRESET_EQUALISER_STOP_STIFFNESS,
-        "spring_friction_band": PRESET_SPRING_FRICTION_BAND,
-        "spring_friction_decay": PRESET_SPRING_FRICTION_DECAY,
-    }
-)
-
-
-def _preset(axle_x: tuple[float, ...], payload_mass: float, bush_stiffness: float, changes: dict[str, Any]) -> Bogie:
-    """A preset: :data:`PRESET_SHARED`, a spring per axle and an equaliser between each two, the given axles,
-    payload (its pitch inertia about the king pin: ``m (x_cg^2 + r_g^2)``) and bush stiffness; then ``changes``."""
-    n = len(axle_x)
-    base = Bogie(
-        axle_x=axle_x,
-        spring_front_half_length=(PRESET_SPRING_HALF_LENGTH,) * n,
-        spring_rear_half_length=(PRESET_SPRING_HALF_LENGTH,) * n,
-        equaliser_front_arm=(PRESET_EQUALISER_ARM,) * (n - 1),
-        equaliser_rear_arm=(PRESET_EQUALISER_ARM,) * (n - 1),
-        payload_mass=payload_mass,
-        chassis_pitch_inertia=payload_mass * (PRESET_PAYLOAD_CG_X**2 + PRESET_RADIUS_OF_GYRATION**2),
-        bush_stiffness=bush_stiffness,
-        **PRESET_SHARED,
-    )
-    return base.replace(**changes) if changes else base
-
-
-def tandem_trrl(**changes: Any) -> Bogie:
-    """The two-axle suspension of the reference's Stages 3 and 4 (one side); provenance in ``docs/presets.md``.
-
-    The reference's 6500 kg payload and its "high" bush stiffness, 1000 N m/rad; the rest is :data:`PRESET_SHARED`.
-    """
-    return _preset((7.345, 8.655), payload_mass=6500.0, bush_stiffness=1000.0, changes=changes)
-
-
-def triaxle_stage1(**changes: Any) -> Bogie:
-    """The tri-axle suspension of the reference's Stages 1 and 2 (one side), with q = 4.3.
-
-    Same springs, tyres and arms as :func:`tandem_trrl` (:data:`PRESET_SHARED`); the bush stiffness is chosen so that
-    q = b^2 K_S / (4 K_B) = 4.3, the value the reference gives for its Stage 1 suspension, and the payload so that
-    the design load deflects spring and tyre by the reference's alpha = 57 mm.
-    """
-    b = PRESET_EQUALISER_ARM
-    k_s = 1.0 / (1.0 / PRESET_SHARED["tyre_stiffness"] + 1.0 / PRESET_SHARED["road_spring_stiffness"])
-    # the reference's chassis deflection alpha = 57 mm under the design load: 3 K_S alpha x_b = m g x_cg
-    payload = 3.0 * k_s * STAGE1_CHASSIS_DEFLECTION * 8.0 / (GRAVITY * PRESET_PAYLOAD_CG_X)
-    return _preset((6.69, 8.0, 9.31), payload_mass=payload, bush_stiffness=b * b * k_s / (4.0 * 4.3), changes=changes)
-
-
-PRESETS = {"tandem_trrl": tandem_trrl, "triaxle_stage1": triaxle_stage1}
-
-
-@functools.cache
-def _preset_base(name: str) -> Bogie:
-    return preset(name)
-
-
-def preset_fields(name: str) -> dict[str, Any]:
-    """The fields of the named preset (:func:`preset`, validated once per process and name) as a new dict: change
-    some and build one :class:`Bogie` from it instead of validating a preset and then each changed copy."""
-    base = _preset_base(name)
-    return {f.name: getattr(base, f.name) for f in dataclasses.fields(Bogie)}
-
-
-def preset(name: str, **changes: Any) -> Bogie:
-    """A named preset (``tandem_trrl`` or ``triaxle_stage1``) with optional field changes."""
-    try:
-        factory = PRESETS[name]
-    except KeyError:
-        raise ValueError(f"unknown preset {name!r}: must be one of {', '.join(PRESETS)}") from None
-    return factory(**changes)
+# the presets (bogie.presets) are re-exported here, so ``from bogie.params import preset`` keeps working; imported
+# last because bogie.presets builds on Bogie (``import bogie`` imports this module first, so importing bogie.presets
+# directly runs in this same order)
+from bogie.presets import *  # noqa: E402, F403

@@ -11,7 +11,7 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from bogie.metrics import p
-from bogie.params import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
+from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
 from bogie.static import nondimensional_loads
 
 #: the reference's Figure 2: chassis slopes 0 to 2 degrees in half-degree steps
@@ -62,9 +62,9 @@ def figure2(
     chassis_deflection
         Chassis downward displacement alpha [m]; the reference's 57 mm by default.
     axle_spacing
-        Axle spacing s in d = psi s / alpha [m]; that of :func:`~bogie.params.triaxle_stage1` by default.
+        Axle spacing s in d = psi s / alpha [m]; that of :func:`~bogie.presets.triaxle_stage1` by default.
     stage1_q
-        q of the Stage 1 suspension to mark [-]; that of :func:`~bogie.params.triaxle_stage1` (4.3) by default.
+        q of the Stage 1 suspension to mark [-]; that of :func:`~bogie.presets.triaxle_stage1` (4.3) by default.
     fe_points
         Optional finite element results to overlay: slope [degree] -> (q, p).
     """

@@ -8,7 +8,7 @@ under the same filters (``observed:``). The method and its checks are the librar
 ``docs/calibration.md``) and :mod:`bogie.fleet.calibration_checks` (the calibrated fleet simulated directly, the
 held-out half, the ablation). This stage reads params.yaml, turns it into those arguments (the calibration fleet is
 the first ``calibrate.n_bogies`` bogies of the fleet study), weighs on the pipeline's one executor
-(:func:`pipeline.simulate.map_ordered`: simulate's loky pool, or the dask cluster of ``execution.backend: dask``)
+(:func:`pipeline.workers.map_ordered`: simulate's loky pool, or the dask cluster of ``execution.backend: dask``)
 and writes data/calibration/ and metrics/calibration.json.
 
 Without an observed survey (``observed.path: null``) or a ``calibrate`` section the stage writes one line, a
@@ -41,7 +41,7 @@ from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, o
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.resources import worker_count
 from pipeline.sample import sample_fleet
-from pipeline.simulate import map_ordered
+from pipeline.workers import map_ordered
 
 __all__ = [
     "build_table", "calibration_samples", "crn_table", "defaults", "main", "method_settings", "observed_groups", "run",
@@ -102,7 +102,7 @@ def build_table(config: Config, progress: Callable[[str], None] = print) -> Tabl
 def workers_map(execution: ExecutionConfig) -> Mapper:
     """The library's map-like executor on the stage's workers: simulate's pool of loky workers on this machine
     (``n_jobs`` capped as simulate's, at each call), or the dask cluster of ``execution.backend: dask``
-    (:func:`pipeline.simulate.map_ordered`, the one executor), the tasks in chunks; the same numbers either way."""
+    (:func:`pipeline.workers.map_ordered`, the one executor), the tasks in chunks; the same numbers either way."""
 
     def mapper(func: Callable[[Any], Any], tasks: Sequence[Any]) -> list:
         chosen = execution

@@ -25,7 +25,7 @@ import argparse
 import hashlib
 import json
 import sys
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -35,55 +35,53 @@ import pyarrow.parquet as pq
 import yaml
 
 from bogie.fleet.observed import (
+    INEQUALITY_COLUMNS,
     READING_RUN_COLUMNS,
+    SIMULATED_COLUMNS,
     SIMULATED_POSITIONS,
     simulated_readings,
     simulated_statistics,
     with_inequality,
 )
+from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
 
 __all__ = [
-    "GROUPS_SCHEMA", "SIMULATED_POSITIONS", "SIMULATED_SCHEMA", "observed_metrics", "observed_table", "main",
-    "simulated_readings", "simulated_statistics", "wim_model",
+    "COLUMN_TYPES", "GROUPS_SCHEMA", "SIMULATED_POSITIONS", "SIMULATED_SCHEMA", "arrow_schema", "observed_metrics",
+    "observed_table", "main", "simulated_readings", "simulated_statistics", "wim_model",
 ]  # fmt: skip
 
-#: the axle columns of the group tables (the widest group surveyed is a tri-axle)
-_AXLES = 3
+#: the Arrow type and unit of each column the two tables hold, by name; a numbered column (``axle_load_0..2``) by
+#: its name without the number. The columns themselves, and their order, are the library's.
+COLUMN_TYPES: dict[str, tuple[pa.DataType, str]] = {
+    "line": (pa.int64(), "-"), "timestamp": (pa.timestamp("us"), "-"), "speed": (pa.float64(), "m/s"),
+    "lane": (pa.int64(), "-"), "vehicle_groups": (pa.int64(), "-"), "group_index": (pa.int64(), "-"),
+    "first_axle": (pa.int64(), "-"), "sample_id": (pa.int64(), "-"), "protocol": (pa.string(), "-"),
+    "n_axles": (pa.int64(), "-"), "group": (pa.string(), "-"), "position": (pa.string(), "-"),
+    "group_load": (pa.float64(), "kg"), "axle_load_": (pa.float64(), "kg"), "spacing_": (pa.float64(), "m"),
+    "load_share_": (pa.float64(), "-"), "spread_kg": (pa.float64(), "kg"), "spread_pct": (pa.float64(), "%"),
+    "outside_5pct": (pa.bool_(), "-"), "over_10pct": (pa.bool_(), "-"),
+}  # fmt: skip
 
 
-def _field(name: str, kind: pa.DataType, unit: str) -> pa.Field:
-    return pa.field(name, kind, metadata={"unit": unit})
+def arrow_schema(columns: Sequence[str]) -> pa.Schema:
+    """The Arrow schema of the named columns, in their order, each field with its unit in its metadata
+    (:data:`COLUMN_TYPES`)."""
+    fields = []
+    for name in columns:
+        kind, unit = COLUMN_TYPES[name] if name in COLUMN_TYPES else COLUMN_TYPES[name.rstrip("0123456789")]
+        fields.append(pa.field(name, kind, metadata={"unit": unit}))
+    return pa.schema(fields)
 
 
-#: per-group quantities both tables carry (bogie.weighings.stats.group_inequality's definitions)
-_INEQUALITY = [
-    *(_field(f"load_share_{i}", pa.float64(), "-") for i in range(_AXLES)),
-    _field("spread_kg", pa.float64(), "kg"),
-    _field("spread_pct", pa.float64(), "%"),
-    _field("outside_5pct", pa.bool_(), "-"),
-    _field("over_10pct", pa.bool_(), "-"),
-]
 #: data/observed/groups.parquet: the columns of bogie.weighings.groups.axle_groups, then the inequality quantities
-GROUPS_SCHEMA = pa.schema([
-    _field("line", pa.int64(), "-"), _field("timestamp", pa.timestamp("us"), "-"), _field("speed", pa.float64(), "m/s"),
-    _field("lane", pa.int64(), "-"), _field("vehicle_groups", pa.int64(), "-"), _field("group_index", pa.int64(), "-"),
-    _field("first_axle", pa.int64(), "-"), _field("n_axles", pa.int64(), "-"), _field("group", pa.string(), "-"),
-    _field("position", pa.string(), "-"), _field("group_load", pa.float64(), "kg"),
-    *(_field(f"axle_load_{i}", pa.float64(), "kg") for i in range(_AXLES)),
-    *(_field(f"spacing_{i}", pa.float64(), "m") for i in range(_AXLES - 1)),
-    *_INEQUALITY,
-])  # fmt: skip
-#: data/observed/simulated.parquet: one row per simulated reading kept, loads in kg as the observed ones
-SIMULATED_SCHEMA = pa.schema([
-    _field("sample_id", pa.int64(), "-"), _field("protocol", pa.string(), "-"), _field("group", pa.string(), "-"),
-    _field("n_axles", pa.int64(), "-"), _field("group_load", pa.float64(), "kg"),
-    *(_field(f"axle_load_{i}", pa.float64(), "kg") for i in range(_AXLES)),
-    *_INEQUALITY,
-])  # fmt: skip
+GROUPS_SCHEMA = arrow_schema((*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS))
+#: data/observed/simulated.parquet: one row per simulated reading kept (bogie.fleet.observed.SIMULATED_COLUMNS),
+#: loads in kg as the observed ones
+SIMULATED_SCHEMA = arrow_schema(SIMULATED_COLUMNS)
 
 
 def _table(frame: pd.DataFrame, schema: pa.Schema) -> pa.Table:

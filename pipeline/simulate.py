@@ -34,22 +34,16 @@ from __future__ import annotations
 import argparse
 import collections
 import dataclasses
-import os
-import queue
 import sys
-import threading
 import time
-from collections.abc import Callable, Iterator, Mapping, Sequence
-from concurrent.futures import Future
+from collections.abc import Iterator, Mapping, Sequence
 from dataclasses import dataclass
 from pathlib import Path
-from typing import Any
 
 import pandas as pd
 import pyarrow as pa
 import yaml
 from joblib import Parallel, delayed, parallel_config
-from joblib.externals.loky import get_reusable_executor
 
 from bogie.fleet.sampling import COLUMNS
 from bogie.fleet.weighing import weigh_rows
@@ -74,6 +68,7 @@ from pipeline.portable import warn_if_unportable
 from pipeline.resources import worker_count
 from pipeline.sample import STUDIES
 from pipeline.schema import failed_runs, runs_frame, table_from_rows
+from pipeline.workers import Feed, OtherNumericsError, check_numerics, local_executor
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -110,27 +105,6 @@ def chunk_table(rows: Mapping[str, Sequence], protocols: Protocols) -> pa.Table:
     return table_from_rows(weigh_rows(rows, protocols))
 
 
-#: how often a loky worker looks whether the main process that started it still runs [s]
-MAIN_PROCESS_POLL = 1.0
-
-
-def _watch_main_process(main_pid: int) -> None:
-    """A local loky worker's initializer: end the worker within :data:`MAIN_PROCESS_POLL` of the end of its parent,
-    the main process ``main_pid`` (at once if it ended while the worker started).
-
-    Once the main process is killed nothing reads the pipe the results go back through, and a worker blocks for
-    ever writing its chunk's result as soon as the pipe's 64 KiB buffer is full (two chunks of 64 samples fill it),
-    whatever WORKER_IDLE_TIMEOUT says; a worker still starting would weigh the chunks queued for it first.
-    """
-
-    def watch() -> None:
-        while os.getppid() == main_pid:
-            time.sleep(MAIN_PROCESS_POLL)
-        os._exit(1)  # the chunk in hand is lost with the main process that would have written it
-
-    threading.Thread(target=watch, name="watch-main-process", daemon=True).start()
-
-
 def _task(
     study: str, index: int, rows: dict[str, list], protocols: Protocols, chunk_hash_: str
 ) -> tuple[str, int, bytes, int, int, str]:
@@ -143,34 +117,7 @@ def _task(
     return study, index, part_content(table, chunk_hash_, numerics), len(table), failed_runs(table), numerics
 
 
-class OtherNumericsError(RuntimeError):
-    """A worker computes other last bits than the main process: its part is not written."""
-
-
-def check_numerics(worker: str, here: str, study: str, index: int) -> None:
-    """Refuse a chunk computed by a worker whose numerics (:func:`process_numerics`) are not this process's.
-
-    Raises
-    ------
-    OtherNumericsError
-        Naming both and what to do.
-    """
-    if worker != here:
-        raise OtherNumericsError(
-            f"the worker that weighed chunk {index} of study {study} computes other last bits than this process "
-            f"(numerics digest and compile target {worker!r} there, {here!r} here): its part is not written. Run "
-            "the workers on x86-64 machines with AVX2 and FMA and the versions of constraints.txt, and import no "
-            "numba-compiled code before bogie in them (docs/architecture.md, 'The same bits on every machine')"
-        )
-
-
 # ---- running ---------------------------------------------------------------------------------------------------
-#: how long an idle loky worker waits for work before it ends [s]: long enough that a worker never times out
-#: while chunks are still coming (10 s did, once, on a loaded machine: loky then restarts it with a warning),
-#: short enough that an idle worker does not outlive its main process by loky's default 300 s (a killed main process's
-#: workers end sooner: :func:`_watch_main_process`)
-WORKER_IDLE_TIMEOUT = 30.0
-
 #: chunks a local loky worker holds at a time, the one it weighs and the next: each result and each next chunk pass
 #: through threads of the main process, which wait up to 5 ms for the interpreter lock each while the main process
 #: weighs, so that a worker holding one chunk waited 12 ms for the next, 4 % of its time [-]
@@ -178,13 +125,6 @@ WORKER_CHUNKS = 2
 
 #: what a part's task returns: study, chunk index, the part file's bytes, its runs and its failed runs, its numerics
 Result = tuple[str, int, bytes, int, int, str]
-
-#: the environment of a loky worker: one thread in every threaded library (what joblib's loky backend sets with
-#: inner_max_num_threads=1), so that n_jobs processes keep n_jobs cores busy and no more
-ONE_THREAD_ENV: dict[str, str] = dict.fromkeys(
-    ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS",
-     "NUMBA_NUM_THREADS", "NUMEXPR_NUM_THREADS"), "1"
-)  # fmt: skip
 
 
 def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Result]:
@@ -194,7 +134,7 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Re
         return
     from dask.distributed import Client
 
-    tasks = (delayed(_task)(c.study, c.index, c.rows, c.protocols, c.hash) for c in chunks)
+    tasks = (delayed(_task)(*_chunk_arguments(c)) for c in chunks)
     # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts its
     # workers with OMP/MKL/OPENBLAS_NUM_THREADS=1. A chunk is seconds of work: joblib's automatic batching would
     # only coarsen the progress and the resumption
@@ -202,40 +142,9 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Re
         yield from Parallel(return_as="generator_unordered", batch_size=1)(tasks)
 
 
-def local_executor(max_workers: int) -> Any:
-    """The one pool of local loky worker processes every stage that weighs uses (simulate's chunks, the calibration's
-    table): one thread each (:data:`ONE_THREAD_ENV`), ended with the main process (:func:`_watch_main_process`), an
-    idle one after :data:`WORKER_IDLE_TIMEOUT`. loky's reusable executor: a second stage in the same process (a test
-    session) gets the same pool, resized, and never one that joblib's ``Parallel`` set up otherwise."""
-    return get_reusable_executor(
-        max_workers=max_workers, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
-        initializer=_watch_main_process, initargs=(os.getpid(),),
-    )  # fmt: skip
-
-
-def _numbered(func: Callable[[Any], Any], item: Any) -> tuple[Any, str]:
-    """``func(item)`` and the numerics of the process that computed it (:func:`process_numerics`)."""
-    return func(item), process_numerics()
-
-
-def map_ordered(func: Callable[[Any], Any], items: Sequence[Any], execution: ExecutionConfig, what: str) -> list:
-    """``[func(item) for item in items]`` on the workers of ``execution``, in the items' order: simulate's pool of
-    loky workers on this machine (:func:`local_executor`, ``n_jobs`` capped as simulate's), or the dask.distributed
-    cluster at ``execution.dask_scheduler``, whose every result is checked to come from a worker with this process's
-    numerics (:func:`check_numerics`, ``what`` naming the work in the message). The one executor of the stages that
-    weigh besides simulate's chunks (the calibration's table)."""
-    if execution.backend == "dask":
-        from dask.distributed import Client
-
-        here = process_numerics()
-        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
-            done = Parallel(batch_size=1)(delayed(_numbered)(func, item) for item in items)
-        for index, (_, numerics) in enumerate(done):
-            check_numerics(numerics, here, what, index)
-        return [value for value, _ in done]
-    if execution.n_jobs <= 1:
-        return [func(item) for item in items]
-    return list(local_executor(execution.n_jobs).map(func, items))
+def _chunk_arguments(chunk: Chunk) -> tuple:
+    """The arguments of :func:`_task` for ``chunk``."""
+    return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash
 
 
 def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
@@ -244,65 +153,29 @@ def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
     The main process weighs chunks too, between writing the files (a ms a chunk): one worker fewer saves a worker's
     start-up, its imports and its compiled kernels' load (about 2 s of CPU), which the main process has paid
     already, and the main process weighs from the start while the workers start. Each worker holds
-    :data:`WORKER_CHUNKS` chunks and gets the next one from loky's result thread as soon as it returns one. A worker
-    waits at most WORKER_IDLE_TIMEOUT for its next chunk, and ends when the main process is killed
-    (:func:`_watch_main_process`).
+    :data:`WORKER_CHUNKS` chunks and gets the next one from loky's result thread as soon as it returns one
+    (:class:`pipeline.workers.Feed`). A worker waits at most ``WORKER_IDLE_TIMEOUT`` for its next chunk, and ends
+    when the main process is killed (:mod:`pipeline.workers`).
     """
-    todo = collections.deque(chunks)
-
-    def arguments(chunk: Chunk) -> tuple:
-        return chunk.study, chunk.index, chunk.rows, chunk.protocols, chunk.hash
-
+    todo = collections.deque(_chunk_arguments(c) for c in chunks)
     if n_jobs <= 1:
         while todo:
-            yield _task(*arguments(todo.popleft()))
+            yield _task(*todo.popleft())
         return
-    executor = local_executor(n_jobs - 1)
-    returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or an error of a submission
-    lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
-    in_flight = 0
-
-    def send_next(done: Future | None = None) -> None:
-        nonlocal in_flight
-        if done is not None:
-            returned.put(done)
-        with lock:
-            if not todo:
-                return
-            chunk = todo.popleft()
-            in_flight += 1
-        try:
-            executor.submit(_task, *arguments(chunk)).add_done_callback(send_next)
-        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread raises it
-            returned.put(exc)
-
-    def take(item: Future | BaseException) -> Result:
-        nonlocal in_flight
-        with lock:
-            in_flight -= 1
-        if isinstance(item, BaseException):
-            raise item
-        return item.result()
-
+    feed = Feed(local_executor(n_jobs - 1), _task, todo)
     try:
         for _ in range(WORKER_CHUNKS * (n_jobs - 1)):
-            send_next()
+            feed.send_next()
         while True:
-            while not returned.empty():
-                yield take(returned.get())
-            with lock:
-                chunk = todo.popleft() if todo else None
-            if chunk is None:
+            yield from feed.done_now()
+            arguments = feed.next_here()
+            if arguments is None:
                 break
-            yield _task(*arguments(chunk))
-        while True:
-            with lock:
-                if not in_flight:
-                    break
-            yield take(returned.get())
+            yield _task(*arguments)
+        yield from feed.the_rest()
     except BaseException:
         # an error, an interrupt or a consumer gone: no chunk of the workers would be written, stop them now
-        executor.shutdown(wait=False, kill_workers=True)
+        feed.executor.shutdown(wait=False, kill_workers=True)
         raise
 
 

@@ -13,11 +13,11 @@ from concurrent.futures import ProcessPoolExecutor
 import numpy as np
 import pandas as pd
 import pytest
+from _fleets import DISTS, fleet
 
 import bogie.fleet as bf
 from bogie.fleet import calibration as L
 from bogie.fleet import calibration_checks as K
-from bogie.params import GRAVITY
 from bogie.weighings.survey import observed_survey
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
@@ -117,18 +117,7 @@ def test_a_survey_file_gives_its_groups_their_records_and_halves(tmp_path):
 
 
 def test_the_table_of_real_weighings_is_the_same_on_worker_processes():
-    fleet = bf.Fleet(
-        distributions={
-            "bush_stiffness": bf.LogUniform(1.0, 3000.0), "bush_damping": bf.LogUniform(1.0, 300.0),
-            "friction_coefficient": bf.TruncNormal(0.25, 0.12, 0.05, 0.6), "contact_roll_radius": bf.Uniform(0.0, 0.12),
-            "tyre_wear": bf.Uniform(0.0, 0.012), "chassis_tilt": TILT, "payload_fraction": bf.Uniform(0.5, 1.0),
-            "equaliser_arm": bf.Uniform(0.12, 0.28), "spring_friction_band": bf.Uniform(0.0, 4000.0),
-            "spring_friction_decay": bf.Uniform(0.002, 0.008), "road_class": bf.Choice(("A", "B")),
-        },
-        axle_mix={"tandem": 0.5, "triaxle": 0.5}, presets={"tandem": "tandem_trrl", "triaxle": "triaxle_stage1"},
-        legal_group_load={"tandem": 18e3 * GRAVITY, "triaxle": 24e3 * GRAVITY},
-    )  # fmt: skip
-    samples = bf.sample_fleet(fleet, n_bogies=4, seed=5)
+    samples = bf.sample_fleet(fleet(distributions={**DISTS, "chassis_tilt": TILT}), n_bogies=4, seed=5)
     tilts = [-2.0, 0.0, 2.0]
     here = L.build_table(samples, TILT, 5, "static", STATIC, tilts)
     with ProcessPoolExecutor(2) as pool:

@@ -13,30 +13,15 @@ from statistics import NormalDist
 import numpy as np
 import pandas as pd
 import pytest
+from _fleets import DISTS, fleet
 
 import bogie.fleet as bf
 from bogie.fleet import design as L
 from bogie.fleet import design_analysis as A
-from bogie.params import GRAVITY
 
-DISTS = {
-    "bush_stiffness": bf.LogUniform(1.0, 3000.0), "bush_damping": bf.LogUniform(1.0, 300.0),
-    "friction_coefficient": bf.TruncNormal(0.25, 0.12, 0.05, 0.6), "contact_roll_radius": bf.Uniform(0.0, 0.12),
-    "tyre_wear": bf.Uniform(0.0, 0.012), "chassis_tilt": bf.Uniform(-0.03, 0.03),
-    "payload_fraction": bf.Uniform(0.5, 1.0), "equaliser_arm": bf.Uniform(0.12, 0.28),
-    "spring_friction_band": bf.Uniform(0.0, 4000.0), "spring_friction_decay": bf.Uniform(0.002, 0.008),
-    "road_class": bf.Choice(("A", "B")),
-}  # fmt: skip
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3,
                            step_tolerance=2e-7)  # fmt: skip
 LIMIT = 0.05 / 1.95  # the largest |s| within 5 %
-
-
-def fleet(**changes):
-    args = dict(distributions=DISTS, axle_mix={"tandem": 0.5, "triaxle": 0.5},
-                presets={"tandem": "tandem_trrl", "triaxle": "triaxle_stage1"},
-                legal_group_load={"tandem": 18e3 * GRAVITY, "triaxle": 24e3 * GRAVITY})  # fmt: skip
-    return bf.Fleet(**{**args, **changes})
 
 
 def wilson(k, n, confidence=0.95):

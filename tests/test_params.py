@@ -276,3 +276,21 @@ def test_each_preset_keeps_every_field_bit_for_bit(name):
     expected = PRESETS_BEFORE_ISSUE_29[name]
     assert [f.name for f in dataclasses.fields(bogie)] == list(expected)
     assert {k: _bits(getattr(bogie, k)) for k in expected} == {k: _bits(v) for k, v in expected.items()}
+
+
+def test_the_presets_and_the_range_table_are_importable_from_params_as_before():
+    import subprocess
+    import sys
+
+    import bogie.params as params
+    import bogie.presets as presets
+    import bogie.ranges as ranges
+
+    for name in presets.__all__:
+        assert getattr(params, name) is getattr(presets, name), name
+    for name in ("FieldRange", "SCALAR_RANGES", "AXLE_RANGES", "EQUALISER_RANGES"):
+        assert getattr(params, name) is getattr(ranges, name), name
+    # whichever module a process imports first (bogie/__init__ imports bogie.params before bogie.presets)
+    check = "import bogie.params as p, bogie.presets as q; assert p.preset is q.preset and p.PRESETS is q.PRESETS"
+    for first in ("bogie.presets", "bogie.ranges", "bogie.params"):
+        subprocess.run([sys.executable, "-c", f"import {first}; {check}"], check=True)

@@ -21,7 +21,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
-from bogie.params import GRAVITY, AxleGroup, FieldRange, _check_scalar, _check_vector, tandem_trrl, triaxle_stage1
+from bogie.params import GRAVITY, AxleGroup
+from bogie.presets import tandem_trrl, triaxle_stage1
+from bogie.ranges import FieldRange, _check_scalar, _check_vector
 
 GAS_CONSTANT_AIR = 287.05
 #: the standard atmosphere [Pa]
@@ -310,10 +312,10 @@ def from_steel(steel, **changes: Any) -> AirBogie:
 
 
 def air_tandem(**changes: Any) -> AirBogie:
-    """An air-sprung tandem on the layout, tyres and payload of :func:`bogie.params.tandem_trrl`, 12 l bags."""
+    """An air-sprung tandem on the layout, tyres and payload of :func:`bogie.presets.tandem_trrl`, 12 l bags."""
     return _from_steel(tandem_trrl(), PRESET_BAG_VOLUMES[2], **changes)
 
 
 def air_triaxle(**changes: Any) -> AirBogie:
-    """An air-sprung tri-axle on the layout, tyres and payload of :func:`bogie.params.triaxle_stage1`, 15 l bags."""
+    """An air-sprung tri-axle on the layout, tyres and payload of :func:`bogie.presets.triaxle_stage1`, 15 l bags."""
     return _from_steel(triaxle_stage1(), PRESET_BAG_VOLUMES[3], **changes)

@@ -14,7 +14,8 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import air
-from bogie.params import GRAVITY, _check_scalar
+from bogie.params import GRAVITY
+from bogie.ranges import _check_scalar
 
 
 @dataclass(frozen=True)

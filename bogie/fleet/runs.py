@@ -17,7 +17,7 @@ import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, PROTOCOLS, SUSPENSIONS
 from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS
-from bogie.params import PRESETS
+from bogie.presets import PRESETS
 from bogie.road import ISO8608_CLASSES
 
 __all__ = [

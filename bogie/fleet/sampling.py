@@ -30,14 +30,12 @@ from bogie.fleet.distributions import Choice, Distribution
 from bogie.params import (
     GRAVITY,
     INHIBITORS,
-    PRESETS,
     Bogie,
     design_spring_loads,
     equaliser_arm_changes,
-    preset,
-    preset_fields,
     with_equaliser_arms,
 )
+from bogie.presets import PRESETS, preset, preset_fields
 from bogie.road import ISO8608_CLASSES
 
 __all__ = [
@@ -152,7 +150,7 @@ class Fleet:
     axle_mix
         Fraction of the fleet in each axle group (``tandem``, ``triaxle``) [-], summing to 1.
     presets
-        Each group's base bogie, a :data:`bogie.params.PRESETS` name.
+        Each group's base bogie, a :data:`bogie.presets.PRESETS` name.
     legal_group_load
         Each group's legal load, both sides together [N]: its design payload (:func:`design_bogie`).
     legal_axle_load
@@ -315,7 +313,7 @@ def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
     )
 
 
-#: each preset's fields (:func:`bogie.params.preset_fields`) gathered once per process: a copy costs a tenth of that
+#: each preset's fields (:func:`bogie.presets.preset_fields`) gathered once per process: a copy costs a tenth of that
 _preset_fields = functools.cache(preset_fields)
 
 

@@ -17,7 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
-__all__ = ["GROUP_SPACING_M", "POSITIONS", "SIZES", "axle_groups", "filter_groups"]
+__all__ = ["GROUP_SPACING_M", "GROUP_TABLE_COLUMNS", "POSITIONS", "SIZES", "axle_groups", "filter_groups"]
 
 #: largest spacing of two axles of one group [m] (issue 13's default; see the module text)
 GROUP_SPACING_M: float = 2.0
@@ -27,6 +27,12 @@ SIZES: dict[int, str] = {2: "tandem", 3: "triaxle"}
 POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
 #: most axles in a group's columns of the group table [-] (a group with more is labelled ``other``)
 _GROUP_COLUMNS = 3
+#: the columns of the group table (:func:`axle_groups`), in order; units in its docstring
+GROUP_TABLE_COLUMNS: tuple[str, ...] = (
+    "line", "timestamp", "speed", "lane", "vehicle_groups", "group_index", "first_axle", "n_axles", "group",
+    "position", "group_load", *(f"axle_load_{i}" for i in range(_GROUP_COLUMNS)),
+    *(f"spacing_{i}" for i in range(_GROUP_COLUMNS - 1)),
+)  # fmt: skip
 
 
 def _check(name: str, value: float, low: float, high: float, unit: str, low_open: bool = False) -> None:
@@ -57,11 +63,7 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         more than three) and ``spacing_0..1`` [m].
     """
     _check("group_spacing_m", group_spacing_m, 0.0, 5.0, "m", low_open=True)
-    columns = [
-        "line", "timestamp", "speed", "lane", "vehicle_groups", "group_index", "first_axle", "n_axles", "group",
-        "position", "group_load", *(f"axle_load_{i}" for i in range(_GROUP_COLUMNS)),
-        *(f"spacing_{i}" for i in range(_GROUP_COLUMNS - 1)),
-    ]  # fmt: skip
+    columns = list(GROUP_TABLE_COLUMNS)
     if not len(vehicles):
         return pd.DataFrame(columns=columns)
     # every vehicle at once (a year of a WIM site is millions of vehicles): the axles as a (vehicles, axles) table

@@ -85,6 +85,17 @@ def metrics(root):
     return json.loads((root / "metrics" / "observed.json").read_text())
 
 
+def test_the_tables_columns_are_the_librarys_each_with_a_type_and_a_unit():
+    from bogie.fleet.observed import INEQUALITY_COLUMNS, SIMULATED_COLUMNS
+    from bogie.weighings.groups import GROUP_TABLE_COLUMNS
+
+    assert tuple(GROUPS_SCHEMA.names) == (*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS)
+    assert tuple(SIMULATED_SCHEMA.names) == SIMULATED_COLUMNS
+    units = {f.name: f.metadata[b"unit"].decode() for f in (*GROUPS_SCHEMA, *SIMULATED_SCHEMA)}
+    assert units["speed"] == "m/s" and units["axle_load_2"] == "kg" and units["spacing_1"] == "m"
+    assert units["spread_pct"] == "%" and units["load_share_0"] == "-"
+
+
 def test_the_schema_offers_the_formats_and_positions_of_the_readers():
     assert OBSERVED_FORMATS == ("auto", *FORMATS)
     assert OBSERVED_POSITIONS == POSITIONS

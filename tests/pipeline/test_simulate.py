@@ -509,7 +509,7 @@ def test_a_worker_that_computes_other_bits_is_refused_and_writes_nothing(config,
     # compiles the kernels for that target (a minute or two, once; then numba's cache has them)
     from dask.distributed import LocalCluster
 
-    from pipeline.simulate import OtherNumericsError
+    from pipeline.workers import OtherNumericsError
 
     out = tmp_path / "runs"
     with LocalCluster(

@@ -9,7 +9,7 @@ from pathlib import Path
 import pytest
 
 from bogie.fleet import calibration_table
-from pipeline import calibrate, simulate
+from pipeline import calibrate, workers
 from pipeline.config import ConfigError, load_config, load_params, parse_config
 from pipeline.config.schema import Params
 from pipeline.resources import MAX_JOBS, MEMORY_BUDGET, worker_count
@@ -96,7 +96,7 @@ def test_an_absurd_worker_count_is_refused(raw):
 def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
     seen = []
 
-    class FakePool:  # simulate's pool of loky workers, as pipeline.simulate.local_executor gives it
+    class FakePool:  # simulate's pool of loky workers, as pipeline.workers.local_executor gives it
         def map(self, f, parts):
             return [f(p) for p in parts]
 
@@ -104,7 +104,7 @@ def test_calibrate_runs_its_workers_through_the_shared_cap(monkeypatch):
         seen.append(max_workers)
         return FakePool()
 
-    monkeypatch.setattr(simulate, "local_executor", fake_executor)
+    monkeypatch.setattr(workers, "local_executor", fake_executor)
     monkeypatch.setattr(calibration_table, "_weigh_kg", lambda *task: [1.0, 2.0, 3.0])
     monkeypatch.setattr(calibrate, "worker_count", lambda n, log, stage: worker_count(n, log, stage, cores=2))
     execution = load_config(PARAMS).execution

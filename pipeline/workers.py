@@ -1,0 +1,170 @@
+"""The worker processes of the stages that weigh: the local pool of loky workers, the dask cluster, the check that
+a worker computes this process's last bits, and the feeding of a local pool a few tasks at a time.
+
+:mod:`pipeline.simulate` runs its chunks on them (:class:`Feed` on this machine) and the calibrate stage its table
+(:func:`map_ordered`): one pool of one-thread workers (:func:`local_executor`), ended with the main process.
+"""
+
+from __future__ import annotations
+
+import collections
+import os
+import queue
+import threading
+import time
+from collections.abc import Callable, Iterator, Sequence
+from concurrent.futures import Future
+from typing import Any
+
+from joblib import Parallel, delayed, parallel_config
+from joblib.externals.loky import get_reusable_executor
+
+from pipeline.chunks import process_numerics
+from pipeline.config import ExecutionConfig
+
+#: how often a loky worker looks whether the main process that started it still runs [s]
+MAIN_PROCESS_POLL = 1.0
+
+#: how long an idle loky worker waits for work before it ends [s]: long enough that a worker never times out
+#: while chunks are still coming (10 s did, once, on a loaded machine: loky then restarts it with a warning),
+#: short enough that an idle worker does not outlive its main process by loky's default 300 s (a killed main process's
+#: workers end sooner: :func:`_watch_main_process`)
+WORKER_IDLE_TIMEOUT = 30.0
+
+#: the environment of a loky worker: one thread in every threaded library (what joblib's loky backend sets with
+#: inner_max_num_threads=1), so that n_jobs processes keep n_jobs cores busy and no more
+ONE_THREAD_ENV: dict[str, str] = dict.fromkeys(
+    ("OMP_NUM_THREADS", "OPENBLAS_NUM_THREADS", "MKL_NUM_THREADS", "BLIS_NUM_THREADS", "VECLIB_MAXIMUM_THREADS",
+     "NUMBA_NUM_THREADS", "NUMEXPR_NUM_THREADS"), "1"
+)  # fmt: skip
+
+
+def _watch_main_process(main_pid: int) -> None:
+    """A local loky worker's initializer: end the worker within :data:`MAIN_PROCESS_POLL` of the end of its parent,
+    the main process ``main_pid`` (at once if it ended while the worker started).
+
+    Once the main process is killed nothing reads the pipe the results go back through, and a worker blocks for
+    ever writing its chunk's result as soon as the pipe's 64 KiB buffer is full (two chunks of 64 samples fill it),
+    whatever WORKER_IDLE_TIMEOUT says; a worker still starting would weigh the chunks queued for it first.
+    """
+
+    def watch() -> None:
+        while os.getppid() == main_pid:
+            time.sleep(MAIN_PROCESS_POLL)
+        os._exit(1)  # the chunk in hand is lost with the main process that would have written it
+
+    threading.Thread(target=watch, name="watch-main-process", daemon=True).start()
+
+
+class OtherNumericsError(RuntimeError):
+    """A worker computes other last bits than the main process: its part is not written."""
+
+
+def check_numerics(worker: str, here: str, study: str, index: int) -> None:
+    """Refuse a chunk computed by a worker whose numerics (:func:`process_numerics`) are not this process's.
+
+    Raises
+    ------
+    OtherNumericsError
+        Naming both and what to do.
+    """
+    if worker != here:
+        raise OtherNumericsError(
+            f"the worker that weighed chunk {index} of study {study} computes other last bits than this process "
+            f"(numerics digest and compile target {worker!r} there, {here!r} here): its part is not written. Run "
+            "the workers on x86-64 machines with AVX2 and FMA and the versions of constraints.txt, and import no "
+            "numba-compiled code before bogie in them (docs/architecture.md, 'The same bits on every machine')"
+        )
+
+
+def local_executor(max_workers: int) -> Any:
+    """The one pool of local loky worker processes every stage that weighs uses (simulate's chunks, the calibration's
+    table): one thread each (:data:`ONE_THREAD_ENV`), ended with the main process (:func:`_watch_main_process`), an
+    idle one after :data:`WORKER_IDLE_TIMEOUT`. loky's reusable executor: a second stage in the same process (a test
+    session) gets the same pool, resized, and never one that joblib's ``Parallel`` set up otherwise."""
+    return get_reusable_executor(
+        max_workers=max_workers, timeout=WORKER_IDLE_TIMEOUT, env=ONE_THREAD_ENV,
+        initializer=_watch_main_process, initargs=(os.getpid(),),
+    )  # fmt: skip
+
+
+def _numbered(func: Callable[[Any], Any], item: Any) -> tuple[Any, str]:
+    """``func(item)`` and the numerics of the process that computed it (:func:`process_numerics`)."""
+    return func(item), process_numerics()
+
+
+def map_ordered(func: Callable[[Any], Any], items: Sequence[Any], execution: ExecutionConfig, what: str) -> list:
+    """``[func(item) for item in items]`` on the workers of ``execution``, in the items' order: simulate's pool of
+    loky workers on this machine (:func:`local_executor`, ``n_jobs`` capped as simulate's), or the dask.distributed
+    cluster at ``execution.dask_scheduler``, whose every result is checked to come from a worker with this process's
+    numerics (:func:`check_numerics`, ``what`` naming the work in the message). The one executor of the stages that
+    weigh besides simulate's chunks (the calibration's table)."""
+    if execution.backend == "dask":
+        from dask.distributed import Client
+
+        here = process_numerics()
+        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+            done = Parallel(batch_size=1)(delayed(_numbered)(func, item) for item in items)
+        for index, (_, numerics) in enumerate(done):
+            check_numerics(numerics, here, what, index)
+        return [value for value, _ in done]
+    if execution.n_jobs <= 1:
+        return [func(item) for item in items]
+    return list(local_executor(execution.n_jobs).map(func, items))
+
+
+class Feed:
+    """Tasks ``task(*arguments)`` fed to a local pool of loky workers a few at a time, the rest left to the caller.
+
+    The caller primes the pool with a few tasks per worker (:meth:`send_next` each); then a worker gets its next
+    task from loky's result thread as soon as it returns one, so it never waits for the main process. The main
+    process runs the tasks no worker has taken yet itself (:meth:`next_here`) and collects the workers' results as
+    they are done (:meth:`done_now`, then :meth:`the_rest`).
+    """
+
+    def __init__(self, executor: Any, task: Callable[..., Any], todo: collections.deque) -> None:
+        self.executor = executor
+        self.task = task
+        self.todo = todo  # argument tuples not yet taken, by a worker or by the main process
+        self.returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or a submission's error
+        self.lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
+        self.in_flight = 0
+
+    def send_next(self, done: Future | None = None) -> None:
+        """Queue ``done`` (a worker's finished task) and give the pool the next task, if one is left."""
+        if done is not None:
+            self.returned.put(done)
+        with self.lock:
+            if not self.todo:
+                return
+            arguments = self.todo.popleft()
+            self.in_flight += 1
+        try:
+            self.executor.submit(self.task, *arguments).add_done_callback(self.send_next)
+        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread raises it
+            self.returned.put(exc)
+
+    def _take(self, item: Future | BaseException) -> Any:
+        with self.lock:
+            self.in_flight -= 1
+        if isinstance(item, BaseException):
+            raise item
+        return item.result()
+
+    def done_now(self) -> Iterator[Any]:
+        """The results the workers have returned so far."""
+        while not self.returned.empty():
+            yield self._take(self.returned.get())
+
+    def next_here(self) -> tuple | None:
+        """The next task's arguments for the main process to run itself, or None when every task is taken."""
+        with self.lock:
+            return self.todo.popleft() if self.todo else None
+
+    def the_rest(self) -> Iterator[Any]:
+        """The results of the tasks still in the workers' hands, each as it is done."""
+        while True:
+            with self.lock:
+                if not self.in_flight:
+                    return
+            yield self._take(self.returned.get())
