@@ -42,7 +42,12 @@ BEGIN, END = "<!-- table:wim-site begin -->", "<!-- table:wim-site end -->"
 def configurations(default: WimProtocol) -> list[tuple[str, WimProtocol]]:
     """(label, settings) of every row: the old model, the parts added in turn, the others alone, other defaults."""
     old = dataclasses.replace(
-        default, site_length_before=0.0, site_length_after=0.0, sensor_length=0.0, contact_length=0.0, accuracy_class="none"
+        default,
+        site_length_before=0.0,
+        site_length_after=0.0,
+        sensor_length=0.0,
+        contact_length=0.0,
+        accuracy_class="none",
     )
     site = {"site_length_before": default.site_length_before, "site_length_after": default.site_length_after}
     length = {"sensor_length": default.sensor_length, "contact_length": default.contact_length}
