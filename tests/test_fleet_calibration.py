@@ -18,6 +18,7 @@ from _fleets import DISTS, fleet
 import bogie.fleet as bf
 from bogie.fleet import calibration as L
 from bogie.fleet import calibration_checks as K
+from bogie.fleet import calibration_fit as F
 from bogie.weighings.survey import observed_survey
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
@@ -68,7 +69,7 @@ def recovered():
     table, observed = analytic_table(), synthetic_observed()
     settings = L.CalibrationSettings(FIT, seed=3, maxiter=30, popsize=8, bootstrap_resamples=8)
     problem = L.make_problem(table, observed, settings.fit, L.base_values(TILT, 0.0, None))
-    return problem, L.calibrate(problem, settings)
+    return problem, F.calibrate(problem, settings)
 
 
 def test_known_fleet_values_are_fitted_back_from_the_load_shares_and_spread(recovered):
@@ -79,6 +80,7 @@ def test_known_fleet_values_are_fitted_back_from_the_load_shares_and_spread(reco
     for name, entry in result.fitted.items():
         assert abs(entry["value"] - TRUTH[name]) < tolerance[name], (name, entry)
         assert entry["low"] <= entry["value"] <= entry["high"] and list(FIT[name]) == entry["bounds"]
+        assert entry["at_bound"] is None, (name, entry)  # the truth lies well inside every range
     # the fleet the fit started from (params: 0.3 +- 0.8 degree, all steel) is no answer: outside every tolerance
     base = problem.base
     assert all(abs(base[q] - TRUTH[q]) > tolerance[q] for q in TRUTH)
@@ -93,13 +95,37 @@ def test_the_bootstrap_the_valley_and_the_profiles_are_around_the_fit(recovered)
     problem, result = recovered
     assert list(result.bootstrap.columns) == ["resample", *problem.fitted, "distance"]
     assert len(result.bootstrap) == 8 and np.isfinite(result.bootstrap["distance"]).all()
-    assert len(result.valley) == L.VALLEY_POINTS**2 and result.valley["distance"].min() >= result.distance - 1e-12
+    assert len(result.valley) == F.VALLEY_POINTS**2 and result.valley["distance"].min() >= result.distance - 1e-12
     for name, profile in result.profiles.groupby("quantity"):
         # each profile is lowest at the grid point next to the fitted value (the others at theirs)
-        step = (FIT[name][1] - FIT[name][0]) / (L.PROFILE_POINTS - 1)
+        step = (FIT[name][1] - FIT[name][0]) / (F.PROFILE_POINTS - 1)
         lowest = profile.loc[profile["distance"].idxmin(), "value"]
         assert abs(lowest - result.fitted[name]["value"]) <= step + 1e-12, (name, lowest)
     assert result.values == {**problem.base, **{q: e["value"] for q, e in result.fitted.items()}}
+
+
+def test_a_fit_piled_against_a_bound_is_flagged_with_its_side_value_and_refits():
+    # the survey's air share is 0.3; a range that stops at 0.2 leaves the fit nowhere to go but its upper bound
+    table, observed = analytic_table(), synthetic_observed()
+    narrow = {**FIT, "air_share": (0.0, 0.2)}
+    settings = L.CalibrationSettings(narrow, seed=3, maxiter=30, popsize=8, bootstrap_resamples=8)
+    result = F.calibrate(L.make_problem(table, observed, narrow, L.base_values(TILT, 0.0, None)), settings)
+    finding = result.fitted["air_share"]["at_bound"]
+    assert finding["bound"] == "high" and finding["limit"] == 0.2
+    assert 0.2 - F.AT_BOUND * 0.2 <= finding["value"] <= 0.2 and finding["share_of_refits"] >= F.PILED
+
+
+def test_at_a_bound_means_within_two_percent_of_the_width_or_a_quarter_of_the_refits():
+    bounds = (0.1, 1.5)  # width 1.4: 2 % is 0.028
+    assert F.at_bound(0.1, bounds) == "low" and F.at_bound(0.127, bounds) == "low"
+    assert F.at_bound(0.13, bounds) is None and F.at_bound(1.473, bounds) == "high" and F.at_bound(1.47, bounds) is None
+    assert F.bound_finding(0.8, bounds, [0.7, 0.8, 0.9]) is None
+    # the fit inside, but 2 of 8 refits (a quarter) at the lower bound: piled against it
+    found = F.bound_finding(0.5, bounds, [0.1, 0.11, 0.5, 0.6, 0.5, 0.7, 0.4, 0.5])
+    assert found == {"bound": "low", "value": 0.5, "limit": 0.1, "share_of_refits": 0.25}
+    assert F.bound_finding(0.5, bounds, [0.1, 0.5, 0.6, 0.5, 0.7, 0.4, 0.5, 0.5]) is None  # 1 of 8: not piled
+    # the fit at its bound without a bootstrap: flagged, no share
+    assert F.bound_finding(1.5, bounds, []) == {"bound": "high", "value": 1.5, "limit": 1.5, "share_of_refits": None}
 
 
 def test_a_survey_file_gives_its_groups_their_records_and_halves(tmp_path):

@@ -45,10 +45,11 @@ _EXPORTS: dict[str, str] = {
         "distributions",
     ),
     **dict.fromkeys(
-        ("CalibrationError", "CalibrationSettings", "Observed", "Table", "base_values", "build_table", "calibrate",
-         "make_problem", "observed_groups"),
+        ("CalibrationError", "CalibrationSettings", "Observed", "Table", "base_values", "build_table", "make_problem",
+         "observed_groups"),
         "calibration",
     ),
+    "calibrate": "calibration_fit",
     **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "calibration_checks"),
     **dict.fromkeys(("compare", "simulated_readings"), "observed"),
     **dict.fromkeys(("StaticProtocol", "WimProtocol"), "protocol_settings"),

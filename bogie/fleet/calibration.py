@@ -14,8 +14,9 @@ error [%]. In short:
 3. **The distance** (:func:`distance`): over laden tandem and tri-axle groups, the sum over each axle position's
    load share and the spread [%] of the energy distance between the observed and the simulated distribution, each
    over the observed quantity's standard deviation.
-4. **The fit** (:func:`calibrate`): scipy's seeded ``differential_evolution``; intervals from a bootstrap of the
-   observed records and of the calibration bogies together; trade-offs, the valley and the profiles.
+4. **The fit** (:func:`fit`; :func:`bogie.fleet.calibration_fit.calibrate`): scipy's seeded
+   ``differential_evolution``; intervals from a bootstrap of the observed records and of the calibration bogies
+   together; a fit piled against a bound flagged; trade-offs, the valley and the profiles.
 
 The checks of a calibration (the fleet simulated directly, a held-out half, the ablation) and the whole calibration
 of a survey in one call are :mod:`bogie.fleet.calibration_checks`. Same arguments, same numbers: whatever the
@@ -25,10 +26,8 @@ executor or the number of workers.
 from __future__ import annotations
 
 import math
-import time
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -40,7 +39,6 @@ from bogie.fleet.calibration_table import (
     CalibrationError,
     Mapper,
     Table,
-    _quiet,
     _whole,
     base_values,
     build_table,
@@ -53,21 +51,15 @@ from bogie.weighings.stats import at_resolution, group_inequality
 from bogie.weighings.survey import ObservedSurvey
 
 __all__ = [
-    "MIN_GROUPS", "ORDER", "SIZES", "Calibration", "CalibrationError", "CalibrationSettings", "Mapper", "Observed",
-    "Problem", "Simulated", "Table", "base_values", "build_table", "calibrate", "check_fit", "crn_table", "distance",
-    "fit", "fleet_readings", "make_problem", "observed_groups", "observed_quantities", "simulated",
+    "MIN_GROUPS", "ORDER", "SIZES", "CalibrationError", "CalibrationSettings", "Mapper", "Observed", "Problem",
+    "Simulated", "Table", "base_values", "build_table", "check_fit", "crn_table", "distance", "fit", "fleet_readings",
+    "make_problem", "observed_groups", "observed_quantities", "simulated",
 ]  # fmt: skip
 
 #: the fitted quantities in the order of the optimiser's vector
 ORDER: tuple[str, ...] = tuple(CALIBRATION_QUANTITIES)
 #: the fewest observed groups of one size that enter the distance (fewer: that size is left out, and said so)
 MIN_GROUPS = 10
-#: the distance over the valley's pair of quantities is evaluated on this many points per side [-]
-VALLEY_POINTS = 21
-#: points of each quantity's profile [-]
-PROFILE_POINTS = 25
-#: bootstrap correlation from which two fitted quantities are reported as trading off [-]
-TRADE_OFF = 0.5
 
 
 def check_fit(fit: Mapping[str, Sequence[float]]) -> None:
@@ -351,147 +343,3 @@ def fit(
         init="sobol", callback=callback,
     )  # fmt: skip
     return np.asarray(result.x, dtype=float), float(result.fun), evaluations[0]
-
-
-@dataclass
-class Calibration:
-    """The outcome of :func:`calibrate`.
-
-    Attributes
-    ----------
-    fitted
-        Per fitted quantity: ``value``, the interval ``low`` and ``high`` (None without a bootstrap of 2 or more) and
-        its ``bounds``, in the unit of its name.
-    distance, evaluations, seconds_per_evaluation
-        The best distance [-], the evaluations of the fit [-] and the wall time of one [s].
-    bootstrap
-        One row per resample: ``resample``, each fitted quantity and the ``distance``.
-    correlation, trade_offs
-        The bootstrap correlation of the fitted quantities; the pairs correlated by :data:`TRADE_OFF` or more.
-    valley, profiles
-        The distance over the most correlated pair's bounds (``quantity_x``, ``x``, ``quantity_y``, ``y``,
-        ``distance``) and along each quantity with the others at their best (``quantity``, ``value``, ``distance``).
-    values
-        Every quantity's value in the calibrated fleet (the base's for an unfitted one).
-    """
-
-    fitted: dict[str, dict[str, float]]
-    distance: float
-    evaluations: int
-    seconds_per_evaluation: float
-    bootstrap: pd.DataFrame
-    correlation: pd.DataFrame
-    trade_offs: list[dict[str, Any]]
-    valley: pd.DataFrame
-    profiles: pd.DataFrame
-    values: dict[str, float]
-
-
-def _bootstrap(problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None]) -> pd.DataFrame:
-    """The fit on each resample of the observed groups and of the calibration bogies together."""
-    seed = settings.seed
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
-    rows = []
-    for b in range(settings.bootstrap_resamples):
-        obs_w = {
-            k: rng.multinomial(len(v), np.full(len(v), 1.0 / len(v))).astype(float) for k, v in problem.obs.items()
-        }
-        n = len(problem.table.size)
-        slots = rng.multinomial(n, np.full(n, 1.0 / n)).astype(float)
-        theta, d, _ = fit(problem, seed + 1 + b, settings.maxiter, settings.popsize, obs_w, slots)
-        rows.append({"resample": b, **dict(zip(problem.fitted, theta)), "distance": d})
-        progress(f"calibrate: bootstrap {b + 1}/{settings.bootstrap_resamples}: distance {d:.5f}")
-    return pd.DataFrame(rows, columns=["resample", *problem.fitted, "distance"])
-
-
-def _intervals(problem: Problem, best: np.ndarray, boot: pd.DataFrame, level: float) -> dict[str, dict[str, Any]]:
-    alpha = 1.0 - level
-    fitted = {}
-    for i, q in enumerate(problem.fitted):
-        entry = {"value": float(best[i]), "low": None, "high": None, "bounds": list(problem.bounds[i])}
-        if len(boot) >= 2:
-            entry["low"], entry["high"] = (float(np.quantile(boot[q], p)) for p in (alpha / 2, 1 - alpha / 2))
-            # a basic interval must hold the estimate: the fit on all the data is one of the bootstrap's worlds
-            entry["low"], entry["high"] = min(entry["low"], entry["value"]), max(entry["high"], entry["value"])
-        fitted[q] = entry
-    return fitted
-
-
-def _trade_offs(fitted: Sequence[str], corr: pd.DataFrame) -> list[dict[str, Any]]:
-    trade = []
-    for i, a in enumerate(fitted):
-        for b_ in fitted[i + 1 :]:
-            r = corr.loc[a, b_] if not corr.empty else math.nan
-            if np.isfinite(r) and abs(r) >= TRADE_OFF:
-                trade.append({"quantities": [a, b_], "correlation": round(float(r), 3)})
-    return trade
-
-
-def calibrate(
-    problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None] | None = None
-) -> Calibration:
-    """Fit, then the bootstrap intervals, the trade-offs, the valley and the profiles.
-
-    Parameters
-    ----------
-    problem
-        What is fitted to what (:func:`make_problem`).
-    settings
-        The optimiser's seed and settings, the bootstrap's resamples and confidence level (its ``fit`` made the
-        problem).
-    progress
-        Told each generation of the fit and each resample (None: nothing).
-    """
-    progress = progress or _quiet
-    start = time.perf_counter()
-    best, dist_best, evaluations = fit(problem, settings.seed, settings.maxiter, settings.popsize, progress=progress)
-    per_eval = (time.perf_counter() - start) / max(evaluations, 1)
-    boot = _bootstrap(problem, settings, progress)
-    fitted = _intervals(problem, best, boot, settings.confidence_level)
-    corr = boot[list(problem.fitted)].corr() if len(boot) >= 3 else pd.DataFrame()
-    trade = _trade_offs(problem.fitted, corr)
-    pair = _valley_pair(problem.fitted, corr)
-    f = problem.objective(problem.unit_weights(), None)
-    valley = _valley(problem, f, best, pair) if pair else pd.DataFrame(columns=["x", "y", "distance"])
-    profiles = _profiles(problem, f, best)
-    return Calibration(
-        fitted, dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
-        _values(best, problem.fitted, problem.base),
-    )  # fmt: skip
-
-
-def _valley_pair(fitted: Sequence[str], corr: pd.DataFrame) -> tuple[str, str] | None:
-    if len(fitted) < 2:
-        return None
-    if corr.empty or not np.isfinite(corr.to_numpy()).any():
-        return (fitted[0], fitted[1])
-    best, pair = -1.0, (fitted[0], fitted[1])
-    for i, a in enumerate(fitted):
-        for b in fitted[i + 1 :]:
-            r = abs(corr.loc[a, b])
-            if np.isfinite(r) and r > best:
-                best, pair = r, (a, b)
-    return pair
-
-
-def _valley(problem: Problem, f: Callable, best: np.ndarray, pair: tuple[str, str]) -> pd.DataFrame:
-    ia, ib = problem.fitted.index(pair[0]), problem.fitted.index(pair[1])
-    xa = np.linspace(*problem.bounds[ia], VALLEY_POINTS)
-    xb = np.linspace(*problem.bounds[ib], VALLEY_POINTS)
-    rows = []
-    for a in xa:
-        for b in xb:
-            theta = best.copy()
-            theta[ia], theta[ib] = a, b
-            rows.append({"quantity_x": pair[0], "x": a, "quantity_y": pair[1], "y": b, "distance": f(theta)})
-    return pd.DataFrame(rows)
-
-
-def _profiles(problem: Problem, f: Callable, best: np.ndarray) -> pd.DataFrame:
-    rows = []
-    for i, q in enumerate(problem.fitted):
-        for x in np.linspace(*problem.bounds[i], PROFILE_POINTS):
-            theta = best.copy()
-            theta[i] = x
-            rows.append({"quantity": q, "value": x, "distance": f(theta)})
-    return pd.DataFrame(rows)

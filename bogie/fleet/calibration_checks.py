@@ -1,6 +1,6 @@
 """The checks of a calibration, and a whole calibration of an observed survey in one call (``docs/calibration.md``).
 
-:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration.calibrate`) and checks: the calibrated fleet simulated
+:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration_fit.calibrate`) and checks: the calibrated fleet simulated
 directly, not through the table, under the survey's filters (``calibrated``); a fit on alternate records held
 against the other half (``held_out``); the ablation re-run on the calibrated fleet's steel groups. Its metrics are
 those of ``metrics/calibration.json`` (the DVC stage ``pipeline/calibrate.py`` writes them). :func:`write_csv_survey`
@@ -27,12 +27,12 @@ from bogie.fleet.calibration import (
     Simulated,
     Table,
     _values,
-    calibrate,
     distance,
     fit,
     make_problem,
     observed_quantities,
 )
+from bogie.fleet.calibration_fit import calibrate
 from bogie.fleet.calibration_table import _quiet, bogie_tilts, protocol_spec, weigh_readings
 from bogie.fleet.observed import by_size
 from bogie.metrics import max_deviation
@@ -268,8 +268,14 @@ def _metrics(
         "protocol": table.protocol,
         "method": "differential evolution on the energy distance, common random numbers, tabulated readings",
         "fitted": {
-            q: {k: (_round(v) if not isinstance(v, list) else v) for k, v in e.items()}
+            q: {k: (_round(v) if not isinstance(v, list) else v) for k, v in e.items() if k != "at_bound"}
             for q, e in result.fitted.items()
+        },  # fmt: skip
+        # a fit piled against a bound is a finding about the model, not a value of the fleet (docs/calibration.md)
+        "at_bounds": {
+            q: {k: (v if isinstance(v, str) else _round(v)) for k, v in e["at_bound"].items()}
+            for q, e in result.fitted.items()
+            if e.get("at_bound")
         },  # fmt: skip
         "fixed": {q: _round(v) for q, v in result.values.items() if q not in result.fitted},
         "confidence_level": settings.confidence_level,

@@ -272,3 +272,21 @@ def test_a_single_fitted_quantity_and_no_held_out_check_still_give_both_pages(tm
     assert [r[2] for r in rows if r[1].startswith("held-out")] == ["0"] * 4
     for page in (fit, check):
         assert_text_above_the_footer(page.figure)
+
+
+def test_a_fit_at_a_bound_is_said_in_words_on_the_fit_page_and_nothing_is_said_without_one(tmp_path):
+    metrics = fitted_metrics()
+    page = figure_text(pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[0].figure)
+    assert "Fitted at a bound" not in page  # the metrics of a fit without one (and of an older stage: no key)
+    metrics["at_bounds"] = {
+        "chassis_tilt_sd_deg": {"bound": "low", "value": 0.1, "limit": 0.1, "share_of_refits": 0.75},
+        "air_share": {"bound": "high", "value": 0.99, "limit": 1.0, "share_of_refits": None},
+    }
+    tables, read = written(tmp_path / "b", metrics, fitted_tables())
+    fig = pages_of(tables, read)[0].figure
+    page = " ".join(figure_text(fig).split())
+    assert "Fitted at a bound: a finding about the model, not a value of the fleet" in page
+    spread = calibration.quantity_label("chassis_tilt_sd_deg", False)
+    assert f"{spread}: fitted 0.1, at its lower bound 0.1, as are 75 % of the bootstrap refits." in page
+    assert f"{calibration.quantity_label('air_share', False)}: fitted 0.99, at its upper bound 1." in page
+    assert_text_above_the_footer(fig)
