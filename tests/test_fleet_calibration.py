@@ -115,6 +115,15 @@ def test_a_fit_piled_against_a_bound_is_flagged_with_its_side_value_and_refits()
     assert 0.2 - F.AT_BOUND * 0.2 <= finding["value"] <= 0.2 and finding["share_of_refits"] >= F.PILED
 
 
+def test_a_held_out_half_too_small_to_fit_gives_its_reason_not_a_distance_of_zero():
+    table = analytic_table()
+    small = synthetic_observed(n=15)  # 8 even records: fewer than MIN_GROUPS
+    settings = L.CalibrationSettings(FIT, seed=3, maxiter=2, popsize=4, bootstrap_resamples=0)
+    held = K.held_out(table, small, settings, L.base_values(TILT, 0.0, None), 0.0)
+    assert held["groups"] is None and "distance_fit_half" not in held
+    assert held["reason"] == f"observed: 0 tandem, 8 triaxle groups; a fit needs at least {L.MIN_GROUPS} of one size"
+
+
 def test_at_a_bound_means_within_two_percent_of_the_width_or_a_quarter_of_the_refits():
     bounds = (0.1, 1.5)  # width 1.4: 2 % is 0.028
     assert F.at_bound(0.1, bounds) == "low" and F.at_bound(0.127, bounds) == "low"

@@ -304,10 +304,14 @@ def make_problem(
     CalibrationError
         If ``fit`` is not as :func:`check_fit` wants, fits a WIM quantity on a static table, the tilt's centre or
         spread of a tilt distribution that is not a TruncNormal, the site roughness outside the table's levels; if
-        ``base`` lacks a quantity or ``min_load_kg`` is not a finite number >= 0.
+        ``base`` lacks a quantity or ``min_load_kg`` is not a finite number >= 0; if no size has
+        :data:`MIN_GROUPS` observed groups (a held-out half of a small survey).
     """
     _check_problem(table, fit, base, min_load_kg)
     obs = {k: observed_quantities(v) for k, v in observed.loads.items() if len(v) >= MIN_GROUPS}
+    if not obs:  # nothing to fit to: the distance would be 0 whatever the values
+        counts = ", ".join(f"{len(v)} {k}" for k, v in observed.loads.items())
+        raise CalibrationError(f"observed: {counts} groups; a fit needs at least {MIN_GROUPS} of one size")
     scales = {k: np.maximum(np.std(v, axis=0), 1e-9) for k, v in obs.items()}
     fitted = tuple(q for q in ORDER if q in fit)
     bounds = tuple(tuple(fit[q]) for q in fitted)
