@@ -131,10 +131,10 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
 def wim_model(wim: WimProtocol) -> dict[str, Any]:
     """What the simulated WIM reading includes, for the caveats (``docs/wim-site.md``): the speed; the smooth site
     (its lengths and IRI) if it has one; the weighing length (sensor plus tyre contact) if not a point; the sensor
-    error's COST 323 class and confidence level if not ``none``."""
+    error's type and its two parts' sds [%] if it has one."""
     site = wim.site_length_before + wim.site_length_after > 0.0
     length = wim.sensor_length + wim.contact_length > 0.0
-    error = wim.accuracy_class != "none"
+    error = not wim.error_free
     return {
         "speed_m_s": wim.speed,
         "site_pavement": site,
@@ -145,8 +145,9 @@ def wim_model(wim: WimProtocol) -> dict[str, Any]:
         "sensor_length_m": wim.sensor_length if length else None,
         "contact_length_m": wim.contact_length if length else None,
         "sensor_error": error,
-        "accuracy_class": wim.accuracy_class if error else None,
-        "confidence_level": wim.confidence_level if error else None,
+        "sensor": wim.sensor if error else None,
+        "sensor_vehicle_error_pct": round(100.0 * wim.vehicle_error_sd, 6) if error else None,
+        "sensor_axle_error_pct": round(100.0 * wim.axle_error_sd, 6) if error else None,
     }
 
 

@@ -137,6 +137,17 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
             }
             for row in pairs.itertuples(index=False)
         }
+    wim_class = tables.get("wim_class.csv")
+    if wim_class is not None and not wim_class.empty:
+        # the COST 323 class the whole simulated system reaches (bogie.road.cost323; pi0 an assumption)
+        metrics["wim_class"] = {
+            group: {
+                "class_reached": sub["class_reached"].iloc[0],
+                "required_share": float(sub["required_share"].iloc[0]),
+                **{f"sd_{row.criterion}_error_pct": rounded(row.sd_error_pct, 2) for row in sub.itertuples()},
+            }
+            for group, sub in wim_class.groupby("group", sort=False)
+        }
     return metrics
 
 

@@ -14,7 +14,7 @@ from bogie.fleet.observed import simulated_readings
 from bogie.params import GRAVITY
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
-WIM = bf.WimProtocol(speed=22.0, approach_length=30.0, dt=1e-3, accuracy_class="B(10)")
+WIM = bf.WimProtocol(speed=22.0, approach_length=30.0, dt=1e-3, sensor="quartz")
 
 
 @pytest.mark.parametrize(
@@ -56,8 +56,11 @@ def test_bad_sampling_arguments_are_refused(kwargs, message):
             lambda: dataclasses.replace(WIM, site_length_after=-5.0),
             r"site_length_after = -5.0: must be a finite number >= 0 \[m\]",
         ),
-        (lambda: dataclasses.replace(WIM, accuracy_class="B10"), "must be one of none, A\\(5\\)"),
-        (lambda: dataclasses.replace(WIM, confidence_level=1.0), "confidence_level = 1.0"),
+        (lambda: dataclasses.replace(WIM, sensor="Quartz"), "sensor = 'Quartz': must be one of none, quartz"),
+        (
+            lambda: dataclasses.replace(WIM, sensor_axle_error=0.5),
+            r"sensor_axle_error = 0.5: must be None or .*\[0, 0.5\)",
+        ),
     ],
 )
 def test_bad_protocol_settings_are_refused_with_their_unit(make, message):

@@ -22,7 +22,7 @@ from bogie.fleet import calibration_fit as F
 from bogie.weighings.survey import observed_survey
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
-WIM = bf.WimProtocol(speed=22.0, approach_length=30.0, dt=1e-3, accuracy_class="B(10)")
+WIM = bf.WimProtocol(speed=22.0, approach_length=30.0, dt=1e-3, sensor="quartz")
 #: the fleet's tilt distribution [rad]: centre 0.3 degree, spread 0.8 degree, within +-2 degrees
 TILT = bf.TruncNormal(math.radians(0.3), math.radians(0.8), math.radians(-2.0), math.radians(2.0))
 GRID = np.linspace(-2.0, 2.0, 17)  # [degree]

@@ -12,7 +12,7 @@ from bogie.fleet.weighing import weigh
 from pipeline.config import StaticProtocol, WimProtocol
 
 STATIC = StaticProtocol(load_time=1.0, approach_length=3.0, crawl_speed=1.4, settle_time=1.5, dt=0.001)
-# a WIM site, a bending plate and the coarsest accuracy class: every part of the WIM model runs
+# a WIM site, a bending plate and a polymer strip's error: every part of the WIM model runs
 WIM = WimProtocol(
     speed=22.0,
     approach_length=20.0,
@@ -22,8 +22,7 @@ WIM = WimProtocol(
     site_iri=1.3,
     sensor_length=0.5,
     contact_length=0.2,
-    accuracy_class="D(25)",
-    confidence_level=0.95,
+    sensor="piezo_polymer",
 )
 
 

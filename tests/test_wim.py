@@ -1,4 +1,4 @@
-"""The WIM site and sensor sub-model (bogie.road.wim): accuracy classes, the weighing length, the site's pavement."""
+"""The WIM site and sensor sub-model (bogie.road.wim): the sensor's error, the weighing length, the site's pavement."""
 
 import math
 
@@ -8,76 +8,73 @@ from scipy import signal
 
 from bogie.road import ISO8608Profile
 from bogie.road.wim import (
-    ACCURACY_CLASSES,
     COST323_TOLERANCES,
+    SENSOR_ERRORS,
+    SENSORS,
     SITE_BLEND_LENGTH,
     SiteRoad,
-    axle_error_sd,
-    axle_errors,
     gd_n0_for_iri,
     iri_of_iso8608,
+    sensor_factors,
+    sensor_normals,
     sensor_reading,
 )
 
-Z95 = 1.959963984540054  # Phi^-1(0.975)
 
-
-# ---- accuracy ------------------------------------------------------------------------------------------------------
-def test_the_error_sd_is_the_single_axle_tolerance_over_the_normal_quantile():
-    assert axle_error_sd("B(10)", 0.95) == pytest.approx(0.15 / Z95, rel=1e-12)
-    assert axle_error_sd("A(5)", 0.95) == pytest.approx(0.08 / Z95, rel=1e-12)
-    assert axle_error_sd("D(25)", 0.90) == pytest.approx(0.30 / 1.6448536269514722, rel=1e-12)
-    assert axle_error_sd("none", 0.95) == 0.0
-    # classes in order of accuracy: each tolerance grows from A(5) to D(25), the axle of a group widest
-    sds = [axle_error_sd(c, 0.95) for c in ACCURACY_CLASSES]
-    assert sds == sorted(sds)
-    for tol in COST323_TOLERANCES.values():
+# ---- the sensor's error -------------------------------------------------------------------------------------------
+def test_the_tolerances_widen_from_the_gross_weight_to_an_axle_of_a_group_and_from_class_a_to_d():
+    classes = list(COST323_TOLERANCES.values())
+    for tol in classes:
         assert tol["gross"] < tol["group"] < tol["single_axle"] < tol["axle_of_group"]
+    for a, b in zip(classes, classes[1:]):
+        assert all(a[k] < b[k] for k in a)
 
 
-@pytest.mark.parametrize("accuracy_class", ACCURACY_CLASSES[1:])
-def test_over_many_draws_the_errors_spread_is_what_the_class_says(accuracy_class):
-    n_seeds, n_axles = 4000, 3
-    e = np.concatenate([axle_errors(accuracy_class, 0.95, seed, n_axles) for seed in range(n_seeds)])
-    n = e.size
-    sd = axle_error_sd(accuracy_class, 0.95)
-    # 4 standard errors: the sample sd of n normals has SE sd / sqrt(2 (n - 1)); a share has SE sqrt(p (1 - p) / n)
-    assert abs(e.std(ddof=1) - sd) < 4.0 * sd / math.sqrt(2.0 * (n - 1))
-    assert abs(e.mean()) < 4.0 * sd / math.sqrt(n)
-    delta = COST323_TOLERANCES[accuracy_class]["single_axle"] / 100.0
-    inside = np.mean(np.abs(e) <= delta)
-    assert abs(inside - 0.95) < 4.0 * math.sqrt(0.95 * 0.05 / n)
-    # the axles of one reading are independent: their correlation is zero within 4 / sqrt(n_seeds)
-    r = np.corrcoef(e.reshape(n_seeds, n_axles).T)
-    assert np.all(np.abs(r[np.triu_indices(n_axles, 1)]) < 4.0 / math.sqrt(n_seeds))
+def test_every_sensor_type_has_two_fractions_and_none_has_no_error():
+    assert SENSOR_ERRORS["none"] == (0.0, 0.0) and set(SENSORS) == set(SENSOR_ERRORS)
+    for s_v, s_a in SENSOR_ERRORS.values():
+        assert 0.0 <= s_v < 0.1 and 0.0 <= s_a < 0.1  # a few per cent: a sensor's, not a whole system's error
+    assert np.array_equal(sensor_factors(0.0, 0.0, 5, 3), np.ones(3))
 
 
-def test_errors_are_deterministic_per_seed_and_per_axle():
-    a = axle_errors("C(15)", 0.95, 12345, 3)
-    assert np.array_equal(a, axle_errors("C(15)", 0.95, 12345, 3))
-    assert np.array_equal(a[:2], axle_errors("C(15)", 0.95, 12345, 2))  # axle i's draw whatever the group size
-    assert not np.array_equal(a, axle_errors("C(15)", 0.95, 12346, 3))
-    # another class scales the same draws (common random numbers across classes too)
-    ratio = axle_error_sd("D(25)", 0.95) / axle_error_sd("C(15)", 0.95)
-    assert axle_errors("D(25)", 0.95, 12345, 3) == pytest.approx(ratio * a, rel=1e-12)
-    assert np.array_equal(axle_errors("none", 0.95, 12345, 3), np.zeros(3))
+def test_over_many_passes_each_part_has_its_sd_and_the_pass_part_is_common_to_the_axles():
+    n_seeds, n_axles, s_v, s_a = 6000, 3, 0.015, 0.02
+    f = np.array([sensor_factors(s_v, s_a, seed, n_axles) for seed in range(n_seeds)])
+    log_f = np.log(f)
+    # per pass, the axles share log(1 + s_v z_v): the covariance of two axles' logs is its variance, about s_v^2
+    cov = np.cov(log_f.T)
+    pair = cov[np.triu_indices(n_axles, 1)].mean()
+    assert abs(pair - s_v**2) < 4.0 * s_a**2 * math.sqrt(2.0 / n_seeds) * 2
+    # each axle's own part: the variance of an axle's log less the common one is s_a^2 (to first order)
+    own = np.mean(np.diag(cov)) - pair
+    assert abs(own - s_a**2) < 4.0 * s_a**2 * math.sqrt(2.0 / (n_seeds * n_axles)) * 2
+    # the load shares do not see the pass's part: with s_a = 0 every axle reads with the same factor
+    common = np.array([sensor_factors(s_v, 0.0, seed, n_axles) for seed in range(50)])
+    assert np.allclose(common / common[:, :1], 1.0, rtol=0, atol=1e-15)
+
+
+def test_the_draws_are_deterministic_per_seed_and_axle_and_the_pass_part_changes_no_axle_draw():
+    z_pass, z_axles = sensor_normals(12345, 3)
+    assert np.array_equal(z_axles, np.random.default_rng(12345).standard_normal(3))  # the old per-axle draws
+    assert sensor_normals(12345, 2)[1].tolist() == z_axles[:2].tolist() and sensor_normals(12345, 3)[0] == z_pass
+    assert sensor_normals(12346, 3)[0] != z_pass
+    f = sensor_factors(0.01, 0.03, 12345, 3)
+    assert f == pytest.approx((1.0 + 0.01 * z_pass) * (1.0 + 0.03 * z_axles), rel=1e-15)
 
 
 @pytest.mark.parametrize(
     ("args", "words"),
     [
-        (("B10", 0.95), ["'B10'", "B(10)", "none"]),
-        (("B(10)", 1.0), ["confidence_level = 1.0", "(0, 1)"]),
-        (("B(10)", 0.0), ["confidence_level = 0.0", "(0, 1)"]),
+        ((0.6, 0.02, 1, 3), ["vehicle_sd = 0.6", "[0, 0.5)"]),
+        ((0.01, -0.1, 1, 3), ["axle_sd = -0.1", "[0, 0.5)"]),
+        ((0.01, 0.02, -1, 3), ["seed = -1"]),
     ],
 )
-def test_a_bad_class_or_level_is_refused_naming_it_and_the_allowed_values(args, words):
+def test_a_bad_sd_or_seed_is_refused_naming_it_and_the_allowed_range(args, words):
     with pytest.raises(ValueError) as excinfo:
-        axle_error_sd(*args)
+        sensor_factors(*args)
     for word in words:
         assert word in str(excinfo.value)
-    with pytest.raises(ValueError, match="seed = -1"):
-        axle_errors("B(10)", 0.95, -1, 3)
 
 
 # ---- weighing length -----------------------------------------------------------------------------------------------

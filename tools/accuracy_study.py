@@ -51,9 +51,9 @@ def study(protocol: str, records: list[dict], spec) -> dict:
     fine = dataclasses.replace(spec, dt=spec.dt / DT_DIVISOR)
     if hasattr(fine, "step_tolerance"):
         fine = dataclasses.replace(fine, step_tolerance=None)
-    if hasattr(spec, "accuracy_class"):
-        spec = dataclasses.replace(spec, accuracy_class="none")
-        fine = dataclasses.replace(fine, accuracy_class="none")
+    if hasattr(spec, "sensor"):
+        spec = dataclasses.replace(spec, sensor="none", sensor_vehicle_error=None, sensor_axle_error=None)
+        fine = dataclasses.replace(fine, sensor="none", sensor_vehicle_error=None, sensor_axle_error=None)
     rows, work, failed = [], [], 0
     for record in records:
         bogie = bogie_from_sample(record)

@@ -47,11 +47,11 @@ def configurations(default: WimProtocol) -> list[tuple[str, WimProtocol]]:
         site_length_after=0.0,
         sensor_length=0.0,
         contact_length=0.0,
-        accuracy_class="none",
+        sensor="none",
     )
     site = {"site_length_before": default.site_length_before, "site_length_after": default.site_length_after}
     length = {"sensor_length": default.sensor_length, "contact_length": default.contact_length}
-    error = {"accuracy_class": default.accuracy_class}
+    error = {"sensor": default.sensor}
     r = dataclasses.replace
     return [
         ("old: point sensor in the sampled road, no error", old),
@@ -61,9 +61,9 @@ def configurations(default: WimProtocol) -> list[tuple[str, WimProtocol]]:
         ("weighing length alone", r(old, **length)),
         ("sensor error alone", r(old, **error)),
         ("defaults with a 0.5 m bending plate", r(default, sensor_length=0.5)),
-        ("defaults with no sensor error", r(default, accuracy_class="none")),
-        ("defaults with class A(5)", r(default, accuracy_class="A(5)")),
-        ("defaults with class C(15)", r(default, accuracy_class="C(15)")),
+        ("defaults with no sensor error", r(default, sensor="none")),
+        ("defaults with a bending plate's error", r(default, sensor="bending_plate")),
+        ("defaults with a piezo-polymer strip's error", r(default, sensor="piezo_polymer")),
     ]
 
 

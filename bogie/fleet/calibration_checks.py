@@ -79,7 +79,8 @@ def simulate_fleet(
         keep.append(i)
     loads = weigh_readings(tasks, executor)
     if table.protocol == "wim":
-        loads = loads * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep])
+        factors = (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep]) * table.pass_factors()[keep, None]
+        loads = loads * factors
     loads = at_resolution(loads, weight_step_kg)
     frame = pd.DataFrame({
         "slot": keep, "group": table.size[keep], "n_axles": [SIZES[s] for s in table.size[keep]],

@@ -72,8 +72,16 @@ class Table:
     loads: np.ndarray
     n_failed: int
     protocol: str = "wim"  # whose readings: "static" or "wim"
-    settings: StaticProtocol | WimProtocol | None = None  # the protocol's (the sensor's class is not used: error free)
+    settings: StaticProtocol | WimProtocol | None = None  # the protocol's (weighed with an error-free sensor)
     tilt_distribution: Distribution | None = None  # the fleet's chassis tilt distribution [rad]
+    z_pass: np.ndarray | None = None  # (n,) the sensor's standard normal common to a pass's axles
+
+    def pass_factors(self) -> np.ndarray:
+        """(n,) each bogie's factor of the sensor's error common to its pass's axles, ``1 + s_v z_v`` (the sensor's
+        ``s_v`` as the WIM settings give it, not fitted: the load shares do not see it); ones for static."""
+        if self.protocol != "wim" or self.z_pass is None or not isinstance(self.settings, WimProtocol):
+            return np.ones(len(self.size))
+        return 1.0 + self.settings.vehicle_error_sd * self.z_pass
 
 
 def base_values(
@@ -89,17 +97,15 @@ def base_values(
     air_share
         Fraction of air-sprung groups [-].
     wim_settings
-        The WIM protocol's settings: the site's roughness [m/km] and the sensor's error sd [%] of its accuracy class
-        (:func:`bogie.road.wim.axle_error_sd`); None: both NaN (a static calibration uses neither).
+        The WIM protocol's settings: the site's roughness [m/km] and the sd of each axle reading's own sensor error
+        [%] (:attr:`~bogie.fleet.WimProtocol.axle_error_sd`); None: both NaN (a static calibration uses neither).
     """
     return {
         "chassis_tilt_mean_deg": math.degrees(getattr(tilt_distribution, "mean", 0.0)),
         "chassis_tilt_sd_deg": math.degrees(getattr(tilt_distribution, "sd", 1.0)),
         "air_share": float(air_share),
         "site_iri_m_km": math.nan if wim_settings is None else wim_settings.site_iri,
-        "sensor_error_pct": math.nan if wim_settings is None else 100.0 * wim.axle_error_sd(
-            wim_settings.accuracy_class, wim_settings.confidence_level
-        ),
+        "sensor_error_pct": math.nan if wim_settings is None else 100.0 * wim_settings.axle_error_sd,
     }  # fmt: skip
 
 
@@ -108,7 +114,7 @@ def protocol_spec(table: Table, iri: float) -> StaticProtocol | WimProtocol:
     and, unless ``iri`` is NaN, the site roughness ``iri`` [m/km]."""
     if table.protocol == "static":
         return table.settings
-    spec = dataclasses.replace(table.settings, accuracy_class="none")
+    spec = dataclasses.replace(table.settings, sensor="none", sensor_vehicle_error=None, sensor_axle_error=None)
     return spec if math.isnan(iri) else dataclasses.replace(spec, site_iri=float(iri))
 
 
@@ -222,13 +228,15 @@ def crn_table(
     truncated = isinstance(tilt_distribution, TruncNormal)
     tilt_u = np.clip(_cdf(tilt_distribution, tilt), 1e-12, 1 - 1e-12) if truncated else np.full(len(tilt), np.nan)
     air_u = np.array([suspension_draw(seed, study, int(i)) for i in samples["sample_id"]])
-    # the sensor's normals: those of bogie.road.wim.axle_errors for the bogie's sensor_seed
-    z = np.array([np.random.default_rng(int(s)).standard_normal(3) for s in samples["sensor_seed"]])
+    # the sensor's normals of bogie.road.wim.sensor_factors for the bogie's sensor_seed: each axle's, the pass's
+    normals = [wim.sensor_normals(int(s), 3) for s in samples["sensor_seed"]]
+    z = np.array([axles for _, axles in normals]).reshape(len(samples), 3)
+    z_pass = np.array([p for p, _ in normals], dtype=float)
     size = samples["group"].astype(str).to_numpy()
     loads = np.zeros((2, len(samples), len(grid), len(iris), 3))
     return Table(
         samples, size, tilt_u, air_u, z, grid, np.asarray(iris, dtype=float), loads, 0, protocol, settings,
-        tilt_distribution,
+        tilt_distribution, z_pass,
     )  # fmt: skip
 
 
@@ -288,8 +296,9 @@ def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:
     """The calibration fleet's readings [kg] with the quantities ``values``: shape (2, n, 3), steel and air.
 
     Each bogie's tilt is :func:`bogie_tilts`, its readings interpolated linearly in tilt and in site roughness
-    (``site_iri_m_km`` [m/km], clipped to the table's levels), then, for WIM, multiplied by 1 + s z (s the sensor
-    error ``sensor_error_pct`` / 100, z the bogie's normals).
+    (``site_iri_m_km`` [m/km], clipped to the table's levels), then, for WIM, multiplied by the sensor's factors
+    ``(1 + s_v z_v) (1 + s_a z_i)`` (``s_a`` each axle's own error, ``sensor_error_pct`` / 100, fitted; ``s_v`` the
+    part common to the pass, :meth:`Table.pass_factors`; z the bogie's normals).
     """
     tilt = bogie_tilts(table, values)
     grid = table.tilts
@@ -305,5 +314,5 @@ def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:
     else:
         at = at[:, :, 0]
     if not math.isnan(table.iris[0]):
-        at = at * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[None, :, :])
+        at = at * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[None, :, :]) * table.pass_factors()[None, :, None]
     return at

@@ -40,7 +40,8 @@ CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "chassis_tilt_sd_deg": (0.01, 5.0, "degree"),  # its spread (parent sd)
     "air_share": (0.0, 1.0, "-"),  # fraction of air-sprung groups, every axle group alike
     "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
-    "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's relative error on an axle reading
+    "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's own error on each axle reading (s_a; the part
+    # common to a pass's axles cancels in the load shares and is not fitted)
 }
 #: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
 #: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's

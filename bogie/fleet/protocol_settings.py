@@ -12,7 +12,6 @@ from dataclasses import dataclass
 from typing import Any
 
 from bogie.road import wim
-from bogie.road.wim import axle_error_sd
 
 __all__ = ["StaticProtocol", "WimProtocol"]
 
@@ -64,11 +63,13 @@ class WimProtocol:
         The sensor's weighing length along the road [m] (0: a point sensor).
     contact_length
         The tyres' contact patch length [m].
-    accuracy_class
-        COST 323 accuracy class of the sensor's axle readings (``none``: no error),
-        :data:`bogie.road.wim.ACCURACY_CLASSES`.
-    confidence_level
-        Confidence level at which the class's tolerance holds [-].
+    sensor
+        The sensor type (:data:`bogie.road.wim.SENSORS`; ``none``: no error): the sizes of its error's two parts,
+        :data:`bogie.road.wim.SENSOR_ERRORS`. A reading is the force averaged over the sensor times
+        ``(1 + s_v z_v) (1 + s_a z_i)`` (:func:`bogie.road.wim.sensor_factors`).
+    sensor_vehicle_error, sensor_axle_error
+        ``s_v``, the sd of the error common to a pass's axles, and ``s_a``, of each axle's own [-] (fractions); None:
+        the sensor type's.
     """
 
     speed: float
@@ -79,8 +80,9 @@ class WimProtocol:
     site_iri: float = 1.3
     sensor_length: float = 0.0
     contact_length: float = 0.0
-    accuracy_class: str = "none"
-    confidence_level: float = 0.95
+    sensor: str = "none"
+    sensor_vehicle_error: float | None = None
+    sensor_axle_error: float | None = None
 
     def __post_init__(self) -> None:
         for name, unit in (("speed", "m/s"), ("approach_length", "m"), ("dt", "s")):
@@ -88,15 +90,27 @@ class WimProtocol:
         for name in ("site_length_before", "site_length_after", "sensor_length", "contact_length"):
             _positive(self, name, "m", "or 0", zero=True)
         _positive(self, "site_iri", "m/km")
-        if self.accuracy_class not in wim.ACCURACY_CLASSES:
-            raise ValueError(
-                f"accuracy_class = {self.accuracy_class!r}: must be one of {', '.join(wim.ACCURACY_CLASSES)} (COST 323)"
-            )
-        level = self.confidence_level
-        if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
-            raise ValueError(f"confidence_level = {level!r}: must lie in (0, 1) [-]")
+        if self.sensor not in wim.SENSORS:
+            raise ValueError(f"sensor = {self.sensor!r}: must be one of {', '.join(wim.SENSORS)}")
+        for name in ("sensor_vehicle_error", "sensor_axle_error"):
+            value = getattr(self, name)
+            number = not isinstance(value, bool) and isinstance(value, (int, float))
+            if value is not None and not (number and 0.0 <= value < 0.5):
+                raise ValueError(f"{name} = {value!r}: must be None or a number in [0, 0.5) [-] (0.02 is 2 %)")
+
+    @property
+    def vehicle_error_sd(self) -> float:
+        """``s_v``: the sd of the sensor's error common to a pass's axles [-] (given, or the sensor type's)."""
+        given = self.sensor_vehicle_error
+        return wim.SENSOR_ERRORS[self.sensor][0] if given is None else float(given)
 
     @property
     def axle_error_sd(self) -> float:
-        """Relative standard deviation of one axle reading's error [-] (:func:`bogie.road.wim.axle_error_sd`)."""
-        return axle_error_sd(self.accuracy_class, self.confidence_level)
+        """``s_a``: the sd of each axle reading's own error [-] (given, or the sensor type's)."""
+        given = self.sensor_axle_error
+        return wim.SENSOR_ERRORS[self.sensor][1] if given is None else float(given)
+
+    @property
+    def error_free(self) -> bool:
+        """Whether the sensor reads without error (both parts 0)."""
+        return self.vehicle_error_sd == 0.0 and self.axle_error_sd == 0.0

@@ -8,8 +8,8 @@ second. The load history and the approach leave friction forces locked in, as on
 ``wim``: the laden trailer passes at road speed over the random approach road and a WIM site at its end: the road
 made smoother over the site's length before and after the sensor (:class:`bogie.road.wim.SiteRoad`), a sensor that reads
 each tyre's force averaged over its passage across the sensor's weighing length (:func:`bogie.road.wim.sensor_reading`),
-and a random error on each axle reading from the sensor's COST 323 accuracy class, drawn from the sample's
-``sensor_seed`` (:func:`bogie.road.wim.axle_errors`). With no site, a point sensor and class ``none`` this is the
+and the sensor's own error, a factor common to the pass's axles and each axle's own, drawn from the sample's
+``sensor_seed`` (:func:`bogie.road.wim.sensor_factors`). With no site, a point sensor and sensor ``none`` this is the
 instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
 Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air.dynamics`
@@ -355,15 +355,16 @@ def wim_pass(
     """Run the WIM protocol; the reading is each wheel's load read by the sensor [N].
 
     ``reading_error_free`` is the same before the sensor's error, each tyre's force averaged over its passage across
-    the sensor (:func:`bogie.road.wim.sensor_reading`). ``sensor_seed`` seeds the errors of ``spec.accuracy_class``; it
-    may be None only for class ``none``. ``history``: as :func:`static_weighbridge`.
+    the sensor (:func:`bogie.road.wim.sensor_reading`). ``sensor_seed`` seeds the sensor's errors
+    (:func:`bogie.road.wim.sensor_factors`: a part common to the pass's axles and each axle's own, of the sizes
+    ``spec`` gives); it may be None only for an error-free sensor. ``history``: as :func:`static_weighbridge`.
     """
-    if spec.accuracy_class == "none":
-        error = np.zeros(bogie.n_axles)
+    if spec.error_free:
+        factors = np.ones(bogie.n_axles)
     elif sensor_seed is None:
-        raise ValueError(f"accuracy_class {spec.accuracy_class} needs a sensor_seed (a non-negative integer)")
+        raise ValueError(f"sensor {spec.sensor} needs a sensor_seed (a non-negative integer)")
     else:
-        error = wim.axle_errors(spec.accuracy_class, spec.confidence_level, sensor_seed, bogie.n_axles)
+        factors = wim.sensor_factors(spec.vehicle_error_sd, spec.axle_error_sd, sensor_seed, bogie.n_axles)
     if isinstance(bogie, AirBogie):
         weighing = _air_wim(bogie, payload_fraction, road_class, road_seed, spec)
     else:
@@ -376,7 +377,7 @@ def wim_pass(
                             run)  # fmt: skip
     if not weighing.success or weighing.reading_error_free is None:
         return weighing
-    return dataclasses.replace(weighing, reading=weighing.reading_error_free * (1.0 + error))
+    return dataclasses.replace(weighing, reading=weighing.reading_error_free * factors)
 
 
 def _air_wim(bogie: AirBogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol) -> Weighing:

@@ -253,7 +253,7 @@ def road_seed(seed: int, study: str, sample_id: int) -> int:
 
 
 def sensor_seed(seed: int, study: str, sample_id: int) -> int:
-    """Seed of one bogie's WIM sensor errors (:func:`bogie.road.wim.axle_errors`), like :func:`road_seed` [-].
+    """Seed of one bogie's WIM sensor errors (:func:`bogie.road.wim.sensor_factors`), like :func:`road_seed` [-].
 
     A stream of its own, so the sensor's errors are independent of the road's profile; per bogie and kept by the
     ablation's variants, so a variant and its baseline read with the same errors (common random numbers).

@@ -21,6 +21,8 @@ import pandas as pd
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
 from bogie.fleet.sampling import TYRE_WEAR_COLUMNS
 from bogie.params import GRAVITY
+from bogie.road.cost323 import REQUIRED_SHARE, class_test
+from bogie.road.wim import COST323_TOLERANCES
 from bogie.weighings.stats import group_inequality, survey_statistics
 
 __all__ = [
@@ -293,6 +295,44 @@ def static_vs_wim(ok: pd.DataFrame) -> tuple[pd.DataFrame, pd.DataFrame]:
     return pairs, pd.DataFrame(rows)
 
 
+def wim_class(ok: pd.DataFrame, required_share: float = REQUIRED_SHARE) -> pd.DataFrame:
+    """The COST 323 class test of the WIM readings against the static weighings of the same bogies
+    (:func:`bogie.road.cost323.class_test`: the whole system, the vehicle's dynamics and the sensor's error together).
+
+    Returns
+    -------
+    pandas.DataFrame
+        Per group (``tandem``, ``triaxle`` and ``all``) and criterion (``group``, ``axle_of_group``): ``n``,
+        ``mean_error_pct`` and ``sd_error_pct`` of the relative errors R / W - 1 [%], ``share_within_<class>`` for
+        each class of :data:`bogie.road.wim.COST323_TOLERANCES` [-], ``required_share`` [-] and the group's
+        ``class_reached`` (None: no class). Empty if a protocol is absent.
+    """
+    classes = list(COST323_TOLERANCES)
+    columns = ["group", "criterion", "n", "mean_error_pct", "sd_error_pct",
+               *(f"share_within_{c}" for c in classes), "required_share", "class_reached"]  # fmt: skip
+    loads = [f"axle_load_{i}" for i in range(3)]
+    static = ok.loc[ok["protocol"] == "static", ["sample_id", "group", "n_axles", *loads]]
+    wim = ok.loc[ok["protocol"] == "wim", ["sample_id", *loads]]
+    pairs = static.merge(wim, on="sample_id", suffixes=("_static", "_wim"), validate="one_to_one")
+    pairs = pairs.sort_values("sample_id")
+    parts = [(str(g), sub) for g, sub in pairs.groupby("group", observed=True)] + [("all", pairs)]
+    rows = []
+    for group, sub in parts:
+        if sub.empty:
+            continue
+        # past a group's axles the runs hold 0: NaN there, an axle the group does not have
+        absent = np.arange(len(loads))[None, :] >= sub["n_axles"].to_numpy(dtype=int)[:, None]
+        w = np.where(absent, np.nan, sub[[f"{c}_static" for c in loads]].to_numpy(dtype=float))
+        r = np.where(absent, np.nan, sub[[f"{c}_wim" for c in loads]].to_numpy(dtype=float))
+        test = class_test(w, r, required_share)
+        for criterion, e in test.errors.iterrows():
+            row = {"group": group, "criterion": criterion, "n": int(e["n"]), "mean_error_pct": 100.0 * e["mean"],
+                   "sd_error_pct": 100.0 * e["sd"]}  # fmt: skip
+            row.update({f"share_within_{c}": test.shares.loc[c, criterion] for c in classes})
+            rows.append({**row, "required_share": test.required_share, "class_reached": test.reached})
+    return pd.DataFrame(rows, columns=columns)
+
+
 def _corr(a: pd.Series, b: pd.Series) -> float:
     # a constant series (e.g. two identical bogies) has no correlation: NaN, not a numpy warning
     if len(a) < 2 or a.std() == 0 or b.std() == 0:
@@ -391,5 +431,6 @@ def survey_tables(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: 
         "tyre_wear.csv": wear_table(ok),
         "static_vs_wim.csv": pair_summary,
         "static_vs_wim_pairs.parquet": pairs,
+        "wim_class.csv": wim_class(ok),
         "legal.csv": legal,
     }

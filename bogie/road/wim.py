@@ -8,8 +8,10 @@ Three parts, each a pure function or a small frozen dataclass (derivations and s
   PSD G_d(n0) (the golden quarter car's response to the PSD, in closed form);
 - **weighing length**: :func:`sensor_reading` is the tyre force averaged over the tyre's passage across the sensor,
   weighted by the length of the contact patch that stands on the sensor, integrated exactly on the stored samples;
-- **accuracy**: :func:`axle_error_sd` is the relative standard deviation of one axle reading from a COST 323
-  accuracy class (:data:`COST323_TOLERANCES`) and a confidence level; :func:`axle_errors` draws the seeded errors.
+- **the sensor's error**: a reading is the averaged force times :func:`sensor_factors`, ``(1 + s_v z_v) (1 + s_a
+  z_i)``, a part common to a pass's axles and each axle's own, their sizes by sensor type (:data:`SENSOR_ERRORS`,
+  assumptions within the sources of ``docs/wim-site.md``); the COST 323 class the whole system reaches is a test of
+  its readings against static weights (:mod:`bogie.road.cost323`, :data:`COST323_TOLERANCES`).
 
 References
 ----------
@@ -26,7 +28,6 @@ import functools
 import math
 from collections.abc import Callable
 from dataclasses import dataclass
-from statistics import NormalDist
 
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
@@ -34,8 +35,8 @@ from numpy.typing import ArrayLike, NDArray
 from bogie import numerics
 
 __all__ = [
-    "ACCURACY_CLASSES", "COST323_TOLERANCES", "SITE_BLEND_LENGTH", "SiteRoad", "axle_error_sd", "axle_errors",
-    "gd_n0_for_iri", "iri_of_iso8608", "sensor_reading",
+    "COST323_TOLERANCES", "SENSORS", "SENSOR_ERRORS", "SITE_BLEND_LENGTH", "SiteRoad", "gd_n0_for_iri",
+    "iri_of_iso8608", "sensor_factors", "sensor_normals", "sensor_reading",
 ]  # fmt: skip
 
 # ---- accuracy ------------------------------------------------------------------------------------------------------
@@ -50,50 +51,59 @@ COST323_TOLERANCES: dict[str, dict[str, float]] = {
     "D(25)": {"gross": 25.0, "group": 28.0, "single_axle": 30.0, "axle_of_group": 35.0},
 }
 
-#: the accuracy classes a sensor can have; ``none`` is an error-free sensor
-ACCURACY_CLASSES: tuple[str, ...] = ("none", *COST323_TOLERANCES)
+#: the sensor types and the standard deviations of their errors' two parts [-]: (common to a vehicle pass's axles,
+#: each axle's own). ASSUMPTIONS within the sources read (docs/wim-site.md, "The observation model"): no source
+#: read splits a sensor's error in two, for any type. The quartz strip's per-axle part is its non-uniformity along
+#: its length (+-3 % uniform: 1.7 % sd, a Lineas-type data sheet) rounded up, under the 4 % RMS of a strip sensor
+#: against an instrumented vehicle (Cebon and Winkler, TRR 1311, 1991); its per-pass part a calibration kept within
+#: a year and a season's temperature (-0.02 %/degC, the data sheet; Rys, Sensors 19:3272, 2019, for the drift's
+#: size where it is not). The bending plate and the polymer strip: the same reading with their drift ordered as
+#: the LTPP consistency study orders it (bending plate < quartz < piezo cable; Masud 2022, abstract), the polymer
+#: strip's per-axle part at Cebon and Winkler's 4 %.
+SENSOR_ERRORS: dict[str, tuple[float, float]] = {
+    "none": (0.0, 0.0),
+    "quartz": (0.015, 0.02),
+    "bending_plate": (0.01, 0.02),
+    "piezo_polymer": (0.03, 0.04),
+}
+#: the sensor types; ``none`` is an error-free sensor
+SENSORS: tuple[str, ...] = tuple(SENSOR_ERRORS)
 
 
-def axle_error_sd(accuracy_class: str, confidence_level: float) -> float:
-    """Relative standard deviation of one axle reading's error [-] for a COST 323 accuracy class.
+def _fraction(name: str, value: float) -> float:
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (0.0 <= value < 0.5):
+        raise ValueError(f"{name} = {value!r}: must be a number in [0, 0.5) [-] (a fraction: 0.02 is 2 %)")
+    return float(value)
 
-    The class's single-axle tolerance delta is read as the half-width of a two-sided normal interval at
-    ``confidence_level`` pi: sigma = delta / z, z = Phi^-1((1 + pi) / 2) (z = 1.960 at pi = 0.95). The single-axle
-    tolerance, not the wider axle-of-a-group one: the class widens the latter for the dynamic load transfer between
-    the axles of a group, which the simulation computes itself (``docs/wim-site.md``).
+
+def sensor_normals(seed: int, n_axles: int) -> tuple[float, NDArray[np.float64]]:
+    """The standard normals of one pass's sensor errors: the pass's ``z_v`` and each axle's ``z_i``, front first.
+
+    ``z_i`` is the i-th draw of ``numpy.random.default_rng(seed)`` (axle i has the same draw whatever the number of
+    axles); ``z_v`` the first draw of a stream of its own, ``SeedSequence(seed, spawn_key=(1,))``, so that the pass's
+    part changes no axle's draw (common random numbers)."""
+    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
+        raise ValueError(f"seed = {seed!r} must be a non-negative integer")
+    z_axles = np.random.default_rng(int(seed)).standard_normal(int(n_axles))
+    z_pass = float(np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(1,))).standard_normal())
+    return z_pass, z_axles
+
+
+def sensor_factors(vehicle_sd: float, axle_sd: float, seed: int, n_axles: int) -> NDArray[np.float64]:
+    """The factors a sensor reads each axle's averaged force with, front first: ``(1 + s_v z_v) (1 + s_a z_i)``.
 
     Parameters
     ----------
-    accuracy_class
-        One of :data:`ACCURACY_CLASSES`; ``"none"`` gives 0.
-    confidence_level
-        pi, in (0, 1) [-].
-
-    Returns
-    -------
-    float
-        sigma [-] (a fraction: 0.0765 for B(10) at 0.95).
+    vehicle_sd, axle_sd
+        ``s_v``, the sd of the error common to the pass's axles, and ``s_a``, of each axle's own [-] (fractions).
+    seed
+        The pass's sensor seed (:func:`sensor_normals`).
+    n_axles
+        Axles of the group [-].
     """
-    if accuracy_class not in ACCURACY_CLASSES:
-        raise ValueError(f"accuracy_class = {accuracy_class!r} must be one of {', '.join(ACCURACY_CLASSES)}")
-    if not (isinstance(confidence_level, (int, float)) and 0.0 < confidence_level < 1.0):
-        raise ValueError(f"confidence_level = {confidence_level!r} is out of range: must be in (0, 1) [-]")
-    if accuracy_class == "none":
-        return 0.0
-    z = NormalDist().inv_cdf(0.5 * (1.0 + confidence_level))
-    return COST323_TOLERANCES[accuracy_class]["single_axle"] / 100.0 / z
-
-
-def axle_errors(accuracy_class: str, confidence_level: float, seed: int, n_axles: int) -> NDArray[np.float64]:
-    """Relative errors e_i [-] of ``n_axles`` axle readings, front first: a reading is W_i (1 + e_i).
-
-    e_i = sigma z_i with z_i the i-th standard normal draw of ``numpy.random.default_rng(seed)``, so axle i has the
-    same draw whatever the number of axles, and the same seed the same errors (common random numbers).
-    """
-    sd = axle_error_sd(accuracy_class, confidence_level)
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be a non-negative integer")
-    return sd * np.random.default_rng(int(seed)).standard_normal(int(n_axles))
+    s_v, s_a = _fraction("vehicle_sd", vehicle_sd), _fraction("axle_sd", axle_sd)
+    z_pass, z_axles = sensor_normals(seed, n_axles)
+    return (1.0 + s_v * z_pass) * (1.0 + s_a * z_axles)
 
 
 # ---- weighing length -----------------------------------------------------------------------------------------------

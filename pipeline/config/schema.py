@@ -33,7 +33,7 @@ from bogie.fleet.constants import (
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
 from bogie.params import preset
-from bogie.road.wim import ACCURACY_CLASSES
+from bogie.road.wim import SENSORS
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.fields import (
@@ -156,8 +156,13 @@ class Wim(Strict):
     sensor_length_m: float = number("m", ge=0.0, le=5.0)
     # a truck tyre's contact patch is 0.15-0.30 m long; 0 with sensor_length_m 0 is the instantaneous force
     contact_length_m: float = number("m", ge=0.0, le=1.0)
-    accuracy_class: Literal[ACCURACY_CLASSES] = named("accuracy class")  # type: ignore[valid-type]
-    confidence_level: float = number("[-]", ge=0.5, lt=1.0)
+    sensor: Literal[SENSORS] = named("sensor type")  # type: ignore[valid-type]
+    """The sensor type; the sizes of its error's two parts are bogie.road.wim.SENSOR_ERRORS (docs/wim-site.md)."""
+    # below 50 %: an error that large is no weighing (the calibration's sensor_error_pct stops at 30)
+    sensor_vehicle_error_pct: float | None = Field(ge=0.0, lt=50.0, json_schema_extra={"unit": "%"})
+    """The sd of the sensor's error common to a pass's axles; null: the sensor type's."""
+    sensor_axle_error_pct: float | None = Field(ge=0.0, lt=50.0, json_schema_extra={"unit": "%"})
+    """The sd of each axle reading's own sensor error; null: the sensor type's."""
 
     @model_validator(mode="after")
     def _pass_fits(self) -> Wim:

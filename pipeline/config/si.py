@@ -14,6 +14,7 @@ unit       suffix    the attribute
 ``m/km``   ``_m_km`` [m/km]: the IRI's own unit everywhere, the library's too (ASTM E1926)
 ``degree`` ``_deg``  kept in degrees, with its suffix: the tilt grids step in exact decimal degrees (0.25, 0.5) and
                      are tabulated and reported in them; in radians the grid's levels would not be those numbers
+``%``      ``_pct``  a fraction [-] (x 0.01)
 ``[-]``              unchanged
 =========  ========  ==========================================================================================
 
@@ -78,6 +79,7 @@ UNITS: dict[str, tuple[str, float | None, str]] = {
     "m/s": ("_m_s", 1.0, "m/s"),
     "m/km": ("_m_km", 1.0, "m/km"),
     "degree": ("", 1.0, "degree"),
+    "%": ("_pct", 0.01, "-"),
 }
 #: a tonne in the SI unit a ``t`` field declares
 TONNE: dict[str, float] = {"N": 1000.0 * GRAVITY, "kg": 1000.0}

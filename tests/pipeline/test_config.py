@@ -65,7 +65,9 @@ def test_default_params_load_and_are_converted_to_si():
         25.0,
         1.3,
     )  # COST 323 class I site [m, m/km]
-    assert (wim.sensor_length, wim.contact_length, wim.accuracy_class) == (0.05, 0.2, "B(10)")
+    assert (wim.sensor_length, wim.contact_length, wim.sensor) == (0.05, 0.2, "quartz")
+    assert (wim.sensor_vehicle_error, wim.sensor_axle_error) == (None, None)  # the type's: bogie.road.wim
+    assert (wim.vehicle_error_sd, wim.axle_error_sd) == (0.015, 0.02)
     assert config.execution.backend == "loky" and config.execution.n_jobs == 2
 
 
@@ -176,17 +178,13 @@ BAD = [
     # accepted before: a WIM pass at 1e-7 m/s asked for a 4.6 TiB history, a 0 s settle failed every static run
     ("protocol.wim.speed_m_s", 1e-7, "protocol.wim.speed_m_s", ["1e-07", "[1, 50] m/s"]),
     # the WIM site and sensor
-    (
-        "protocol.wim.accuracy_class",
-        "B10",
-        "protocol.wim.accuracy_class",
-        ["'B10'", "did you mean B(10)?", "none, A(5)"],
-    ),
-    ("protocol.wim.accuracy_class", None, "protocol.wim.accuracy_class", ["None", "D+(20), D(25)"]),
+    ("protocol.wim.sensor", "Quartz", "protocol.wim.sensor", ["'Quartz'", "did you mean quartz?", "none, quartz"]),
+    ("protocol.wim.sensor", None, "protocol.wim.sensor", ["None", "bending_plate, piezo_polymer"]),
+    ("protocol.wim.sensor_axle_error_pct", 50.0, "protocol.wim.sensor_axle_error_pct", ["50.0", "[0, 50) %"]),
+    ("protocol.wim.sensor_vehicle_error_pct", -1.0, "protocol.wim.sensor_vehicle_error_pct", ["-1.0", "[0, 50) %"]),
     ("protocol.wim.sensor_length_m", 6.0, "protocol.wim.sensor_length_m", ["6.0", "[0, 5] m"]),
     ("protocol.wim.contact_length_m", -0.1, "protocol.wim.contact_length_m", ["-0.1", "[0, 1] m"]),
     ("protocol.wim.site_iri_m_km", 0.0, "protocol.wim.site_iri_m_km", ["0.0", "[0.3, 6] m/km"]),
-    ("protocol.wim.confidence_level", 1.0, "protocol.wim.confidence_level", ["1.0", "[0.5, 1)"]),
     ("protocol.wim.site_length_after_m", -5.0, "protocol.wim.site_length_after_m", ["-5.0", "[0, 1000] m"]),
     (
         "protocol.wim.site_length_before_m",

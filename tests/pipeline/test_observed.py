@@ -143,7 +143,7 @@ def test_without_a_path_the_stage_writes_the_simulated_side_and_an_empty_groups_
     assert m["simulated"]["static"]["groups"]["tandem"]["mean_spread_kg"] == 1000.0
     wim = raw_params()["protocol"]["wim"]
     model = m["simulated"]["wim_model"]
-    assert model["sensor_error"] is (wim.get("accuracy_class", "none") != "none")
+    assert model["sensor_error"] is (wim.get("sensor", "none") != "none")
     assert model["site_pavement"] is (wim.get("site_length_before_m", 0.0) + wim.get("site_length_after_m", 0.0) > 0)
     groups = pq.read_table(root / "data" / "observed" / "groups.parquet")
     assert groups.num_rows == 0

@@ -10,7 +10,7 @@ from bogie import nonlinear
 from bogie.fleet.protocols import wim_pass
 from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.weighing import weigh
-from bogie.road.wim import axle_errors
+from bogie.road.wim import sensor_factors
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
 
@@ -24,7 +24,7 @@ def setup():
     # the old WIM model: the sensor in the sampled road, a point sensor, no error
     point = dataclasses.replace(
         config.protocol.wim, site_length_before=0.0, site_length_after=0.0, sensor_length=0.0, contact_length=0.0,
-        accuracy_class="none",
+        sensor="none",
     )  # fmt: skip
     return config, fleet, point
 
@@ -78,17 +78,17 @@ def test_the_old_point_sensor_is_the_instantaneous_force_at_the_crossing(setup):
     assert np.max(np.abs(np.subtract(step, expected))) > 1.0
 
 
-def test_each_axle_reading_carries_its_class_error_drawn_from_the_samples_sensor_seed(setup):
+def test_each_axle_reading_carries_the_sensors_error_drawn_from_the_samples_sensor_seed(setup):
     config, fleet, _ = setup
     spec = config.protocol.wim
-    assert spec.accuracy_class == "B(10)"
+    assert spec.sensor == "quartz" and (spec.vehicle_error_sd, spec.axle_error_sd) == (0.015, 0.02)
     sample = fleet.iloc[1].to_dict()
     bogie = bogie_from_sample(sample)
     row = weigh(bogie, sample, "wim", spec)
     run = wim_pass(bogie, sample["payload_fraction"], sample["road_class"], sample["road_seed"], spec,
                    sample["sensor_seed"])  # fmt: skip
-    error = axle_errors("B(10)", 0.95, sample["sensor_seed"], bogie.n_axles)
-    assert run.reading == pytest.approx(run.reading_error_free * (1.0 + error), rel=1e-14)
+    factors = sensor_factors(0.015, 0.02, sample["sensor_seed"], bogie.n_axles)
+    assert run.reading == pytest.approx(run.reading_error_free * factors, rel=1e-14)
     assert [row[f"axle_load_{i}"] for i in range(bogie.n_axles)] == pytest.approx(2.0 * run.reading)
     # another sensor seed: the same pass, other errors; the same seed: the same reading (deterministic)
     other = weigh(bogie, {**sample, "sensor_seed": sample["sensor_seed"] + 1}, "wim", spec)

@@ -272,8 +272,9 @@ def observed_metrics(given=True, position="all", sensor_error=False):
                 "sensor_length_m": 0.05,
                 "contact_length_m": 0.2,
                 "sensor_error": sensor_error,
-                "accuracy_class": "B(10)" if sensor_error else None,
-                "confidence_level": 0.95 if sensor_error else None,
+                "sensor": "quartz" if sensor_error else None,
+                "sensor_vehicle_error_pct": 1.5 if sensor_error else None,
+                "sensor_axle_error_pct": 2.0 if sensor_error else None,
             },  # fmt: skip
             "static": {"runs": runs, "groups": {"tandem": stats(3, 0.3333, 0.0, 364.2), "triaxle": none}},
             "wim": {"runs": runs, "groups": {"tandem": stats(3, 0.6667, 0.25, 1113.4), "triaxle": none}},
@@ -317,7 +318,8 @@ def test_observed_text_states_the_position_note_and_the_sensor_error_when_modell
     )
     assert "Position drive: no simulated group passes." in text_
     assert "Position all:" not in text_
-    assert "included: each simulated WIM axle reading carries a random error of COST 323 class B(10)" in text_
+    assert "included: each simulated WIM axle reading carries the error of a quartz sensor, a factor common" in text_
+    assert "(sd 1.5 %) times each axle's own (sd 2 %); the load shares see only the second." in text_
     assert "on a smooth site (IRI 1.3 m/km from 50 m before to 25 m after the sensor" in text_
     assert "averaged over its passage across a 0.05 m sensor (0.2 m contact patch)" in text_
 
@@ -382,7 +384,7 @@ def test_the_wim_protocol_text_says_when_the_old_point_sensor_is_chosen():
     raw = load_params(ROOT / "params.yaml")
     wim = raw["protocol"]["wim"]
     wim.update(site_length_before_m=0.0, site_length_after_m=0.0, sensor_length_m=0.0, contact_length_m=0.0)
-    wim.update(accuracy_class="none")
+    wim.update(sensor="none")
     paras = text.render(
         "definitions.j2", config=parse_config(raw), tare=0.25, read_time=0.5, pair_tolerance=0.05,
         share_tolerance=0.1, nose_up_deg=0.5, n_airborne=0,
@@ -445,8 +447,9 @@ def test_definitions_take_the_protocols_from_params():
     )
     assert "across the sensor (0.05 m weighing length, 0.2 m contact patch)" in paras[2]
     assert (
-        "accuracy class B(10) (standard deviation 7.7 %: the class's single-axle tolerance at 95 % confidence)"
-        in paras[2]
+        "The sensor (quartz) reads each axle with its own error: a factor common to the pass's axles (standard "
+        "deviation 1.5 %) times each axle's own (standard deviation 2.0 %), seeded per bogie"
+        in " ".join(paras[2].split())
     )
     assert "(max W - min W) / max W > 0.05. Outside 10 %: the largest load share > 1.1. Nose up" in " ".join(paras)
     assert (

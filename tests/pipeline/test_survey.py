@@ -26,6 +26,7 @@ from bogie.fleet.survey import (
     survey_tables,
     tilt_table,
     wear_table,
+    wim_class,
 )
 from bogie.fleet.weighing import result_row
 from bogie.params import GRAVITY
@@ -196,6 +197,25 @@ def test_static_vs_wim_is_empty_with_one_protocol():
     assert pairs.empty and summary.empty
 
 
+def test_the_wim_class_holds_the_readings_against_the_static_weighings_of_the_same_bogies():
+    # four tri-axles read -3 %, 0, +3 % (each group exact); a tandem read +12 % on both axles
+    static = [run(i, [80e3, 80e3, 80e3]) for i in range(4)] + [run(9, [90e3, 90e3])]
+    wim = [run(i, [80e3 * 0.97, 80e3, 80e3 * 1.03], "wim") for i in range(4)] + [run(9, [90e3 * 1.12] * 2, "wim")]
+    table = wim_class(derived(wim[::-1] + static)).set_index(["group", "criterion"])
+    assert table.loc[("triaxle", "group"), "n"] == 4 and table.loc[("triaxle", "axle_of_group"), "n"] == 12
+    assert table.loc[("triaxle", "group"), "class_reached"] == "A(5)"  # every error within +-7 % and +-10 %
+    # the tandem: +12 % is outside A(5)'s 7 % (group) and 10 % (axle), outside B+(7)'s 10 % (group), inside B(10)'s 13 %
+    tandem = table.loc["tandem"]
+    assert tandem.loc["group", "share_within_B+(7)"] == 0.0 and tandem.loc["group", "share_within_B(10)"] == 1.0
+    assert tandem.loc["axle_of_group", "mean_error_pct"] == pytest.approx(12.0)
+    assert tandem.loc["group", "class_reached"] == "B(10)"
+    # all five groups: 4 of 5 groups within 7 % and 12 of 14 axles within 10 %, short of 0.95, so B(10) again
+    assert table.loc[("all", "group"), "share_within_A(5)"] == pytest.approx(0.8)
+    assert table.loc[("all", "axle_of_group"), "share_within_A(5)"] == pytest.approx(12 / 14)
+    assert table.loc[("all", "group"), "class_reached"] == "B(10)"
+    assert wim_class(derived(static)).empty  # one protocol: nothing to hold against
+
+
 # ---- legal limits, failures, counts -----------------------------------------------------------------------------
 def test_axle_over_its_limit_while_the_group_is_legal():
     rows = [
@@ -249,7 +269,9 @@ def test_headline_metrics_keys_and_rounding():
         shares = 1 + 0.04 * tilt * np.array([-1.0, 0.0, 1.0]) + 0.01 * rng.standard_normal(3)
         rows += [run(i, 80e3 * shares, tilt_deg=tilt), run(i, 80e3 * shares * (1 + 0.02 * rng.random(3)), "wim")]
     metrics = headline_metrics(survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP))
-    expected = {"n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim", "by_suspension"}
+    expected = {
+        "n_runs", "n_ok", "n_failed", "n_airborne", "static", "wim", "static_vs_wim", "by_suspension", "wim_class",
+    }  # fmt: skip
     assert set(metrics) == expected
     entry = metrics["static"]["triaxle"]
     assert set(entry) == {
@@ -333,7 +355,7 @@ def test_stage_writes_every_table_and_the_metrics(stage_dir):
     out = stage_dir / "data" / "survey"
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["summary.csv", "by_suspension.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv",
-         "tilt.csv", "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv",
+         "tilt.csv", "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv", "wim_class.csv",
          "design_guidance.csv"]
     )  # fmt: skip
     metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())

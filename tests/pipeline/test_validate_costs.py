@@ -195,4 +195,4 @@ def test_config_json_gives_each_distribution_its_kind_and_no_section_or_protocol
     assert config["distributions"]["chassis_tilt"]["kind"] == "truncnormal"
     assert config["distributions"]["road_class"]["kind"] == "choice"
     assert "kind" not in config["protocol"]["static"] and "kind" not in config["protocol"]["wim"]
-    assert "kind" not in config["fleet"] and config["protocol"]["wim"]["accuracy_class"] == "B(10)"
+    assert "kind" not in config["fleet"] and config["protocol"]["wim"]["sensor"] == "quartz"
