@@ -330,72 +330,16 @@ def run(
         raise ValueError(f"check_every = {check_every!r} is out of range: must be an integer >= 1 (steps)")
     c = nl.constants(bogie)  # the bogie's pack, tolerances and limits, computed once per bogie
     n = bogie.n_axles
-    rows, road_h = _rows(phases, c)
-    ndof = 2 * n
-    at_rest = initial is None
-    if at_rest:
-        u, v, a = np.zeros(ndof), np.zeros(ndof), np.zeros(ndof)
-        hist = np.zeros(core.history_length(n))
-    else:
-        hist = nl._history(bogie, initial.history, "initial.history")
-        u, v, a = (np.array(x, dtype=float) for x in (initial.u, initial.v, initial.a))
-    readings = np.zeros((len(phases), 2 * n))
-    on_stop = np.zeros(len(phases), dtype=np.bool_)
-    stats = np.zeros((len(phases), len(pc.STAT_COLUMNS)))
-    # room for the trace: twice the fixed steps of dt (adaptive steps are mostly longer), more if it needs more
-    rows_needed = int(2 * sum(p.duration / p.dt for p in phases)) + 16 if history else 0
-    start = (u.copy(), v.copy(), a.copy(), hist.copy())
-    while True:
-        trace = np.zeros((rows_needed, n + 2))
-        args = (
-            c.mass, c.data_f, c.data_i, c.offsets, c.levers, rows, road_h, u, v, a, hist, at_rest, _RELAXED_SLOTS,
-            float(bogie.bogie_centre_x), c.r_tol, c.u_limit, MAX_ITER, _SCHEME, core.record_length(n),
-            core.work_size(n), float(check_every), readings, on_stop, stats, trace,
-        )  # fmt: skip
-        status, stopped, t_stop, rnorm, traced = pc.run_phases(*args)
-        if traced <= rows_needed or not history:
-            break
-        rows_needed = traced  # a run is a pure function of its inputs: the same again, with room for its trace
-        u, v, a, hist = (x.copy() for x in start)
+    u, v, a, hist = _start(bogie, initial)
+    out = _Outputs(len(phases), n)
+    status, stopped, t_stop, rnorm, traced, trace = _run_kernel(
+        bogie, phases, c, (u, v, a, hist), initial is None, history, check_every, out
+    )
     if status == pc.STATUS_NO_EQUILIBRIUM:
         # Newton alone did not reach an equilibrium inside the limits: the Python one follows it from the design
         # state (and raises, naming why, if there is none)
-        state = nl.equilibrium(bogie, _first_drive_row(phases[0], c, n))
-        mass, data_f, data_i = c.mass, c.data_f, c.data_i
-        f0 = np.zeros(ndof)
-        core.force(
-            state.u, state.v, _first_drive_row(phases[0], c, n), data_f, data_i, state.history,
-            state.history.copy(), f0, np.zeros((ndof, ndof)), np.zeros((ndof, ndof)),
-            np.zeros(core.record_length(n)), False, False, np.zeros(core.work_size(n)),
-        )  # fmt: skip
-        initial = nl.State(state.u, state.v, consistent_acceleration(mass, f0), state.history)
-        return run(bogie, phases, initial, history, check_every)
-    outcomes = []
-    for p in range(min(stopped + 1, len(phases))):
-        done = p < stopped
-        phase = phases[p]
-        reading = None
-        if done and phase.reading is not None:
-            if isinstance(phase.reading, MeanReading):
-                reading = readings[p, :n] / (phase.reading.end - phase.reading.start)
-            else:
-                weight = readings[p, n:]
-                reading = np.where(weight > 0.0, readings[p, :n] / np.where(weight > 0.0, weight, 1.0), np.nan)
-        s = stats[p]
-        outcomes.append(
-            PhaseOutcome(
-                name=phase.name,
-                reading=reading,
-                on_stop=bool(on_stop[p]),
-                steps=int(s[pc.S_STEPS]),
-                rejected=int(s[pc.S_REJECTED]),
-                force_evaluations=int(s[pc.S_EVALS]),
-                tangents=int(s[pc.S_TANGENTS]),
-                factorisations=int(s[pc.S_FACTORS]),
-                end_time=float(s[pc.S_END]),
-                unchecked=int(s[pc.S_UNCHECKED]),
-            )
-        )
+        return run(bogie, phases, _continued_start(bogie, phases[0], c), history, check_every)
+    outcomes = _outcomes(phases, stopped, out, n)
     traces = (trace[:traced, 0], trace[:traced, 1 : n + 1], trace[:traced, n + 1]) if history else (None,) * 3
     if status != pc.STATUS_OK:
         phase = phases[stopped]
@@ -405,3 +349,90 @@ def run(
         )
         return PhasesRun("failed", message, None, tuple(outcomes), *traces)
     return PhasesRun("ok", "ok", nl.State(u=u, v=v, a=a, history=hist), tuple(outcomes), *traces)
+
+
+def _start(bogie: Bogie, initial: nl.State | None) -> tuple[np.ndarray, ...]:
+    """The state arrays the kernel starts from and updates in place: ``u``, ``v``, ``a`` and the friction history
+    (zeros at rest: the kernel then finds the equilibrium itself)."""
+    n = bogie.n_axles
+    if initial is None:
+        return np.zeros(2 * n), np.zeros(2 * n), np.zeros(2 * n), np.zeros(core.history_length(n))
+    hist = nl._history(bogie, initial.history, "initial.history")
+    u, v, a = (np.array(x, dtype=float) for x in (initial.u, initial.v, initial.a))
+    return u, v, a, hist
+
+
+class _Outputs:
+    """What the kernel writes per phase: the readings' sums (and sensor weights), on-stop flags and statistics."""
+
+    def __init__(self, n_phases: int, n_axles: int) -> None:
+        self.readings = np.zeros((n_phases, 2 * n_axles))
+        self.on_stop = np.zeros(n_phases, dtype=np.bool_)
+        self.stats = np.zeros((n_phases, len(pc.STAT_COLUMNS)))
+
+
+def _run_kernel(
+    bogie: Bogie, phases: list[Phase], c: nl.Constants, state: tuple, at_rest: bool, history: bool, check_every: int,
+    out: _Outputs,
+) -> tuple:  # fmt: skip
+    """One compiled call of every phase (again, with room, if the trace outgrew its first guess); the state arrays
+    and ``out`` are updated in place. Returns the kernel's status, the phase it stopped in, its time and residual,
+    the trace's rows and the trace."""
+    n = bogie.n_axles
+    rows, road_h = _rows(phases, c)
+    u, v, a, hist = state
+    # room for the trace: twice the fixed steps of dt (adaptive steps are mostly longer), more if it needs more
+    rows_needed = int(2 * sum(p.duration / p.dt for p in phases)) + 16 if history else 0
+    start = tuple(x.copy() for x in state)
+    while True:
+        trace = np.zeros((rows_needed, n + 2))
+        args = (
+            c.mass, c.data_f, c.data_i, c.offsets, c.levers, rows, road_h, u, v, a, hist, at_rest, _RELAXED_SLOTS,
+            float(bogie.bogie_centre_x), c.r_tol, c.u_limit, MAX_ITER, _SCHEME, core.record_length(n),
+            core.work_size(n), float(check_every), out.readings, out.on_stop, out.stats, trace,
+        )  # fmt: skip
+        status, stopped, t_stop, rnorm, traced = pc.run_phases(*args)
+        if traced <= rows_needed or not history:
+            return status, stopped, t_stop, rnorm, traced, trace
+        rows_needed = traced  # a run is a pure function of its inputs: the same again, with room for its trace
+        for x, x0 in zip((u, v, a, hist), start):
+            x[:] = x0
+
+
+def _continued_start(bogie: Bogie, first: Phase, c: nl.Constants) -> nl.State:
+    """The state at rest at the first phase's start by :func:`bogie.nonlinear.equilibrium` (its continuation from
+    the design state), with the acceleration consistent with its forces."""
+    n = bogie.n_axles
+    ndof = 2 * n
+    drive = _first_drive_row(first, c, n)
+    state = nl.equilibrium(bogie, drive)
+    f0 = np.zeros(ndof)
+    core.force(
+        state.u, state.v, drive, c.data_f, c.data_i, state.history, state.history.copy(), f0,
+        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(core.record_length(n)), False, False,
+        np.zeros(core.work_size(n)),
+    )  # fmt: skip
+    return nl.State(state.u, state.v, consistent_acceleration(c.mass, f0), state.history)
+
+
+def _outcomes(phases: list[Phase], stopped: int, out: _Outputs, n: int) -> list[PhaseOutcome]:
+    """Each phase run (up to the one the run stopped in): its reading, whether it ended on a stop, its counts."""
+    outcomes = []
+    for p in range(min(stopped + 1, len(phases))):
+        phase = phases[p]
+        reading = None
+        if p < stopped and phase.reading is not None:
+            if isinstance(phase.reading, MeanReading):
+                reading = out.readings[p, :n] / (phase.reading.end - phase.reading.start)
+            else:
+                weight = out.readings[p, n:]
+                reading = np.where(weight > 0.0, out.readings[p, :n] / np.where(weight > 0.0, weight, 1.0), np.nan)
+        s = out.stats[p]
+        outcomes.append(
+            PhaseOutcome(
+                name=phase.name, reading=reading, on_stop=bool(out.on_stop[p]), steps=int(s[pc.S_STEPS]),
+                rejected=int(s[pc.S_REJECTED]), force_evaluations=int(s[pc.S_EVALS]), tangents=int(s[pc.S_TANGENTS]),
+                factorisations=int(s[pc.S_FACTORS]), end_time=float(s[pc.S_END]), unchecked=int(s[pc.S_UNCHECKED]),
+            )
+        )  # fmt: skip
+    return outcomes

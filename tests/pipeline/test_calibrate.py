@@ -133,8 +133,12 @@ def test_readings_interpolate_the_table_linearly_in_tilt_and_roughness():
     got = L.fleet_readings(table, values)
     mu, sd = values["chassis_tilt_mean_deg"], values["chassis_tilt_sd_deg"]
     tilt = truncnorm.ppf(table.tilt_u, (-2 - mu) / sd, (2 - mu) / sd, loc=mu, scale=sd)
-    np.testing.assert_allclose(got[0, :, 0], 5000.0 + 100.0 * tilt + 25.0, rtol=1e-12)
-    # the sensor's error multiplies each axle by 1 + s z with the bogie's own normals
+    # the sensor's part common to a pass (s_v, the protocol's quartz 1.5 %) multiplies every axle of a bogie alike
+    passes = table.pass_factors()
+    assert config.protocol.wim.vehicle_error_sd == 0.015 and np.all(passes != 1.0)
+    np.testing.assert_allclose(passes, 1.0 + 0.015 * table.z_pass, rtol=1e-15)
+    np.testing.assert_allclose(got[0, :, 0], (5000.0 + 100.0 * tilt + 25.0) * passes, rtol=1e-12)
+    # the sensor's own error of each axle multiplies it by 1 + s z with the bogie's own normals
     noisy = L.fleet_readings(table, {**values, "sensor_error_pct": 2.0})
     np.testing.assert_allclose(noisy / got, np.broadcast_to(1.0 + 0.02 * table.z, got.shape), rtol=1e-12)
 
