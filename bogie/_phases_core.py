@@ -36,7 +36,8 @@ import numpy as np
 from numba import njit
 
 from bogie import _nonlinear_core as nlc
-from bogie._lu import invert, lu_factor, lu_solve
+from bogie._equilibrium_core import relaxed_equilibrium
+from bogie._lu import invert
 from bogie._newmark_core import (
     STATUS_NO_CONVERGENCE,
     STATUS_NOT_FINITE,
@@ -744,90 +745,6 @@ def _adaptive_steps(model, course, state, trial, newton, out, t_offset):
     return STATUS_OK, duration, rnorm, on_stop
 
 
-# ---- the equilibrium to start from -----------------------------------------------------------------------------
-@njit(cache=True)
-def _equilibrium(data_f, data_i, drv, u, hist_new, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec, work):
-    """Static equilibrium at the drive row ``drv`` with the friction relaxed, from the design position with the
-    chassis pitched to the king pin's height: the Newton iteration of :func:`bogie.nonlinear._equilibrium`
-    (tangent at every iterate, steps limited to 0.05 rad or m, backtracking while the residual grows). Writes the
-    solution to ``u`` and its history (each contact's slip where it carries no friction, each spring on its
-    elastic line) to ``hist_new``; returns whether it converged inside the freedoms' limits."""
-    # longer than 60 lines: one Newton iteration with its singular-tangent fallback, step limit and backtracking, which
-    # share the step and the last step taken; it runs once per run, and reads as the Python one it follows
-    n = u.shape[0]
-    n_axles = data_i[0]
-    relaxed = data_f.copy()
-    for k in relaxed_slots:
-        relaxed[k] = 0.0
-    hist = np.zeros(hist_new.shape[0])
-    for i in range(n):
-        u[i] = 0.0
-    u[0] = math.atan2(drv[2 * n_axles + 1], bogie_centre_x)
-    v = np.zeros(n)
-    f = np.zeros(n)
-    f_try = np.zeros(n)
-    kt = np.zeros((n, n))
-    ct = np.zeros((n, n))
-    piv = np.zeros(n, dtype=np.int64)
-    step = np.zeros(n)
-    last = np.zeros(n)
-    trial = np.zeros(n)
-    converged = False
-    for _ in range(100):
-        nlc.force(u, v, drv, relaxed, data_i, hist, hist_new, f, kt, ct, rec, False, True, work)
-        inside = True
-        for i in range(n):
-            if not abs(f[i]) <= r_tol[i]:
-                inside = False
-        if inside:
-            converged = True
-            break
-        if not lu_factor(kt, piv):
-            big = 0.0
-            for i in range(n):
-                big = max(big, abs(last[i]))
-            if big > 1e-9:
-                for i in range(n):
-                    last[i] *= 0.5
-                    u[i] -= last[i]
-                continue
-            return False
-        for i in range(n):
-            step[i] = -f[i]
-        lu_solve(kt, piv, step)
-        big_rot = 0.0
-        big_disp = 0.0
-        for i in range(n_axles):
-            big_rot = max(big_rot, abs(step[i]))
-            big_disp = max(big_disp, abs(step[n_axles + i]))
-        scale = max(1.0, big_rot / 0.05, big_disp / 0.05)
-        norm = 0.0
-        for i in range(n):
-            step[i] /= scale
-            norm += (f[i] / r_tol[i]) ** 2
-        norm = math.sqrt(norm)
-        for _ in range(12):
-            for i in range(n):
-                trial[i] = u[i] + step[i]
-            nlc.force(trial, v, drv, relaxed, data_i, hist, hist_new, f_try, kt, ct, rec, False, False, work)
-            norm_try = 0.0
-            for i in range(n):
-                norm_try += (f_try[i] / r_tol[i]) ** 2
-            if math.sqrt(norm_try) < norm:
-                break
-            for i in range(n):
-                step[i] *= 0.5
-        for i in range(n):
-            u[i] += step[i]
-            last[i] = step[i]
-    if not converged:
-        return False
-    for i in range(n):
-        if not abs(u[i]) <= u_limit[i]:
-            return False
-    return True
-
-
 # ---- the whole run ---------------------------------------------------------------------------------------------
 @njit(cache=True)
 def _work_records(n, n_axles, n_hist, n_record, work_size, check_every):
@@ -894,7 +811,8 @@ def run_phases(
     state = (u, v, a, f_old, hist)
     _drive(phases[0], road_h, offsets, n_axles, 0.0, drv)
     if at_rest:
-        if not _equilibrium(data_f, data_i, drv, u, hist, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec, work):
+        if not relaxed_equilibrium(data_f, data_i, drv, u, hist, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec,
+                                   work):  # fmt: skip
             return STATUS_NO_EQUILIBRIUM, 0, 0.0, 0.0, 0
         for i in range(n):
             v[i] = 0.0

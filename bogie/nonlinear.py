@@ -22,9 +22,9 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import _equilibrium_core as eq
 from bogie import _nonlinear_core as core
 from bogie import numerics
-from bogie._lu import lu_factor, lu_solve
 from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
@@ -472,12 +472,6 @@ def _history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]
 
 
 # ---- static equilibrium ----------------------------------------------------------------------------------------
-def _norm(x: NDArray[np.float64]) -> float:
-    """The Euclidean norm with its sum in numpy's fixed (pairwise) order: ``numpy.linalg.norm`` takes it from BLAS,
-    whose kernel, and so the last bit, OpenBLAS chooses by the CPU (``bogie/numerics.py``)."""
-    return math.sqrt(float(np.sum(x * x)))
-
-
 def equilibrium(
     bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None = None, u0: ArrayLike | None = None
 ) -> State:
@@ -541,69 +535,42 @@ def _continued_equilibrium(bogie: Bogie, drive_row: NDArray[np.float64], history
 
 
 def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, u0: ArrayLike | None) -> State:
-    """Newton's static equilibrium from ``u0`` (see :func:`equilibrium`)."""
+    """Newton's static equilibrium from ``u0`` (see :func:`equilibrium`): the compiled
+    :func:`bogie._equilibrium_core.newton`, the one the phases start from, and its failures as errors."""
     n = bogie.n_axles
     ndof = 2 * n
     relaxed = history is None
+    c = constants(bogie)
     # relaxed: the pack of bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0), without a new bogie
-    _, data_f, data_i = _packed(bogie)
+    data_f = c.data_f.copy()
     if relaxed:
         data_f[_FRICTION_SLOTS] = 0.0
-    drv = np.asarray(drive_row, dtype=float)
+    drv = np.ascontiguousarray(drive_row, dtype=float)
     hist = np.zeros(core.history_length(n)) if relaxed else _history(bogie, history, "history")
     hist_new = hist.copy()
-    u = np.zeros(ndof) if u0 is None else np.asarray(u0, dtype=float).copy()
     if u0 is None:
         # start with the bogie end of the chassis at its design height, so that no spring starts slack
-        u[0] = math.atan2(float(drv[2 * n + 1]), bogie.bogie_centre_x)
-    v = np.zeros(ndof)
-    f = np.zeros(ndof)
-    kt = np.zeros((ndof, ndof))
-    ct = np.zeros((ndof, ndof))
-    rec = np.zeros(core.record_length(n))
-    piv = np.zeros(ndof, dtype=np.int64)
-    work = np.zeros(_work_size(bogie))
-    tol = _tolerance(bogie)
-    f_try = np.zeros(ndof)
-    last = np.zeros(ndof)
-    for _ in range(100):
-        core.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, False, True, work)
-        if np.all(np.abs(f) <= tol):
-            break
-        if not lu_factor(kt, piv):
-            if np.max(np.abs(last)) > 1e-9:
-                # the last step lifted an axle off both its spring and its tyre (a stiff stop's onset can throw
-                # one there): take back half of it and go on from there
-                last *= 0.5
-                u -= last
-                continue
-            raise RuntimeError(
-                f"static equilibrium: singular stiffness at u = {np.array2string(u, precision=4)} "
-                "(a spring and its tyre both unloaded: is the load factor or king pin rise out of reach?)"
-            )
-        step = -f.copy()
-        lu_solve(kt, piv, step)
-        # limit the rotation and displacement of one iteration to keep Newton inside the physical range
-        scale = max(1.0, np.max(np.abs(step[:n])) / 0.05, np.max(np.abs(step[n:])) / 0.05)
-        step /= scale
-        # backtrack while the step raises the residual: a free equaliser is unstable inside its stops and stiff on
-        # them, where the full Newton step can cycle across a stop's onset
-        norm = _norm(f / tol)
-        for _ in range(12):
-            core.force(u + step, v, drv, data_f, data_i, hist, hist_new, f_try, kt, ct, rec, False, False, work)
-            if _norm(f_try / tol) < norm:
-                break
-            step *= 0.5
-        u += step
-        last = step
+        u = np.zeros(ndof)
+        eq.design_start(drv, n, bogie.bogie_centre_x, u)
     else:
-        worst = int(np.argmax(np.abs(f) / tol))
+        u = np.array(u0, dtype=float)
+    f = np.zeros(ndof)
+    rec = np.zeros(core.record_length(n))
+    work = np.zeros(_work_size(bogie))
+    status = eq.newton(data_f, c.data_i, drv, u, hist, hist_new, f, c.r_tol, c.u_limit, rec, work)
+    if status == eq.SINGULAR:
+        raise RuntimeError(
+            f"static equilibrium: singular stiffness at u = {np.array2string(u, precision=4)} "
+            "(a spring and its tyre both unloaded: is the load factor or king pin rise out of reach?)"
+        )
+    if status == eq.NO_CONVERGENCE:
+        worst = int(np.argmax(np.abs(f) / c.r_tol))
         raise RuntimeError(
             f"static equilibrium did not converge: largest force residual {np.max(np.abs(f)):.3g} "
             f"(on {dof_names(n)[worst]}) at u = {np.array2string(u, precision=4)}"
         )
     _check_limits(bogie, u)
-    return State(u=u, v=v, a=np.zeros(ndof), history=hist_new.copy() if relaxed else hist.copy())
+    return State(u=u, v=np.zeros(ndof), a=np.zeros(ndof), history=hist_new.copy() if relaxed else hist.copy())
 
 
 # ---- running ---------------------------------------------------------------------------------------------------
