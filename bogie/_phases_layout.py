@@ -72,6 +72,7 @@ RUNG_MATRICES = 16
 SKIP_LIMIT = 0.25
 #: every this many steps the first correction is checked anyway, to measure its contraction afresh
 CHECK_EVERY = 16
+#: how many times a fixed step is halved when Newton fails in it
 MAX_HALVINGS = 5
 
 
