@@ -188,6 +188,8 @@ def _attempt(
     grow, or leaves the freedoms' limits ``u_limit`` (beyond which the model has spurious equilibria, e.g. a
     chassis pitched 90 degrees on slack springs), it is halved (backtracking) before a new direction is taken.
     """
+    # longer than 60 lines with its docstring (the code is 45): the iteration's branches (backtracking, a new
+    # tangent, a kept matrix) share its scalars; split, they would be passed in and returned at every iteration
     beta, gamma, alpha_m, alpha_f = scheme
     u_new, v_new, a_new, f_new, hist_new = trial
     c_a = 1.0 / (beta * dt * dt)
@@ -375,6 +377,8 @@ def _integrate_linear_kernel(mass, damping, stiffness, loads, u0, v0, a0, dt, n_
     from the predictor with the iteration matrix factored once, so no Newton loop, convergence test or state
     saving is needed. Returns (u, v, a, status): status is STATUS_SINGULAR if the iteration matrix is singular.
     """
+    # longer than 60 lines: the set-up (the matrix factored once) and the loop over the steps share the scheme's
+    # constants and the factors; the loop body is one predictor, one solve and the update
     n = u0.shape[0]
     uu = np.zeros((n_steps + 1, n))
     vv = np.zeros((n_steps + 1, n))

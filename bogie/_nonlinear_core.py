@@ -8,7 +8,8 @@ equations of motion are M a + f = 0. Its tangent K_T = df/du is formed by forwar
 algorithmic force (the friction return map included), which is the consistent tangent of the discrete problem;
 C_T = df/dv is exact.
 
-Packed parameters (built by :func:`bogie.nonlinear.pack`); this module is the one definition of their layout:
+Packed parameters (built by :func:`bogie.nonlinear.pack`); :mod:`bogie._nonlinear_layout` is the one definition of
+their layout (every name of it importable from here, as when it was part of this module):
 
 * ``data_i = [n, pad_body_0 .. pad_body_{2n-1}]``: the body carrying contact e (-1 chassis, j equaliser j);
   contact 2i is spring i's front end, 2i + 1 its rear end.
@@ -25,15 +26,16 @@ Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at
 (:func:`_radius_rod`), and the rod turns the spring ends' friction into generalised forces on the chassis pitch
 and the axle's vertical freedom.
 
-The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, the
-springs with their end friction's return map, pad moments, tyre loads, bushes, bump stops, the record); when they
-were split from a former single routine they kept its arithmetic in the same order, so results were bit-identical
-to it (the radius rods and the equaliser stops, added later, changed the physics). The helpers are inlined into
-:func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled the cost of a force
-evaluation. The helpers used inside loops take and return scalars, and the short loops over pivots, contacts and
-tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`` buffer (:data:`WORK`), not views,
-and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
-touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
+The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, in
+:mod:`bogie._nonlinear_geometry`; the springs with their end friction's return map, pad moments, tyre loads, bushes,
+bump stops, the record, here); when they were split from a former single routine they kept its arithmetic in the
+same order, so results were bit-identical to it (the radius rods and the equaliser stops, added later, changed the
+physics). The helpers are inlined into :func:`_internal` at numba IR level (``inline="always"``): as separate calls
+they doubled the cost of a force evaluation. The helpers used inside loops take and return scalars, and the short
+loops over pivots, contacts and tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work``
+buffer (:data:`WORK`), not views, and it is compiled without reference counting (``_nrt=False``), so an evaluation
+creates no array object and touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle,
+``bench/README.md``).
 
 Library sin, cos and atan2 calls were most of an evaluation's cost, so the same quantities are computed another
 way. The springs never form the leaf end angles (:func:`_rolled_contacts`): their sines and cosines come from the
@@ -52,153 +54,97 @@ import math
 
 from numba import njit
 
-SCALARS = (
-    "road_spring_stiffness",
-    "tyre_stiffness",
-    "tyre_damping",
-    "bush_stiffness",
-    "bush_damping",
-    "contact_roll_radius",
-    "friction_coefficient",
-    "contact_tangential_stiffness",
-    "spring_end_slope_rate",
-    "payload_weight",
-    "payload_cg_x",
-    "axle_weight",
-    "equaliser_stop",
-    "equaliser_stop_stiffness",
-    "spring_friction_band",
-    "spring_friction_decay",
+from bogie._nonlinear_geometry import (  # noqa: F401 - what the force uses, and the geometry's names as before
+    SIN_COS_SERIES_BOUND,
+    _body_point,
+    _chassis_point,
+    _radius_rod,
+    _rolled_contacts,
+    _sin_cos,
 )
-(
-    _KR,
-    _KT,
-    _CT,
-    _KB,
-    _CB,
-    _RHO,
-    _MU,
-    _KTAN,
-    _KAPPA,
-    _WPAY,
-    _XCG,
-    _WAXLE,
-    _STOP,
-    _KSTOP,
+from bogie._nonlinear_layout import (  # noqa: F401 - what the force uses, and the layout's names as before
     _BAND,
     _BETA,
-) = range(len(SCALARS))
-NS = len(SCALARS)
-
-#: packed arrays after the scalars: (name, length per axle, extra length); length = per_axle * n + extra, so
-#: (1, 0) is one per axle, (2, 0) one per contact and (1, -1) one per equaliser
-ARRAYS = (
-    ("axle_x", 1, 0),
-    ("elongation_front", 1, 0),
-    ("elongation_rear", 1, 0),
-    ("design_spring_load", 1, 0),
-    ("design_tyre_compression", 1, 0),
-    ("tyre_wear", 1, 0),
-    ("design_chord_height", 1, 0),
-    ("design_chord_cos", 1, 0),
-    ("design_chord_sin", 1, 0),
-    ("pad_x", 2, 0),
-    ("pad_z", 2, 0),
-    ("design_contact_x", 2, 0),
-    ("pivot_x", 1, -1),
-    ("pivot_z", 1, -1),
-    ("rod_anchor_x", 1, 0),
-    ("rod_anchor_z", 1, 0),
-    ("rod_length", 1, 0),
-)
-(
-    _XA,
+    _C0,
+    _CB,
+    _CB0,
+    _CT,
+    _H0,
+    _HIST_DEFLECTION,
+    _HIST_HYSTERESIS,
+    _KAPPA,
+    _KB,
+    _KR,
+    _KSTOP,
+    _KT,
+    _KTAN,
     _LF,
     _LR,
-    _WD,
-    _C0,
-    _WEAR,
-    _H0,
-    _CB0,
-    _SB0,
+    _MU,
+    _MX0,
     _PX,
     _PZ,
-    _MX0,
-    _VX,
-    _VZ,
     _RAX,
     _RAZ,
-    _RL,
-) = range(len(ARRAYS))
-_ARRAY_PER_AXLE = tuple(a[1] for a in ARRAYS)
-_ARRAY_EXTRA = tuple(a[2] for a in ARRAYS)
-# start of array k = NS + _START_PER_AXLE[k] n + _START_EXTRA[k]: prefix sums of the table, so that the compiled
-# code finds an offset without a loop (k is a compile-time constant there)
-_START_PER_AXLE = tuple(sum(_ARRAY_PER_AXLE[:k]) for k in range(len(ARRAYS) + 1))
-_START_EXTRA = tuple(sum(_ARRAY_EXTRA[:k]) for k in range(len(ARRAYS) + 1))
-
-#: recorded outputs: (name, entries per axle, extra entries), in record order; length = per_axle * n + extra, as
-#: in :data:`ARRAYS`. New outputs go at the end, so that the earlier ones keep their slices.
-RECORD = (
-    ("tyre_load", 1, 0),
-    ("spring_load", 1, 0),
-    ("friction_force", 2, 0),
-    ("stick", 2, 0),
-    ("contact_shift", 2, 0),
-    ("plastic_slip", 2, 0),
-    ("axle_position", 1, 0),
-    ("stop_moment", 1, -1),
-    ("spring_deflection", 1, 0),
-    ("spring_hysteresis", 1, 0),
-)
-(
-    _REC_TYRE,
-    _REC_SPRING,
+    _REC_AXLE_X,
+    _REC_DEFLECTION,
     _REC_FRICTION,
-    _REC_STICK,
+    _REC_HYSTERESIS,
     _REC_SHIFT,
     _REC_SLIP,
-    _REC_AXLE_X,
+    _REC_SPRING,
+    _REC_STICK,
     _REC_STOP,
-    _REC_DEFLECTION,
-    _REC_HYSTERESIS,
-) = range(len(RECORD))
-_RECORD_START_PER_AXLE = tuple(sum(r[1] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
-_RECORD_START_EXTRA = tuple(sum(r[2] for r in RECORD[:k]) for k in range(len(RECORD) + 1))
-#: record entries per axle: ``RECORD_PER_AXLE * n`` is at least the record's length, :func:`record_length` (n)
-#: exactly (the per-equaliser outputs are one short of n)
-RECORD_PER_AXLE = _RECORD_START_PER_AXLE[-1]
-
-#: history variables, committed at converged steps: (name, entries per axle, extra entries), in order
-HISTORY = (
-    ("plastic_slip", 2, 0),
-    ("spring_deflection", 1, 0),
-    ("spring_hysteresis", 1, 0),
+    _RHO,
+    _RL,
+    _SB0,
+    _STOP,
+    _VX,
+    _VZ,
+    _W_AXLE_X,
+    _W_AXLE_X_PITCH,
+    _W_AXLE_X_RISE,
+    _W_CONTACT_X,
+    _W_CONTACT_Z,
+    _W_EQ_COS,
+    _W_EQ_SIN,
+    _W_FRICTION,
+    _W_MAT_X,
+    _W_MAT_Z,
+    _W_NORMAL,
+    _W_PAD_COS,
+    _W_PAD_SIN,
+    _W_PIVOT_X,
+    _W_PIVOT_Z,
+    _W_SPRING,
+    _W_STICK,
+    _WAXLE,
+    _WD,
+    _WEAR,
+    _WPAY,
+    _XA,
+    _XCG,
+    ARRAYS,
+    HISTORY,
+    NS,
+    RECORD,
+    RECORD_PER_AXLE,
+    SCALARS,
+    WORK,
+    _work_start,
+    array_length,
+    array_offsets,
+    array_start,
+    data_length,
+    history_length,
+    history_slices,
+    history_start,
+    record_length,
+    record_slices,
+    record_start,
+    scratch_size,
+    work_size,
 )
-_HIST_SLIP, _HIST_DEFLECTION, _HIST_HYSTERESIS = range(len(HISTORY))
-_HISTORY_START = tuple(sum(h[1] for h in HISTORY[:k]) for k in range(len(HISTORY) + 1))
-
-
-@njit(cache=True, inline="always")
-def history_start(k, n):
-    """Index in the history of the first entry of variable k (an index into :data:`HISTORY`) for n axles.
-
-    k = len(HISTORY) gives the history's length.
-    """
-    return _HISTORY_START[k] * n
-
-
-def history_length(n: int) -> int:
-    """Length of the history of n axles: the plastic slips, then each spring's deflection and hysteretic force."""
-    return int(history_start(len(HISTORY), n))
-
-
-def history_slices(n: int) -> dict[str, slice]:
-    """Where each history variable sits in the history of n axles, by name."""
-    return {
-        name: slice(int(history_start(k, n)), int(history_start(k + 1, n))) for k, (name, _, _) in enumerate(HISTORY)
-    }
-
 
 #: [rad] width of a stop's onset: its contact stiffness grows linearly from 0 to the full stiffness over this much
 #: rotation beyond the stop angle (a crowned rubber face whose contact area grows over its first 0.75 mm at
@@ -206,217 +152,6 @@ def history_slices(n: int) -> dict[str, slice]:
 STOP_ONSET = 0.005
 
 FD_STEP = 1e-7  # [m] or [rad]: forward-difference step of the tangent
-
-
-# ---- layout ----------------------------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
-def array_length(k, n):
-    """Number of entries of packed array k (an index into :data:`ARRAYS`) for n axles."""
-    return _ARRAY_PER_AXLE[k] * n + _ARRAY_EXTRA[k]
-
-
-@njit(cache=True, inline="always")
-def array_start(k, n):
-    """Index in ``data_f`` of the first entry of packed array k (an index into :data:`ARRAYS`) for n axles.
-
-    k = len(ARRAYS) gives the length of ``data_f``.
-    """
-    return NS + _START_PER_AXLE[k] * n + _START_EXTRA[k]
-
-
-def array_offsets(n: int) -> dict[str, tuple[int, int]]:
-    """Start and length of each packed array in ``data_f`` for n axles, by name."""
-    return {name: (int(array_start(k, n)), int(array_length(k, n))) for k, (name, _, _) in enumerate(ARRAYS)}
-
-
-def data_length(n: int) -> int:
-    """Length of ``data_f`` for n axles."""
-    return int(array_start(len(ARRAYS), n))
-
-
-@njit(cache=True, inline="always")
-def record_start(k, n):
-    """Index in the record of the first entry of output k (an index into :data:`RECORD`) for n axles.
-
-    k = len(RECORD) gives the record's length.
-    """
-    return _RECORD_START_PER_AXLE[k] * n + _RECORD_START_EXTRA[k]
-
-
-def record_length(n: int) -> int:
-    """Length of the record of n axles."""
-    return int(record_start(len(RECORD), n))
-
-
-def record_slices(n: int) -> dict[str, slice]:
-    """Where each recorded output sits in the record of n axles, by name."""
-    return {name: slice(int(record_start(k, n)), int(record_start(k + 1, n))) for k, (name, _, _) in enumerate(RECORD)}
-
-
-#: scratch arrays of :func:`_internal` in the work buffer, in order: (name, length per axle, extra length)
-WORK = (
-    ("pivot_x", 1, -1),
-    ("pivot_z", 1, -1),
-    ("material_x", 2, 0),
-    ("material_z", 2, 0),
-    ("pad_sin", 2, 0),
-    ("pad_cos", 2, 0),
-    ("contact_x", 2, 0),
-    ("contact_z", 2, 0),
-    ("friction_force", 2, 0),
-    ("stick", 2, 0),
-    ("normal_load", 2, 0),
-    ("spring_load", 1, 0),
-    ("equaliser_cos", 1, -1),
-    ("equaliser_sin", 1, -1),
-    ("axle_x", 1, 0),
-    ("axle_x_pitch", 1, 0),
-    ("axle_x_rise", 1, 0),
-)
-_WORK_START_PER_AXLE = tuple(sum(w[1] for w in WORK[:k]) for k in range(len(WORK) + 1))
-_WORK_START_EXTRA = tuple(sum(w[2] for w in WORK[:k]) for k in range(len(WORK) + 1))
-
-
-@njit(cache=True, inline="always")
-def _work_start(k, n):
-    """Index in the work buffer of scratch array k (an index into :data:`WORK`); k = len(WORK) gives the total."""
-    return _WORK_START_PER_AXLE[k] * n + _WORK_START_EXTRA[k]
-
-
-@njit(cache=True, inline="always")
-def scratch_size(n):
-    """Length of the work array :func:`_internal` needs for n axles (:data:`WORK`)."""
-    return _work_start(len(WORK), n)
-
-
-def work_size(n: int) -> int:
-    """Length of the work array :func:`force` needs for n axles: :func:`scratch_size` plus 4n for the tangent."""
-    return int(scratch_size(n)) + 4 * n
-
-
-(
-    _W_PIVOT_X,
-    _W_PIVOT_Z,
-    _W_MAT_X,
-    _W_MAT_Z,
-    _W_PAD_SIN,
-    _W_PAD_COS,
-    _W_CONTACT_X,
-    _W_CONTACT_Z,
-    _W_FRICTION,
-    _W_STICK,
-    _W_NORMAL,
-    _W_SPRING,
-    _W_EQ_COS,
-    _W_EQ_SIN,
-    _W_AXLE_X,
-    _W_AXLE_X_PITCH,
-    _W_AXLE_X_RISE,
-) = range(len(WORK))
-# The scratch arrays are read and written as work[_work_start(k, n) + i], not through views: each view of a
-# buffer is a new array object, and its reference counting at every use cost more than the arithmetic it served.
-
-
-# ---- geometry --------------------------------------------------------------------------------------------------
-@njit(cache=True, inline="always")
-def _chassis_point(bx, bz, dh, cc, sc):
-    """World position (x, z) [m] of the chassis point at (bx, bz) from the king pin, raised by dh, pitched (cc, sc).
-
-    The same as :func:`_body_point` with origin (0, dh) but without adding the 0 to x, which could turn a -0.0 into
-    +0.0 and so differ in the last bit from the single routine this was split from.
-    """
-    return bx * cc + bz * sc, dh - bx * sc + bz * cc
-
-
-@njit(cache=True, inline="always")
-def _body_point(ox, oz, c, s, dx, dz):
-    """World position (x, z) [m] of the point at (dx, dz) in a body's frame, origin (ox, oz), rotation (c, s)."""
-    return ox + dx * c + dz * s, oz - dx * s + dz * c
-
-
-#: [rad] bound of |x| up to which :func:`_sin_cos` sums Taylor series instead of calling the library. It covers the
-#: chassis pitch's limit (20 degrees, 0.35 rad) and what the protocols' runs of the sample bogies of
-#: ``bench/profile_protocol.py`` reach: equaliser rotations up to 0.25 rad, flattening angles kappa d up to 0.1 rad.
-#: There the first omitted terms, x^15/15! of sin and x^14/14! of cos, are below 1e-17 relative, and the series are
-#: within an ulp of the exact values (0.55 and 0.82 ulp at most; ``tests/test_force_formulation.py``)
-SIN_COS_SERIES_BOUND = 0.4
-# the series' coefficients: (-1)^k / (2k + 1)! for sin, (-1)^k / (2k)! for cos, k = 1 .. 6
-_S1, _S2, _S3, _S4, _S5, _S6 = (-1.0 / 6.0, 1.0 / 120.0, -1.0 / 5040.0, 1.0 / 362880.0, -1.0 / 39916800.0,
-                                1.0 / 6227020800.0)  # fmt: skip
-_C1, _C2, _C3, _C4, _C5, _C6 = (-0.5, 1.0 / 24.0, -1.0 / 720.0, 1.0 / 40320.0, -1.0 / 3628800.0, 1.0 / 479001600.0)
-
-
-@njit(cache=True, inline="always")
-def _sin_cos(x):
-    """(sin x, cos x) to double precision: Taylor series for |x| up to :data:`SIN_COS_SERIES_BOUND`, else the library.
-
-    The angles of the model are mostly small, and two inlined series in x^2 (12 multiply-adds that overlap with the
-    rest of the evaluation) cost less than the two library calls. Each series adds a small correction to its first
-    term (x, 1), so its own round-off stays below an ulp.
-    """
-    if abs(x) > SIN_COS_SERIES_BOUND:
-        return math.sin(x), math.cos(x)
-    x2 = x * x
-    s = x + x * x2 * (_S1 + x2 * (_S2 + x2 * (_S3 + x2 * (_S4 + x2 * (_S5 + x2 * _S6)))))
-    c = 1.0 + x2 * (_C1 + x2 * (_C2 + x2 * (_C3 + x2 * (_C4 + x2 * (_C5 + x2 * _C6)))))
-    return s, c
-
-
-@njit(cache=True, inline="always")
-def _rolled_contacts(xf, zf, xr, zr, pad_sf, pad_cf, pad_sr, pad_cr, xa, za, h0, cos_b0, sin_b0, kappa, rho):
-    """Contact points P (x, z) of a spring's front and rear ends, from their material points M (x, z) [m].
-
-    The chord's rotation beta from its design angle beta0 (cos_b0, sin_b0) and a first deflection d from the
-    material points fix the leaf end angles g = beta -+ kappa d; a leaf end on a convex pad of radius rho touches it
-    where their tangents agree, so the contact point moves along the pad by rho x (pad rotation - leaf end
-    rotation). Returns (x_front, z_front, x_rear, z_rear).
-
-    The angles are never formed: (cos, sin) of beta is the chord's unit vector turned back by beta0, and those of
-    g follow by the angle-sum formulas with (sin, cos) of kappa d (:func:`_sin_cos`). The same values as
-    atan2, a subtraction and four sin/cos calls to round-off, for a square root, a division and a short series.
-    """
-    if rho > 0.0:
-        span = xr - xf
-        rise = zf - zr
-        wf = (xr - xa) / span
-        d_tilde = za - (wf * zf + (1.0 - wf) * zr - h0)
-        inv_chord = 1.0 / math.sqrt(span * span + rise * rise)
-        cos_chord = span * inv_chord
-        sin_chord = rise * inv_chord
-        cos_beta = cos_chord * cos_b0 + sin_chord * sin_b0
-        sin_beta = sin_chord * cos_b0 - cos_chord * sin_b0
-        sin_k, cos_k = _sin_cos(kappa * d_tilde)
-        sc = sin_beta * cos_k
-        cs = cos_beta * sin_k
-        cc = cos_beta * cos_k
-        ss = sin_beta * sin_k
-        # sin and cos of g_front = beta - kappa d and g_rear = beta + kappa d
-        return (
-            xf + rho * (pad_sf - (sc - cs)),
-            zf + rho * (pad_cf - (cc + ss)),
-            xr + rho * (pad_sr - (sc + cs)),
-            zr + rho * (pad_cr - (cc - ss)),
-        )
-    return xf, zf, xr, zr
-
-
-@njit(cache=True, inline="always")
-def _radius_rod(xi_a, zeta_a, length, z, dh, cc, sc):
-    """Axle x on its radius rod and its derivatives: (x_i [m], dx_i/dtheta_c [m/rad], dx_i/dz_i [-]).
-
-    The rod of ``length`` runs from the chassis anchor (xi_a, zeta_a) (king pin coordinates, pitched (cc, sc) and
-    raised by dh) back to the axle's eye, which is at zeta_a + z: level in the design position. The axle's
-    vertical displacement z is the freedom, its x follows (``docs/models.md``, "Axle location").
-    """
-    x_anchor = xi_a * cc + zeta_a * sc
-    dz = zeta_a + z - (dh - xi_a * sc + zeta_a * cc)
-    s2 = length * length - dz * dz
-    floor = 0.01 * length * length  # a rod beyond 84 degrees: far outside the freedoms' limits
-    if s2 < floor:
-        s2 = floor
-    span = math.sqrt(s2)
-    ratio = dz / span
-    return x_anchor + span, (-xi_a * sc + zeta_a * cc) + ratio * (-xi_a * cc - zeta_a * sc), -ratio
 
 
 # ---- springs and friction --------------------------------------------------------------------------------------
@@ -457,6 +192,9 @@ def _springs(u, data_f, n, hist_old, hist_new, work):
     end loads and spring loads there. Each spring's deflection and hysteretic force go to the new history (and
     from there to the record).
     """
+    # longer than 60 lines: one pass over the springs whose stages (contact points, deflection, hysteresis, each
+    # end's return map, the loads) share the spring's scalars; split, they would pass a dozen scalars each way per
+    # spring. The offsets into data_f and work are taken once, before the loop
     o_xa, o_h0, o_wd = array_start(_XA, n), array_start(_H0, n), array_start(_WD, n)
     o_cb0, o_sb0 = array_start(_CB0, n), array_start(_SB0, n)
     o_lf, o_lr, o_mx0 = array_start(_LF, n), array_start(_LR, n), array_start(_MX0, n)
@@ -642,6 +380,9 @@ def _internal(u, v, drv, data_f, data_i, hist_old, hist_new, f, rec, record, wor
     operations in a step's two evaluations) are not needed. It stays a call: inlined as well, the kernel took
     minutes to compile and ran slower.
     """
+    # longer than 60 lines: the short loops over pivots, contacts, axles, tyres and stops stay here and the helpers
+    # they call take and return scalars (as calls of their own they doubled an evaluation's cost, the module text);
+    # it reads as the force's terms in the order of docs/models.md
     n = data_i[0]
     load_factor = drv[2 * n]
     dh = drv[2 * n + 1]

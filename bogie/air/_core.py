@@ -59,6 +59,9 @@ def _enthalpy(n_poly: float, k: float, p: float) -> float:
 def evaluate(par, x, wear, y, road, road_rate, load, rise, rise_rate, valve, dy, rec):
     """Rates ``dy`` of state ``y`` and the record ``rec`` = [tyre (n), extension (n), gauge pressure (n), bag force
     (n), the 7 powers]; returns a status code (:data:`EMPTIED` if a bag emptied or closed)."""
+    # longer than 60 lines: one evaluation of the right-hand side, called by the ODE solver at every stage; its
+    # parts (bag pressures, the valve, each axle's rates and powers) share the per-axle arrays and scalars, and as
+    # calls of their own would pass them in and out at every stage
     n = x.shape[0]
     theta = y[0]
     theta_d = y[n + 1]
