@@ -456,3 +456,19 @@ def test_definitions_take_the_protocols_from_params():
         f"- Fleet: {config.fleet.n_bogies} bogies ({config.fleet.sampling}, seed {config.seed}), axle mix tandem"
         in " ".join(paras)
     )
+
+
+def test_the_definitions_say_the_class_the_whole_simulated_wim_system_reaches_and_that_its_share_is_assumed():
+    config = parse_config(load_params(ROOT / "params.yaml"))
+    wim_class = {"all": {"class_reached": "B(10)", "required_share": 0.95, "sd_group_error_pct": 4.31,
+                         "sd_axle_of_group_error_pct": 6.02}}  # fmt: skip
+    args = {"config": config, "tare": 0.25, "read_time": 0.5, "pair_tolerance": 0.05, "share_tolerance": 0.1,
+            "nose_up_deg": 0.5, "n_airborne": 0}  # fmt: skip
+    said = " ".join(" ".join(text.render("definitions.j2", **args, wim_class=wim_class)).split())
+    assert (
+        "the simulated WIM system reaches class B(10): errors of sd 4.31 % on a group's load and 6.02 % on an" in said
+    )
+    assert "at least 95 % of each within the class's tolerance (an assumed share" in said
+    wim_class["all"]["class_reached"] = None
+    assert "reaches no class" in " ".join(text.render("definitions.j2", **args, wim_class=wim_class))
+    assert "COST 323's test" not in " ".join(text.render("definitions.j2", **args))  # no survey metrics: nothing said

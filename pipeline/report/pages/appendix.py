@@ -84,6 +84,7 @@ def definitions(ctx: Context) -> list[Page]:
         share_tolerance=SHARE_TOLERANCE,
         nose_up_deg=NOSE_UP_DEG,
         n_airborne=ctx.inputs.survey_metrics.get("n_airborne", 0),
+        wim_class=ctx.inputs.survey_metrics.get("wim_class"),
     )
     fig = text_page("Appendix B: protocols, definitions and model assumptions", paragraphs)
     return [Page("Appendix B: protocols, definitions, assumptions", "", fig)]
