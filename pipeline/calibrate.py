@@ -34,6 +34,7 @@ import yaml
 from bogie.fleet import calibration
 from bogie.fleet.calibration import CalibrationError, CalibrationSettings, Mapper, Observed, Table, base_values
 from bogie.fleet.calibration_checks import calibrate_survey
+from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
@@ -64,7 +65,13 @@ def defaults(config: Config) -> dict[str, float]:
     ``fleet.suspension_mix``'s distinct air shares."""
     mix = config.fleet.suspension_mix
     shares = {mix[g]["air"] for g in mix}
-    return base_values(config.distributions["chassis_tilt"], float(np.mean(sorted(shares))), config.protocol.wim)
+    air = float(np.mean(sorted(shares)))
+    return base_values(config.distributions["chassis_tilt"], air, config.protocol.wim, _inhibitors(config))
+
+
+def _inhibitors(config: Config) -> dict[str, Any]:
+    """The fleet's distributions of the inhibitors whose mean a calibration may fit (SI)."""
+    return {c: config.distributions[c] for c, _ in TILTED_QUANTITIES.values() if c in config.distributions}
 
 
 def calibration_samples(config: Config) -> pd.DataFrame:
@@ -85,7 +92,7 @@ def _fleet(config: Config) -> dict[str, Any]:
     return {
         "samples": calibration_samples(config), "tilt_distribution": config.distributions["chassis_tilt"],
         "seed": config.seed, "protocol": cal.protocol, "settings": settings, "tilts": _tilt_grid(config),
-        "site_iri_levels": cal.site_iri_levels, "study": "fleet",
+        "site_iri_levels": cal.site_iri_levels, "study": "fleet", "inhibitor_distributions": _inhibitors(config),
     }  # fmt: skip
 
 

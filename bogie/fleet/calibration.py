@@ -44,8 +44,9 @@ from bogie.fleet.calibration_table import (
     build_table,
     crn_table,
     fleet_readings,
+    steel_weights,
 )
-from bogie.fleet.constants import CALIBRATION_QUANTITIES, WIM_QUANTITIES
+from bogie.fleet.constants import CALIBRATION_QUANTITIES, TILTED_QUANTITIES, WIM_QUANTITIES
 from bogie.fleet.distributions import TruncNormal
 from bogie.weighings.stats import at_resolution, group_inequality
 from bogie.weighings.survey import ObservedSurvey
@@ -199,16 +200,21 @@ def simulated(
 ) -> Simulated:  # fmt: skip
     """The simulated survey: the calibration groups that pass the filters (every axle read and loaded, the group at
     least ``min_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
-    bootstrap count ``slot_counts``, None: 1); every reading first read at the observed file's resolution
-    ``weight_step_kg`` [kg] (None: as it is)."""
+    bootstrap count ``slot_counts``, None: 1; a steel group also by its density ratio under the fitted inhibitor
+    distributions, :func:`~bogie.fleet.calibration_table.steel_weights`); every reading first read at the observed
+    file's resolution ``weight_step_kg`` [kg] (None: as it is)."""
     readings = at_resolution(fleet_readings(table, values), weight_step_kg)
     share = values["air_share"]
     counts = np.ones(len(table.size)) if slot_counts is None else slot_counts
+    moved = steel_weights(table, values)
     quantities, weights = {}, {}
     for size, n in SIZES.items():
         sel = table.size == size
         loads = readings[:, sel, :n].reshape(-1, n)
-        w = np.concatenate([(1.0 - share) * counts[sel], share * counts[sel]])
+        # the steel groups reweighted to the fitted inhibitor distributions, normalised so that steel keeps its share
+        steel = counts[sel] * moved[sel]
+        steel = steel * (counts[sel].sum() / steel.sum()) if steel.sum() > 0.0 else steel
+        w = np.concatenate([(1.0 - share) * steel, share * counts[sel]])
         keep = np.all(np.isfinite(loads), axis=1) & np.all(loads > 0.0, axis=1) & (loads.sum(axis=1) >= min_load_kg)
         keep &= w > 0.0
         quantities[size] = observed_quantities(loads[keep]) if keep.any() else np.zeros((0, n + 1))
@@ -272,6 +278,17 @@ def _check_problem(table: Table, fit: Mapping[str, Sequence[float]], base: Mappi
     if iri is not None and not table.iris[0] <= iri[0] < iri[1] <= table.iris[-1]:
         raise CalibrationError(f"fit['site_iri_m_km'] = {tuple(iri)!r}: must lie within the table's site_iri_levels, "
                                f"[{table.iris[0]:g}, {table.iris[-1]:g}] [m/km]")  # fmt: skip
+    for q in (q for q in fit if q in TILTED_QUANTITIES):
+        family = table.tilted.get(q)
+        column = TILTED_QUANTITIES[q][0]
+        if family is None:
+            raise CalibrationError(f"fit: {q} moves the fleet's distribution of {column}, which the table was not "
+                                   "given as a uniform or log-uniform (inhibitor_distributions)")  # fmt: skip
+        lo, hi = family.mean_range()
+        if not lo < fit[q][0] < fit[q][1] < hi:
+            unit = CALIBRATION_QUANTITIES[q][2]
+            raise CalibrationError(f"fit[{q!r}] = {tuple(fit[q])!r}: must lie strictly within the fleet distribution's "
+                                   f"support ({lo:g}, {hi:g}) [{unit}]")  # fmt: skip
     missing = [q for q in ORDER if q not in base]
     if missing:
         raise CalibrationError(f"base: no value for {', '.join(missing)} (base_values gives every quantity)")

@@ -33,7 +33,7 @@ from bogie.fleet.calibration import (
     observed_quantities,
 )
 from bogie.fleet.calibration_fit import calibrate
-from bogie.fleet.calibration_table import _quiet, bogie_tilts, protocol_spec, weigh_readings
+from bogie.fleet.calibration_table import _quiet, bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.observed import by_size
 from bogie.metrics import max_deviation
 from bogie.params import INHIBITORS
@@ -67,7 +67,7 @@ def simulate_fleet(
     iri = values["site_iri_m_km"] if table.protocol == "wim" else math.nan
     spec = protocol_spec(table, iri)
     tasks, keep = [], []
-    for i, row in enumerate(table.samples.to_dict("records")):
+    for i, row in enumerate(moved_samples(table, values).to_dict("records")):
         if steel_only and kinds[i] != "steel":
             continue
         sample = {**row, "suspension": kinds[i], "chassis_tilt": math.radians(float(tilt[i]))}

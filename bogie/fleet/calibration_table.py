@@ -21,16 +21,19 @@ import numpy as np
 import pandas as pd
 from scipy.stats import truncnorm
 
+from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.distributions import Distribution, TruncNormal
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import bogie_from_sample, suspension_draw
+from bogie.fleet.tilted import Tilted
 from bogie.fleet.weighing import weigh
 from bogie.params import GRAVITY
 from bogie.road import wim
 
 __all__ = [
     "SIZES", "CalibrationError", "Mapper", "Table", "base_values", "bogie_tilts", "build_table", "crn_table",
-    "fleet_readings", "protocol_spec", "weigh_reading", "weigh_readings",
+    "fleet_readings", "moved_samples", "protocol_spec", "steel_weights", "tilted_families", "weigh_reading",
+    "weigh_readings",
 ]  # fmt: skip
 
 #: the axle groups a calibration covers, and their axles
@@ -75,6 +78,8 @@ class Table:
     settings: StaticProtocol | WimProtocol | None = None  # the protocol's (weighed with an error-free sensor)
     tilt_distribution: Distribution | None = None  # the fleet's chassis tilt distribution [rad]
     z_pass: np.ndarray | None = None  # (n,) the sensor's standard normal common to a pass's axles
+    #: quantity of TILTED_QUANTITIES -> the family its fleet distribution moves in (those that can be fitted)
+    tilted: Mapping[str, Tilted] = dataclasses.field(default_factory=dict)
 
     def pass_factors(self) -> np.ndarray:
         """(n,) each bogie's factor of the sensor's error common to its pass's axles, ``1 + s_v z_v`` (the sensor's
@@ -84,9 +89,25 @@ class Table:
         return 1.0 + self.settings.vehicle_error_sd * self.z_pass
 
 
+def tilted_families(inhibitor_distributions: Mapping[str, Distribution] | None) -> dict[str, Tilted]:
+    """Per quantity of :data:`~bogie.fleet.constants.TILTED_QUANTITIES` whose sample column has a uniform or a
+    log-uniform distribution in ``inhibitor_distributions`` (sample column -> the fleet's distribution, SI): the
+    family a fit moves it in (:class:`bogie.fleet.tilted.Tilted`). Other kinds are left out: their mean is not
+    fitted."""
+    families = {}
+    for quantity, (column, scale) in TILTED_QUANTITIES.items():
+        dist = (inhibitor_distributions or {}).get(column)
+        try:
+            families[quantity] = Tilted.of(dist, scale) if dist is not None else None
+        except ValueError:
+            families[quantity] = None
+    return {q: f for q, f in families.items() if f is not None}
+
+
 def base_values(
-    tilt_distribution: Distribution, air_share: float, wim_settings: WimProtocol | None
-) -> dict[str, float]:
+    tilt_distribution: Distribution, air_share: float, wim_settings: WimProtocol | None,
+    inhibitor_distributions: Mapping[str, Distribution] | None = None,
+) -> dict[str, float]:  # fmt: skip
     """The value of each quantity of :data:`ORDER` in a fleet (what an unfitted quantity keeps).
 
     Parameters
@@ -99,13 +120,20 @@ def base_values(
     wim_settings
         The WIM protocol's settings: the site's roughness [m/km] and the sd of each axle reading's own sensor error
         [%] (:attr:`~bogie.fleet.WimProtocol.axle_error_sd`); None: both NaN (a static calibration uses neither).
+    inhibitor_distributions
+        Sample column -> the fleet's distribution (SI) of ``contact_roll_radius`` and ``bush_stiffness``: the mean
+        radius [mm] and the geometric mean stiffness [N m/rad] of a uniform or log-uniform one
+        (:func:`tilted_families`); NaN for another kind or none given (then not fittable).
     """
+    families = tilted_families(inhibitor_distributions)
+    moved = {q: families[q].fleet_mean if q in families else math.nan for q in TILTED_QUANTITIES}
     return {
         "chassis_tilt_mean_deg": math.degrees(getattr(tilt_distribution, "mean", 0.0)),
         "chassis_tilt_sd_deg": math.degrees(getattr(tilt_distribution, "sd", 1.0)),
         "air_share": float(air_share),
         "site_iri_m_km": math.nan if wim_settings is None else wim_settings.site_iri,
         "sensor_error_pct": math.nan if wim_settings is None else 100.0 * wim_settings.axle_error_sd,
+        **moved,
     }  # fmt: skip
 
 
@@ -190,7 +218,7 @@ def _check_fleet(samples: pd.DataFrame, tilt_distribution: Any, protocol: str, s
 def crn_table(
     samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
-    study: str = "fleet",
+    study: str = "fleet", inhibitor_distributions: Mapping[str, Distribution] | None = None,
 ) -> Table:  # fmt: skip
     """The calibration fleet and its common random numbers, with no reading yet (``loads`` zeros).
 
@@ -213,6 +241,9 @@ def crn_table(
         distribution gives (its support).
     site_iri_levels
         The WIM site roughnesses the readings are tabulated at [m/km], increasing (``wim`` only).
+    inhibitor_distributions
+        The fleet's distributions (SI) of ``contact_roll_radius`` and ``bush_stiffness``, the sample columns whose
+        mean a fit may move (:func:`tilted_families`); None: neither can be fitted.
 
     Raises
     ------
@@ -234,9 +265,14 @@ def crn_table(
     z_pass = np.array([p for p, _ in normals], dtype=float)
     size = samples["group"].astype(str).to_numpy()
     loads = np.zeros((2, len(samples), len(grid), len(iris), 3))
+    families = tilted_families(inhibitor_distributions)
+    for quantity in families:
+        column = TILTED_QUANTITIES[quantity][0]
+        if column not in samples.columns:
+            raise CalibrationError(f"samples: no column {column!r} for inhibitor_distributions[{column!r}]")
     return Table(
         samples, size, tilt_u, air_u, z, grid, np.asarray(iris, dtype=float), loads, 0, protocol, settings,
-        tilt_distribution, z_pass,
+        tilt_distribution, z_pass, families,
     )  # fmt: skip
 
 
@@ -244,6 +280,7 @@ def build_table(
     samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
     executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None, study: str = "fleet",
+    inhibitor_distributions: Mapping[str, Distribution] | None = None,
 ) -> Table:  # fmt: skip
     """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs.
 
@@ -256,7 +293,9 @@ def build_table(
         ``loads`` [kg] of shape (2, n, tilts, roughnesses, 3) and ``n_failed``, the weighings that gave no reading.
     """
     progress = progress or _quiet
-    base = crn_table(samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study)
+    base = crn_table(
+        samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study, inhibitor_distributions
+    )
     n, tilts, iris = len(base.size), base.tilts, base.iris
     tasks, records = [], base.samples.to_dict("records")
     for kind in ("steel", "air"):
@@ -290,6 +329,41 @@ def bogie_tilts(table: Table, values: Mapping[str, float]) -> np.ndarray:
         return np.degrees(table.samples["chassis_tilt"].to_numpy(dtype=float))
     mean, sd = math.radians(values["chassis_tilt_mean_deg"]), math.radians(values["chassis_tilt_sd_deg"])
     return np.degrees(dataclasses.replace(dist, mean=mean, sd=sd).ppf(table.tilt_u))
+
+
+def _tilts_of(table: Table, values: Mapping[str, float]) -> dict[str, float]:
+    """Per moved quantity of the table, the tilt ``t`` of its value (0 for the fleet's own)."""
+    out = {}
+    for quantity, family in table.tilted.items():
+        value = values.get(quantity, math.nan)
+        if not math.isnan(value) and value != family.fleet_mean:
+            out[quantity] = family.tilt(value)
+    return out
+
+
+def steel_weights(table: Table, values: Mapping[str, float]) -> np.ndarray:
+    """(n,) each calibration bogie's steel group's weight in a fleet whose inhibitor distributions have the means of
+    ``values`` (:data:`~bogie.fleet.constants.TILTED_QUANTITIES`): the product of the density ratios of its sampled
+    values (:meth:`bogie.fleet.tilted.Tilted.weights`), up to a common factor; ones for the fleet's own."""
+    w = np.ones(len(table.size))
+    for quantity, t in _tilts_of(table, values).items():
+        column = TILTED_QUANTITIES[quantity][0]
+        w = w * table.tilted[quantity].weights(table.samples[column].to_numpy(dtype=float), t)
+    return w
+
+
+def moved_samples(table: Table, values: Mapping[str, float]) -> pd.DataFrame:
+    """The calibration bogies' samples in a fleet whose inhibitor distributions have the means of ``values``: each
+    sampled value moved to its rank under the moved distribution (:meth:`bogie.fleet.tilted.Tilted.moved`), for a
+    direct simulation. The table's own samples when no mean moves."""
+    tilts = _tilts_of(table, values)
+    if not tilts:
+        return table.samples
+    samples = table.samples.copy()
+    for quantity, t in tilts.items():
+        column = TILTED_QUANTITIES[quantity][0]
+        samples[column] = table.tilted[quantity].moved(samples[column].to_numpy(dtype=float), t)
+    return samples
 
 
 def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:

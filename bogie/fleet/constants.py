@@ -7,8 +7,8 @@ from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
 __all__ = [
     "CALIBRATION_QUANTITIES", "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS",
-    "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION", "WIM_QUANTITIES",
-    "n_axles",
+    "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION",
+    "TILTED_QUANTITIES", "WIM_QUANTITIES", "n_axles",
 ]  # fmt: skip
 
 #: axles in each axle group the fleet is made of [-]
@@ -42,6 +42,17 @@ CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
     "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's own error on each axle reading (s_a; the part
     # common to a pass's axles cancels in the load shares and is not fitted)
+    # the mean of distributions.contact_roll_radius_mm, moved by an exponential tilt (bogie.fleet.tilted); the range
+    # is the Bogie field's (bogie.ranges), a fit's must lie strictly within the fleet distribution's support
+    "contact_roll_radius_mean_mm": (0.0, 500.0, "mm"),
+    # the geometric mean of distributions.bush_stiffness (log-uniform), moved the same way
+    "bush_stiffness_geomean": (1e-3, 1e7, "N m/rad"),
+}
+#: the fitted quantities that move a fleet distribution of an inhibitor (bogie.fleet.tilted): the sample column each
+#: moves, and the factor from its SI unit to the unit of the fitted mean
+TILTED_QUANTITIES: dict[str, tuple[str, float]] = {
+    "contact_roll_radius_mean_mm": ("contact_roll_radius", 1000.0),
+    "bush_stiffness_geomean": ("bush_stiffness", 1.0),
 }
 #: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
 #: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's
