@@ -57,6 +57,7 @@ def method_settings(config: Config) -> CalibrationSettings:
     return CalibrationSettings(
         fit=dict(cal.fit), seed=config.seed, maxiter=cal.maxiter, popsize=cal.popsize,
         bootstrap_resamples=cal.bootstrap_resamples, confidence_level=cal.confidence_level,
+        posterior_draws=cal.posterior_draws,
     )  # fmt: skip
 
 
@@ -161,7 +162,7 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
     table = build_table(config, progress)
     metrics, tables = calibrate_survey(
         table, observed, method_settings(config), defaults(config), config.observed.min_group_load,
-        workers_map(config.execution), progress,
+        workers_map(config.execution), progress, config.protocol.static,
     )  # fmt: skip
     return {"skipped": False, **metrics}, tables
 

@@ -28,6 +28,7 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 import pandas as pd
@@ -105,6 +106,12 @@ class CalibrationSettings:
         Bootstrap resamples for the intervals and trade-offs [-], >= 0 (0: no intervals).
     confidence_level
         Of the intervals [-], in (0, 1).
+    posterior_draws
+        Metropolis draws of the posterior kept (a quarter more adapt the sampler first) [-], >= 0 (0: no posterior;
+        :mod:`bogie.fleet.calibration_posterior`).
+    priors
+        Quantity -> :class:`bogie.fleet.priors.Prior`; None: :func:`bogie.fleet.priors.default_priors` (each
+        documented with its source). A quantity left out is flat over its bounds.
     """
 
     fit: Mapping[str, tuple[float, float]]
@@ -113,6 +120,8 @@ class CalibrationSettings:
     popsize: int = 8
     bootstrap_resamples: int = 50
     confidence_level: float = 0.9
+    posterior_draws: int = 4000
+    priors: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:
         check_fit(self.fit)
@@ -121,6 +130,7 @@ class CalibrationSettings:
         _whole("maxiter", self.maxiter, 1)
         _whole("popsize", self.popsize, 2)
         _whole("bootstrap_resamples", self.bootstrap_resamples, 0)
+        _whole("posterior_draws", self.posterior_draws, 0)
         level = self.confidence_level
         if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
             raise CalibrationError(f"confidence_level = {level!r}: must lie in (0, 1) [-]")

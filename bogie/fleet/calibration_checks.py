@@ -32,9 +32,11 @@ from bogie.fleet.calibration import (
     make_problem,
     observed_quantities,
 )
+from bogie.fleet.calibration_attribution import attribution
 from bogie.fleet.calibration_fit import calibrate
 from bogie.fleet.calibration_table import _quiet, bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.observed import by_size
+from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.metrics import max_deviation
 from bogie.params import INHIBITORS
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
@@ -208,7 +210,7 @@ def held_out(
 def calibrate_survey(
     table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float],
     min_load_kg: float = 0.0, executor: Executor | Mapper | None = None,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | None = None, static: StaticProtocol | None = None,
 ) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:  # fmt: skip
     """The whole calibration of an observed survey: the fit, its intervals and trade-offs, and its checks.
 
@@ -228,6 +230,9 @@ def calibrate_survey(
         Where the direct simulations (the checks) are weighed (:func:`~bogie.fleet.calibration_table.weigh_readings`).
     progress
         Told the fit's generations, the resamples and the cost of an evaluation (None: nothing).
+    static
+        The static weighing's settings: with a WIM table, the calibrated fleet's inequality is attributed to its
+        causes (:func:`bogie.fleet.calibration_attribution.attribution`, the weighing without dynamics); None: not.
 
     Returns
     -------
@@ -252,11 +257,22 @@ def calibrate_survey(
     held = held_out(table, observed, settings, base, min_load_kg, executor, progress)
     abl = ablation(table, result.values, min_load_kg, executor)
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
+    by_cause = None
+    if static is not None and table.protocol == "wim":
+        progress("calibrate: attribution, the calibrated fleet weighed four ways")
+        by_cause, metrics["attribution"] = attribution(
+            table, result.values, min_load_kg, static, step, executor, settings.seed,
+            max(settings.bootstrap_resamples, 200), settings.confidence_level,
+        )  # fmt: skip
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
     tables = {
         "bootstrap.csv": result.bootstrap, "valley.csv": result.valley, "profiles.csv": result.profiles,
         "calibrated.csv": direct, "ablation.csv": abl,
     }  # fmt: skip
+    if result.posterior is not None:
+        tables["posterior.csv"] = result.posterior.draws
+    if by_cause is not None:
+        tables["attribution.csv"] = by_cause
     return metrics, tables
 
 
@@ -269,15 +285,20 @@ def _metrics(
         "protocol": table.protocol,
         "method": "differential evolution on the energy distance, common random numbers, tabulated readings",
         "fitted": {
-            q: {k: (_round(v) if not isinstance(v, list) else v) for k, v in e.items() if k != "at_bound"}
+            q: {
+                k: (_round(v) if not isinstance(v, list) else v)
+                for k, v in e.items()
+                if k not in ("at_bound", "posterior")
+            }
             for q, e in result.fitted.items()
         },  # fmt: skip
-        # a fit piled against a bound is a finding about the model, not a value of the fleet (docs/calibration.md)
+        # a fit (or posterior) piled against a bound is a finding about the model, not a value of the fleet
         "at_bounds": {
             q: {k: (v if isinstance(v, str) else _round(v)) for k, v in e["at_bound"].items()}
             for q, e in result.fitted.items()
             if e.get("at_bound")
         },  # fmt: skip
+        "posterior": _posterior_metrics(result.posterior, settings.confidence_level),
         "fixed": {q: _round(v) for q, v in result.values.items() if q not in result.fitted},
         "confidence_level": settings.confidence_level,
         "bootstrap_resamples": settings.bootstrap_resamples,
@@ -305,6 +326,24 @@ def _metrics(
             }
             for r in abl.itertuples()
         },  # fmt: skip
+    }
+
+
+def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
+    """The posterior's summary per quantity, its priors, draws and acceptance (None: no posterior)."""
+    if post is None:
+        return None
+    return {
+        "method": "random-walk Metropolis (adapted in burn-in) on the priors times a synthetic likelihood of the "
+        "survey's summaries over the table (bogie.fleet.calibration_posterior)",
+        "credible_level": level,
+        "draws": len(post.draws),
+        "acceptance": _round(post.acceptance),
+        "quantities": {
+            q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()}
+            for q, e in post.summary.items()
+        },  # fmt: skip
+        "priors": post.priors,
     }
 
 

@@ -19,7 +19,10 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration import CalibrationSettings, Problem, _values, fit
+from bogie.fleet.calibration_posterior import Posterior, posterior
 from bogie.fleet.calibration_table import _quiet
+from bogie.fleet.constants import AT_BOUND, PILED
+from bogie.fleet.priors import default_priors
 
 __all__ = [
     "AT_BOUND", "PILED", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound", "bound_finding",
@@ -32,11 +35,8 @@ VALLEY_POINTS = 21
 PROFILE_POINTS = 25
 #: bootstrap correlation from which two fitted quantities are reported as trading off [-]
 TRADE_OFF = 0.5
-#: a fitted value within this fraction of its bounds' width from a bound is "at the bound" [-]; a convention (no
-#: source): 2 % of [0.1, 1.5] degree is 0.028 degree, below the tilt table's resolution
-AT_BOUND = 0.02
-#: the share of bootstrap refits at one bound from which the refits are "piled against" it [-]; a convention
-PILED = 0.25
+# AT_BOUND (2 % of the width from a bound) and PILED (a quarter of the refits or draws) are conventions of
+# bogie.fleet.constants
 
 
 @dataclass
@@ -59,6 +59,8 @@ class Calibration:
         ``distance``) and along each quantity with the others at their best (``quantity``, ``value``, ``distance``).
     values
         Every quantity's value in the calibrated fleet (the base's for an unfitted one).
+    posterior
+        The posterior (:func:`bogie.fleet.calibration_posterior.posterior`); None with ``posterior_draws`` 0.
     """
 
     fitted: dict[str, dict[str, float]]
@@ -71,6 +73,7 @@ class Calibration:
     valley: pd.DataFrame
     profiles: pd.DataFrame
     values: dict[str, float]
+    posterior: Posterior | None = None
 
 
 def _bootstrap(problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None]) -> pd.DataFrame:
@@ -163,10 +166,34 @@ def calibrate(
     f = problem.objective(problem.unit_weights(), None)
     valley = _valley(problem, f, best, pair) if pair else pd.DataFrame(columns=["x", "y", "distance"])
     profiles = _profiles(problem, f, best)
+    post = None
+    if settings.posterior_draws:
+        progress(f"calibrate: posterior, {settings.posterior_draws} draws")
+        priors = settings.priors
+        if priors is None:
+            priors = default_priors(problem.base, {q: t.mean_range() for q, t in problem.table.tilted.items()})
+        post = posterior(problem, priors, best, settings.posterior_draws, settings.seed, settings.confidence_level)
+        _posterior_findings(fitted, post)
     return Calibration(
         fitted, dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
-        _values(best, problem.fitted, problem.base),
+        _values(best, problem.fitted, problem.base), post,
     )  # fmt: skip
+
+
+def _posterior_findings(fitted: dict[str, dict[str, Any]], post: Posterior) -> None:
+    """Each fitted quantity's posterior summary; a posterior piled against a bound flagged as a fit at it is."""
+    for q, entry in fitted.items():
+        summary = post.summary[q]
+        entry["posterior"] = summary
+        side = summary["piled"]
+        share = {"low": summary["share_at_low"], "high": summary["share_at_high"]}
+        finding = entry.get("at_bound")
+        if finding is None and side is not None:
+            limit = entry["bounds"][0] if side == "low" else entry["bounds"][1]
+            finding = {"bound": side, "value": summary["median"], "limit": float(limit), "share_of_refits": None}
+        if finding is not None:
+            finding["share_of_posterior"] = share[finding["bound"]]
+        entry["at_bound"] = finding
 
 
 def _valley_pair(fitted: Sequence[str], corr: pd.DataFrame) -> tuple[str, str] | None:

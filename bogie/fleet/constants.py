@@ -6,8 +6,8 @@ from bogie.params import TARE_FRACTION
 from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
 __all__ = [
-    "CALIBRATION_QUANTITIES", "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PROTOCOLS",
-    "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION",
+    "AT_BOUND", "CALIBRATION_QUANTITIES", "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PILED",
+    "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION",
     "TILTED_QUANTITIES", "WIM_QUANTITIES", "n_axles",
 ]  # fmt: skip
 
@@ -54,6 +54,12 @@ TILTED_QUANTITIES: dict[str, tuple[str, float]] = {
     "contact_roll_radius_mean_mm": ("contact_roll_radius", 1000.0),
     "bush_stiffness_geomean": ("bush_stiffness", 1.0),
 }
+#: a fitted value within this fraction of its bounds' width from a bound is "at the bound" [-]; a convention (no
+#: source): 2 % of [0.1, 1.5] degree is 0.028 degree, below the tilt table's resolution
+AT_BOUND = 0.02
+#: the share of bootstrap refits or posterior draws at one bound from which they are "piled against" it [-]; a
+#: convention
+PILED = 0.25
 #: the roughness a WIM site may have [m/km]: 0.3, a very smooth new pavement, to 10, a poor paved road (the IRI scale
 #: of Sayers et al. 1986, World Bank TP 46: 6-10 m/km a damaged paved road; ISO 8608 class D and rougher); COST 323's
 #: site classes end at 4 m/km, so no WIM site is rougher than 10

@@ -356,6 +356,8 @@ class Calibrate(Strict):
     """Generations of the differential evolution."""
     popsize: int = integer(2, 200)
     """Population of the differential evolution, per fitted quantity."""
+    posterior_draws: int = integer(0, 1_000_000)
+    """Metropolis draws of the posterior kept, under the documented priors (0: no posterior)."""
 
     @model_validator(mode="after")
     def _quantities(self) -> Calibrate:

@@ -8,9 +8,11 @@ and read back as a real survey would be.
 import copy
 import dataclasses
 import json
+import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 import yaml
 from scipy.stats import truncnorm
@@ -83,7 +85,17 @@ def test_a_synthetic_survey_of_known_fleet_values_is_recovered_within_the_interv
         assert entry["low"] <= entry["value"] <= entry["high"]
         # an interval that filled the bounds would recover anything: each is narrower than its bounds
         assert entry["high"] - entry["low"] < 0.8 * (FIT[name][1] - FIT[name][0]), (name, entry)
-    assert metrics["fixed"] == {"site_iri_m_km": TRUTH["site_iri_m_km"]}
+    # the unfitted quantities keep the fleet's: the site, the mean contact-roll radius of U(0, 120) mm and the
+    # geometric mean of the log-uniform 1-3000 N m/rad bush stiffness
+    fixed = {"site_iri_m_km": TRUTH["site_iri_m_km"], "contact_roll_radius_mean_mm": 60.0,
+             "bush_stiffness_geomean": round(math.sqrt(3000.0), 4)}  # fmt: skip
+    assert metrics["fixed"] == fixed
+    # the posterior: its draws written, each quantity's credible interval around the truth, no draw piled up
+    post = metrics["posterior"]
+    assert set(post["quantities"]) == set(FIT) and set(post["priors"]) == set(FIT)
+    for name, entry in post["quantities"].items():
+        assert entry["low"] <= TRUTH[name] <= entry["high"], (name, entry)
+        assert entry["piled"] is None
 
 
 def test_the_fit_is_closer_to_the_survey_than_the_default_fleet(recovered):
@@ -113,11 +125,34 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
     assert held["distance_held_out"] > 0.0 and held["distance_halves"] > 0.0
     assert set(held["fitted"]) == set(FIT)
     assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
-        ["ablation.csv", "bootstrap.csv", "calibrated.csv", "profiles.csv", "valley.csv"]
-    )
+        ["ablation.csv", "attribution.csv", "bootstrap.csv", "calibrated.csv", "posterior.csv", "profiles.csv",
+         "valley.csv"]
+    )  # fmt: skip
     # every variant of the ablation was weighed on the calibrated fleet's tri-axles
     variants = {key.split("/")[0] for key in metrics["ablation"] if key.endswith("/triaxle")}
     assert variants == {"baseline", *INHIBITORS, "all"}
+
+
+def test_the_wim_inequality_is_attributed_to_its_causes_on_the_calibrated_fleet(recovered):
+    root, metrics = recovered
+    by_cause = metrics["attribution"]
+    table = pd.read_csv(root / "data" / "calibration" / "attribution.csv")
+    steel = by_cause["triaxle/steel"]
+    assert steel["n_groups"] >= 10 and set(steel["causes"]) == {"resolution", "sensor", "tilt", "dynamics"}
+    rows = table[(table["group"] == "triaxle") & (table["suspension"] == "steel")].set_index("scenario")
+    assert list(rows.index) == ["as_observed", "no_resolution", "no_sensor", "no_tilt", "no_dynamics", "at_rest"]
+    for stat in ("share_outside_5pct", "share_over_10pct", "mean_spread_pct"):
+        # each cause's share is what switching it off removes, paired on the same groups, its interval around it
+        for cause, scenario in (("sensor", "no_sensor"), ("tilt", "no_tilt"), ("dynamics", "no_dynamics")):
+            share = steel["causes"][cause][stat]
+            assert share["value"] == pytest.approx(rows.loc["as_observed", stat] - rows.loc[scenario, stat], abs=2e-4)
+            assert share["low"] <= share["value"] + 1e-4 and share["value"] <= share["high"] + 1e-4
+        assert steel["as_observed"][stat] == pytest.approx(rows.loc["as_observed", stat], abs=1e-4)
+    # the survey's fleet (tilt 0.8 +- 0.5 degree): the tilt spreads the steel tri-axles' loads, the level fleet less
+    assert steel["causes"]["tilt"]["mean_spread_pct"]["low"] > 0.0
+    # the air groups share load through their bags: at rest they are nearly equal whatever the tilt
+    air = by_cause.get("triaxle/air")
+    assert air is None or air["at_rest"]["mean_spread_pct"] < steel["at_rest"]["mean_spread_pct"]
 
 
 # ---- the table and the distance ----------------------------------------------------------------------------------

@@ -27,6 +27,13 @@ FITTED = {
     "air_share": {"value": 0.4156, "low": None, "high": None, "bounds": [0.0, 1.0]},
 }
 FIXED = {"site_iri_m_km": 1.5, "sensor_error_pct": 2.25}
+#: the posterior of two of the fitted quantities (an older stage's metrics have none: the third shows "-")
+POSTERIOR = {
+    "chassis_tilt_mean_deg": {"median": 0.7412, "low": 0.4871, "high": 1.1023, "share_at_low": 0.0,
+                              "share_at_high": 0.0, "piled": None},
+    "chassis_tilt_sd_deg": {"median": 0.3377, "low": 0.1052, "high": 0.5811, "share_at_low": 0.31,
+                            "share_at_high": 0.0, "piled": "low"},
+}  # fmt: skip
 
 
 def stats(n, spread, share, quantiles):
@@ -82,6 +89,14 @@ def fitted_metrics(held=True):
         "calibrated": {"groups": groups(0.8)},
         "held_out": held_out,
         "ablation": {},
+        "posterior": {
+            "method": "random-walk Metropolis",
+            "credible_level": 0.9,
+            "draws": 3000,
+            "acceptance": 0.2871,
+            "quantities": POSTERIOR,
+            "priors": {"chassis_tilt_mean_deg": "normal(mean 0, sd 0.6): a source", "chassis_tilt_sd_deg": "half"},
+        },  # fmt: skip
     }
 
 
@@ -222,11 +237,16 @@ def test_the_fit_table_gives_the_metrics_numbers(tmp_path):
         assert row[1] == "fitted"
         assert float(row[2]) == e["value"]
         if e["low"] is None:
-            assert row[3].startswith("no interval")
+            assert row[3] == "none"
         else:
-            low, high = row[3].removesuffix(" (90 %)").split(" to ")
+            low, high = row[3].split(" to ")
             assert (float(low), float(high)) == (e["low"], e["high"])
-        assert [float(b) for b in row[4].split(" to ")] == e["bounds"]
+        p = POSTERIOR.get(q)
+        if p is None:
+            assert row[4] == "-"
+        else:
+            assert row[4] == f"{p['median']:g} ({p['low']:g} to {p['high']:g})"
+        assert [float(b) for b in row[5].split(" to ")] == e["bounds"]
     for q, v in metrics["fixed"].items():
         row = by_label[calibration.quantity_label(q)]
         assert row[1] == "fixed" and float(row[2]) == v
@@ -234,6 +254,9 @@ def test_the_fit_table_gives_the_metrics_numbers(tmp_path):
     assert f"Distance reached: {metrics['distance']:g} through the table" in page
     assert f"simulated directly: {metrics['distance_direct']:g}" in page
     assert "chassis tilt, centre and chassis tilt, spread (sd): +0.97" in page
+    flat = " ".join(page.split())
+    assert "Posterior: 3000 draws (29 % accepted)" in flat and "90 % credible interval" in flat
+    assert "chassis tilt, centre normal(mean 0, sd 0.6); chassis tilt, spread (sd) half." in flat
 
 
 def test_the_checks_page_gives_each_sides_statistics_and_the_held_out_distances(tmp_path):
@@ -279,7 +302,13 @@ def test_a_fit_at_a_bound_is_said_in_words_on_the_fit_page_and_nothing_is_said_w
     page = figure_text(pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[0].figure)
     assert "Fitted at a bound" not in page  # the metrics of a fit without one (and of an older stage: no key)
     metrics["at_bounds"] = {
-        "chassis_tilt_sd_deg": {"bound": "low", "value": 0.1, "limit": 0.1, "share_of_refits": 0.75},
+        "chassis_tilt_sd_deg": {
+            "bound": "low",
+            "value": 0.1,
+            "limit": 0.1,
+            "share_of_refits": 0.75,
+            "share_of_posterior": 0.31,
+        },
         "air_share": {"bound": "high", "value": 0.99, "limit": 1.0, "share_of_refits": None},
     }
     tables, read = written(tmp_path / "b", metrics, fitted_tables())
@@ -287,6 +316,7 @@ def test_a_fit_at_a_bound_is_said_in_words_on_the_fit_page_and_nothing_is_said_w
     page = " ".join(figure_text(fig).split())
     assert "Fitted at a bound: a finding about the model, not a value of the fleet" in page
     spread = calibration.quantity_label("chassis_tilt_sd_deg", False)
-    assert f"{spread}: fitted 0.1, at its lower bound 0.1, as are 75 % of the bootstrap refits." in page
+    assert (f"{spread}: fitted 0.1, at its lower bound 0.1, as are 75 % of the bootstrap refits; 31 % of the "
+            "posterior's draws lie there.") in page  # fmt: skip
     assert f"{calibration.quantity_label('air_share', False)}: fitted 0.99, at its upper bound 1." in page
     assert_text_above_the_footer(fig)

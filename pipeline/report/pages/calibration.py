@@ -41,6 +41,8 @@ QUANTITY: dict[str, tuple[str, str]] = {
     "air_share": ("air-sprung share", "-"),
     "site_iri_m_km": ("WIM site roughness (IRI)", "m/km"),
     "sensor_error_pct": ("sensor error (sd)", "%"),
+    "contact_roll_radius_mean_mm": ("contact-roll radius, mean", "mm"),
+    "bush_stiffness_geomean": ("bush stiffness, geometric mean", "N m/rad"),
 }
 #: the sides of the checks page: (label, where in metrics/calibration.json, colour)
 CHECK_SIDES: tuple[tuple[str, tuple[str, ...], str], ...] = (
@@ -77,20 +79,23 @@ def _nothing(ax, what: str) -> None:
 # ---- the fit ------------------------------------------------------------------------------------------------------
 def fit_rows(m: Mapping[str, Any]) -> list[list[str]]:
     """The fit table: each fitted quantity (value, interval, bounds), then each fixed one (its value)."""
-    level = f"{100 * m['confidence_level']:g} %"
     rows = []
+    post = (m.get("posterior") or {}).get("quantities", {})
     for q, e in m["fitted"].items():
-        interval = "no interval" if e["low"] is None or e["high"] is None else f"{_g(e['low'])} to {_g(e['high'])}"
-        rows.append([quantity_label(q), "fitted", _g(e["value"]), f"{interval} ({level})", " to ".join(
+        interval = "none" if e["low"] is None or e["high"] is None else f"{_g(e['low'])} to {_g(e['high'])}"
+        p = post.get(q)
+        posterior = "-" if p is None else f"{_g(p['median'])} ({_g(p['low'])} to {_g(p['high'])})"
+        rows.append([quantity_label(q), "fitted", _g(e["value"]), interval, posterior, " to ".join(
             _g(b) for b in e["bounds"])])  # fmt: skip
     for q, v in (m.get("fixed") or {}).items():
-        rows.append([quantity_label(q), "fixed", _g(v), "-", "-"])
+        if v is not None:
+            rows.append([quantity_label(q), "fixed", _g(v), "-", "-", "-"])
     return rows
 
 
 #: the fit table's header and column widths
-FIT_HEADER = ("quantity", "", "value", "interval", "bounds")
-FIT_WIDTHS = (0.33, 0.09, 0.12, 0.28, 0.18)
+FIT_HEADER = ("quantity", "", "value", "bootstrap interval", "posterior median (interval)", "bounds")
+FIT_WIDTHS = (0.27, 0.07, 0.09, 0.18, 0.25, 0.14)
 
 
 def _valley(ax, cax, valley: pd.DataFrame, boot: pd.DataFrame, fitted: Mapping[str, Any]) -> None:

@@ -1,0 +1,80 @@
+"""The calibration's priors and posterior (issue 30 Must 2): the priors' densities and sources, the summaries by
+hand, the posterior around the truth of a known fleet, and a posterior piled against a bound flagged."""
+
+import math
+
+import numpy as np
+import pytest
+from test_fleet_tilted import BUSH, FIT, RADIUS, TILT, TRUTH, radius_survey, radius_table
+
+from bogie.fleet import calibration as L
+from bogie.fleet import calibration_fit as F
+from bogie.fleet import calibration_posterior as P
+from bogie.fleet.constants import CALIBRATION_QUANTITIES, PILED
+from bogie.fleet.priors import Prior, default_priors, log_prior
+
+
+def test_every_fittable_quantity_has_a_prior_with_a_source():
+    base = L.base_values(TILT, 0.0, None, {"contact_roll_radius": RADIUS, "bush_stiffness": BUSH})
+    priors = default_priors(base, {"contact_roll_radius_mean_mm": (0.0, 120.0), "bush_stiffness_geomean": (1.0, 3e3)})
+    assert set(priors) == set(CALIBRATION_QUANTITIES)
+    assert all(len(p.source) > 40 for p in priors.values())
+    # the sensor's prior is centred on the type's error; without a WIM protocol, on the quartz strip's 2 %
+    assert priors["sensor_error_pct"].a == 2.0 and priors["sensor_error_pct"].b == pytest.approx(math.log(2.0))
+    assert priors["contact_roll_radius_mean_mm"].describe().startswith("uniform(low 0, high 120): no source")
+
+
+def test_the_priors_log_densities_are_their_closed_forms():
+    normal, lognormal = Prior("normal", 0.0, 0.6, "s"), Prior("lognormal", 2.0, math.log(2.0), "s")
+    assert normal.log_density(0.6) - normal.log_density(0.0) == pytest.approx(-0.5)
+    # a log-normal's density at its median e^sigma is e^(-sigma^2/2) / e^sigma of the one at its median... by hand:
+    # ln p(4) - ln p(2) = -ln 2 - (ln 2 / ln 2)^2 / 2 = -0.693 - 0.5
+    assert lognormal.log_density(4.0) - lognormal.log_density(2.0) == pytest.approx(-math.log(2.0) - 0.5)
+    assert Prior("uniform", 0.0, 1.0, "s").log_density(1.5) == -math.inf
+    log_uniform = Prior("loguniform", 1.0, 3000.0, "s")
+    assert log_uniform.log_density(10.0) - log_uniform.log_density(100.0) == pytest.approx(math.log(10.0))
+    assert log_prior({"x": normal}, {"x": 1.2, "y": 5.0}) == pytest.approx(-2.0)  # y has no prior: flat
+    for bad in (("normal", 0.0, 0.0), ("uniform", 1.0, 1.0), ("loguniform", 0.0, 1.0), ("beta", 1.0, 2.0)):
+        with pytest.raises(ValueError, match="must be one of"):
+            Prior(*bad, "s")
+
+
+def test_the_summaries_by_hand():
+    # two tri-axle groups of shares (0.9, 1.0, 1.1) and (1.1, 1.0, 0.9), spreads 20 %; one tandem group weighted 3x
+    tri = np.array([[0.9, 1.0, 1.1, 20.0], [1.1, 1.0, 0.9, 20.0]])
+    tandem = np.array([[0.95, 1.05, 10.0], [1.05, 0.95, 10.0]])
+    s = P.summaries({"tandem": tandem, "triaxle": tri}, {"tandem": np.array([3.0, 1.0]), "triaxle": np.ones(2)})
+    # tandem: mean share 0 = (3 x 0.95 + 1.05) / 4 = 0.975; its weighted sd sqrt(3/4 x 0.025^2 + 1/4 x 0.075^2);
+    # spread mean 10, sd 0. Tri-axle: mean shares 1.0, 1.0; sds 0.1, 0, 0.1; spread 20, sd 0
+    sd_t = math.sqrt(0.75 * 0.025**2 + 0.25 * 0.075**2)
+    np.testing.assert_allclose(s, [0.975, sd_t, 10.0, 0.0, 1.0, 1.0, 0.1, 0.0, 0.1, 20.0, 0.0], atol=1e-12)
+
+
+@pytest.fixture(scope="module")
+def fitted():
+    table, observed = radius_table(), radius_survey()
+    base = L.base_values(TILT, 0.0, None, {"contact_roll_radius": RADIUS, "bush_stiffness": BUSH})
+    settings = L.CalibrationSettings(FIT, seed=4, maxiter=30, popsize=8, bootstrap_resamples=4, posterior_draws=3000)
+    return F.calibrate(L.make_problem(table, observed, FIT, base), settings)
+
+
+def test_the_posterior_holds_the_known_fleet_and_is_narrower_than_its_prior(fitted):
+    post = fitted.posterior
+    assert len(post.draws) == 3000 and 0.15 < post.acceptance < 0.6
+    for q, truth in TRUTH.items():
+        s = fitted.fitted[q]["posterior"]
+        assert s["low"] <= truth <= s["high"], (q, s)
+        assert s["high"] - s["low"] < 0.2 * (FIT[q][1] - FIT[q][0]) and s["piled"] is None
+    assert fitted.fitted["contact_roll_radius_mean_mm"]["at_bound"] is None
+
+
+def test_a_posterior_piled_against_a_bound_is_flagged_with_its_share_of_draws():
+    # the survey's mean radius is 35 mm; a range that starts at 50 mm leaves the posterior nowhere but its lower bound
+    table, observed = radius_table(), radius_survey()
+    base = L.base_values(TILT, 0.0, None, {"contact_roll_radius": RADIUS, "bush_stiffness": BUSH})
+    narrow = {**FIT, "contact_roll_radius_mean_mm": (50.0, 115.0)}
+    settings = L.CalibrationSettings(narrow, seed=4, maxiter=20, popsize=8, bootstrap_resamples=0, posterior_draws=2000)
+    result = F.calibrate(L.make_problem(table, observed, narrow, base), settings)
+    finding = result.fitted["contact_roll_radius_mean_mm"]["at_bound"]
+    assert finding["bound"] == "low" and finding["limit"] == 50.0 and finding["share_of_posterior"] >= PILED
+    assert result.fitted["contact_roll_radius_mean_mm"]["posterior"]["piled"] == "low"
