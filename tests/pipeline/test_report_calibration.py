@@ -320,3 +320,47 @@ def test_a_fit_at_a_bound_is_said_in_words_on_the_fit_page_and_nothing_is_said_w
             "posterior's draws lie there.") in page  # fmt: skip
     assert f"{calibration.quantity_label('air_share', False)}: fitted 0.99, at its upper bound 1." in page
     assert_text_above_the_footer(fig)
+
+
+def attribution_metrics():
+    """metrics/calibration.json's ``attribution`` for two of the four groups (numbers chosen to format distinctly)."""
+
+    def share(v, lo, hi):
+        return {"share_outside_5pct": {"value": v, "low": lo, "high": hi},
+                "share_over_10pct": {"value": v / 2, "low": lo / 2, "high": hi / 2},
+                "mean_spread_pct": {"value": 10 * v, "low": 10 * lo, "high": 10 * hi}}  # fmt: skip
+
+    def stats(outside):
+        return {"share_outside_5pct": outside, "share_over_10pct": outside / 3, "mean_spread_pct": 40 * outside}
+
+    return {
+        "triaxle/steel": {"n_groups": 21, "n_dropped": 0, "as_observed": stats(0.81), "at_rest": stats(0.29),
+                          "causes": {"resolution": share(0.0, -0.01, 0.01), "sensor": share(0.05, -0.02, 0.12),
+                                     "tilt": share(0.33, 0.21, 0.46), "dynamics": share(-0.07, -0.15, 0.02)}},
+        "tandem/air": {"n_groups": 7, "n_dropped": 1, "as_observed": stats(0.43), "at_rest": stats(0.0),
+                       "causes": {"resolution": share(0.0, 0.0, 0.0), "sensor": share(0.43, 0.14, 0.71),
+                                  "tilt": share(0.0, 0.0, 0.0), "dynamics": share(0.14, 0.0, 0.29)}},
+    }  # fmt: skip
+
+
+def test_the_attribution_gives_a_page_of_each_causes_share_with_its_interval(tmp_path):
+    metrics = fitted_metrics()
+    assert [p.name for p in pages_of(*written(tmp_path / "a", metrics, fitted_tables()))][-1] == "calibration_checks"
+    metrics["attribution"] = attribution_metrics()
+    tables, read = written(tmp_path / "b", metrics, fitted_tables())
+    pages = pages_of(tables, read)
+    assert (pages[-1].section, pages[-1].name) == ("Calibration: what the WIM shows, by cause", "calibration_causes")
+    fig = pages[-1].figure
+    header, *rows = table_cells(fig)
+    assert header == list(calibration.CAUSE_HEADER)
+    # tri-axles first, as the bars; outside 5 % in % of groups, each cause's share (interval), at rest
+    assert rows == [
+        ["tri-axle, steel", "21", "81", "+0 (-1 to +1)", "+5 (-2 to +12)", "+33 (+21 to +46)", "-7 (-15 to +2)", "29"],
+        ["tandem, air", "7", "43", "+0 (+0 to +0)", "+43 (+14 to +71)", "+0 (+0 to +0)", "+14 (+0 to +29)", "0"],
+    ]
+    bars = [ax for ax in fig.get_axes() if not ax.tables and ax.get_visible() and ax.axison]
+    assert [ax.get_ylabel() for ax in bars] == [label for _, label, _ in calibration.CAUSE_STATS]
+    assert all(ax.has_data() for ax in bars)
+    page = " ".join(figure_text(fig).split())
+    assert "switching that one cause off removes" in page and "90 % interval from a paired bootstrap" in page
+    assert_text_above_the_footer(fig)

@@ -27,8 +27,8 @@ from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, GROUPS, factor_label
 from pipeline.report.style import QUANTITY as SAMPLED_QUANTITY
 
 __all__ = [
-    "CHECK_SIDES", "QUANTITY", "SIZES", "check_page", "fit_page", "fit_rows", "page", "quantity_label",
-    "skipped_page", "stats_rows",
+    "CAUSE_HEADER", "CHECK_SIDES", "QUANTITY", "SIZES", "cause_page", "cause_rows", "check_page", "fit_page",
+    "fit_rows", "page", "quantity_label", "skipped_page", "stats_rows",
 ]  # fmt: skip
 
 #: the group sizes compared
@@ -281,6 +281,87 @@ def check_page(
 CHECK_FITS = ((0.45, 7.9), (0.47, 7.6), (0.5, 7.4), (0.53, 7.1), (0.56, 6.8))
 
 
+# ---- what the WIM shows, by cause ---------------------------------------------------------------------------------
+#: the causes attributed (bogie.fleet.calibration_attribution.CAUSES), their labels and colours
+CAUSE_LABEL: dict[str, tuple[str, str]] = {
+    "resolution": ("file resolution", "C7"), "sensor": ("sensor error", "C4"), "tilt": ("chassis tilt", "C3"),
+    "dynamics": ("dynamics", "C2"),
+}  # fmt: skip
+#: the statistics drawn: key, axis label, factor to the axis's unit
+CAUSE_STATS: tuple[tuple[str, str, float], ...] = (
+    ("share_outside_5pct", "outside 5 % [% of groups]", 100.0),
+    ("mean_spread_pct", "mean spread [% of the mean axle load]", 1.0),
+)
+
+
+def _group_key_label(key: str) -> str:
+    size, kind = key.split("/")
+    return f"{GROUP_LABEL[size]}, {kind}"
+
+
+def _causes(ax, attribution: Mapping[str, Any], stat: str, ylabel: str, factor: float, legend: bool) -> None:
+    """Per size and suspension: the readings as observed, the suspension at rest, and each cause's share."""
+    keys = [k for k in ("triaxle/steel", "triaxle/air", "tandem/steel", "tandem/air") if k in attribution]
+    bars = ["as_observed", *CAUSE_LABEL, "at_rest"]
+    width = 0.8 / len(bars)
+    x = np.arange(len(keys))
+    for j, bar in enumerate(bars):
+        pos = x + (j - (len(bars) - 1) / 2) * width
+        if bar in ("as_observed", "at_rest"):
+            values = [factor * attribution[k][bar][stat] for k in keys]
+            color, label = ("0.15", "as observed") if bar == "as_observed" else ("0.7", "at rest (all off)")
+            ax.bar(pos, values, 0.9 * width, color=color, label=label)
+            continue
+        entries = [attribution[k]["causes"][bar][stat] for k in keys]
+        values = np.array([factor * e["value"] for e in entries])
+        err = np.array([[factor * (e["value"] - e["low"]), factor * (e["high"] - e["value"])] for e in entries]).T
+        ax.bar(pos, values, 0.9 * width, color=CAUSE_LABEL[bar][1], label=f"{CAUSE_LABEL[bar][0]}'s share")
+        ax.errorbar(pos, values, yerr=np.maximum(err, 0.0), fmt="none", ecolor="0.2", elinewidth=0.8, capsize=1.5)
+    ax.axhline(0.0, color="0.3", lw=0.7)
+    ax.set_xticks(x, [f"{_group_key_label(k)}\n({attribution[k]['n_groups']} groups)" for k in keys])
+    ax.set_ylabel(ylabel)
+    if legend:
+        low, high = ax.get_ylim()
+        ax.set_ylim(low, high + 0.45 * (high - low))  # headroom for the legend
+        ax.legend(loc="upper right", ncol=3, fontsize=7)
+
+
+def cause_rows(attribution: Mapping[str, Any]) -> list[list[str]]:
+    """The table under the bars: per size and suspension, outside 5 % as observed, each cause's share with its
+    interval and at rest, in % of groups."""
+    rows = []
+    for key in (k for k in ("triaxle/steel", "triaxle/air", "tandem/steel", "tandem/air") if k in attribution):
+        entry, stat = attribution[key], "share_outside_5pct"
+        cells = [_group_key_label(key), str(entry["n_groups"]), f"{100 * entry['as_observed'][stat]:.0f}"]
+        for cause in CAUSE_LABEL:
+            e = entry["causes"][cause][stat]
+            cells.append(f"{100 * e['value']:+.0f} ({100 * e['low']:+.0f} to {100 * e['high']:+.0f})")
+        cells.append(f"{100 * entry['at_rest'][stat]:.0f}")
+        rows.append(cells)
+    return rows
+
+
+#: the cause table's header and widths
+CAUSE_HEADER = ("group", "groups", "observed", "resolution", "sensor", "tilt", "dynamics", "at rest")
+CAUSE_WIDTHS = (0.15, 0.07, 0.09, 0.155, 0.155, 0.155, 0.155, 0.07)
+
+
+def cause_page(m: Mapping[str, Any], caption: Sequence[str]) -> Figure:
+    """The attribution's bars, outside 5 % and mean spread, above its table and ``caption``."""
+    attribution = m["attribution"]
+
+    def draw(fit: tuple[float, float]) -> tuple[Figure, float]:
+        bottom, type_size = fit
+        fig = new_page("Calibration: what the WIM shows, by cause", body=(0.06, bottom, 0.88, 0.93 - bottom))
+        grid = fig.add_gridspec(len(CAUSE_STATS), 1)
+        for r, (stat, label, factor) in enumerate(CAUSE_STATS):
+            _causes(fig.add_subplot(grid[r, 0]), attribution, stat, label, factor, r == 0)
+        top = table_axes(fig, bottom - 0.01, CAUSE_HEADER, cause_rows(attribution), CAUSE_WIDTHS, size=type_size - 0.8)
+        return fig, text_block(fig, top - 0.012, caption, size=type_size)
+
+    return first_fit(CHECK_FITS, draw)
+
+
 # ---- skipped ------------------------------------------------------------------------------------------------------
 def skipped_page(m: Mapping[str, Any]) -> Figure:
     """One page of text: why nothing was calibrated and how to give a survey."""
@@ -296,7 +377,11 @@ def page(ctx: Context) -> list[Page]:
     fit = fit_page(m, tables, text.render("calibration_fit.j2", m=m, label=quantity_label, valley=valley))
     intro = text.render("calibration_check_intro.j2", m=m)
     check = check_page(m, tables, intro, text.render("calibration_check.j2", m=m, sizes=SIZES))
-    return [
+    pages = [
         Page("Calibration: the fit", "calibration_fit", fit),
         Page("Calibration: observed against calibrated, held out, ablation", "calibration_checks", check),
     ]
+    if m.get("attribution"):
+        by_cause = cause_page(m, text.render("calibration_causes.j2", m=m))
+        pages.append(Page("Calibration: what the WIM shows, by cause", "calibration_causes", by_cause))
+    return pages
