@@ -33,7 +33,8 @@ from bogie.fleet.calibration import (
     observed_quantities,
 )
 from bogie.fleet.calibration_attribution import attribution
-from bogie.fleet.calibration_fit import calibrate
+from bogie.fleet.calibration_fit import calibrate, priors_for
+from bogie.fleet.calibration_posterior import posterior
 from bogie.fleet.calibration_table import _quiet, bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.observed import by_size
 from bogie.fleet.protocol_settings import StaticProtocol
@@ -202,6 +203,12 @@ def held_out(
             groups=groups_stats(odd.loads),
             calibrated_groups=frame_stats(direct_half),
         )
+        if settings.posterior_draws:  # the half fit's posterior: a held-out check with one piled is no check
+            post = posterior(half, priors_for(half, settings), theta, settings.posterior_draws, settings.seed,
+                             settings.confidence_level)  # fmt: skip
+            held["posterior"] = {q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()}
+                                 for q, e in post.summary.items()}  # fmt: skip
+            held["posterior_piled"] = {q: e["piled"] for q, e in post.summary.items() if e["piled"]}
     except CalibrationError as exc:
         held.update(reason=str(exc), groups=None)
     return held

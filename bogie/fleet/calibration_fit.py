@@ -26,7 +26,7 @@ from bogie.fleet.priors import default_priors
 
 __all__ = [
     "AT_BOUND", "PILED", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound", "bound_finding",
-    "calibrate",
+    "calibrate", "priors_for",
 ]  # fmt: skip
 
 #: the distance over the valley's pair of quantities is evaluated on this many points per side [-]
@@ -169,15 +169,21 @@ def calibrate(
     post = None
     if settings.posterior_draws:
         progress(f"calibrate: posterior, {settings.posterior_draws} draws")
-        priors = settings.priors
-        if priors is None:
-            priors = default_priors(problem.base, {q: t.mean_range() for q, t in problem.table.tilted.items()})
+        priors = priors_for(problem, settings)
         post = posterior(problem, priors, best, settings.posterior_draws, settings.seed, settings.confidence_level)
         _posterior_findings(fitted, post)
     return Calibration(
         fitted, dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
         _values(best, problem.fitted, problem.base), post,
     )  # fmt: skip
+
+
+def priors_for(problem: Problem, settings: CalibrationSettings) -> dict[str, Any]:
+    """The settings' priors, or the documented defaults (:func:`bogie.fleet.priors.default_priors`) for the
+    problem's fleet."""
+    if settings.priors is not None:
+        return dict(settings.priors)
+    return default_priors(problem.base, {q: t.mean_range() for q, t in problem.table.tilted.items()})
 
 
 def _posterior_findings(fitted: dict[str, dict[str, Any]], post: Posterior) -> None:

@@ -124,6 +124,8 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
     assert abs(held["groups"]["triaxle"]["n_groups"] - total / 2) <= 0.1 * total
     assert held["distance_held_out"] > 0.0 and held["distance_halves"] > 0.0
     assert set(held["fitted"]) == set(FIT)
+    # the half fit's posterior, and none of it piled against a bound (the truth lies inside every range)
+    assert set(held["posterior"]) == set(FIT) and held["posterior_piled"] == {}
     assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
         ["ablation.csv", "attribution.csv", "bootstrap.csv", "calibrated.csv", "posterior.csv", "profiles.csv",
          "valley.csv"]

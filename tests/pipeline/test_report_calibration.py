@@ -364,3 +364,14 @@ def test_the_attribution_gives_a_page_of_each_causes_share_with_its_interval(tmp
     page = " ".join(figure_text(fig).split())
     assert "switching that one cause off removes" in page and "90 % interval from a paired bootstrap" in page
     assert_text_above_the_footer(fig)
+
+
+def test_a_half_fit_whose_posterior_is_piled_is_said_not_to_validate_that_fleet(tmp_path):
+    metrics = fitted_metrics()
+    page = " ".join(figure_text(pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[1].figure).split())
+    assert "posterior is piled" not in page
+    metrics["held_out"]["posterior_piled"] = {"air_share": "high"}
+    fig = pages_of(*written(tmp_path / "b", metrics, fitted_tables()))[1].figure
+    page = " ".join(figure_text(fig).split())
+    assert "The half fit's posterior is piled against a bound for air_share: a held-out match" in page
+    assert_text_above_the_footer(fig)
