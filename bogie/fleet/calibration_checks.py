@@ -264,6 +264,7 @@ def calibrate_survey(
     held = held_out(table, observed, settings, base, min_load_kg, executor, progress)
     abl = ablation(table, result.values, min_load_kg, executor)
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
+    metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
     by_cause = None
     if static is not None and table.protocol == "wim":
         progress("calibrate: attribution, the calibrated fleet weighed four ways")
@@ -334,6 +335,14 @@ def _metrics(
             for r in abl.itertuples()
         },  # fmt: skip
     }
+
+
+def _faithful(table: float | None, direct: float | None, halves: float | None) -> dict[str, Any]:
+    """Issue 30 Must 4: the table is faithful when the calibrated fleet simulated directly is as far from the survey
+    as the table said, within the sampling floor (the distance between the survey's two halves)."""
+    gap = None if table is None or direct is None else _round(direct - table, 5)
+    faithful = None if gap is None or halves is None else bool(abs(gap) <= halves)
+    return {"gap": gap, "floor": halves, "faithful": faithful}
 
 
 def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:

@@ -126,6 +126,11 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
     assert set(held["fitted"]) == set(FIT)
     # the half fit's posterior, and none of it piled against a bound (the truth lies inside every range)
     assert set(held["posterior"]) == set(FIT) and held["posterior_piled"] == {}
+    # the table's faithfulness: the direct simulation's distance against the table's, and the sampling floor
+    faithful = metrics["table_faithful"]
+    assert faithful["gap"] == pytest.approx(metrics["distance_direct"] - metrics["distance"], abs=2e-5)
+    assert faithful["floor"] == held["distance_halves"] and faithful["faithful"] == (abs(faithful["gap"]) <= held[
+        "distance_halves"])  # fmt: skip
     assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
         ["ablation.csv", "attribution.csv", "bootstrap.csv", "calibrated.csv", "posterior.csv", "profiles.csv",
          "valley.csv"]

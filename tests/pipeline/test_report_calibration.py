@@ -375,3 +375,14 @@ def test_a_half_fit_whose_posterior_is_piled_is_said_not_to_validate_that_fleet(
     page = " ".join(figure_text(fig).split())
     assert "The half fit's posterior is piled against a bound for air_share: a held-out match" in page
     assert_text_above_the_footer(fig)
+
+
+def test_the_fit_page_says_whether_the_table_is_faithful_within_the_sampling_floor(tmp_path):
+    metrics = fitted_metrics()
+    metrics["table_faithful"] = {"gap": 2.58792, "floor": 2.71184, "faithful": True}
+    page = " ".join(figure_text(pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[0].figure).split())
+    assert "simulated directly: 7.07898: within the sampling floor 2.71184 of the table's" in page
+    assert "misstates" not in page
+    metrics["table_faithful"] = {"gap": 2.9, "floor": 1.2, "faithful": False}
+    page = " ".join(figure_text(pages_of(*written(tmp_path / "b", metrics, fitted_tables()))[0].figure).split())
+    assert "NOT within the sampling floor 1.2 of the table's" in page and "misstates the fleet it fits" in page
