@@ -15,6 +15,7 @@ BENCHMARKS = (
     "bench.bench_stage",
     "bench.bench_air",
     "bench.bench_calibrate",
+    "bench.bench_distance",
     "bench.bench_readers",
     "bench.profile_protocol",
     "bench.profile_stage",

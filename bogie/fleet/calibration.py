@@ -49,7 +49,7 @@ from bogie.fleet.calibration_table import (
 )
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, TILTED_QUANTITIES, WIM_QUANTITIES
 from bogie.fleet.distributions import TruncNormal
-from bogie.weighings.stats import at_resolution, group_inequality
+from bogie.weighings.stats import at_resolution
 from bogie.weighings.survey import ObservedSurvey
 
 __all__ = [
@@ -182,11 +182,13 @@ def observed_groups(survey: ObservedSurvey) -> Observed:
 
 
 def observed_quantities(loads: np.ndarray) -> np.ndarray:
-    """Per group (rows of ``loads`` [any unit], front first): each axle's load share W_i / mean(W), then the spread
-    (max - min) / mean [%], from :func:`bogie.weighings.stats.group_inequality`, shape (groups, n + 1)."""
+    """Per group (rows of ``loads`` [any unit], front first, every axle present): each axle's load share
+    W_i / mean(W), then the spread (max - min) / mean [%], shape (groups, n + 1): the arithmetic of
+    :func:`bogie.weighings.stats.group_inequality`, without its other quantities (the fit's inner loop)."""
     n = loads.shape[1]
-    ineq = group_inequality(loads, np.full(len(loads), n))
-    return np.column_stack([ineq["load_share"][:, :n], ineq["spread_pct"]])
+    total = loads.sum(axis=1)
+    spread = 100.0 * (loads.max(axis=1) - loads.min(axis=1)) / (total / n)
+    return np.column_stack([n * loads / total[:, None], spread])
 
 
 # ---- a fleet of given quantities, from the table -----------------------------------------------------------------
@@ -249,6 +251,42 @@ def distance(
     return float(total)
 
 
+class _SortedSample:
+    """A weighted sample sorted once, with its CDF's steps: one side of :func:`_energy`."""
+
+    def __init__(self, x: np.ndarray, w: np.ndarray) -> None:
+        order = np.argsort(x, kind="stable")
+        self.x = np.ascontiguousarray(x[order], dtype=float)
+        cum = np.concatenate(([0.0], np.cumsum(w[order], dtype=float)))
+        self.cdf = cum / cum[-1] if cum[-1] > 0.0 else cum
+
+
+def _energy(u: _SortedSample, v: _SortedSample) -> float:
+    """The energy distance of two weighted 1-D samples: ``sqrt(2)`` times the L2 distance of their CDFs, the
+    formula of :func:`scipy.stats.energy_distance` (Szekely's E-statistic's square root in 1-D), from presorted
+    sides."""
+    both = np.concatenate((u.x, v.x))
+    both.sort(kind="mergesort")
+    deltas = np.diff(both)
+    fu = u.cdf[u.x.searchsorted(both[:-1], "right")]
+    fv = v.cdf[v.x.searchsorted(both[:-1], "right")]
+    return math.sqrt(2.0) * math.sqrt(float(np.dot(np.square(fu - fv), deltas)))
+
+
+def _fast_distance(
+    observed: Mapping[str, list[_SortedSample]], sim: Simulated, scales: Mapping[str, np.ndarray]
+) -> float:
+    """:func:`distance` with the observed side presorted (:class:`_SortedSample`): the fit's objective."""
+    total = 0.0
+    for size, sides in observed.items():
+        s, w = sim.quantities[size], sim.weights[size]
+        if len(s) == 0 or w.sum() <= 0.0:
+            return math.inf
+        for c, u in enumerate(sides):
+            total += _energy(u, _SortedSample(s[:, c], w)) / scales[size][c]
+    return float(total)
+
+
 # ---- the fit -----------------------------------------------------------------------------------------------------
 @dataclass
 class Problem:
@@ -264,10 +302,13 @@ class Problem:
     weight_step_kg: float | None = None  # the observed file's resolution [kg]
 
     def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
+        # the observed side's sorted values and CDF steps, once per objective: only the simulated side changes
+        observed = {k: [_SortedSample(q[:, c], obs_weights[k]) for c in range(q.shape[1])] for k, q in self.obs.items()}
+
         def f(theta: np.ndarray) -> float:
             values = _values(theta, self.fitted, self.base)
             sim = simulated(self.table, values, self.min_load_kg, slot_counts, self.weight_step_kg)
-            return distance(self.obs, obs_weights, sim, self.scales)
+            return _fast_distance(observed, sim, self.scales)
 
         return f
 

@@ -9,6 +9,7 @@ numbers (:func:`crn_table`). Loads in kg, tilts in degrees, roughness in m/km.
 from __future__ import annotations
 
 import dataclasses
+import functools
 import math
 import os
 import time
@@ -80,6 +81,13 @@ class Table:
     z_pass: np.ndarray | None = None  # (n,) the sensor's standard normal common to a pass's axles
     #: quantity of TILTED_QUANTITIES -> the family its fleet distribution moves in (those that can be fitted)
     tilted: Mapping[str, Tilted] = dataclasses.field(default_factory=dict)
+
+    def column(self, name: str) -> np.ndarray:
+        """A sample column as floats, read once (the fit reads the inhibitors' columns at every evaluation)."""
+        cache = self.__dict__.setdefault("_columns", {})
+        if name not in cache:
+            cache[name] = self.samples[name].to_numpy(dtype=float)
+        return cache[name]
 
     def pass_factors(self) -> np.ndarray:
         """(n,) each bogie's factor of the sensor's error common to its pass's axles, ``1 + s_v z_v`` (the sensor's
@@ -331,13 +339,18 @@ def bogie_tilts(table: Table, values: Mapping[str, float]) -> np.ndarray:
     return np.degrees(dataclasses.replace(dist, mean=mean, sd=sd).ppf(table.tilt_u))
 
 
+@functools.lru_cache(maxsize=4096)
+def _tilt(family: Tilted, value: float) -> float:
+    return family.tilt(value)
+
+
 def _tilts_of(table: Table, values: Mapping[str, float]) -> dict[str, float]:
     """Per moved quantity of the table, the tilt ``t`` of its value (0 for the fleet's own)."""
     out = {}
     for quantity, family in table.tilted.items():
         value = values.get(quantity, math.nan)
         if not math.isnan(value) and value != family.fleet_mean:
-            out[quantity] = family.tilt(value)
+            out[quantity] = _tilt(family, float(value))
     return out
 
 
@@ -347,8 +360,7 @@ def steel_weights(table: Table, values: Mapping[str, float]) -> np.ndarray:
     values (:meth:`bogie.fleet.tilted.Tilted.weights`), up to a common factor; ones for the fleet's own."""
     w = np.ones(len(table.size))
     for quantity, t in _tilts_of(table, values).items():
-        column = TILTED_QUANTITIES[quantity][0]
-        w = w * table.tilted[quantity].weights(table.samples[column].to_numpy(dtype=float), t)
+        w = w * table.tilted[quantity].weights(table.column(TILTED_QUANTITIES[quantity][0]), t)
     return w
 
 
