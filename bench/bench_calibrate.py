@@ -121,6 +121,7 @@ def report(metrics: dict) -> None:
     if held.get("groups") is None:
         print(f"no held-out check: {held.get('reason')}")
         return
+    print(f"half fit's posterior piled against a bound: {held.get('posterior_piled') or 'none'}")
     for size in ("tandem", "triaxle"):
         obs, sim = held["groups"].get(size), held["calibrated_groups"].get(size)
         if not obs or not sim or not obs.get("n_groups"):
