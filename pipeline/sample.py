@@ -135,8 +135,9 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
 
 
 def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
-    """The switch-off ablation: the first ``ablation.n_bogies`` steel fleet bogies, each as the variants of
-    :data:`VARIANTS` (the inhibitors are the steel groups'; an air-sprung group has none to remove).
+    """The switch-off ablation: the first ``ablation.n_bogies`` steel fleet bogies (all of them when the fleet has
+    fewer: the size follows the fleet), each as the variants of :data:`VARIANTS` (the inhibitors are the steel
+    groups'; an air-sprung group has none to remove).
 
     A variant differs from its baseline only in the inhibitor(s) set to the ideal value of
     :data:`bogie.params.INHIBITORS`; it keeps the fleet bogie's road seed and WIM sensor seed, so the baseline rows
@@ -156,12 +157,12 @@ def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:
         ``len(VARIANTS)`` consecutive rows per fleet bogie, ``base_id`` its fleet ``sample_id``.
     """
     steel = fleet[fleet["suspension"] == "steel"]
-    if len(steel) < config.ablation.n_bogies:
+    if len(steel) == 0:
         raise ConfigError(
-            "ablation.n_bogies",
-            f"ablation.n_bogies = {config.ablation.n_bogies}: the fleet has only {len(steel)} steel-equalised "
-            "bogies (fleet.suspension_mix), and the ablation removes the steel groups' inhibitors; allowed: at most "
-            f"{len(steel)} [-]",
+            "fleet.suspension_mix",
+            f"fleet.suspension_mix = {dict(config.fleet.suspension_mix)}: the fleet of {len(fleet)} bogies has no "
+            "steel-equalised bogie, and the ablation removes the steel groups' inhibitors; allowed: a steel share "
+            "above 0 in some group [-]",
         )
     base = steel.iloc[: config.ablation.n_bogies]
     frame = base.loc[base.index.repeat(len(VARIANTS))].reset_index(drop=True)
@@ -196,7 +197,8 @@ BYTES_PER_BOGIE = 3 * 1024
 def memory_needed(config: Config) -> int:
     """The memory [bytes] the studies of ``config`` need at the pipeline's peak (:data:`BYTES_PER_BOGIE`)."""
     sensitivity = config.sensitivity.base_size * (len(config.sensitivity.factors) + 2)
-    rows = config.fleet.n_bogies + sensitivity + len(VARIANTS) * config.ablation.n_bogies
+    ablation = min(config.ablation.n_bogies, config.fleet.n_bogies)
+    rows = config.fleet.n_bogies + sensitivity + len(VARIANTS) * ablation
     return rows * BYTES_PER_BOGIE
 
 
@@ -213,7 +215,8 @@ def check_memory(config: Config, available: int | None) -> None:
         raise ConfigError(
             "fleet.n_bogies",
             f"fleet.n_bogies = {config.fleet.n_bogies}: the studies ({config.fleet.n_bogies:,} fleet, "
-            f"{config.ablation.n_bogies:,} x {len(VARIANTS)} ablation and the Sobol' design) need about "
+            f"{min(config.ablation.n_bogies, config.fleet.n_bogies):,} x {len(VARIANTS)} ablation and the Sobol' "
+            "design) need about "
             f"{need / 2**30:,.1f} GiB at the pipeline's peak, more than the {available / 2**30:,.1f} GiB available "
             "on this machine: lower fleet.n_bogies, or run on a larger machine",
         )

@@ -34,6 +34,7 @@ __all__ = [
     "View",
     "calibration_tilt_count",
     "design_tilt_count",
+    "fleet_bounded",
     "rule_errors",
 ]
 
@@ -160,19 +161,10 @@ def _protocols_run(view: View) -> Iterator[RuleError]:
         yield RuleError("survey.export_format", export, expected)
 
 
-def _ablation_fleet(view: View) -> Iterator[RuleError]:
-    n, fleet = view.get("ablation.n_bogies"), view.get("fleet.n_bogies")
-    if n > fleet:
-        expected = f"must not exceed fleet.n_bogies = {fleet}: the ablation reuses fleet bogies"
-        yield RuleError("ablation.n_bogies", n, expected)
-
-
-def _calibration_fleet(view: View) -> Iterator[RuleError]:
-    _calibrates(view)
-    n, fleet = view.get("calibrate.n_bogies"), view.get("fleet.n_bogies")
-    if n > fleet:
-        expected = f"must not exceed fleet.n_bogies = {fleet}: the calibration fleet is the first fleet bogies [-]"
-        yield RuleError("calibrate.n_bogies", n, expected)
+def fleet_bounded(view: View, key: str) -> int:
+    """A study size that reuses fleet bogies (``ablation.n_bogies``, ``calibrate.n_bogies``): at most the fleet's,
+    so that one switch (``-S fleet.n_bogies=100``) makes a small study (issue 31; the params.yaml comments say so)."""
+    return min(view.get(key), view.get("fleet.n_bogies"))
 
 
 def _calibration_tilt(view: View) -> Iterator[RuleError]:
@@ -226,7 +218,7 @@ def calibration_runs(view: View) -> tuple[int, str]:
     low, high = _tilt_support(view)
     tilts = calibration_tilt_count(low, high, view.get("calibrate.tilt_step_deg"))
     levels = len(view.get("calibrate.site_iri_levels_m_km")) if view.get("calibrate.protocol") == "wim" else 1
-    n = view.get("calibrate.n_bogies")
+    n = fleet_bounded(view, "calibrate.n_bogies")
     return n * 2 * tilts * levels, f"{n:,} bogies x 2 suspensions x {tilts:,} tilts x {levels} site roughnesses"
 
 
@@ -247,7 +239,7 @@ def study_rows(view: View) -> int:
     """Sample rows of the fleet, sensitivity and ablation studies (the survey holds all their runs at once)."""
     fleet = view.get("fleet.n_bogies")
     sensitivity = view.get("sensitivity.base_size") * (len(view.get("sensitivity.factors")) + 2)
-    return fleet + sensitivity + ABLATION_VARIANTS * view.get("ablation.n_bogies")
+    return fleet + sensitivity + ABLATION_VARIANTS * fleet_bounded(view, "ablation.n_bogies")
 
 
 def _cost(key_of: str, counted: Callable[[View], tuple[int, str]], cause: str) -> Rule:
@@ -292,8 +284,6 @@ RULES: tuple[Rule, ...] = (
     _calibration_tilt,
     _design_level,
     _protocols_run,
-    _ablation_fleet,
-    _calibration_fleet,
     _calibration_site,
     _cost("calibrate.tilt_step_deg", calibration_runs, "raise calibrate.tilt_step_deg or lower calibrate.n_bogies"),
     _cost("design.tilt_step_deg", design_runs, "raise design.tilt_step_deg, or use fewer grid levels or conditions"),

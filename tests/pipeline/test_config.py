@@ -199,7 +199,6 @@ BAD = [
     ("execution.backend", "dask", "execution.dask_scheduler", ["None", "tcp://"]),
     ("execution.n_jobs", 0, "execution.n_jobs", ["= 0", "integer"]),
     ("execution.chunk_size", 0, "execution.chunk_size", ["= 0", "integer"]),
-    ("ablation.n_bogies", 5000, "ablation.n_bogies", ["5000", "fleet.n_bogies"]),
     ("seed", -1, "seed", ["-1", "integer"]),
     ("observed.path", "/srv/wim/site.mon", "observed.path", ["'/srv/wim/site.mon'", "a file in observed/"]),
     ("observed.path", "data/site.mon", "observed.path", ["'data/site.mon'", "relative to the project root"]),
@@ -300,10 +299,10 @@ def test_every_bad_key_is_reported_at_once_one_line_each(raw):
 
 
 def test_a_cross_section_rule_is_checked_once_the_sections_are_valid(raw):
-    # ablation.n_bogies > fleet.n_bogies is only meaningful for a valid fleet.n_bogies: the type error alone is reported
+    # sensitivity.protocol not in protocol.run is only meaningful for a valid protocol.run: the type error alone
     with pytest.raises(ConfigError) as excinfo:
-        parse_config(changed(changed(raw, "fleet.n_bogies", "many"), "ablation.n_bogies", 10**6))
-    assert [key for key, _ in excinfo.value.errors] == ["fleet.n_bogies"]
+        parse_config(changed(changed(raw, "protocol.run", "many"), "sensitivity.protocol", "wim"))
+    assert [key for key, _ in excinfo.value.errors] == ["protocol.run"]
 
 
 def test_the_schema_exports_its_ranges_and_units_as_json_schema():

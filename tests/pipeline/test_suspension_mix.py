@@ -10,7 +10,7 @@ import yaml
 from bogie.air import AirBogie
 from bogie.fleet.sampling import bogie_from_sample
 from pipeline.config import ConfigError, parse_config
-from pipeline.sample import sample_ablation, sample_fleet
+from pipeline.sample import VARIANTS, sample_ablation, sample_fleet
 from pipeline.simulate import run_chunk, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
@@ -60,10 +60,16 @@ def test_the_ablation_takes_steel_groups_only_and_says_when_too_few():
     ablation = sample_ablation(config, fleet)
     assert (ablation["suspension"] == "steel").all()
     assert set(ablation["base_id"]) <= set(fleet.loc[fleet["suspension"] == "steel", "sample_id"])
-    params = raw(0.99, n_bogies=30)
+    # fewer steel bogies than ablation.n_bogies: all of them (the size follows the fleet, issue 31)
+    params = raw(0.5, n_bogies=30)
     params["ablation"]["n_bogies"] = 25
     config = parse_config(params)
-    with pytest.raises(ConfigError, match="ablation.n_bogies"):
+    fleet = sample_fleet(config)
+    steel = int((fleet["suspension"] == "steel").sum())
+    assert 0 < steel < 25 and len(sample_ablation(config, fleet)) == steel * len(VARIANTS)
+    # no steel bogie at all: nothing to ablate, said naming the mix
+    config = parse_config(raw(1.0, n_bogies=30))
+    with pytest.raises(ConfigError, match="fleet.suspension_mix = .* no steel-equalised bogie"):
         sample_ablation(config, sample_fleet(config))
 
 

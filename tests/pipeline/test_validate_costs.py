@@ -59,7 +59,6 @@ def refused(raw, **values):
             ["1,000,000,000 grid combinations"],
         ),
         ({"calibrate__tilt_step_deg": 1e-9, **SURVEY}, "calibrate.tilt_step_deg", ["tilts", "more than 10,000,000"]),
-        ({"calibrate__n_bogies": 5000, **SURVEY}, "calibrate.n_bogies", ["5000", "fleet.n_bogies = 2000"]),
         ({"sensitivity__factors": ["bush_stiffness", "road_class"]}, "sensitivity.factors[1]", ["categorical"]),
         ({"execution__dask_scheduler": "file:///tmp/scheduler.json"}, "execution.dask_scheduler", ["tcp://"]),
         ({"calibrate__site_iri_levels_m_km": [1.0, 2.0, 1000.0]}, "calibrate.site_iri_levels_m_km[2]", ["[0.3, 10]"]),
@@ -176,14 +175,28 @@ def test_a_calibration_that_will_not_run_is_not_checked_against_the_fleet(raw):
 
 
 def test_a_rule_between_keys_is_reported_with_the_other_errors(raw):
-    err = refused(raw, sensitivity__base_size=500, ablation__n_bogies=5000, calibrate__n_bogies=3000, **SURVEY)
+    no_site = {"protocol__wim__site_length_before_m": 0.0, "protocol__wim__site_length_after_m": 0.0}
+    err = refused(raw, sensitivity__base_size=500, protocol__run=["wim"], **no_site, **SURVEY)
     keys = [key for key, _ in err.errors]
-    assert keys == ["sensitivity.base_size", "ablation.n_bogies", "calibrate.n_bogies"]
+    assert keys == ["sensitivity.base_size", "sensitivity.protocol", "calibrate.fit.site_iri_m_km"]
 
 
 def test_the_schema_alone_enforces_the_rules(raw):
-    with pytest.raises(ValueError, match="must not exceed fleet.n_bogies = 2000: the calibration fleet"):
-        Params.model_validate(changed(raw, calibrate__n_bogies=3000, **SURVEY))
+    with pytest.raises(ValueError, match="is not run: protocol.run lists only wim"):
+        Params.model_validate(changed(raw, protocol__run=["wim"]))
+
+
+def test_one_switch_makes_a_small_study_the_sizes_that_reuse_fleet_bogies_follow_it(raw):
+    # issue 31: the README's `dvc exp run --temp -S fleet.n_bogies=100` stopped at "ablation.n_bogies = 500: must
+    # not exceed fleet.n_bogies = 100"; the ablation and the calibration fleet now take at most the fleet's bogies
+    config = parse_config(changed(raw, fleet__n_bogies=100, **SURVEY))
+    assert config.ablation.n_bogies == 500 and config.calibrate.n_bogies == 300  # as written; used at most 100
+    from pipeline.sample import VARIANTS, sample_ablation, sample_fleet
+
+    fleet = sample_fleet(config)
+    ablation = sample_ablation(config, fleet)
+    assert len(fleet) == 100 and len(ablation) == 100 * len(VARIANTS)  # the default fleet is all steel
+    assert len(calibrate.calibration_samples(config)) == 100
 
 
 def test_config_json_gives_each_distribution_its_kind_and_no_section_or_protocol_one():
