@@ -33,7 +33,7 @@ try:
 except ImportError:  # no flock (Windows): claim nothing, prune nothing
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["GRACE", "KEEP", "cache_root", "claim", "hash_sources", "prune", "source_digest"]
+__all__ = ["GRACE", "KEEP", "cache_root", "claim", "hash_sources", "is_cached", "prune", "source_digest"]
 
 #: the cache directories kept, the most recently used first, this process's own among them: the versions a day's
 #: switching between branches and clones comes back to (each is 0.5-25 MB; one not kept costs a recompilation,
@@ -46,6 +46,20 @@ GRACE = 3600.0
 LOCK_NAME = ".in-use"
 #: name prefix of a directory being removed (renamed into the root first); leftovers of an interrupted removal too
 _REMOVING = ".removing-"
+
+
+def is_cached(module_file: str | Path, cache_dir: str | Path | None = None) -> bool:
+    """Whether numba's cache holds compiled functions of the source ``module_file`` for this clone: an index
+    (``<module>.<function>-<line>.py<version>.nbi``) in the subdirectory numba's user-provided cache locator gives
+    that file, ``<parent name>_<sha1 of the parent's absolute path>`` under ``cache_dir`` (None: the
+    ``NUMBA_CACHE_DIR`` ``import bogie`` set). A prediction for a progress message, not a guarantee: an index
+    without the signature asked for still compiles."""
+    directory = cache_dir or os.environ.get("NUMBA_CACHE_DIR")
+    if not directory:
+        return False
+    parent = Path(module_file).resolve().parent
+    sub = Path(directory) / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"
+    return any(sub.glob(f"{Path(module_file).stem}.*.nbi"))
 
 
 def cache_root() -> Path:

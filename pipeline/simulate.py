@@ -310,11 +310,47 @@ def simulate_samples(
     return summary
 
 
+#: samples weighed in the main process to compile the kernels before the workers start, at most [-]
+WARM_SAMPLES = 4
+
+
+def compile_kernels(pending: Sequence[Chunk], log: Log) -> float:
+    """Compile the kernels the pending chunks need, once, in this process, before the workers start (issue 31: a
+    first run was silent for minutes while every worker compiled, and its rate and time left counted the compile).
+
+    When numba's cache holds no kernel of this version of the code (:func:`bogie.numba_cache.is_cached`), it says so,
+    weighs the first sample of each kind (axle group, suspension, protocols) of the pending chunks here, which
+    compiles and caches every kernel they use, and says how long that took; the workers then load the cache. Returns
+    the seconds spent (0 when the cache was there)."""
+    from bogie import _phases_core
+    from bogie.numba_cache import is_cached
+
+    if not pending or is_cached(_phases_core.__file__):
+        return 0.0
+    log(
+        "simulate: compiling the numba kernels for this version of the code, once (a few minutes on 2 cores; "
+        "cached for every later run, and the progress below leaves it out)"
+    )
+    start = time.perf_counter()
+    seen = set()
+    for chunk in pending:
+        for i in range(len(chunk.rows["sample_id"])):
+            kind = (chunk.rows["group"][i], chunk.rows["suspension"][i], tuple(p for p, _ in chunk.protocols))
+            if kind in seen or len(seen) >= WARM_SAMPLES:
+                continue
+            seen.add(kind)
+            chunk_table({c: v[i : i + 1] for c, v in chunk.rows.items()}, chunk.protocols)
+    seconds = time.perf_counter() - start
+    log(f"simulate: kernels compiled in {seconds:.0f} s")
+    return seconds
+
+
 def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: int, log: Log) -> int:
     """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
     by_key = {(c.study, c.index): c for c in pending}
     failed = 0
     here = process_numerics()
+    compile_kernels(pending, log)
     progress = Progress(total, log)
     try:
         for study, index, content, runs, failed_runs, numerics in _results(pending, execution) if pending else ():

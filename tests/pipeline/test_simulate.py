@@ -27,6 +27,7 @@ from bogie.fleet.sampling import COLUMNS
 from pipeline.chunks import (
     HASH_KEY,
     NUMERICS_KEY,
+    Chunk,
     NotRunsDatasetError,
     RunsLockedError,
     part_content,
@@ -520,3 +521,44 @@ def test_a_worker_that_computes_other_bits_is_refused_and_writes_nothing(config,
             run(config, {"fleet": samples["fleet"].iloc[:3]}, out, backend="dask",
                 dask_scheduler=cluster.scheduler_address)  # fmt: skip
     assert parts(out) == []
+
+
+# ---- the first run talks (issue 31 item 2) -------------------------------------------------------------------------
+def test_numbas_cache_is_found_where_its_locator_puts_a_modules_index(tmp_path):
+    import hashlib
+
+    from bogie import _phases_core
+    from bogie.numba_cache import is_cached
+
+    parent = Path(_phases_core.__file__).resolve().parent
+    sub = tmp_path / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"
+    assert not is_cached(_phases_core.__file__, tmp_path)
+    sub.mkdir()
+    (sub / "_phases_step.advance-3.py311.nbi").write_text("")  # another module's functions: not it
+    (sub / "_phases_core_x.run-1.py311.nbi").write_text("")
+    assert not is_cached(_phases_core.__file__, tmp_path)
+    (sub / "_phases_core.run_phases-512.py311.nbi").write_text("")
+    assert is_cached(_phases_core.__file__, tmp_path)
+    (tmp_path / "elsewhere_0123").mkdir()  # another clone's subdirectory does not count for this one
+    assert not is_cached(_phases_core.__file__, tmp_path / "elsewhere_0123")
+
+
+def test_the_kernels_compile_once_before_the_workers_with_a_line_before_and_after(monkeypatch):
+    import pipeline.simulate as S
+    from bogie import numba_cache
+
+    rows = {c: [] for c in COLUMNS}
+    for i, (group, suspension) in enumerate([("triaxle", "steel")] * 3 + [("tandem", "steel"), ("triaxle", "air")]):
+        for c in COLUMNS:
+            rows[c].append({"sample_id": i, "group": group, "suspension": suspension}.get(c, 0))
+    chunk = Chunk("fleet", 0, rows, (("static", None), ("wim", None)), "h", Path("p"))
+    weighed, lines = [], []
+    monkeypatch.setattr(S, "chunk_table", lambda r, protocols: weighed.append((r["group"], r["suspension"])))
+    monkeypatch.setattr(numba_cache, "is_cached", lambda *a, **k: True)
+    assert S.compile_kernels([chunk], lines.append) == 0.0 and weighed == [] and lines == []  # cached: nothing said
+    monkeypatch.setattr(numba_cache, "is_cached", lambda *a, **k: False)
+    S.compile_kernels([chunk], lines.append)
+    # one sample of each kind, the first of each: steel tri-axle, steel tandem, air tri-axle
+    assert weighed == [(["triaxle"], ["steel"]), (["tandem"], ["steel"]), (["triaxle"], ["air"])]
+    assert len(lines) == 2 and "compiling the numba kernels" in lines[0] and "leaves it out" in lines[0]
+    assert re.fullmatch(r"simulate: kernels compiled in \d+ s", lines[1])
