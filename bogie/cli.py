@@ -44,10 +44,16 @@ def _image_suffix(parser: argparse.ArgumentParser, option: str, path: str | None
 def _cmd_case_list() -> int:
     from bogie import cases
 
+    import textwrap
+
     for name in cases.names():
         case = cases.get(name)
         text = case.description.split(":", 1)[-1].strip()  # without the "Table 2 block 3 run N10:" prefix
-        print(f"{name}  {text if len(text) <= 110 else text[:109] + '…'}")
+        # whole, wrapped under the name: cut at a width, N07 and N08 read the same (issue 31)
+        lines = textwrap.wrap(text, width=110 - len(name) - 2, break_on_hyphens=False) or [""]
+        print(f"{name}  {lines[0]}")
+        for line in lines[1:]:
+            print(" " * (len(name) + 2) + line)
     return 0
 
 

@@ -31,14 +31,22 @@ def test_version_is_the_installed_package_version():
     assert proc.returncode == 0 and proc.stdout.strip() == f"bogie {version('bogie')}"
 
 
-def test_case_list_names_every_run_with_a_one_line_description(capsys):
+def test_case_list_names_every_run_with_its_whole_description_wrapped(capsys):
     from bogie import cases
 
     assert main(["case", "list"]) == 0
     lines = capsys.readouterr().out.splitlines()
-    assert [line.split()[0] for line in lines] == list(cases.CASES)
-    assert any(line.startswith("N10 ") and "short step" in line for line in lines)
-    assert all(len(line) <= 115 for line in lines)
+    assert [line.split()[0] for line in lines if not line.startswith(" ")] == list(cases.CASES)
+    assert all(len(line) <= 110 for line in lines)
+    # each description whole (issue 31: cut at 110 characters, N07 and N08 read the same)
+    entries, name = {}, None
+    for line in lines:
+        if not line.startswith(" "):
+            name, line = line.split(maxsplit=1)[0], line.split(maxsplit=1)[1]
+        entries[name] = (entries.get(name, "") + " " + line.strip()).strip()
+    for name in cases.CASES:
+        assert entries[name] == cases.get(name).description.split(":", 1)[-1].strip()
+    assert entries["N07"] != entries["N08"]
 
 
 def test_a_bad_flag_prints_the_subcommands_usage():
