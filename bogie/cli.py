@@ -42,9 +42,9 @@ def _image_suffix(parser: argparse.ArgumentParser, option: str, path: str | None
 
 
 def _cmd_case_list() -> int:
-    from bogie import cases
-
     import textwrap
+
+    from bogie import cases
 
     for name in cases.names():
         case = cases.get(name)
