@@ -180,7 +180,7 @@ def run(
         f"{len(exp.samples)} static runs"
     )
     protocols = {"design": (("static", config.protocol.static),)}
-    simulate_samples({"design": exp.samples[list(COLUMNS)]}, protocols, config.execution, runs_dir, log)
+    simulate_samples({"design": exp.samples[list(COLUMNS)]}, protocols, config.execution, runs_dir, log, "design")
     # every part verified (the file's SHA-256, its pages' CRC32s: pipeline.schema.read_runs_frame), as every stage
     # that reads runs does
     analysis, summary = analysed(config, exp, read_runs_frame(runs_dir, "design"))

@@ -182,7 +182,9 @@ def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
 class Progress:
     """A tqdm bar when stderr is a terminal; otherwise a log line every 10 % of the runs or every 30 s."""
 
-    def __init__(self, total: int, log: Log, interval: float = 30.0, step: float = 0.1) -> None:
+    def __init__(
+        self, total: int, log: Log, interval: float = 30.0, step: float = 0.1, stage: str = "simulate"
+    ) -> None:
         self.total = total
         self.log = log
         self.interval = interval
@@ -195,7 +197,7 @@ class Progress:
             # imported here: a worker imports this module for its task, and tqdm would add 50 ms to its start-up
             from tqdm import tqdm
 
-            self.bar = tqdm(total=total, unit="run", desc="simulate", file=sys.stderr)
+            self.bar = tqdm(total=total, unit="run", desc=stage, file=sys.stderr)
 
     def update(self, runs: int) -> None:
         self.done += runs
@@ -251,6 +253,7 @@ def simulate_samples(
     execution: ExecutionConfig,
     out: str | Path,
     log: Log = _print,
+    stage: str = "simulate",
 ) -> Summary:
     """Simulate the given studies into the hive-partitioned dataset ``out``, resuming from the files already there.
 
@@ -268,6 +271,8 @@ def simulate_samples(
         (:func:`pipeline.chunks.check_runs_dir`).
     log
         Receives the progress and summary lines.
+    stage
+        The stage the lines name (``design`` runs its study through here too).
 
     Returns
     -------
@@ -282,6 +287,8 @@ def simulate_samples(
         If another process writes ``out``.
     """
     start = time.perf_counter()
+    if stage != "simulate":  # the shared code's lines say "simulate:"; the stage running them is another
+        log = _relabelled(log, stage)
     out = Path(out)
     check_runs_dir(out)  # before the lock: a refused folder gets no lock file beside it either
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
@@ -296,7 +303,7 @@ def simulate_samples(
         )
         if execution.backend == "loky" and pending:
             execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log, "simulate"))
-        failed = failed_done + _run_pending(pending, execution, total, log)
+        failed = failed_done + _run_pending(pending, execution, total, log, stage)
     summary = Summary(
         runs=sum(c.n_runs for c in chunks),
         failed=failed,
@@ -345,13 +352,22 @@ def compile_kernels(pending: Sequence[Chunk], log: Log) -> float:
     return seconds
 
 
-def _run_pending(pending: Sequence[Chunk], execution: ExecutionConfig, total: int, log: Log) -> int:
+def _relabelled(log: Log, stage: str) -> Log:
+    def relabelled(line: str) -> None:
+        log(f"{stage}:{line.removeprefix('simulate:')}" if line.startswith("simulate:") else line)
+
+    return relabelled
+
+
+def _run_pending(
+    pending: Sequence[Chunk], execution: ExecutionConfig, total: int, log: Log, stage: str = "simulate"
+) -> int:
     """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
     by_key = {(c.study, c.index): c for c in pending}
     failed = 0
     here = process_numerics()
     compile_kernels(pending, log)
-    progress = Progress(total, log)
+    progress = Progress(total, log, stage=stage)
     try:
         for study, index, content, runs, failed_runs, numerics in _results(pending, execution) if pending else ():
             check_numerics(numerics, here, study, index)

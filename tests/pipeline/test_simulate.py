@@ -562,3 +562,13 @@ def test_the_kernels_compile_once_before_the_workers_with_a_line_before_and_afte
     assert weighed == [(["triaxle"], ["steel"]), (["tandem"], ["steel"]), (["triaxle"], ["air"])]
     assert len(lines) == 2 and "compiling the numba kernels" in lines[0] and "leaves it out" in lines[0]
     assert re.fullmatch(r"simulate: kernels compiled in \d+ s", lines[1])
+
+
+def test_another_stage_running_its_study_here_is_named_in_every_line(config, samples, tmp_path):
+    # issue 31: the design stage's progress lines said "simulate:"
+    lines = []
+    few = {"fleet": samples["fleet"].iloc[:2]}
+    simulate_samples(few, {"fleet": study_protocols(config, "fleet")}, dataclasses.replace(config.execution, n_jobs=1),
+                     tmp_path / "runs", lines.append, "design")  # fmt: skip
+    assert lines and all(line.startswith("design:") for line in lines), lines
+    assert not any("simulate" in line for line in lines)
