@@ -61,7 +61,9 @@ PAGES: tuple[tuple[str, Callable[[Context], list[Page]]], ...] = (
 )
 
 
-def build_pages(inputs: ReportInputs, runs: Mapping[str, DynamicResult]) -> tuple[list[Page], dict[str, Any]]:
+def build_pages(
+    inputs: ReportInputs, runs: Mapping[str, DynamicResult], progress: Callable[[str], None] | None = None
+) -> tuple[list[Page], dict[str, Any]]:
     """Every page of the report, in order (the title page first), and the summary's numbers.
 
     Parameters
@@ -70,6 +72,8 @@ def build_pages(inputs: ReportInputs, runs: Mapping[str, DynamicResult]) -> tupl
         What the pipeline wrote (:func:`pipeline.report.inputs.read_inputs`).
     runs
         The reference cases' results (:func:`pipeline.report.pages.reference.reference_runs`).
+    progress
+        Told each part of the report as it is drawn (None: nothing).
 
     Returns
     -------
@@ -79,7 +83,11 @@ def build_pages(inputs: ReportInputs, runs: Mapping[str, DynamicResult]) -> tupl
         The numbers the summary's sentences are made from, as read from metrics/*.json.
     """
     ctx = Context.of(inputs, runs)
-    pages = [page for _, build in PAGES for page in build(ctx)]
+    pages = []
+    for k, (name, build) in enumerate(PAGES, start=1):
+        if progress is not None:
+            progress(f"report: drawing {name} ({k}/{len(PAGES)})")
+        pages.extend(build(ctx))
     title = front.title(ctx, contents([p.section for p in pages], first=2))
     return [title, *pages], ctx.numbers
 
@@ -118,13 +126,24 @@ def write_report(
             frame.to_csv(tmp_plots / name, index=False, float_format="%.6g")
 
 
-def make_report(inputs: ReportInputs, pdf: str | Path, png_dir: str | Path, plots_dir: str | Path) -> dict[str, Any]:
-    """Build and write the whole report; returns the summary's numbers and the page count (key ``pages``)."""
+def make_report(
+    inputs: ReportInputs, pdf: str | Path, png_dir: str | Path, plots_dir: str | Path,
+    progress: Callable[[str], None] | None = None,
+) -> dict[str, Any]:  # fmt: skip
+    """Build and write the whole report; returns the summary's numbers and the page count (key ``pages``).
+    ``progress`` is told each step (the reference cases, each part, the writing; None: nothing)."""
+    say = progress or (lambda text: None)
+    say("report: running the reference's named cases")
     runs = reference.reference_runs()
     with matplotlib.rc_context(STYLE):
-        pages, numbers = build_pages(inputs, runs)
+        pages, numbers = build_pages(inputs, runs, progress)
+        say(f"report: writing {len(pages)} pages to the PDF and the PNG pages")
         write_report(pages, report_series(inputs), pdf, png_dir, plots_dir, inputs.facts["code_sha256"])
     return {**numbers, "pages": len(pages)}
+
+
+def _to_stderr(text: str) -> None:
+    print(text, file=sys.stderr, flush=True)
 
 
 def main(argv: list[str] | None = None) -> int:
@@ -152,7 +171,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"report: {exc}", file=sys.stderr)
         return 2
     try:
-        numbers = make_report(inputs, args.pdf, args.png, args.plots)
+        numbers = make_report(
+            inputs, args.pdf, args.png, args.plots, lambda text: print(text, file=sys.stderr, flush=True)
+        )
     except OSError as exc:
         print(io_error("report", exc), file=sys.stderr)
         return 2

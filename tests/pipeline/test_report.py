@@ -339,3 +339,13 @@ def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project
     counts = report.run_counts(inputs.runs).set_index("study")
     assert counts.loc["all", "n_failed"] == int((inputs.runs["status"] != "ok").sum()) >= 3
     assert f"{counts.loc['all', 'n_failed']:,} failed" in figure_text(pages[0][2])
+
+
+def test_the_report_says_each_part_as_it_draws_it(built):
+    # issue 31: the report stage was silent for a minute
+    from pipeline.report.build import PAGES
+
+    lines = []
+    with matplotlib.rc_context(style.STYLE):
+        report.build_pages(built[1], report.reference_runs(), lines.append)
+    assert lines == [f"report: drawing {name} ({k}/{len(PAGES)})" for k, (name, _) in enumerate(PAGES, start=1)]
