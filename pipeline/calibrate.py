@@ -145,7 +145,8 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
     except CalibrationError as exc:
         raise CalibrationError(
             f"observed.path = {obs.path!r}: after the filters (min_group_load_t {obs.min_group_load / 1000:g} t, "
-            f"group_spacing_m {obs.group_spacing:g} m, position {obs.position}): {exc}"
+            f"group_spacing_m {obs.group_spacing:g} m, position {obs.position}): {exc}. To compare this survey with "
+            "the fleet on the report's observed page without calibrating to it, set calibrate: null in params.yaml"
         ) from None
 
 
