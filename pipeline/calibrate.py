@@ -165,7 +165,42 @@ def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> 
         table, observed, method_settings(config), defaults(config), config.observed.min_group_load,
         workers_map(config.execution), progress, config.protocol.static,
     )  # fmt: skip
-    return {"skipped": False, **metrics}, tables
+    values = {q: e["value"] for q, e in metrics["fitted"].items()}
+    return {"skipped": False, **metrics, "fleet_study": fleet_study_overrides(values, config)}, tables
+
+
+#: each fitted quantity's params.yaml key(s) in the fleet study (None: no params.yaml form; see fleet_study_overrides)
+PARAMS_KEYS: dict[str, tuple[str, ...] | None] = {
+    "chassis_tilt_mean_deg": ("distributions.chassis_tilt_deg.mean",),
+    "chassis_tilt_sd_deg": ("distributions.chassis_tilt_deg.sd",),
+    "air_share": ("fleet.suspension_mix",),  # each group's steel and air
+    "site_iri_m_km": ("protocol.wim.site_iri_m_km",),
+    "sensor_error_pct": ("protocol.wim.sensor_axle_error_pct",),
+    "contact_roll_radius_mean_mm": None,
+    "bush_stiffness_geomean": None,
+}
+
+
+def fleet_study_overrides(values: Mapping[str, float], config: Config) -> dict[str, Any]:
+    """The fitted values as params.yaml settings for the fleet study (issue 31: offer to feed them back): ``set``
+    (key -> value), ``command`` (the ``dvc exp run -S ...`` line that runs the study with them) and ``not_settable``
+    (the fitted means of the inhibitor distributions: an exponential tilt of the fleet's uniform or log-uniform, a
+    kind params.yaml has no form for; the fleet study keeps its own)."""
+    settings, not_settable = {}, []
+    for quantity, value in values.items():
+        keys = PARAMS_KEYS.get(quantity)
+        if keys is None:
+            not_settable.append(quantity)
+            continue
+        v = round(float(value), 4) + 0.0
+        if quantity == "air_share":  # one air share for every group, as the calibration fits it
+            for group in config.fleet.suspension_mix:
+                settings[f"{keys[0]}.{group}.steel"] = round(1.0 - v, 4) + 0.0
+                settings[f"{keys[0]}.{group}.air"] = v
+        else:
+            settings[keys[0]] = v
+    command = "dvc exp run " + " ".join(f"-S {k}={v:g}" for k, v in settings.items()) if settings else None
+    return {"set": settings, "command": command, "not_settable": not_settable}
 
 
 def write_outputs(metrics: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], out_dir, metrics_path) -> None:

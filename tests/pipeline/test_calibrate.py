@@ -140,6 +140,30 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
     assert variants == {"baseline", *INHIBITORS, "all"}
 
 
+def test_the_fitted_values_are_offered_as_the_fleet_studys_settings_and_parse_to_that_fleet(recovered):
+    # issue 31 item 8: the fitted values could not feed the fleet study
+    _, metrics = recovered
+    offer = metrics["fleet_study"]
+    assert offer["not_settable"] == [] and offer["command"].startswith("dvc exp run -S ")
+    raw = raw_params()
+    for arg in offer["command"].removeprefix("dvc exp run ").split(" -S "):
+        key, value = arg.removeprefix("-S ").split("=")
+        node = raw
+        *path, last = key.split(".")
+        for part in path:
+            node = node[part]
+        node[last] = float(value)
+    config = parse_config(raw)
+    fitted = {q: e["value"] for q, e in metrics["fitted"].items()}
+    tilt = config.distributions["chassis_tilt"]
+    assert math.degrees(tilt.mean) == pytest.approx(fitted["chassis_tilt_mean_deg"], abs=1e-4)
+    assert math.degrees(tilt.sd) == pytest.approx(fitted["chassis_tilt_sd_deg"], abs=1e-4)
+    assert {g: m["air"] for g, m in config.fleet.suspension_mix.items()} == {
+        "tandem": pytest.approx(fitted["air_share"], abs=1e-4), "triaxle": pytest.approx(fitted["air_share"], abs=1e-4)
+    }  # fmt: skip
+    assert config.protocol.wim.axle_error_sd == pytest.approx(fitted["sensor_error_pct"] / 100, abs=1e-6)
+
+
 def test_the_wim_inequality_is_attributed_to_its_causes_on_the_calibrated_fleet(recovered):
     root, metrics = recovered
     by_cause = metrics["attribution"]

@@ -386,3 +386,16 @@ def test_the_fit_page_says_whether_the_table_is_faithful_within_the_sampling_flo
     metrics["table_faithful"] = {"gap": 2.9, "floor": 1.2, "faithful": False}
     page = " ".join(figure_text(pages_of(*written(tmp_path / "b", metrics, fitted_tables()))[0].figure).split())
     assert "NOT within the sampling floor 1.2 of the table's" in page and "misstates the fleet it fits" in page
+
+
+def test_the_checks_page_offers_the_fitted_values_to_the_fleet_study(tmp_path):
+    metrics = fitted_metrics()
+    metrics["fleet_study"] = {
+        "set": {"fleet.suspension_mix.triaxle.air": 0.4156}, "not_settable": ["contact_roll_radius_mean_mm"],
+        "command": "dvc exp run -S fleet.suspension_mix.triaxle.air=0.4156",
+    }  # fmt: skip
+    fig = pages_of(*written(tmp_path, metrics, fitted_tables()))[1].figure
+    page = " ".join(figure_text(fig).split())
+    assert "The calibrated fleet in the fleet study" in page
+    assert "dvc exp run -S fleet.suspension_mix.triaxle.air=0.4156 (contact_roll_radius_mean_mm have no" in page
+    assert_text_above_the_footer(fig)
