@@ -76,7 +76,7 @@ def _cmd_case(args: argparse.Namespace) -> int:
         out = Path(args.csv)
         out.parent.mkdir(parents=True, exist_ok=True)
         tmp = out.with_name(f".{out.name}.tmp")
-        result.to_frame().to_csv(tmp)
+        result.to_frame(units=True).to_csv(tmp)  # a header with each column's unit
         tmp.replace(out)
         print(f"wrote {args.csv}")
     if args.plot:

@@ -15,6 +15,26 @@ from bogie import metrics
 Profile = Callable[[ArrayLike], NDArray[np.float64]]
 
 
+#: the unit of each history a run records, by name without its axle or end index (SI; "-" non-dimensional): the
+#: linear model's (bogie.linear) and the non-linear model's (bogie._nonlinear_layout.RECORD, bogie.nonlinear) extras
+HISTORY_UNITS: dict[str, str] = {
+    "wheel_load": "N", "nondimensional_load": "-", "p": "-", "p1": "-", "chassis_pitch": "rad",
+    "centre_displacement": "m", "equaliser_rotation": "rad", "road_height": "m", "axle_displacement": "m",
+    "load_factor": "-", "spring_load": "N", "friction_force": "N", "stick": "-", "contact_shift": "m",
+    "plastic_slip": "m", "axle_position": "m", "stop_moment": "N m", "spring_deflection": "m",
+    "spring_hysteresis": "N",
+}  # fmt: skip
+
+
+def history_unit(column: str) -> str:
+    """The unit of a history column of :meth:`DynamicResult.to_frame` (``wheel_load_2`` -> ``N``); ``?`` for a name
+    :data:`HISTORY_UNITS` does not know."""
+    name = column
+    while name and name not in HISTORY_UNITS and "_" in name and name.rsplit("_", 1)[1].isdigit():
+        name = name.rsplit("_", 1)[0]
+    return HISTORY_UNITS.get(name, "?")
+
+
 @dataclass(frozen=True, repr=False)
 class DynamicResult:
     """Time history of one dynamic simulation.
@@ -91,8 +111,10 @@ class DynamicResult:
         """RMS equalisation parameter of Equation 5 over the run [-]."""
         return float(metrics.rms(self.wheel_loads))
 
-    def to_frame(self):
-        """The histories as a pandas DataFrame indexed by time (loads in N, non-dimensional loads, p, p1, extras)."""
+    def to_frame(self, units: bool = False):
+        """The histories as a pandas DataFrame indexed by time (loads in N, non-dimensional loads, p, p1, extras);
+        ``units``: each column named ``"name [unit]"`` (:data:`HISTORY_UNITS`), the index ``"t [s]"``, as the CLI's
+        CSV writes them."""
         import pandas as pd
 
         n = self.wheel_loads.shape[1]
@@ -110,4 +132,8 @@ class DynamicResult:
             else:
                 for k in range(arr.shape[1]):
                     cols[f"{name}_{k}"] = arr[:, k]
-        return pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
+        frame = pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
+        if units:
+            frame = frame.rename(columns=lambda c: f"{c} [{history_unit(c)}]")
+            frame.index.name = "t [s]"
+        return frame

@@ -1,3 +1,4 @@
+import re
 import subprocess
 import sys
 
@@ -83,3 +84,14 @@ def test_result_objects_print_one_line():
     text = repr(cases.run("L03"))
     assert text.startswith("DynamicResult(status='ok', 2 axles, 201 samples, t 0 to 25 s, wheel loads ")
     assert "\n" not in text and len(text) < 300
+
+
+def test_a_cases_csv_header_gives_every_columns_unit(tmp_path, capsys):
+    # issue 31 item 9: the case CSV header had no units
+    for name in ("L01", "N10"):  # the linear and the non-linear model's histories
+        out = tmp_path / f"{name}.csv"
+        assert main(["case", name, "--csv", str(out)]) == 0
+        header = out.read_text().splitlines()[0].split(",")
+        assert header[:4] == ["t [s]", "wheel_load_0 [N]", "wheel_load_1 [N]", "nondimensional_load_0 [-]"]
+        assert all(re.fullmatch(r"\w+ \[(N|-|m|rad|s|N m)\]", column) for column in header), header
+    assert "stop_moment_0 [N m]" in header and "spring_hysteresis_1 [N]" in header
