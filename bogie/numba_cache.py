@@ -48,10 +48,10 @@ LOCK_NAME = ".in-use"
 _REMOVING = ".removing-"
 
 
-def is_cached(module_file: str | Path, cache_dir: str | Path | None = None) -> bool:
-    """Whether numba's cache holds compiled functions of the source ``module_file`` for this clone: an index
-    (``<module>.<function>-<line>.py<version>.nbi``) in the subdirectory numba's user-provided cache locator gives
-    that file, ``<parent name>_<sha1 of the parent's absolute path>`` under ``cache_dir`` (None: the
+def is_cached(module_file: str | Path, cache_dir: str | Path | None = None, function: str = "*") -> bool:
+    """Whether numba's cache holds compiled ``function`` (default: any) of the source ``module_file`` for this
+    clone: an index (``<module>.<function>-<line>.py<version>.nbi``) in the subdirectory numba's user-provided cache
+    locator gives that file, ``<parent name>_<sha1 of the parent's absolute path>`` under ``cache_dir`` (None: the
     ``NUMBA_CACHE_DIR`` ``import bogie`` set). A prediction for a progress message, not a guarantee: an index
     without the signature asked for still compiles."""
     directory = cache_dir or os.environ.get("NUMBA_CACHE_DIR")
@@ -59,7 +59,7 @@ def is_cached(module_file: str | Path, cache_dir: str | Path | None = None) -> b
         return False
     parent = Path(module_file).resolve().parent
     sub = Path(directory) / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"
-    return any(sub.glob(f"{Path(module_file).stem}.*.nbi"))
+    return any(sub.glob(f"{Path(module_file).stem}.{function}-*.nbi"))
 
 
 def cache_root() -> Path:

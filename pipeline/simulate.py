@@ -332,7 +332,7 @@ def compile_kernels(pending: Sequence[Chunk], log: Log) -> float:
     from bogie import _phases_core
     from bogie.numba_cache import is_cached
 
-    if not pending or is_cached(_phases_core.__file__):
+    if not pending or is_cached(_phases_core.__file__, function="run_phases"):
         return 0.0
     log(
         "simulate: compiling the numba kernels for this version of the code, once (a few minutes on 2 cores; "
@@ -365,8 +365,8 @@ def _run_pending(
     """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
     by_key = {(c.study, c.index): c for c in pending}
     failed = 0
+    compile_kernels(pending, log)  # first: the numerics digest below runs the kernels too, silently
     here = process_numerics()
-    compile_kernels(pending, log)
     progress = Progress(total, log, stage=stage)
     try:
         for study, index, content, runs, failed_runs, numerics in _results(pending, execution) if pending else ():
