@@ -232,17 +232,20 @@ class Summary:
     skipped_chunks: int
     removed_files: int
     wall_time: float
+    compile_time: float = 0.0  # of wall_time, compiling the kernels (0: they were cached) [s]
 
     @property
     def runs_per_second(self) -> float:
-        """Computed runs per second of wall time [1/s] (0 if nothing was computed)."""
-        return self.computed_runs / self.wall_time if self.computed_runs and self.wall_time > 0 else 0.0
+        """Computed runs per second of wall time, the compile left out [1/s] (0 if nothing was computed)."""
+        running = self.wall_time - self.compile_time
+        return self.computed_runs / running if self.computed_runs and running > 0 else 0.0
 
     def line(self) -> str:
         """The stage's closing log line."""
+        compiling = f", {self.compile_time:.1f} s of it compiling" if self.compile_time else ""
         return (
             f"simulate: {self.runs} runs, {self.failed} failed; computed {self.computed_runs} runs in "
-            f"{self.computed_chunks} chunks in {self.wall_time:.1f} s ({self.runs_per_second:.1f} runs/s); "
+            f"{self.computed_chunks} chunks in {self.wall_time:.1f} s{compiling} ({self.runs_per_second:.1f} runs/s); "
             f"{self.skipped_chunks} chunks up to date, {self.removed_files} stale files removed"
         )
 
@@ -291,6 +294,7 @@ def simulate_samples(
         log = _relabelled(log, stage)
     out = Path(out)
     check_runs_dir(out)  # before the lock: a refused folder gets no lock file beside it either
+    compiling = compile_kernels(samples, protocols, log)  # before the chunks' hashes: their digest runs the kernels
     chunks = plan_chunks(samples, protocols, execution.chunk_size, out)
     with runs_lock(out):
         claim_runs_dir(out, log)
@@ -312,6 +316,7 @@ def simulate_samples(
         skipped_chunks=len(done),
         removed_files=len(removed),
         wall_time=time.perf_counter() - start,
+        compile_time=compiling,
     )
     log(summary.line())
     return summary
@@ -321,32 +326,39 @@ def simulate_samples(
 WARM_SAMPLES = 4
 
 
-def compile_kernels(pending: Sequence[Chunk], log: Log) -> float:
-    """Compile the kernels the pending chunks need, once, in this process, before the workers start (issue 31: a
-    first run was silent for minutes while every worker compiled, and its rate and time left counted the compile).
+def compile_kernels(
+    samples: Mapping[str, pd.DataFrame], protocols: Mapping[str, Protocols], log: Log
+) -> float:  # fmt: skip
+    """Compile the kernels, once, in this process, saying so, before anything runs them silently (issue 31: a first
+    run was silent for minutes while the numerics digest of the chunks' hashes and then every worker compiled, and
+    its rate and time left counted the compile).
 
-    When numba's cache holds no kernel of this version of the code (:func:`bogie.numba_cache.is_cached`), it says so,
-    weighs the first sample of each kind (axle group, suspension, protocols) of the pending chunks here, which
-    compiles and caches every kernel they use, and says how long that took; the workers then load the cache. Returns
-    the seconds spent (0 when the cache was there)."""
+    When numba's cache holds no ``run_phases`` of this version of the code for this clone
+    (:func:`bogie.numba_cache.is_cached`), it says so, computes this process's numerics digest (which runs the
+    kernels: :func:`pipeline.chunks.process_numerics`), weighs the first sample of each kind (axle group,
+    suspension, study's protocols; at most :data:`WARM_SAMPLES`) of ``samples`` here, which compiles and caches
+    every kernel they use, and says how long that took; the workers then load the cache. Returns the seconds spent
+    (0 when the cache was there)."""
     from bogie import _phases_core
     from bogie.numba_cache import is_cached
 
-    if not pending or is_cached(_phases_core.__file__, function="run_phases"):
+    if is_cached(_phases_core.__file__, function="run_phases"):
         return 0.0
     log(
         "simulate: compiling the numba kernels for this version of the code, once (a few minutes on 2 cores; "
         "cached for every later run, and the progress below leaves it out)"
     )
     start = time.perf_counter()
+    process_numerics()
     seen = set()
-    for chunk in pending:
-        for i in range(len(chunk.rows["sample_id"])):
-            kind = (chunk.rows["group"][i], chunk.rows["suspension"][i], tuple(p for p, _ in chunk.protocols))
+    for study, frame in samples.items():
+        for i in range(len(frame)):
+            kind = (frame["group"].iat[i], frame["suspension"].iat[i], tuple(p for p, _ in protocols[study]))
             if kind in seen or len(seen) >= WARM_SAMPLES:
                 continue
             seen.add(kind)
-            chunk_table({c: v[i : i + 1] for c, v in chunk.rows.items()}, chunk.protocols)
+            row = frame.iloc[i : i + 1]
+            chunk_table({c: row[c].tolist() for c in COLUMNS}, protocols[study])
     seconds = time.perf_counter() - start
     log(f"simulate: kernels compiled in {seconds:.0f} s")
     return seconds
@@ -365,7 +377,6 @@ def _run_pending(
     """Compute the pending chunks, writing each part file as soon as it is done; returns the failed runs."""
     by_key = {(c.study, c.index): c for c in pending}
     failed = 0
-    compile_kernels(pending, log)  # first: the numerics digest below runs the kernels too, silently
     here = process_numerics()
     progress = Progress(total, log, stage=stage)
     try:

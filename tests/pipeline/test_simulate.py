@@ -27,7 +27,6 @@ from bogie.fleet.sampling import COLUMNS
 from pipeline.chunks import (
     HASH_KEY,
     NUMERICS_KEY,
-    Chunk,
     NotRunsDatasetError,
     RunsLockedError,
     part_content,
@@ -550,18 +549,20 @@ def test_the_kernels_compile_once_before_the_workers_with_a_line_before_and_afte
     import pipeline.simulate as S
     from bogie import numba_cache
 
-    rows = {c: [] for c in COLUMNS}
-    for i, (group, suspension) in enumerate([("triaxle", "steel")] * 3 + [("tandem", "steel"), ("triaxle", "air")]):
-        for c in COLUMNS:
-            rows[c].append({"sample_id": i, "group": group, "suspension": suspension}.get(c, 0))
-    chunk = Chunk("fleet", 0, rows, (("static", None), ("wim", None)), "h", Path("p"))
-    weighed, lines = [], []
+    kinds = [("triaxle", "steel")] * 3 + [("tandem", "steel"), ("triaxle", "air")]
+    frame = pd.DataFrame({c: [0] * len(kinds) for c in COLUMNS})
+    frame["group"], frame["suspension"] = [g for g, _ in kinds], [k for _, k in kinds]
+    samples, protocols = {"fleet": frame}, {"fleet": (("static", None), ("wim", None))}
+    weighed, lines, digests = [], [], []
     monkeypatch.setattr(S, "chunk_table", lambda r, protocols: weighed.append((r["group"], r["suspension"])))
+    monkeypatch.setattr(S, "process_numerics", lambda: digests.append(1))
     monkeypatch.setattr(numba_cache, "is_cached", lambda *a, **k: True)
-    assert S.compile_kernels([chunk], lines.append) == 0.0 and weighed == [] and lines == []  # cached: nothing said
+    assert S.compile_kernels(samples, protocols, lines.append) == 0.0  # cached: nothing run, nothing said
+    assert weighed == [] and lines == [] and digests == []
     monkeypatch.setattr(numba_cache, "is_cached", lambda *a, **k: False)
-    S.compile_kernels([chunk], lines.append)
-    # one sample of each kind, the first of each: steel tri-axle, steel tandem, air tri-axle
+    S.compile_kernels(samples, protocols, lines.append)
+    # the numerics digest (what the chunks' hashes run first), then one sample of each kind, the first of each
+    assert digests == [1]
     assert weighed == [(["triaxle"], ["steel"]), (["tandem"], ["steel"]), (["triaxle"], ["air"])]
     assert len(lines) == 2 and "compiling the numba kernels" in lines[0] and "leaves it out" in lines[0]
     assert re.fullmatch(r"simulate: kernels compiled in \d+ s", lines[1])
@@ -575,3 +576,14 @@ def test_another_stage_running_its_study_here_is_named_in_every_line(config, sam
                      tmp_path / "runs", lines.append, "design")  # fmt: skip
     assert lines and all(line.startswith("design:") for line in lines), lines
     assert not any("simulate" in line for line in lines)
+
+
+def test_the_closing_lines_rate_leaves_the_compile_out():
+    from pipeline.simulate import Summary
+
+    s = Summary(runs=100, failed=0, computed_runs=100, computed_chunks=4, skipped_chunks=0, removed_files=0,
+                wall_time=75.0, compile_time=70.0)  # fmt: skip
+    assert s.runs_per_second == 20.0  # 100 runs in the 5 s left after 70 s of compiling
+    assert "computed 100 runs in 4 chunks in 75.0 s, 70.0 s of it compiling (20.0 runs/s)" in s.line()
+    cached = dataclasses.replace(s, compile_time=0.0)
+    assert "compiling" not in cached.line() and cached.runs_per_second == pytest.approx(100 / 75)
