@@ -417,7 +417,6 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--out", default="data/runs", help="runs dataset directory (default: data/runs)")
     args = parser.parse_args(argv)
-    warn_if_unportable("simulate")
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
@@ -429,6 +428,9 @@ def main(argv: list[str] | None = None) -> int:
         print(f"simulate: {exc}", file=sys.stderr)
         return 2
     protocols = {study: study_protocols(config, study) for study in samples}
+    # the compile said before the portability check, whose numerics digest would otherwise run it without a word
+    compile_kernels(samples, protocols, _print)
+    warn_if_unportable("simulate")
     try:
         simulate_samples(samples, protocols, config.execution, args.out)
     except (NotRunsDatasetError, RunsLockedError, OtherNumericsError, OSError) as exc:
