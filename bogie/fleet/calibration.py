@@ -33,7 +33,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 from scipy.optimize import differential_evolution
-from scipy.stats import energy_distance
 
 from bogie.fleet.calibration_table import (
     SIZES,
@@ -240,15 +239,8 @@ def distance(
 ) -> float:  # fmt: skip
     """Sum over sizes and quantities (:func:`observed_quantities`' columns) of the energy distance between the
     observed and the simulated distribution, each over its scale (the observed sd): a dimensionless number, inf when
-    a size has no simulated group."""
-    total = 0.0
-    for size, q in obs.items():
-        s = sim.quantities[size]
-        if len(s) == 0 or sim.weights[size].sum() <= 0.0:
-            return math.inf
-        for c in range(q.shape[1]):
-            total += energy_distance(q[:, c], s[:, c], obs_weights[size], sim.weights[size]) / scales[size][c]
-    return float(total)
+    a size has no simulated group. (:meth:`Problem.objective` sorts the observed side once per fit instead.)"""
+    return _sorted_distance(_sorted_sides(obs, obs_weights), sim, scales)
 
 
 class _SortedSample:
@@ -273,10 +265,15 @@ def _energy(u: _SortedSample, v: _SortedSample) -> float:
     return math.sqrt(2.0) * math.sqrt(float(np.dot(np.square(fu - fv), deltas)))
 
 
-def _fast_distance(
+def _sorted_sides(obs: Mapping[str, np.ndarray], weights: Mapping[str, np.ndarray]) -> dict[str, list[_SortedSample]]:
+    """Per size, each quantity's observed sample sorted (:class:`_SortedSample`)."""
+    return {k: [_SortedSample(q[:, c], weights[k]) for c in range(q.shape[1])] for k, q in obs.items()}
+
+
+def _sorted_distance(
     observed: Mapping[str, list[_SortedSample]], sim: Simulated, scales: Mapping[str, np.ndarray]
 ) -> float:
-    """:func:`distance` with the observed side presorted (:class:`_SortedSample`): the fit's objective."""
+    """:func:`distance` from the observed side presorted (:func:`_sorted_sides`)."""
     total = 0.0
     for size, sides in observed.items():
         s, w = sim.quantities[size], sim.weights[size]
@@ -303,12 +300,12 @@ class Problem:
 
     def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
         # the observed side's sorted values and CDF steps, once per objective: only the simulated side changes
-        observed = {k: [_SortedSample(q[:, c], obs_weights[k]) for c in range(q.shape[1])] for k, q in self.obs.items()}
+        observed = _sorted_sides(self.obs, obs_weights)
 
         def f(theta: np.ndarray) -> float:
             values = _values(theta, self.fitted, self.base)
             sim = simulated(self.table, values, self.min_load_kg, slot_counts, self.weight_step_kg)
-            return _fast_distance(observed, sim, self.scales)
+            return _sorted_distance(observed, sim, self.scales)
 
         return f
 

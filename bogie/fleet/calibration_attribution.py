@@ -24,7 +24,6 @@ every scenario weighed. Intervals: a paired bootstrap over the groups.
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping
 from concurrent.futures import Executor
 from typing import Any
@@ -33,7 +32,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration import SIZES, CalibrationError, Mapper, Table
-from bogie.fleet.calibration_table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
+from bogie.fleet.calibration_table import _round, bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.weighings.stats import at_resolution, group_inequality
 
@@ -157,17 +156,13 @@ def _metrics_of(per, means, n_groups, dropped, rng, resamples, level) -> dict[st
         diff = per["as_observed"] - per[scenario]  # paired: the same groups
         boot = diff[idx].mean(axis=1)  # (resamples, statistics)
         causes[cause] = {
-            s: {"value": _r(diff[:, j].mean()), "low": _r(np.quantile(boot[:, j], alpha / 2)),
-                "high": _r(np.quantile(boot[:, j], 1 - alpha / 2))}
+            s: {"value": _round(diff[:, j].mean()), "low": _round(np.quantile(boot[:, j], alpha / 2)),
+                "high": _round(np.quantile(boot[:, j], 1 - alpha / 2))}
             for j, s in enumerate(STATISTICS)
         }  # fmt: skip
     return {
         "n_groups": n_groups, "n_dropped": dropped,
-        "as_observed": {s: _r(means["as_observed"][j]) for j, s in enumerate(STATISTICS)},
-        "at_rest": {s: _r(means["at_rest"][j]) for j, s in enumerate(STATISTICS)},
+        "as_observed": {s: _round(means["as_observed"][j]) for j, s in enumerate(STATISTICS)},
+        "at_rest": {s: _round(means["at_rest"][j]) for j, s in enumerate(STATISTICS)},
         "causes": causes,
     }  # fmt: skip
-
-
-def _r(x: float) -> float | None:
-    return None if not math.isfinite(float(x)) else round(float(x), 4) + 0.0

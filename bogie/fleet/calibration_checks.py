@@ -35,7 +35,15 @@ from bogie.fleet.calibration import (
 from bogie.fleet.calibration_attribution import attribution
 from bogie.fleet.calibration_fit import calibrate, priors_for
 from bogie.fleet.calibration_posterior import posterior
-from bogie.fleet.calibration_table import _quiet, bogie_tilts, moved_samples, protocol_spec, weigh_readings
+from bogie.fleet.calibration_table import (
+    _quiet,
+    _round,
+    _summary,
+    bogie_tilts,
+    moved_samples,
+    protocol_spec,
+    weigh_readings,
+)
 from bogie.fleet.observed import by_size
 from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.metrics import max_deviation
@@ -171,12 +179,6 @@ def ablation(
 
 
 # ---- held out, and the whole calibration of a survey ---------------------------------------------------------------
-def _round(x: Any, digits: int = 4) -> Any:
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return None
-    return round(float(x), digits) + 0.0
-
-
 def held_out(
     table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float], min_load_kg: float,
     executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None,
@@ -206,8 +208,7 @@ def held_out(
         if settings.posterior_draws:  # the half fit's posterior: a held-out check with one piled is no check
             post = posterior(half, priors_for(half, settings), theta, settings.posterior_draws, settings.seed,
                              settings.confidence_level)  # fmt: skip
-            held["posterior"] = {q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()}
-                                 for q, e in post.summary.items()}  # fmt: skip
+            held["posterior"] = _summary(post.summary)
             held["posterior_piled"] = {q: e["piled"] for q, e in post.summary.items() if e["piled"]}
     except CalibrationError as exc:
         held.update(reason=str(exc), groups=None)
@@ -355,10 +356,7 @@ def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
         "credible_level": level,
         "draws": len(post.draws),
         "acceptance": _round(post.acceptance),
-        "quantities": {
-            q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()}
-            for q, e in post.summary.items()
-        },  # fmt: skip
+        "quantities": _summary(post.summary),
         "priors": post.priors,
     }
 

@@ -52,6 +52,20 @@ def _quiet(text: str) -> None:
     """A progress callback that says nothing."""
 
 
+def _round(x: Any, digits: int = 4) -> Any:
+    """A number for the metrics' JSON: rounded to ``digits``, -0.0 made 0.0; None for None, NaN and infinities."""
+    if x is None or (isinstance(x, float) and not math.isfinite(x)):
+        return None
+    return round(float(x), digits) + 0.0
+
+
+def _summary(entries: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per quantity, a summary's numbers rounded (:func:`_round`), its words and Nones kept."""
+    return {
+        q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()} for q, e in entries.items()
+    }
+
+
 def _whole(name: str, value: Any, low: int) -> None:
     if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
         raise CalibrationError(f"{name} = {value!r}: must be a whole number >= {low} [-]")

@@ -62,6 +62,22 @@ class Prior:
         return f"{self.kind}({names[0]} {self.a:g}, {names[1]} {self.b:g}): {self.source}"
 
 
+#: the priors of the inhibitor distributions' fitted means: flat (in the quantity or its log) over the support of the
+#: fleet's distribution, the kind and the source
+_INHIBITOR_MEANS: dict[str, tuple[str, str]] = {
+    "contact_roll_radius_mean_mm": (
+        "uniform",
+        "no source measures the contact-roll radius on a fleet (issue 30: why it is fitted): flat over the support "
+        "of the fleet's distribution (distributions.contact_roll_radius_mm)",
+    ),
+    "bush_stiffness_geomean": (
+        "loguniform",
+        "no source measures the bush stiffness on a fleet (the reference's one bush, q = 4.3): flat in its log over "
+        "the support of the fleet's log-uniform distribution (distributions.bush_stiffness)",
+    ),
+}
+
+
 def default_priors(
     base: Mapping[str, float], supports: Mapping[str, tuple[float, float]] | None = None
 ) -> dict[str, Prior]:
@@ -94,19 +110,9 @@ def default_priors(
             "Cebon and Winkler 1991's < 4 % RMS for strip sensors), a factor of two either way at one sd",
         ),  # fmt: skip
     }  # fmt: skip
-    supports = supports or {}
-    if "contact_roll_radius_mean_mm" in supports:
-        priors["contact_roll_radius_mean_mm"] = Prior(
-            "uniform", *supports["contact_roll_radius_mean_mm"],
-            "no source measures the contact-roll radius on a fleet (issue 30: why it is fitted): flat over the "
-            "support of the fleet's distribution (distributions.contact_roll_radius_mm)",
-        )  # fmt: skip
-    if "bush_stiffness_geomean" in supports:
-        priors["bush_stiffness_geomean"] = Prior(
-            "loguniform", *supports["bush_stiffness_geomean"],
-            "no source measures the bush stiffness on a fleet (the reference's one bush, q = 4.3): flat in its log "
-            "over the support of the fleet's log-uniform distribution (distributions.bush_stiffness)",
-        )  # fmt: skip
+    for quantity, (kind, source) in _INHIBITOR_MEANS.items():
+        if quantity in (supports or {}):
+            priors[quantity] = Prior(kind, *supports[quantity], source)
     unknown = set(priors) - set(CALIBRATION_QUANTITIES)
     assert not unknown, unknown
     return priors
