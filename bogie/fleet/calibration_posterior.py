@@ -30,7 +30,9 @@ from bogie.fleet.priors import Prior, log_prior
 
 __all__ = ["BOOTSTRAP", "Posterior", "posterior", "summaries", "synthetic_likelihood"]
 
-#: bootstrap resamples of each side for the summaries' covariance [-]
+#: bootstrap resamples of each side for the summaries' covariance [-]; a convention (no source), like the sampler's
+#: first proposal (a fiftieth of each bound's width) and its burn-in (a quarter of the draws); the adapted
+#: proposal's scale 2.38^2 / d is Gelman, Roberts and Gilks 1996's optimal scaling, as Haario et al. 2001 use it
 BOOTSTRAP = 200
 
 

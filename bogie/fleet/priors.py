@@ -88,10 +88,11 @@ def default_priors(
     priors = {
         "chassis_tilt_mean_deg": Prior(
             "normal", 0.0, 0.6,
-            "no survey of fifth-wheel mismatch found (searched); the fifth-wheel heights of tractors span about 150 mm "
-            "by trailer type (1143-1346 mm), so a trailer behind another tractor is up to about +-150 mm out over a "
-            "kingpin-to-bogie length near 8 m: up to about 1.1 degree either way; a normal of sd 0.6 degree puts 93 % "
-            "within that, centred on level (no direction preferred); the reference studied 0-2 degree",
+            "an assumption: no survey of fifth-wheel mismatch found (searched); a trade table (not a standard) gives "
+            "tractors' fifth-wheel heights spanning about 150 mm by trailer type (1143-1346 mm), so a trailer behind "
+            "another tractor is up to about +-150 mm out over an assumed kingpin-to-bogie length near 8 m: up to "
+            "about 1.1 degree either way; a normal of sd 0.6 degree puts 93 % within that, centred on level (no "
+            "direction preferred); the reference studied 0-2 degree",
         ),
         "chassis_tilt_sd_deg": Prior(
             "normal", 0.0, 0.6,
@@ -107,7 +108,8 @@ def default_priors(
         "sensor_error_pct": Prior(
             "lognormal", _finite_or(base.get("sensor_error_pct"), 2.0), math.log(2.0),
             "centred on the sensor type's own error s_a (bogie.road.wim.SENSOR_ERRORS, itself an assumption within "
-            "Cebon and Winkler 1991's < 4 % RMS for strip sensors), a factor of two either way at one sd",
+            "Cebon and Winkler 1991's < 4 % RMS for strip sensors), a factor of two either way at one sd (an "
+            "assumption: no source sizes that uncertainty)",
         ),  # fmt: skip
     }  # fmt: skip
     for quantity, (kind, source) in _INHIBITOR_MEANS.items():
