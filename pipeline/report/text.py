@@ -30,6 +30,7 @@ __all__ = [
     "pct",
     "points",
     "render",
+    "sig",
     "span",
 ]
 
@@ -57,8 +58,21 @@ def num(x: float, digits: int = 2) -> str:
 
 
 def interval(x: float, half: float) -> str:
-    """An estimate and its symmetric interval: ``interval(0.5, 0.1)`` is "0.50 (0.40 to 0.60)"."""
-    return f"{num(x)} ({num(x - half)} to {num(x + half)})"
+    """An estimate and its symmetric interval: ``interval(0.5, 0.1)`` is "0.50 (0.40 to 0.60)"; four decimals when
+    the estimate and the half-width are both under 0.01 (``interval(0.0008, 0.0002)`` is "0.0008 (0.0006 to
+    0.0010)"), so that two small, different indices do not both read "0.00"."""
+    digits = 4 if 0.0 < max(abs(x), abs(half)) < 0.01 else 2
+    return f"{num(x, digits)} ({num(x - half, digits)} to {num(x + half, digits)})"
+
+
+def sig(x: float | None) -> str:
+    """An index to two decimals, or to one significant digit under 0.01 (``sig(0.00083)`` is "0.0008"), so a small
+    index does not read as zero; "0" for zero and "n/a" for a missing value."""
+    if _missing(x):
+        return "n/a"
+    if x == 0.0:
+        return "0"
+    return num(x) if abs(x) >= 0.01 else f"{x:.1g}"
 
 
 def fixed(x: float, digits: int = 0) -> str:
@@ -109,6 +123,7 @@ FILTERS = {
     "num": num,
     "fixed": fixed,
     "interval": interval,
+    "sig": sig,
     "points": points,
     "span": span,
     "groups": groups,

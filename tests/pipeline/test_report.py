@@ -7,6 +7,7 @@ checks that need them are skipped with the reason when they are missing.
 """
 
 import copy
+import dataclasses
 import json
 import re
 import shutil
@@ -32,7 +33,8 @@ from pipeline.simulate import simulate_samples, study_protocols
 ROOT = Path(__file__).resolve().parents[2]
 #: title, summary, sensitivity, 2 survey, observed, calibration (skipped), Figure 2, L01-L03, step runs, 2 design
 #: guidance, fleet correlations, appendices A, B, C
-PAGES = 18
+#: the report of a run without an observed survey and without failed runs: no calibration page, no Appendix C
+PAGES = 17
 SITE = ROOT / "tests" / "data" / "weighings" / "site30.csv"
 PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
 NEEDS_POPPLER = pytest.mark.skipif(
@@ -159,6 +161,7 @@ def test_report_has_every_page_numbered_and_every_chart_page_as_png(built, proje
     pngs = sorted(f.stem for f in p["png"].glob("*.png"))
     assert pngs == sorted(
         [
+            "summary",
             "sensitivity",
             "survey_load_share",
             "survey_tilt",
@@ -225,7 +228,7 @@ def expected_phrases(sv, ss):
 def test_summary_sentences_are_made_from_the_metrics(built, pages):
     _, inputs = built
     sv, ss = inputs.survey_metrics, inputs.sensitivity_metrics
-    text = figure_text(pages[1][2])
+    text = figure_text(pages[2][2])  # the summary in numbers
     for phrase in expected_phrases(sv, ss):
         assert phrase in text, phrase
     labels = [style.FACTOR_LABEL[f] for f in ss["ranking"]]
@@ -245,7 +248,7 @@ def test_rendered_pages_are_not_blank_and_say_what_the_metrics_say(built, projec
         assert ink > 0.002, f"page {k} is nearly blank ({ink:.4f} of its pixels inked)"
         assert f"page {k} of {PAGES}" in page_text(p["pdf"], k)
     _, inputs = built
-    summary = page_text(p["pdf"], 2)
+    summary = page_text(p["pdf"], 3)
     for phrase in expected_phrases(inputs.survey_metrics, inputs.sensitivity_metrics):
         assert phrase in summary, phrase
 
@@ -290,18 +293,50 @@ def test_with_an_observed_survey_the_page_draws_and_quotes_it(project, tmp_path)
     assert f"observed, {m['groups']['tandem']['n_groups']}" in legends
 
 
+# ---- the summary a reader acts on ---------------------------------------------------------------------------------
+def test_page_two_gives_three_findings_one_figure_and_what_to_do(built, pages):
+    _, inputs = built
+    ss = inputs.sensitivity_metrics
+    section, name, fig = pages[1]
+    assert (section, name) == ("Summary", "summary")
+    text = figure_text(fig)
+    headings = re.findall(r"\b[123]\. [A-Z][^.]*\.", text)
+    assert len(headings) == 3, headings
+    assert f"Of the five inhibitors, {style.FACTOR_LABEL[ss['ranking'][0]]} matters most" in text
+    assert "What to do" in text
+    charts = [ax for ax in fig.get_axes() if ax.has_data()]
+    assert len(charts) == 1
+    # the figure: a bar per ablation variant and protocol, whose lengths are the metrics' fleet means
+    drawn = sorted(round(p.get_width(), 6) for p in charts[0].patches)
+    expected = sorted(round(100.0 * a[v]["mean_max_deviation"], 6) for a in ss["ablation"].values()
+                      for v in ("baseline", *ss["ranking"], "all"))  # fmt: skip
+    assert drawn == pytest.approx(expected, abs=0.0051)  # the metrics hold four decimals of a fraction
+
+
 # ---- the calibration page ---------------------------------------------------------------------------------------
-def test_without_an_observed_survey_one_calibration_page_says_why_and_how_to_give_one(pages, built):
+def test_without_an_observed_survey_no_calibration_page_and_the_observed_page_says_what_a_survey_brings(pages, built):
     _, inputs = built
     assert inputs.calibration_metrics["skipped"] and inputs.calibration == {}
-    [(section, name, fig)] = [p for p in pages if p.section.startswith("Calibration")]
+    assert not [p for p in pages if p.section.startswith("Calibration")]
+    page = observed_page(pages)
+    for words in ("make repro also calibrates the fleet to it", "docs/calibration.md", "calibration pages follow"):
+        assert words in page, words
+
+
+def test_with_a_survey_and_the_calibration_skipped_one_page_says_why(built):
+    from pipeline.report.pages import calibration
+
+    _, inputs = built
+    why = {"skipped": True, "reason": "calibrate is null in params.yaml"}
+    given = dataclasses.replace(
+        inputs, calibration_metrics=why, observed_metrics={**inputs.observed_metrics, "observed": {"path": "x"}}
+    )
+    with matplotlib.rc_context(style.STYLE):
+        [(section, name, fig)] = calibration.page(Context.of(given, {}))
     assert (section, name) == ("Calibration", "")
     page = figure_text(fig)
-    for words in (
-        "Nothing was calibrated", "The calibrate stage was skipped: no observed survey given",
-        "observed.path is null", "observed.path: observed/site.mon", "calibrate section", "calibrate.fit",
-        "docs/calibration.md", "make repro",
-    ):  # fmt: skip
+    for words in ("Nothing was calibrated", "The calibrate stage was skipped: calibrate is null in params.yaml",
+                  "calibrate.fit", "docs/calibration.md", "make repro"):  # fmt: skip
         assert words in page, words
 
 
@@ -325,7 +360,7 @@ def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project
     analyse(copy_)
     assert report.main(report_args(copy_)) == 0
     p = paths(copy_)
-    assert pdf_pages(p["pdf"]) == PAGES
+    assert pdf_pages(p["pdf"]) == PAGES + 1  # Appendix C
     inputs = report.read_inputs(p["params"], p["samples"], p["runs"], p["survey"], p["sensitivity"], p["metrics"])
     failed = report.failed_runs(inputs.runs)
     planted = failed[failed["message"] == PLANTED]
@@ -339,6 +374,7 @@ def test_a_run_with_failed_samples_still_gives_the_report_and_lists_them(project
     counts = report.run_counts(inputs.runs).set_index("study")
     assert counts.loc["all", "n_failed"] == int((inputs.runs["status"] != "ok").sum()) >= 3
     assert f"{counts.loc['all', 'n_failed']:,} failed" in figure_text(pages[0][2])
+    assert "Appendix C lists them" in figure_text(pages[0][2])
 
 
 def test_the_report_says_each_part_as_it_draws_it(built):

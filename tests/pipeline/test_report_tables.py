@@ -104,13 +104,39 @@ def test_summary_table_formats_indices_and_ablation_without_units():
     header, rows = summary_table(numbers)
     assert len(header) == 7 == len(rows[0])
     assert rows[0] == [
-        "contact roll radius", "1", "0.24 (0.19 to 0.29)", "0.20 (0.16 to 0.24)", "1.50", "1.71 (1.61 to 1.81)", "25.0"
+        "contact roll radius", "1", "0.24\n(0.19 to 0.29)", "0.20\n(0.16 to 0.24)", "1.50", "1.71\n(1.61 to 1.81)",
+        "25.0"
     ]  # fmt: skip
+    # indices under 0.01 get four decimals, so that two small, different ones do not both read 0.00
     assert rows[1] == [
-        "spring-end friction coefficient", "2", "0.00 (-0.01 to 0.00)", "0.00 (-0.01 to 0.00)", "n/a", "–", "n/a"
+        "spring-end friction coefficient", "2", "-0.0010\n(-0.0050 to 0.0030)", "-0.0020\n(-0.0050 to 0.0010)", "n/a",
+        "–", "n/a"
     ]  # fmt: skip
-    assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71 (1.61 to 1.81)", "0.0"]
+    assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71\n(1.61 to 1.81)", "0.0"]
     assert rows[3] == ["none removed", "", "", "", "3.21", "", "62.5"]
+
+
+def test_worse_without_lists_the_removals_whose_whole_interval_is_worse():
+    from pipeline.report.pages.front import worse_without
+
+    def entry(high):
+        return {"reduction": high - 0.001, "reduction_low": high - 0.002, "reduction_high": high}
+
+    numbers = {
+        "ranking": ["contact_roll_radius", "friction_coefficient", "bush_damping"],
+        "ablation": {
+            "static": {"baseline": {}, "contact_roll_radius": entry(0.03), "friction_coefficient": entry(-0.001),
+                       "bush_damping": entry(0.0005), "all": entry(0.05)},
+            "wim": {"baseline": {}, "contact_roll_radius": entry(0.02), "friction_coefficient": entry(0.001),
+                    "bush_damping": entry(-0.002), "all": entry(-0.01)},
+        },
+    }  # fmt: skip
+    # an interval reaching zero (bush damping's static 0.0005) is no finding; "all" comes last
+    assert worse_without(numbers) == {"static": ["friction_coefficient"], "wim": ["bush_damping", "all"]}
+    for abl in numbers["ablation"].values():
+        for v in ("friction_coefficient", "bush_damping", "all"):
+            abl[v] = entry(0.01)
+    assert worse_without(numbers) == {}
 
 
 # ---- plot series ---------------------------------------------------------------------------------------------------

@@ -118,9 +118,12 @@ def failures_table(failed: pd.DataFrame, shown: int = 12) -> list[list[str]]:
 
 
 def failures(ctx: Context) -> list[Page]:
-    """Appendix C: every failed run, grouped, over as many pages as it needs."""
+    """Appendix C: every failed run, grouped, over as many pages as it needs; no page when none failed (the title
+    page says so under its run counts)."""
     failed = failed_runs(ctx.inputs.runs)
-    intro = text.render("failures.j2", n=int(failed["n"].sum()) if not failed.empty else 0)
+    if failed.empty:
+        return []  # the title page's run counts say that no run failed
+    intro = text.render("failures.j2", n=int(failed["n"].sum()))
     title = "Appendix C: failed runs"
     figures = table_pages(title, FAILURE_COLUMNS, failures_table(failed), intro, FAILURE_WIDTHS)
     return [Page(title if k == 0 else "", "", fig) for k, fig in enumerate(figures)]

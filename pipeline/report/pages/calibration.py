@@ -369,9 +369,12 @@ def skipped_page(m: Mapping[str, Any]) -> Figure:
 
 
 def page(ctx: Context) -> list[Page]:
-    """The calibration pages: from data/calibration and metrics/calibration.json."""
+    """The calibration pages: from data/calibration and metrics/calibration.json; none when no survey was given (the
+    observed page says what a survey brings), one page of why when a survey was given and the stage skipped."""
     m, tables = ctx.inputs.calibration_metrics, ctx.inputs.calibration
     if m.get("skipped", True):
+        if ctx.inputs.observed_metrics.get("observed") is None:
+            return []  # no survey to calibrate to: the observed page says how to give one and that it is calibrated
         return [Page("Calibration", "", skipped_page(m))]
     valley = len(tables["valley.csv"]) > 0
     fit = fit_page(m, tables, text.render("calibration_fit.j2", m=m, label=quantity_label, valley=valley))

@@ -1,4 +1,5 @@
-"""Front matter: the title page (build facts, run counts, contents) and the summary (words and one table)."""
+"""Front matter: the title page (build facts, run counts, contents), the summary a reader acts on (three findings,
+one figure, what to do) and the summary in numbers (words and one table)."""
 
 from __future__ import annotations
 
@@ -17,7 +18,18 @@ from pipeline.report.layout import A4, LEFT, RIGHT, first_fit, page_header, tabl
 from pipeline.report.style import GROUP_LABEL, factor_label
 from pipeline.report.tables import run_counts
 
-__all__ = ["SUBTITLE", "TITLE", "summary", "summary_page", "summary_table", "title", "title_facts", "title_page"]
+__all__ = [
+    "SUBTITLE",
+    "TITLE",
+    "findings_page",
+    "numbers_page",
+    "summary",
+    "summary_table",
+    "title",
+    "title_facts",
+    "title_page",
+    "worse_without",
+]
 
 TITLE = "Why mechanically equalised trailer bogies do not share load equally"
 SUBTITLE = "Sensitivity report: the five inhibitors of axle-load equalisation across a sampled fleet"
@@ -67,7 +79,15 @@ def title_page(
     rows = [[r.study, f"{r.n_runs:,}", f"{r.n_ok:,}", f"{r.n_failed:,}"] for r in counts.itertuples()]
     fig.text(LEFT, y - 0.01, "Runs by study", fontsize=11, weight="bold", va="top")
     header = ["study", "runs", "succeeded", "failed"]
-    y = table_axes(fig, y - 0.035, header, rows, [0.28, 0.22, 0.24, 0.22], 8.5) - 0.05
+    y = table_axes(fig, y - 0.035, header, rows, [0.28, 0.22, 0.24, 0.22], 8.5)
+    failed = int(counts.loc[counts["study"] == "all", "n_failed"].sum())
+    note = (
+        "No run failed: every sample of every study gave a reading under every protocol it ran."
+        if failed == 0
+        else f"{failed:,} runs failed: Appendix C lists them with their reasons."
+    )
+    fig.text(LEFT, y - 0.012, note, fontsize=9, va="top")
+    y -= 0.07
     fig.text(LEFT, y, "Contents", fontsize=11, weight="bold", va="top")
     for name, page in contents:
         y -= 0.024
@@ -88,12 +108,19 @@ def title(ctx: Context, contents: Sequence[tuple[str, int]]) -> Page:
 SUMMARY_HEADER = [
     "inhibitor",
     "rank",
-    "ST (interval)",
-    "S1 (interval)",
-    "max. dev.\nwithout it [%]",
+    "ST\n(interval)",
+    "S1\n(interval)",
+    "max. dev.\nwithout [%]",
     "reduction [points]\n(interval)",
-    "outside 5 %\nwithout it [%]",
+    "outside 5 %\nwithout [%]",
 ]
+#: the summary table's column widths [page width between the margins]
+SUMMARY_WIDTHS = (0.27, 0.05, 0.15, 0.15, 0.11, 0.15, 0.12)
+
+
+def _stacked(estimate: str) -> str:
+    """An estimate and its interval, "0.21 (0.17 to 0.25)", as two lines of a table cell."""
+    return estimate.replace(" (", "\n(", 1)
 
 
 def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]]]:
@@ -102,7 +129,9 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
     abl = numbers["ablation"].get(protocol) or next(iter(numbers["ablation"].values()))
 
     def gain(a: Mapping[str, Any]) -> str:
-        return "–" if a.get("reduction") is None else text.span(a["reduction"], a["reduction_low"], a["reduction_high"])
+        if a.get("reduction") is None:
+            return "–"
+        return _stacked(text.span(a["reduction"], a["reduction_low"], a["reduction_high"]))
 
     def removed(a: Mapping[str, Any]) -> list[str]:
         return [text.pct(a.get("mean_max_deviation"), 2, unit=False), gain(a)]
@@ -114,8 +143,8 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
             [
                 factor_label(f),
                 str(rank),
-                text.interval(i["ST"], i["ST_conf"]),
-                text.interval(i["S1"], i["S1_conf"]),
+                _stacked(text.interval(i["ST"], i["ST_conf"])),
+                _stacked(text.interval(i["S1"], i["S1_conf"])),
                 *removed(a),
                 text.pct(a.get("share_outside_5pct"), unit=False),
             ]
@@ -127,43 +156,102 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
     return list(SUMMARY_HEADER), rows
 
 
-def summary_page(
+def worse_without(numbers: Mapping[str, Any]) -> dict[str, list[str]]:
+    """Per protocol, the ablation variants (an inhibitor, or "all") whose removal made the fleet mean maximum deviation
+    worse with the whole paired interval of the change on that side (``reduction_high`` below zero), in the ranking's
+    order with "all" last; protocols with none are left out."""
+    out = {}
+    for protocol, abl in numbers["ablation"].items():
+        order = [*numbers["ranking"], "all"]
+        worse = [
+            v for v in order if v in abl and abl[v].get("reduction_high") is not None and abl[v]["reduction_high"] < 0.0
+        ]
+        if worse:
+            out[protocol] = worse
+    return out
+
+
+def findings_page(
+    findings: Sequence[str], ablation: pd.DataFrame, caption: Sequence[str], action: Sequence[str]
+) -> Figure:
+    """Page 2: three findings in words, one figure (the ablation's fleet mean maximum deviation by protocol) with its
+    caption, then what to do; in the largest type of :data:`SUMMARY_SIZES` that ends above the footer."""
+    from pipeline.report.pages.sensitivity import ablation_bars
+
+    def draw(size: float) -> tuple[Figure, float]:
+        fig = Figure(figsize=A4)
+        page_header(fig, "Summary")
+        y = text_block(fig, 0.925, findings, size=size)
+        height = 0.25
+        ax = fig.add_axes((0.36, y - height, RIGHT - 0.36, height - 0.035))
+        ablation_bars(ax, ablation, 100.0)
+        ax.set_xlabel("fleet mean of the maximum deviation from the mean axle load [%]", fontsize=8)
+        ax.set_title("What removing each inhibitor does to the fleet", fontsize=9)
+        ax.tick_params(labelsize=7.5)
+        y = text_block(fig, y - height - 0.045, caption, size=min(size, 7.5))
+        return fig, text_block(fig, y - 0.004, action, size=size)
+
+    return first_fit(SUMMARY_SIZES, draw)
+
+
+def numbers_page(
     paragraphs: Sequence[str],
     header: Sequence[str],
     rows: Sequence[Sequence[str]],
     table_title: str,
     notes: Sequence[str],
 ) -> Figure:
-    """The summary in words, then its one table, in the largest type (of :data:`SUMMARY_SIZES`) that ends above the
-    footer (:func:`~pipeline.report.layout.first_fit`)."""
+    """Page 3: the summary's numbers in words, then its one table and the table's notes, in the largest type (of
+    :data:`SUMMARY_SIZES`) that ends above the footer (:func:`~pipeline.report.layout.first_fit`)."""
 
     def draw(size: float) -> tuple[Figure, float]:
         fig = Figure(figsize=A4)
-        page_header(fig, "Summary")
+        page_header(fig, "Summary in numbers")
         y = text_block(fig, 0.925, paragraphs, size=size)
         fig.text(LEFT, y - 0.005, table_title, fontsize=9.5, weight="bold", va="top")
-        widths = [0.19, 0.05, 0.165, 0.165, 0.1, 0.2, 0.13]
-        y = table_axes(fig, y - 0.03, header, rows, widths, 7.3)
+        y = table_axes(fig, y - 0.03, header, rows, SUMMARY_WIDTHS, 7.3)
         return fig, text_block(fig, y - 0.012, notes, size=min(size, 7.5))
 
     return first_fit(SUMMARY_SIZES, draw)
 
 
 #: type sizes the summary's text tries, largest first [pt]
-SUMMARY_SIZES = (8.9, 8.6, 8.3, 8.0, 7.7)
+SUMMARY_SIZES = (9.2, 8.9, 8.6, 8.3, 8.0, 7.7, 7.4)
+
+
+def fleet_words(fleet: pd.DataFrame, config: Any) -> dict[str, str]:
+    """The fleet's bogies per axle group, as text ("600"), in params.yaml's group order."""
+    counts = fleet["group"].value_counts()
+    return {g: f"{counts.get(g, 0):,}" for g in config.fleet.axle_mix}
 
 
 def summary(ctx: Context) -> list[Page]:
-    """Page 2: the summary in words and its table, every number from metrics/*.json."""
+    """Pages 2 and 3: the answer in one minute (three findings, the ablation's figure, what to do), then the same
+    numbers in full (the survey, the ranking, the ablation in words and the summary table), all from metrics/*.json."""
     numbers = ctx.numbers
     s = numbers["sobol"]
     n = (numbers["ablation"].get(s["protocol"]) or {}).get("baseline", {}).get("n_bogies", "–")
-    header, rows = summary_table(numbers)
+    # the design study's advice to a designer and an operator: per group the design with the widest tilt tolerance
+    # and the tilt today's typical design needs (docs/design.md)
+    guidance = ctx.inputs.design_metrics.get("guidance", [])
+    design = [line for line in guidance if line.startswith(("With ", "Today's typical"))]
+    worse = worse_without(numbers)
+    findings = text.render(
+        "summary_findings.j2",
+        numbers=numbers,
+        nose_up_deg=NOSE_UP_DEG,
+        n_bogies=fleet_words(ctx.inputs.fleet, ctx.inputs.config),
+        worse=worse,
+    )
+    abl = ctx.inputs.sensitivity["ablation.csv"]
+    rows = abl[(abl["group"] == "all") & (abl["statistic"] == "mean_max_deviation")]
+    caption = text.render("summary_figure.j2", numbers=numbers)
+    action = text.render("summary_action.j2", numbers=numbers, design=design)
+    first = Page("Summary", "summary", findings_page(findings, rows, caption, action))
+    header, table = summary_table(numbers)
     table_title = (
         f"The five inhibitors: Sobol' indices and what removing each buys ({s['protocol']}, {s['group']} design)"
     )
-    # the design study's advice to a designer: per group the design with the widest tilt tolerance (docs/design.md)
-    design = [line for line in ctx.inputs.design_metrics.get("guidance", []) if line.startswith("With ")]
-    paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG, design=design)
+    paragraphs = text.render("summary.j2", numbers=numbers, nose_up_deg=NOSE_UP_DEG, design=[])
     notes = text.render("summary_notes.j2", s=s, n=n)
-    return [Page("Summary", "", summary_page(paragraphs, header, rows, table_title, notes))]
+    return [first, Page("Summary in numbers", "", numbers_page(paragraphs, header, table, table_title, notes))]

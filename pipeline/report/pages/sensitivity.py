@@ -13,7 +13,7 @@ from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, text_block
 from pipeline.report.style import MEASURE_LABEL, PROTOCOL_LABEL, factor_label
 
-__all__ = ["page", "sensitivity_page"]
+__all__ = ["ablation_bars", "page", "sensitivity_page"]
 
 
 def _index_bars(ax, main: pd.DataFrame, ranking_measure: str) -> None:
@@ -60,7 +60,7 @@ def _measure_bars(ax, indices: pd.DataFrame, order: Sequence[str], ranking_measu
     ax.legend(loc="lower right")
 
 
-def _ablation_bars(ax, rows: pd.DataFrame, scale: float) -> None:
+def ablation_bars(ax, rows: pd.DataFrame, scale: float) -> None:
     """One statistic of the ablation: a bar per variant and protocol, whisker the variant's paired interval."""
     variants = list(dict.fromkeys(rows["variant"]))[::-1]
     protocols = list(dict.fromkeys(rows["protocol"]))
@@ -114,7 +114,7 @@ def sensitivity_page(
         (ax_a, "mean_max_deviation", 100.0, "fleet mean of max. deviation [%]"),
         (ax_o, "share_outside_5pct", 100.0, "groups outside 5 % [%]"),
     ):
-        _ablation_bars(ax, ablation[ablation["statistic"] == statistic], scale)
+        ablation_bars(ax, ablation[ablation["statistic"] == statistic], scale)
         ax.set_xlabel(label)
     ax_a.set_title("Ablation: mean inequality")
     ax_o.set_title("Ablation: outside 5 %")
