@@ -154,7 +154,17 @@ def _scalar(field: str, value: Any, problems: list[str], label: str | None = Non
     try:
         si = _to_si(value, key)
     except TypeError:
-        problems.append(f"{label} = {value!r} is not a number ({_kind(value)}): must be in {allowed}")
+        hint = ""
+        if isinstance(value, str) and "e" in value.lower():
+            try:
+                float(value)
+                mantissa, _, exponent = value.lower().partition("e")
+                mantissa += "" if "." in mantissa else ".0"
+                exponent = exponent if exponent.startswith(("+", "-")) else f"+{exponent}"
+                hint = f"; YAML needs a dot and the exponent's sign: write {mantissa}e{exponent}"
+            except ValueError:
+                pass
+        problems.append(f"{label} = {value!r} is not a number ({_kind(value)}{hint}): must be in {allowed}")
         return None
     if not (math.isfinite(si) and rng.contains(si)):
         problems.append(f"{label} = {value!r} is out of range: must be in {allowed}")
