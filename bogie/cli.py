@@ -1,4 +1,4 @@
-"""The ``bogie`` command: single cases, figures and observed weighings from the command line."""
+"""The ``bogie`` command: single cases, figures, observed weighings and a bogie of one's own from the command line."""
 
 from __future__ import annotations
 
@@ -159,6 +159,48 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     return 0
 
 
+def design_loads_table(name: str, bogie, chassis_tilt_deg: float) -> tuple[str, list[float]]:
+    """The text ``bogie design show`` prints, and the static tyre loads [N] it prints, one per axle: the linear
+    static model at the tilt (:func:`bogie.static.tilted_axle_loads`)."""
+    import math
+
+    from bogie.static import tilted_axle_loads
+
+    loads = [float(w) for w in tilted_axle_loads(bogie, math.radians(chassis_tilt_deg))]
+    total = sum(loads)
+    lines = [
+        f"{name}: {bogie.n_axles} axles at x = {', '.join(f'{v:g}' for v in bogie.axle_x)} m behind the king pin, "
+        f"chassis tilt {chassis_tilt_deg:+g} degree (nose up +)",
+        "static tyre loads of one side (linear static model, bogie.static.tilted_axle_loads):",
+        f"{'axle':>4} {'x [m]':>7} {'load [kN]':>10} {'share [%]':>10}",
+    ]
+    lines += [
+        f"{i + 1:>4} {bogie.axle_x[i]:>7.3f} {w / 1e3:>10.2f} {w / total * 100:>10.2f}" for i, w in enumerate(loads)
+    ]
+    lines.append(
+        f"{'sum':>4} {'':>7} {total / 1e3:>10.2f} {100.0:>10.2f}   (group load, both sides: {2 * total / 1e3:.2f} kN)"
+    )
+    return "\n".join(lines), loads
+
+
+def _cmd_design_show(args: argparse.Namespace) -> int:
+    from bogie.bogie_file import base_bogie
+
+    bogie = base_bogie(args.bogie)
+    text, loads = design_loads_table(args.bogie, bogie, args.tilt_deg)
+    print(text)
+    if args.out:
+        import math
+
+        from bogie.plotting import bogie_side_view, save_figure
+
+        title = (f"{Path(args.bogie).name}: static tyre loads of one side at a chassis tilt of {args.tilt_deg:+g}°, "
+                 f"{sum(loads) / 1e3:.1f} kN in all")  # fmt: skip
+        save_figure(bogie_side_view(bogie, loads, math.radians(args.tilt_deg), title), Path(args.out))
+        print(f"wrote {args.out}")
+    return 0
+
+
 def _version() -> str:
     from importlib.metadata import PackageNotFoundError, version
 
@@ -215,6 +257,21 @@ def build_parser() -> argparse.ArgumentParser:
                        "groups")  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
     weigh.set_defaults(func=_cmd_weighings, parser=weigh)
+    design = sub.add_parser("design", help="a bogie of your own: 'show' draws it and prints its static axle loads")
+    design_sub = design.add_subparsers(dest="design_command", required=True)
+    show = design_sub.add_parser(
+        "show",
+        help="print a bogie's static axle loads at a chassis tilt and draw it (docs/bogie-file.md)",
+        description="Read a bogie file (docs/bogie-file.md) or take a preset, print its static tyre loads at a "
+        "chassis tilt (the linear static model) and, with --out, draw its side view with the loads on it.",
+    )
+    show.add_argument("bogie", help="a bogie file (.yaml) or a preset name (tandem_trrl, triaxle_stage1)")
+    show.add_argument(
+        "--tilt-deg", type=_range("--tilt-deg", -10.0, 10.0, "degree"), default=0.0,
+        help="chassis tilt, nose up positive [degree] (default 0)",
+    )  # fmt: skip
+    show.add_argument("--out", help="write the side view to this image file (.png, .pdf, .svg)")
+    show.set_defaults(func=_cmd_design_show, parser=show)
     return parser
 
 
@@ -225,7 +282,7 @@ def main(argv: Sequence[str] | None = None) -> int:
         args.parser.error(f"unrecognized arguments: {' '.join(extra)}")
     if args.command == "case":
         _image_suffix(args.parser, "--plot", args.plot)
-    elif args.command == "figure2":
+    elif args.command == "figure2" or args.command == "design":
         _image_suffix(args.parser, "--out", args.out)
     try:
         code = args.func(args)

@@ -175,3 +175,110 @@ def _p1_newtons_panel(ax, result, case, ours: dict) -> None:
     ax.set_ylabel("P1 [N]")
     ax.set_ylim(0.0, 1.6 * max(levels))  # room above the lines for the legend
     ax.legend(fontsize=7, loc="upper right")
+
+
+# ---- a bogie's side view ----------------------------------------------------------------------------------------
+#: heights of the side view's schematic parts [m]: the spring seat above the axle centre, and the leaves' camber, the
+#: drop from the seat to the pads of an arched spring (the model has one seat height, ``docs/models.md``; these only
+#: draw it)
+_SEAT_RISE, _CAMBER = 0.10, 0.06
+
+
+def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: str = "") -> Figure:
+    """One side of a bogie seen from the side, its static axle loads written under the tyres.
+
+    Drawn to scale from the bogie's geometry: the tyres on the road (radius less wear), each leaf spring from its
+    seat on the axle to its two pads, the front and rear hangers and each equaliser's bracket, pivot and arms, and
+    the chassis at the king pin's height (``pad_drop`` above the pads), pitched by the tilt about the bogie centre
+    with the pads; the spring and pad heights are schematic (the model has one seat height).
+
+    Parameters
+    ----------
+    bogie
+        A :class:`bogie.params.Bogie`.
+    loads
+        Each axle's static tyre load, front to rear [N] (:func:`bogie.static.tilted_axle_loads`).
+    chassis_tilt
+        Pitch of the chassis, nose up positive [rad]: the rear of the drawing lower.
+    title
+        The figure's title.
+    """
+    from matplotlib.patches import Circle, FancyArrowPatch
+
+    n = bogie.n_axles
+    x = np.asarray(bogie.axle_x)
+    loads = np.asarray(loads, dtype=float)
+    radius = bogie.tyre_radius - np.asarray(bogie.tyre_wear)
+    centre = bogie.bogie_centre_x
+    slope = math.tan(chassis_tilt)
+    z_pad0 = float(np.max(radius)) + _SEAT_RISE - _CAMBER
+
+    def pad(xx):  # the chassis's pads, pitched with it about the bogie centre (nose up: rear lower)
+        return z_pad0 - (np.asarray(xx) - centre) * slope
+
+    fig = new_figure(7.6, 4.6)
+    ax = fig.add_subplot()
+    steel, spring_colour, load_colour = "0.25", "tab:blue", "tab:red"
+    front, rear = bogie.front_hanger_x, bogie.rear_hanger_x
+    x0, x1 = front - 0.45, rear + 0.45
+    z_chassis = z_pad0 + max(bogie.pad_drop, 0.12)
+    ax.plot([x0 - 0.3, x1 + 0.3], [0.0, 0.0], color="0.5", lw=1.0)  # the road
+    ax.fill_between([x0 - 0.3, x1 + 0.3], -0.06, 0.0, color="0.88", lw=0)
+    chassis_x = np.array([x0, x1])
+    chassis_z = z_chassis - (chassis_x - centre) * slope
+    ax.fill_between(chassis_x, chassis_z, chassis_z + 0.09, color="0.55", lw=0)
+    ax.text(x0 + 0.05, chassis_z[0] + 0.13, f"chassis, tilted {math.degrees(chassis_tilt):+.2f}° (nose up +)",
+            fontsize=8, va="bottom")  # fmt: skip
+    for hx in (front, rear):  # the hangers: brackets from the chassis down to the outer pads
+        ax.plot([hx, hx], [pad(hx), z_chassis - (hx - centre) * slope], color=steel, lw=2.5, solid_capstyle="butt")
+    pivots = bogie.equaliser_pivot_x
+    for j, px in enumerate(pivots):
+        tip_f, tip_r = px - bogie.equaliser_front_arm[j], px + bogie.equaliser_rear_arm[j]
+        z_pivot = pad(px) + 0.5 * (bogie.equaliser_front_tip_drop + bogie.equaliser_rear_tip_drop) + 0.03
+        ax.plot([px, px], [z_pivot, z_chassis - (px - centre) * slope], color=steel, lw=2.5, solid_capstyle="butt")
+        ax.plot([tip_f, px, tip_r], [pad(tip_f), z_pivot, pad(tip_r)], color="tab:orange", lw=3.0,
+                solid_capstyle="round", zorder=4)  # fmt: skip
+        ax.add_patch(Circle((px, z_pivot), 0.025, facecolor="white", edgecolor="k", lw=1.0, zorder=5))
+    for i in range(n):
+        ends = (x[i] - bogie.spring_front_half_length[i], x[i] + bogie.spring_rear_half_length[i])
+        seat = radius[i] + _SEAT_RISE
+        # an arched leaf: a parabola through its front pad, its seat on the axle and its rear pad, three leaves deep
+        fit = np.polyfit([ends[0], x[i], ends[1]], [pad(ends[0]), seat, pad(ends[1])], 2)
+        xs = np.linspace(ends[0], ends[1], 60)
+        for k, depth in enumerate((0.0, 0.018, 0.036)):
+            cut = xs[np.abs(xs - x[i]) <= (1.0 - 0.25 * k) * max(x[i] - ends[0], ends[1] - x[i])]
+            ax.plot(cut, np.polyval(fit, cut) - depth, color=spring_colour, lw=1.6, zorder=3)
+        ax.plot([x[i], x[i]], [radius[i], seat - 0.036], color=steel, lw=4.0, zorder=3)  # the U-bolted seat
+        # the tyre as an outline, so that the suspension behind it shows
+        ax.add_patch(Circle((x[i], radius[i]), radius[i], facecolor="0.93", edgecolor="0.2", lw=2.2, zorder=1))
+        ax.add_patch(Circle((x[i], radius[i]), 0.55 * radius[i], facecolor="none", edgecolor="0.55", lw=0.8, zorder=1))
+        ax.add_patch(Circle((x[i], radius[i]), 0.05, facecolor="white", edgecolor="k", zorder=3))
+        ax.add_patch(FancyArrowPatch((x[i], -0.42), (x[i], -0.07), arrowstyle="-|>", mutation_scale=12,
+                                     color=load_colour, lw=1.6))  # fmt: skip
+        share = loads[i] / loads.sum() * 100.0
+        ax.text(x[i], -0.47, f"axle {i + 1}\n{loads[i] / 1e3:.1f} kN\n{share:.1f} %", ha="center", va="top",
+                fontsize=8.5, color=load_colour)  # fmt: skip
+    z_dim = -1.0
+    for i in range(n - 1):  # axle spacings, dimensioned under the loads
+        mid = 0.5 * (x[i] + x[i + 1])
+        ax.annotate("", (x[i], z_dim), (x[i + 1], z_dim), arrowprops={"arrowstyle": "<->", "lw": 0.8, "color": "0.3"})
+        ax.text(mid, z_dim + 0.03, f"{(x[i + 1] - x[i]) * 1e3:.0f} mm", ha="center", va="bottom", fontsize=7.5,
+                color="0.3")  # fmt: skip
+    for xi in x:
+        ax.plot([xi, xi], [z_dim - 0.05, z_dim + 0.05], color="0.3", lw=0.8)
+    from matplotlib.lines import Line2D
+
+    handles = [Line2D([], [], color=spring_colour, lw=1.6, label="leaf spring"),
+               Line2D([], [], color="tab:orange", lw=3.0, label="equaliser (pivot o)"),
+               Line2D([], [], color=steel, lw=2.5, label="hanger, bracket, seat"),
+               Line2D([], [], color=load_colour, lw=1.6, marker="^", label="tyre load, share of side")]  # fmt: skip
+    fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=7.5, frameon=False)
+    ax.set_aspect("equal")
+    ax.set_xlim(x0 - 0.3, x1 + 0.3)
+    ax.set_ylim(-1.12, z_chassis + 0.5)
+    ax.set_xlabel("distance behind the king pin x [m]")
+    ax.set_ylabel("height z [m]")
+    ax.set_title(title, fontsize=10)
+    ax.grid(True, color="0.92", lw=0.6)
+    ax.set_axisbelow(True)
+    return fig

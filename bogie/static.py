@@ -18,7 +18,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
-from bogie.params import Bogie
+from bogie.params import GRAVITY, Bogie
 
 
 @lru_cache(maxsize=16)
@@ -201,3 +201,37 @@ def equation1_mapping(bogie: Bogie, chassis_deflection: float, chassis_rotation:
     if chassis_deflection == 0.0:
         raise ValueError("chassis_deflection = 0.0 m: Equation 1 is scaled by alpha, which must be non-zero")
     return bogie.q(0), -chassis_rotation * float(spacing[0]) / chassis_deflection
+
+
+def tilted_axle_loads(bogie: Bogie, chassis_tilt: float | None = None) -> NDArray[np.float64]:
+    """Static tyre loads [N] of each axle of one side, front to rear, with the chassis tilted by ``chassis_tilt``.
+
+    The linear static model (:func:`solve_static`, the bogie's real geometry and wear, small angles) with the chassis
+    pitched by the tilt about the bogie centre and lowered until the springs carry the sprung weight's share that
+    the moments about the king pin give, ``sum_i W_i x_i = m g x_cg`` (as :func:`bogie.params.design_spring_loads`
+    does for the level design position); each tyre carries its spring's load and the axle's weight. The springs'
+    loads are linear in the chassis deflection, so two solves give it exactly. Friction, bump stops and the
+    non-linear geometry are left out (:func:`bogie.nonlinear.equilibrium` has them); level, unworn and with a
+    moment-free bush these are the design loads (:func:`bogie._nonlinear_pack.design_wheel_loads`).
+
+    Parameters
+    ----------
+    bogie
+        The bogie: its geometry, stiffnesses, tyre wear, payload and axle masses.
+    chassis_tilt
+        Pitch of the chassis, nose up positive (king pin raised) [rad]; ``bogie.chassis_tilt`` if None.
+
+    Returns
+    -------
+    numpy.ndarray
+        One load per axle [N]; they sum to the sprung weight on the bogie plus the axles' weight.
+    """
+    tilt = bogie.chassis_tilt if chassis_tilt is None else float(chassis_tilt)
+    if not (math.isfinite(tilt) and abs(tilt) < math.pi / 2):
+        raise ValueError(f"chassis_tilt = {tilt!r} is out of range: must be in (-pi/2, pi/2) rad")
+    x = np.asarray(bogie.axle_x)
+    per_deflection = wheel_loads(bogie, 1.0, 0.0, np.zeros(bogie.n_axles))  # [N/m]
+    tilted = wheel_loads(bogie, 0.0, tilt)  # the tilt and the wear at zero deflection [N]
+    moment = bogie.payload_mass * GRAVITY * bogie.payload_cg_x  # about the king pin [N m]
+    deflection = (moment - math.fsum(tilted * x)) / math.fsum(per_deflection * x)  # sums without BLAS
+    return tilted + deflection * per_deflection + bogie.axle_mass * GRAVITY

@@ -30,11 +30,13 @@ import pyarrow as pa
 import pyarrow.parquet as pq
 import scipy
 
+from bogie.bogie_file import base_fields
 from bogie.digest import numerics_digest
 from bogie.fleet.sampling import COLUMNS
 from bogie.fleet.weighing import Protocols
 from bogie.numba_cache import hash_sources
 from bogie.numerics import compile_target
+from bogie.presets import PRESETS
 from pipeline.atomic import LockedError, atomic_file, output_lock, temporary_name
 from pipeline.deps import ROOT, project_files
 from pipeline.schema import RunsFileError, failed_runs, read_runs_content, runs_file_content, write_file
@@ -119,6 +121,10 @@ def chunk_hash(study: str, rows: Mapping[str, np.ndarray], protocols: Protocols,
     specs = json.dumps([[name, dataclasses.asdict(spec)] for name, spec in protocols], sort_keys=True)
     digest = hashlib.sha256(f"{study}\0{specs}\0{code}\0".encode())
     digest.update(_rows_digest(rows))
+    # a row names a bogie file by its path: its bogie is part of the content (none for a study on presets alone)
+    for label in sorted({str(v) for v in rows["preset"]} - set(PRESETS)):
+        fields = json.dumps(base_fields(label), sort_keys=True)
+        digest.update(f"{label}\0{fields}\0".encode())
     return digest.hexdigest()
 
 

@@ -31,6 +31,7 @@ from bogie.fleet.runs import (
     SchemaError,
     check_runs,
     conform,
+    preset_categories,
     runs_frame,
 )
 from pipeline.atomic import atomic_file
@@ -130,11 +131,16 @@ def table_from_rows(rows: Sequence[Mapping[str, object]]) -> pa.Table:
             arrays.append(pa.array(values, field.type, from_pandas=True))
             continue
         codes = _CODES[field.name]
+        dictionary = _DICTIONARIES[field.name]
+        if field.name == "preset" and not all(v in codes for v in values):
+            # bogie files' paths after the presets' names (bogie.fleet.runs.preset_categories)
+            labels = preset_categories([v for v in values if v is not None and v == v])
+            codes, dictionary = {v: i for i, v in enumerate(labels)}, pa.array(labels, pa.string())
         # a null label (None or NaN) stays null; an unknown one is collected for the error
         indices = [None if v is None or v != v else codes.get(v, -1) for v in values]
         if -1 in indices:
             unknown[field.name] = sorted({str(v) for v, i in zip(values, indices) if i == -1})
-        arrays.append(pa.DictionaryArray.from_arrays(pa.array(indices, pa.int32()), _DICTIONARIES[field.name]))
+        arrays.append(pa.DictionaryArray.from_arrays(pa.array(indices, pa.int32()), dictionary))
     if unknown:
         raise SchemaError(f"run rows with labels outside the schema's categories: {unknown}")
     return pa.Table.from_arrays(arrays, schema=RUNS_SCHEMA.with_metadata({b"pandas": _pandas_metadata()}))
@@ -308,7 +314,11 @@ def read_runs_frame(
     if not frames:
         what = f"study {study!r}" if study is not None else "any study"
         raise RunsFileError(f"{runs_dir}/ holds no part file of {what}; run the simulate stage first")
-    return pd.concat(frames, ignore_index=True)
+    runs = pd.concat(frames, ignore_index=True)
+    if "preset" in runs and not isinstance(runs["preset"].dtype, pd.CategoricalDtype):
+        # parts that name other bogie files (or none) have other dictionaries, which concat turns into text
+        runs["preset"] = runs["preset"].astype(pd.CategoricalDtype(preset_categories(runs["preset"])))
+    return runs
 
 
 def write_file(content: bytes, path: str | Path) -> None:

@@ -2,6 +2,8 @@ import re
 import subprocess
 import sys
 
+import pytest
+
 from bogie.cli import main
 
 
@@ -95,3 +97,47 @@ def test_a_cases_csv_header_gives_every_columns_unit(tmp_path, capsys):
         assert header[:4] == ["t [s]", "wheel_load_0 [N]", "wheel_load_1 [N]", "nondimensional_load_0 [-]"]
         assert all(re.fullmatch(r"\w+ \[(N|-|m|rad|s|N m)\]", column) for column in header), header
     assert "stop_moment_0 [N m]" in header and "spring_hysteresis_1 [N]" in header
+
+
+def test_design_show_prints_the_library_s_static_loads_summing_to_the_group_load(tmp_path, capsys):
+    from bogie import triaxle_stage1
+    from bogie._nonlinear_pack import design_wheel_loads
+    from bogie.params import GRAVITY
+    from bogie.static import tilted_axle_loads
+
+    out = tmp_path / "tri.png"
+    assert main(["design", "show", "triaxle_stage1", "--out", str(out)]) == 0
+    text = capsys.readouterr().out
+    rows = [line.split() for line in text.splitlines() if re.match(r"\s+\d\s", line)]
+    printed = [float(r[2]) * 1e3 for r in rows]
+    bogie = triaxle_stage1()
+    # the equalised preset at tilt 0: the library's loads, which sum to the design group load of this side
+    assert printed == pytest.approx(tilted_axle_loads(bogie, 0.0), abs=5.0)  # printed to 10 N
+    expected_side = (
+        bogie.payload_mass * GRAVITY * bogie.payload_cg_x / bogie.bogie_centre_x + 3 * bogie.axle_mass * GRAVITY
+    )
+    assert sum(printed) == pytest.approx(expected_side, abs=15.0)
+    assert sum(design_wheel_loads(bogie)) == pytest.approx(expected_side, rel=1e-12)
+    assert [float(r[3]) for r in rows] == pytest.approx([33.33] * 3, abs=0.006)
+    assert out.read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+
+
+def test_design_show_reads_a_bogie_file_and_a_tilt_loads_the_rear(tmp_path, capsys):
+    from pathlib import Path
+
+    example = Path(__file__).resolve().parents[1] / "bogies" / "example_triaxle.yaml"
+    assert main(["design", "show", str(example), "--tilt-deg", "2"]) == 0
+    rows = [line.split() for line in capsys.readouterr().out.splitlines() if re.match(r"\s+\d\s", line)]
+    assert [float(r[1]) for r in rows] == [7.14, 8.5, 9.86]  # the file's axles
+    loads = [float(r[2]) for r in rows]
+    assert loads[0] < loads[1] < loads[2]  # nose up: the rear axle heaviest
+
+
+def test_design_show_names_a_bad_file_and_refuses_a_tilt_out_of_range(tmp_path, capsys):
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("base: tandem_trrl\ntyre_radius_mm: 5000\n")
+    assert main(["design", "show", str(bad)]) == 2
+    assert "tyre_radius_mm = 5000 is out of range: must be in [50, 2000] mm" in capsys.readouterr().err
+    with pytest.raises(SystemExit):
+        main(["design", "show", "tandem_trrl", "--tilt-deg", "30"])
+    assert "--tilt-deg 30 outside the allowed range [-10, 10] degree" in capsys.readouterr().err

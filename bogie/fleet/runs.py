@@ -15,6 +15,7 @@ from collections.abc import Mapping
 
 import pandas as pd
 
+from bogie.bogie_file import is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, PROTOCOLS, SUSPENSIONS
 from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS
 from bogie.presets import PRESETS
@@ -22,11 +23,12 @@ from bogie.road import ISO8608_CLASSES
 
 __all__ = [
     "BOOLEAN_RESULTS", "CATEGORICAL", "CATEGORIES", "RESULT_COLUMNS", "RUN_COLUMNS", "SAMPLE_COLUMNS", "UNITS",
-    "SchemaError", "check_runs", "conform", "runs_frame",
+    "SchemaError", "check_runs", "conform", "preset_categories", "runs_frame",
 ]  # fmt: skip
 
 #: text columns stored dictionary-encoded, each with every value it can take in a fixed order: every part file has
-#: the same dictionary, so pandas reads them back as the same categoricals whatever the chunking
+#: the same dictionary, so pandas reads them back as the same categoricals whatever the chunking. ``preset`` may also
+#: hold bogie files' paths (:func:`preset_categories`), after the presets' names
 CATEGORIES: dict[str, tuple[str, ...]] = {
     "group": tuple(GROUP_AXLES),
     "preset": tuple(PRESETS),
@@ -76,6 +78,22 @@ RUN_COLUMNS: dict[str, str] = {
 }
 
 
+def preset_categories(labels: object) -> tuple[str, ...]:
+    """The ``preset`` column's categories for rows with these labels: the presets' names (:data:`CATEGORIES`), then
+    the bogie files' paths among the labels, sorted; a study on the presets alone has exactly the presets' names.
+
+    Raises
+    ------
+    SchemaError
+        If a label is neither a preset's name nor a bogie file's path (``.yaml``/``.yml``).
+    """
+    names = {str(v) for v in pd.Series(labels, dtype=object).dropna()} - set(CATEGORIES["preset"])
+    bad = sorted(v for v in names if not is_bogie_file(v))
+    if bad:
+        raise SchemaError(f"run rows with labels outside the schema's categories: {{'preset': {bad}}}")
+    return (*CATEGORIES["preset"], *sorted(names))
+
+
 class SchemaError(ValueError):
     """A runs table that does not have the runs schema's columns, types or nulls."""
 
@@ -92,11 +110,12 @@ def conform(frame: pd.DataFrame) -> pd.DataFrame:
     if missing:
         raise SchemaError(f"run rows lack the columns {', '.join(missing)}")
     frame = frame[list(RUN_COLUMNS)]
-    unknown = {c: sorted(set(frame[c].dropna().astype(str)) - set(CATEGORIES[c])) for c in CATEGORIES}
+    categories = {**CATEGORIES, "preset": preset_categories(frame["preset"])}
+    unknown = {c: sorted(set(frame[c].dropna().astype(str)) - set(categories[c])) for c in categories}
     unknown = {c: v for c, v in unknown.items() if v}
     if unknown:
         raise SchemaError(f"run rows with labels outside the schema's categories: {unknown}")
-    dtypes: dict[str, object] = {c: pd.CategoricalDtype(CATEGORIES[c]) if c in CATEGORIES else d
+    dtypes: dict[str, object] = {c: pd.CategoricalDtype(categories[c]) if c in categories else d
                                  for c, d in RUN_COLUMNS.items()}  # fmt: skip
     return frame.astype(dtypes)
 

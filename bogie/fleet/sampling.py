@@ -25,6 +25,7 @@ import pandas as pd
 
 from bogie import air
 from bogie.air import AirBogie
+from bogie.bogie_file import base_bogie, base_fields, is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
 from bogie.fleet.distributions import Choice, Distribution
 from bogie.params import (
@@ -35,7 +36,7 @@ from bogie.params import (
     equaliser_arm_changes,
     with_equaliser_arms,
 )
-from bogie.presets import PRESETS, preset, preset_fields
+from bogie.presets import PRESETS
 from bogie.road import ISO8608_CLASSES
 
 __all__ = [
@@ -75,7 +76,7 @@ COLUMNS: dict[str, str] = {
     "study": "str",
     "group": "str",  # tandem | triaxle
     "n_axles": "int64",
-    "preset": "str",  # bogie.params preset of the group
+    "preset": "str",  # base bogie of the group: a bogie.params preset's name or a bogie file's path
     "variant": "str",  # baseline, or the inhibitor switched off (ablation)
     "suspension": "str",  # steel (leaf springs, equalisers) | air (connected air springs: bogie.air)
     "bush_stiffness": "float64",  # [N m/rad]
@@ -150,7 +151,10 @@ class Fleet:
     axle_mix
         Fraction of the fleet in each axle group (``tandem``, ``triaxle``) [-], summing to 1.
     presets
-        Each group's base bogie, a :data:`bogie.presets.PRESETS` name.
+        Each group's base bogie: a :data:`bogie.presets.PRESETS` name or the path of a bogie file
+        (:func:`bogie.bogie_file.load_bogie`, ``docs/bogie-file.md``; relative to the working directory, which must be
+        the same for every process that rebuilds a bogie from a sample row) with the group's number of axles. The
+        sample rows' ``preset`` column holds it as given.
     legal_group_load
         Each group's legal load, both sides together [N]: its design payload (:func:`design_bogie`).
     legal_axle_load
@@ -195,8 +199,19 @@ class Fleet:
             if lacking:
                 raise FleetError(f"{name} = {dict(table)!r}: a value is needed for {', '.join(lacking)}")
         for g in self.axle_mix:
-            if self.presets[g] not in PRESETS:
-                raise FleetError(f"presets[{g!r}] = {self.presets[g]!r}: must be one of {', '.join(PRESETS)}")
+            name = self.presets[g]
+            if name not in PRESETS and not is_bogie_file(name):
+                raise FleetError(
+                    f"presets[{g!r}] = {name!r}: must be one of {', '.join(PRESETS)} or a bogie file's path (.yaml)"
+                )
+            try:
+                n_axles = base_bogie(name).n_axles
+            except ValueError as exc:
+                raise FleetError(f"presets[{g!r}] = {name!r}: {exc}") from None
+            if n_axles != GROUP_AXLES[g]:
+                raise FleetError(
+                    f"presets[{g!r}] = {self.presets[g]!r} has {n_axles} axles but a {g} has {GROUP_AXLES[g]} [-]"
+                )
             load = float(self.legal_group_load[g])
             if not (math.isfinite(load) and load > 0.0):
                 raise FleetError(f"legal_group_load[{g!r}] = {load!r}: must be a finite load > 0 [N]")
@@ -285,7 +300,8 @@ def design_seed(seed: int, study: str) -> int:
 
 # ---- the design bogie ------------------------------------------------------------------------------------------
 def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
-    """The preset with the sprung mass that makes its fully laden design load the legal group load.
+    """The base bogie (a preset or a bogie file) with the sprung mass that makes its fully laden design load the legal
+    group load.
 
     Per side: (sprung weight on the bogie) + n m_axle g = legal_group_load / 2. The sprung weight on the bogie,
     m g x_cg / x_b (:func:`bogie.params.design_spring_loads`), is linear in the payload mass m, so one evaluation on
@@ -294,16 +310,17 @@ def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
     Parameters
     ----------
     preset_name
-        Name of a bogie.params preset.
+        Name of a bogie.params preset, or a bogie file's path (:func:`bogie.bogie_file.base_bogie`).
     legal_group_load
         Legal load of the axle group, both sides together [N].
 
     Returns
     -------
     Bogie
-        The preset with ``payload_mass`` [kg] and ``chassis_pitch_inertia`` [kg m^2] set.
+        The base bogie with ``payload_mass`` [kg] and ``chassis_pitch_inertia`` [kg m^2] set (a file's own two are
+        replaced, as a preset's are).
     """
-    base = preset(preset_name)
+    base = base_bogie(preset_name)
     weight_per_kg = sum(design_spring_loads(base)) / base.payload_mass  # [N/kg]
     unsprung_weight = base.n_axles * base.axle_mass * GRAVITY
     payload = (0.5 * legal_group_load - unsprung_weight) / weight_per_kg
@@ -313,12 +330,16 @@ def design_bogie(preset_name: str, legal_group_load: float) -> Bogie:
     )
 
 
-#: each preset's fields (:func:`bogie.presets.preset_fields`) gathered once per process: a copy costs a tenth of that
-_preset_fields = functools.cache(preset_fields)
+#: each base bogie's fields (:func:`bogie.bogie_file.base_fields`: a preset's, or a file's read once) gathered once per
+#: process: a copy costs a tenth of that
+_base_fields = functools.cache(base_fields)
+#: each base bogie once per process (a file read once): the air path's and the error path's start
+_base_bogie = functools.cache(base_bogie)
 
 
 def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
-    """The bogie of one sample row: its group's preset with the sampled parameters and the design payload.
+    """The bogie of one sample row: its group's base bogie (the ``preset`` column: a preset's name or a bogie file's
+    path) with the sampled parameters and the design payload.
 
     A row whose ``suspension`` is ``air`` gives the air-sprung group on the same trailer
     (:func:`bogie.air.from_steel` of the steel design bogie): its own tilt, tyre wear, payload and pitch inertia;
@@ -336,8 +357,7 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
     """
     n_axles = int(row["n_axles"])
     if str(row.get("suspension", "steel")) == "air":
-        design = preset(
-            str(row["preset"]),
+        design = _base_bogie(str(row["preset"])).replace(
             payload_mass=float(row["payload_mass"]),
             chassis_pitch_inertia=float(row["chassis_pitch_inertia"]),
         )
@@ -360,7 +380,7 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
     )
     # the preset with the changes and the arms in one validation (issue 15: preset, changes and arms validated
     # one after another took a tenth of a weighing's Python); the same fields as the steps below
-    fields = dict(_preset_fields(str(row["preset"])))  # the values are immutable: a shallow copy is a new bogie's
+    fields = dict(_base_fields(str(row["preset"])))  # the values are immutable: a shallow copy is a new bogie's
     fields.update(changes)
     # a longer arm on the same axle layout shortens the springs beside it; the design loads stay equal
     fields.update(equaliser_arm_changes(fields, float(row["equaliser_arm"])))
@@ -368,7 +388,7 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
         return Bogie(**fields)
     except ValueError:
         pass  # the steps raise the error they always raised (the first of several, say)
-    bogie = preset(str(row["preset"]), **changes)
+    bogie = _base_bogie(str(row["preset"])).replace(**changes)
     return with_equaliser_arms(bogie, float(row["equaliser_arm"]))
 
 

@@ -9,12 +9,13 @@ holds as :class:`~pipeline.config.si.FrozenMap`.
 from __future__ import annotations
 
 from collections.abc import Callable
-from typing import Any, ClassVar, Literal
+from typing import Any, ClassVar
 
 from pydantic import AfterValidator, Field, ValidationInfo, create_model, field_validator, model_validator
 
+from bogie.bogie_file import BogieFileError, base_bogie, is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
-from bogie.params import PRESETS, preset
+from bogie.presets import PRESETS
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error
 
@@ -75,8 +76,17 @@ class _Presets(_Map):
     @classmethod
     def _axles_match(cls, name: str, info: ValidationInfo) -> str:
         group, n_axles = info.field_name, GROUP_AXLES[info.field_name]
-        if preset(name).n_axles != n_axles:
-            raise config_error("", name, f"has {preset(name).n_axles} axles but a {group} has {n_axles}")
+        if name not in PRESETS and not is_bogie_file(name):
+            raise config_error(
+                "", name, f"must be a preset ({', '.join(PRESETS)}) or a bogie file's path ending in .yaml or .yml, "
+                "relative to the project root (docs/bogie-file.md)"
+            )  # fmt: skip
+        try:
+            bogie = base_bogie(name)
+        except BogieFileError as exc:
+            raise config_error("", name, f"not a valid bogie file: {exc}") from None
+        if bogie.n_axles != n_axles:
+            raise config_error("", name, f"has {bogie.n_axles} axles but a {group} has {n_axles}")
         return name
 
 
@@ -103,9 +113,11 @@ SuspensionMix = _group_map(
 GroupPresets = _group_map(
     "GroupPresets",
     _Presets,
-    Literal[tuple(PRESETS)],
-    lambda: named("preset"),
-    "``fleet.presets``: the base bogie (a bogie.params preset with the group's number of axles) of each group.",
+    str,
+    lambda: named("preset or bogie file"),
+    "``fleet.presets``: the base bogie of each group, with the group's number of axles: a bogie.params preset's name "
+    "or a bogie file's path relative to the project root (``docs/bogie-file.md``; keep it in ``bogies/``, the folder "
+    "dvc.yaml lists).",
 )
 GroupLoads = _group_map(
     "GroupLoads",

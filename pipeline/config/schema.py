@@ -20,6 +20,7 @@ from pydantic import (
     model_validator,
 )
 
+from bogie.bogie_file import base_bogie
 from bogie.fleet.constants import (
     CALIBRATION_QUANTITIES,
     GROUP_AXLES,
@@ -32,7 +33,6 @@ from bogie.fleet.constants import (
 )
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
-from bogie.params import preset
 from bogie.road.wim import SENSORS
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
@@ -83,7 +83,8 @@ class Fleet(Strict):
     """Per axle group, the fraction of its groups of each suspension (``steel``: leaf springs and equalisers, ``air``:
     connected air springs), summing to 1."""
     presets: GroupPresets  # type: ignore[valid-type]
-    """Name of the base bogie (a bogie.params preset) of each group."""
+    """The base bogie of each group: a bogie.params preset's name or a bogie file's path relative to the project root
+    (``docs/bogie-file.md``), in the folder ``bogies/`` that dvc.yaml lists as a dependency."""
     legal_group_load_t: GroupLoads = Field(json_schema_extra={"unit": "t", "si": "N"})  # type: ignore[valid-type]
     """Legal load of each group, both sides together (a load: N in the config)."""
     legal_axle_load_t: float = number("t", si="N", gt=0.0, le=100.0)
@@ -94,7 +95,7 @@ class Fleet(Strict):
         # the design bogie needs a positive payload: the legal load must exceed the group's own unsprung mass
         for group, n_axles in GROUP_AXLES.items():
             name, tonnes = getattr(self.presets, group), getattr(self.legal_group_load_t, group)
-            unsprung = 2 * n_axles * preset(name).axle_mass / 1000.0
+            unsprung = 2 * n_axles * base_bogie(name).axle_mass / 1000.0
             if tonnes <= unsprung:
                 expected = f"must exceed the unsprung mass of the {name} axles, {unsprung:g} t"
                 raise config_error(f"legal_group_load_t.{group}", tonnes, expected)

@@ -370,3 +370,49 @@ def test_scaling_changes_the_unit_not_the_distribution():
 def test_design_points_outside_the_unit_interval_are_refused():
     with pytest.raises(ValueError, match=r"\[0, 1\]"):
         Uniform(0.0, 1.0).ppf([1.5])
+
+
+# ---- a bogie file as a group's base bogie (docs/bogie-file.md) ---------------------------------------------------
+def test_a_bogie_file_may_be_a_group_s_base_bogie(raw, monkeypatch):
+    monkeypatch.chdir(PARAMS.parent)  # the path is relative to the project root, where the stages run
+    config = parse_config(
+        changed(raw, "fleet.presets", {"tandem": "tandem_trrl", "triaxle": "bogies/example_triaxle.yaml"})
+    )
+    assert dict(config.fleet.presets) == {"tandem": "tandem_trrl", "triaxle": "bogies/example_triaxle.yaml"}
+
+
+@pytest.mark.parametrize(
+    ("presets", "key", "words"),
+    [
+        ({"tandem": "bogies/example_triaxle.yaml", "triaxle": "triaxle_stage1"}, "fleet.presets.tandem",
+         ["'bogies/example_triaxle.yaml'", "has 3 axles but a tandem has 2"]),
+        ({"tandem": "tandem_trrl", "triaxle": "bogies/none.yaml"}, "fleet.presets.triaxle",
+         ["'bogies/none.yaml'", "no such bogie file"]),
+        ({"tandem": "tandem_trrl", "triaxle": "BAD"}, "fleet.presets.triaxle", ["'BAD'", "bad.yaml",
+         "tyre_radius_mm = 5000 is out of range: must be in [50, 2000] mm"]),
+        ({"tandem": "tandem_trrl", "triaxle": "bogies/example_triaxle.txt"}, "fleet.presets.triaxle",
+         ["a preset (tandem_trrl, triaxle_stage1) or a bogie file's path ending in .yaml"]),
+    ],
+)  # fmt: skip
+def test_a_bad_bogie_file_is_named_with_its_key_and_what_is_wrong(raw, monkeypatch, tmp_path, presets, key, words):
+    monkeypatch.chdir(PARAMS.parent)
+    bad = tmp_path / "bad.yaml"
+    bad.write_text("base: triaxle_stage1\ntyre_radius_mm: 5000\n")
+    presets = {g: str(bad) if v == "BAD" else v for g, v in presets.items()}
+    words = [str(bad) if w == "'BAD'" else w for w in words]
+    with pytest.raises(ConfigError) as excinfo:
+        parse_config(changed(raw, "fleet.presets", presets))
+    message = str(excinfo.value)
+    assert excinfo.value.key == key and message.startswith(f"{key} = ")
+    for word in words:
+        assert word in message, message
+
+
+def test_runs_on_a_bogie_file_keep_its_path_as_a_category_after_the_presets():
+    from bogie.fleet.runs import SchemaError, preset_categories
+
+    assert preset_categories(["triaxle_stage1", "tandem_trrl"]) == ("tandem_trrl", "triaxle_stage1")
+    labels = ["tandem_trrl", "bogies/b.yaml", "bogies/a.yml", None]
+    assert preset_categories(labels) == ("tandem_trrl", "triaxle_stage1", "bogies/a.yml", "bogies/b.yaml")
+    with pytest.raises(SchemaError, match="'quad'"):
+        preset_categories(["quad"])
