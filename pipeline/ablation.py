@@ -36,7 +36,7 @@ ABLATION_STATISTICS: dict[str, str] = {
     "mean_max_deviation": "max_deviation",
     "mean_p1": "p1",
     "share_outside_5pct": "outside_5pct",
-    "share_outside_10pct": "outside_10pct",
+    "share_over_10pct": "over_10pct",
 }
 
 
@@ -65,7 +65,7 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
         One row per protocol, bogie and variant (the baseline included): ``ok`` (variant and baseline succeeded
         and neither reading has a wheel in the air), ``airborne`` (either reading has an axle at 0 N over the WIM
         sensor: a record a WIM system flags, left out like a failure but counted apart), and ``max_deviation``,
-        ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``outside_10pct`` of the variant and of the
+        ``p1`` (of the loads over their mean) [-], ``outside_5pct``, ``over_10pct`` of the variant and of the
         baseline (suffix ``_baseline``); NaN for a failed run.
 
     Raises
@@ -90,10 +90,10 @@ def ablation_pairs(runs: pd.DataFrame) -> pd.DataFrame:
         else pd.Series(False, index=frame.index)
     )
     ok = (frame["status"] == "ok") & ~airborne
-    values = ["max_deviation", "p1", "outside_5pct", "outside_10pct"]
-    flags = inequality_columns(frame[ok])[["outside_5pct", "outside_10pct"]].astype(float)
-    frame = frame.assign(outside_5pct=np.nan, outside_10pct=np.nan)
-    frame.loc[ok, ["outside_5pct", "outside_10pct"]] = flags.to_numpy()
+    values = ["max_deviation", "p1", "outside_5pct", "over_10pct"]
+    flags = inequality_columns(frame[ok])[["outside_5pct", "over_10pct"]].astype(float)
+    frame = frame.assign(outside_5pct=np.nan, over_10pct=np.nan)
+    frame.loc[ok, ["outside_5pct", "over_10pct"]] = flags.to_numpy()
     frame.loc[~ok, ["max_deviation", "p1"]] = np.nan
     frame["airborne"] = airborne.to_numpy()
     keys = ["protocol", "base_id"]

@@ -102,7 +102,7 @@ def rounded(x: Any, digits: int) -> float | None:
 
 #: headline column -> decimals in metrics/survey.json
 _HEADLINE_DIGITS = {
-    "share_outside_5pct": 4, "share_outside_10pct": 4, "mean_max_deviation": 4, "mean_spread_pct": 2,
+    "share_outside_5pct": 4, "share_over_10pct": 4, "mean_max_deviation": 4, "mean_spread_pct": 2,
     "mean_spread_kg": 1, "mean_road_wear_factor": 4, "rear_overload_share_nose_up": 4,
     "frac_axle_over_group_legal": 4, "share_on_stop": 4,
 }  # fmt: skip

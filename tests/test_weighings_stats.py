@@ -98,5 +98,5 @@ def test_the_survey_stage_summary_uses_these_statistics():
     summary = summary_table(ok, runs, legal).iloc[0]
     ours = survey_statistics(ok, unit_per_kg=GRAVITY).iloc[0]
     assert summary["share_outside_5pct"] == ours["share_outside_5pct"]
-    assert summary["share_outside_10pct"] == ours["share_over_10pct"]
+    assert summary["share_over_10pct"] == ours["share_over_10pct"]
     assert summary["mean_spread_kg"] == pytest.approx(ours["mean_spread_kg"], rel=1e-14)

@@ -84,7 +84,7 @@ def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
     pandas.DataFrame
         ``runs`` with added columns: ``spread_pct`` (heaviest minus lightest axle over the mean axle load [%]),
         ``pair_difference`` ((max - min) / max [-]), ``max_load_share`` (largest LSC [-]), ``outside_5pct``
-        (pair_difference > 0.05), ``outside_10pct`` (max_load_share > 1.10), ``heaviest_axle`` (0 = front; a tie
+        (pair_difference > 0.05), ``over_10pct`` (max_load_share > 1.10), ``heaviest_axle`` (0 = front; a tie
         goes to the front-most), ``rear_heaviest``, ``tilt_deg`` [degree, nose up +] and ``wear_diff_mm`` (most
         minus least worn tyre of the group [mm]).
     """
@@ -99,7 +99,7 @@ def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
     out["pair_difference"] = ineq["pair_difference"]
     out["max_load_share"] = ineq["max_load_share"]
     out["outside_5pct"] = ineq["outside_5pct"]
-    out["outside_10pct"] = ineq["over_10pct"]
+    out["over_10pct"] = ineq["over_10pct"]
     out["heaviest_axle"] = ineq["heaviest_axle"]
     out["rear_heaviest"] = out["heaviest_axle"].to_numpy() == n - 1
     out["tilt_deg"] = np.degrees(runs["chassis_tilt"].to_numpy(dtype=float))
@@ -218,7 +218,7 @@ def _banded(ok: pd.DataFrame, column: str, width: float, prefix: str, extra: dic
     keys = [*KEYS, f"{prefix}_low", f"{prefix}_high"]
     table = frame.groupby(keys, observed=True).agg(
         n=("max_deviation", "size"), mean_max_deviation=("max_deviation", "mean"),
-        share_outside_5pct=("outside_5pct", "mean"), share_outside_10pct=("outside_10pct", "mean"), **extra,
+        share_outside_5pct=("outside_5pct", "mean"), share_over_10pct=("over_10pct", "mean"), **extra,
     ).reset_index()  # fmt: skip
     table.insert(len(keys), f"{prefix}_bin", [f"[{a:g}, {b:g})" for a, b in zip(table[keys[2]], table[keys[3]])])
     return table
@@ -353,11 +353,11 @@ def summary_table(ok: pd.DataFrame, runs: pd.DataFrame, legal: pd.DataFrame) -> 
         rear_overload_share_nose_up=("rear_nose_up", "mean"), n_nose_up=("rear_nose_up", "count"),
         share_on_stop=("equaliser_on_stop", "mean"),
     ).reset_index()  # fmt: skip
-    shared = survey_statistics(ok, by=KEYS, unit_per_kg=GRAVITY).rename(
-        columns={"share_over_10pct": "share_outside_10pct"}
-    )[[*KEYS, "share_outside_5pct", "share_outside_10pct", "mean_spread_kg"]]
+    shared = survey_statistics(ok, by=KEYS, unit_per_kg=GRAVITY)[
+        [*KEYS, "share_outside_5pct", "share_over_10pct", "mean_spread_kg"]
+    ]
     table = table.merge(shared, on=KEYS, how="left")[
-        [*KEYS, "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct",
+        [*KEYS, "share_outside_5pct", "share_over_10pct", "mean_max_deviation", "mean_spread_pct",
          "mean_spread_kg", "mean_road_wear_factor", "rear_overload_share_nose_up", "n_nose_up", "share_on_stop"]
     ]  # fmt: skip
     table = table.merge(legal[[*KEYS, "frac_axle_over_group_legal"]], on=KEYS, how="left")

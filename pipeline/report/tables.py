@@ -76,7 +76,7 @@ def summary_numbers(survey: Mapping[str, Any], sensitivity: Mapping[str, Any]) -
     """The numbers of the summary page, taken as they are from metrics/survey.json and metrics/sensitivity.json."""
     keys = (
         "share_outside_5pct",
-        "share_outside_10pct",
+        "share_over_10pct",
         "mean_spread_kg",
         "mean_spread_pct",
         "rear_overload_share_nose_up",

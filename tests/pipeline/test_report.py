@@ -206,7 +206,7 @@ def test_summary_numbers_are_those_of_the_metrics_files(built, project):
     assert numbers["ablation"] == ss["ablation"]
     for protocol in ("static", "wim"):
         for group, entry in sv[protocol].items():
-            for key in ("share_outside_5pct", "share_outside_10pct", "mean_spread_kg", "rear_overload_share_nose_up"):
+            for key in ("share_outside_5pct", "share_over_10pct", "mean_spread_kg", "rear_overload_share_nose_up"):
                 assert numbers["survey"][protocol][group][key] == entry[key], (protocol, group, key)
 
 
@@ -215,7 +215,7 @@ def expected_phrases(sv, ss):
     phrases = []
     for protocol in ("static", "wim"):
         for entry in sv[protocol].values():
-            for key in ("share_outside_5pct", "share_outside_10pct"):
+            for key in ("share_outside_5pct", "share_over_10pct"):
                 phrases.append("n/a" if entry[key] is None else f"{100 * entry[key]:.1f} %")
             phrases.append(f"{entry['mean_spread_kg']:.0f} kg")
     for abl in ss["ablation"].values():

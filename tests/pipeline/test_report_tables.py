@@ -77,7 +77,7 @@ def test_failures_table_shortens_long_id_lists_and_names_the_variant():
 
 # ---- summary -------------------------------------------------------------------------------------------------------
 def test_summary_numbers_copy_the_metrics():
-    headline = {"share_outside_5pct": 0.5, "share_outside_10pct": 0.25, "mean_spread_kg": 100.0, "mean_spread_pct": 2.0}
+    headline = {"share_outside_5pct": 0.5, "share_over_10pct": 0.25, "mean_spread_kg": 100.0, "mean_spread_pct": 2.0}
     headline["rear_overload_share_nose_up"] = None
     survey = {"n_ok": 3, "static": {"tandem": {**headline, "n_ok": 3}}}
     sensitivity = {k: k for k in ("ranking", "ranking_measure", "reference_check", "ranking_other_measures")}

@@ -120,7 +120,7 @@ def numbers(agrees=True, resolved=True, survey=True):
     }
     headline = {
         "share_outside_5pct": 0.1234,
-        "share_outside_10pct": 0.05,
+        "share_over_10pct": 0.05,
         "mean_spread_kg": 312.4,
         "mean_spread_pct": 4.567,
         "rear_overload_share_nose_up": 0.9,

@@ -276,7 +276,7 @@ def test_ablation_recovers_known_paired_effects_with_exact_intervals_when_they_a
     # with every inhibitor off d is 0.0025..0.0425: only d = 0.0325, 0.0425 stay outside 5 % (2 of 5)
     out5 = effects.loc[("static", "all", "all", "share_outside_5pct")]
     assert (out5["baseline"], out5["value"], out5["reduction"]) == pytest.approx((1.0, 0.4, 0.6))
-    out10 = effects.loc[("static", "all", "baseline", "share_outside_10pct")]
+    out10 = effects.loc[("static", "all", "baseline", "share_over_10pct")]
     assert out10["value"] == 0.0 and math.isnan(out10["relative_reduction"])
 
 

@@ -77,11 +77,11 @@ def tolerance_fleet():
 def test_shares_outside_the_5_and_10_percent_tolerances_count_exactly_those_groups():
     ok = derived(tolerance_fleet())
     assert ok["outside_5pct"].tolist() == [True, True, True] + [False] * 7
-    assert ok["outside_10pct"].tolist() == [True] + [False] * 9
+    assert ok["over_10pct"].tolist() == [True] + [False] * 9
     tables = survey_tables(frame(tolerance_fleet()), 10 * TONNE, LEGAL_GROUP)
     summary = tables["summary.csv"].iloc[0]
     assert summary["share_outside_5pct"] == pytest.approx(0.3)
-    assert summary["share_outside_10pct"] == pytest.approx(0.1)
+    assert summary["share_over_10pct"] == pytest.approx(0.1)
 
 
 def test_spread_in_percent_of_the_mean_and_in_kg():
@@ -275,7 +275,7 @@ def test_headline_metrics_keys_and_rounding():
     assert set(metrics) == expected
     entry = metrics["static"]["triaxle"]
     assert set(entry) == {
-        "share_outside_5pct", "share_outside_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
+        "share_outside_5pct", "share_over_10pct", "mean_max_deviation", "mean_spread_pct", "mean_spread_kg",
         "mean_road_wear_factor", "rear_overload_share_nose_up", "frac_axle_over_group_legal", "n_ok", "n_failed",
         "n_airborne", "share_on_stop",
     }  # fmt: skip
