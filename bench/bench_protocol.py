@@ -46,7 +46,7 @@ TREE_CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "b
 PROTOCOLS = ("static", "wim")
 #: the float result columns compared (bogie.fleet.runs.RESULT_COLUMNS without the flags)
 FLOAT_COLUMNS = (
-    *(f"axle_load_{i}" for i in range(6)), *(f"load_share_{i}" for i in range(6)),
+    *(f"axle_load_{i + 1}" for i in range(6)), *(f"load_share_{i + 1}" for i in range(6)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",
 )  # fmt: skip
 FLAG_COLUMNS = ("outside_5pct", "over_10pct", "wheel_airborne", "equaliser_on_stop")

@@ -339,8 +339,8 @@ for fmt in ("mon", "csv", "castor"):
     r = read_weighings(d / f"check.{fmt}", fmt)
     assert (r.n_read, r.n_skipped) == (n, 0), (fmt, r.summary())
     f = r.vehicles
-    got_loads = f[[f"axle_load_{i}" for i in range(loads.shape[1])]].to_numpy()
-    got_spacings = f[[f"spacing_{i}" for i in range(spacings.shape[1])]].to_numpy()
+    got_loads = f[[f"axle_load_{i + 1}" for i in range(loads.shape[1])]].to_numpy()
+    got_spacings = f[[f"spacing_{i + 1}" for i in range(spacings.shape[1])]].to_numpy()
     step = 100.0 if fmt == "castor" else 0.0
     assert np.allclose(got_loads, loads, atol=step / 2 + 1e-9, rtol=0, equal_nan=True), fmt
     assert np.allclose(got_spacings, spacings, atol=step / 2000 + 1e-9, rtol=0, equal_nan=True), fmt

@@ -27,7 +27,7 @@ HISTORY_UNITS: dict[str, str] = {
 
 
 def history_unit(column: str) -> str:
-    """The unit of a history column of :meth:`DynamicResult.to_frame` (``wheel_load_2`` -> ``N``); ``?`` for a name
+    """The unit of a history column of :meth:`DynamicResult.to_frame` (``wheel_load_3`` -> ``N``); ``?`` for a name
     :data:`HISTORY_UNITS` does not know."""
     name = column
     while name and name not in HISTORY_UNITS and "_" in name and name.rsplit("_", 1)[1].isdigit():
@@ -120,9 +120,9 @@ class DynamicResult:
         n = self.wheel_loads.shape[1]
         cols: dict[str, NDArray[Any]] = {}
         for i in range(n):
-            cols[f"wheel_load_{i}"] = self.wheel_loads[:, i]
+            cols[f"wheel_load_{i + 1}"] = self.wheel_loads[:, i]
         for i in range(n):
-            cols[f"nondimensional_load_{i}"] = self.nondimensional_loads[:, i]
+            cols[f"nondimensional_load_{i + 1}"] = self.nondimensional_loads[:, i]
         cols["p"] = self.p
         cols["p1"] = self.p1
         for name, values in self.extras.items():
@@ -131,7 +131,7 @@ class DynamicResult:
                 cols[name] = arr
             else:
                 for k in range(arr.shape[1]):
-                    cols[f"{name}_{k}"] = arr[:, k]
+                    cols[f"{name}_{k + 1}"] = arr[:, k]  # numbered from 1, as the axles are
         frame = pd.DataFrame(cols, index=pd.Index(self.t, name="t"))
         if units:
             frame = frame.rename(columns=lambda c: f"{c} [{history_unit(c)}]")

@@ -54,7 +54,7 @@ __all__ = [
     "observed_table", "main", "simulated_readings", "simulated_statistics", "wim_model",
 ]  # fmt: skip
 
-#: the Arrow type and unit of each column the two tables hold, by name; a numbered column (``axle_load_0..2``) by
+#: the Arrow type and unit of each column the two tables hold, by name; a numbered column (``axle_load_1..3``) by
 #: its name without the number. The columns themselves, and their order, are the library's.
 COLUMN_TYPES: dict[str, tuple[pa.DataType, str]] = {
     "line": (pa.int64(), "-"), "timestamp": (pa.timestamp("us"), "-"), "speed": (pa.float64(), "m/s"),

@@ -188,10 +188,10 @@ def wim_records(runs: pd.DataFrame, samples: pd.DataFrame, speed: float) -> tupl
         "speed": np.full(len(kept), speed), "lane": 1, "direction": 1, "n_axles": n,
     })  # fmt: skip
     for i in range(width):
-        load = kept[f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY
-        vehicles[f"axle_load_{i}"] = np.where(n > i, load, np.nan)
+        load = kept[f"axle_load_{i + 1}"].to_numpy(dtype=float) / GRAVITY
+        vehicles[f"axle_load_{i + 1}"] = np.where(n > i, load, np.nan)
     for i in range(width - 1):
-        vehicles[f"spacing_{i}"] = spacings[:, i]
+        vehicles[f"spacing_{i + 1}"] = spacings[:, i]
     return vehicles, counts
 
 

@@ -94,9 +94,9 @@ def test_a_cases_csv_header_gives_every_columns_unit(tmp_path, capsys):
         out = tmp_path / f"{name}.csv"
         assert main(["case", name, "--csv", str(out)]) == 0
         header = out.read_text().splitlines()[0].split(",")
-        assert header[:4] == ["t [s]", "wheel_load_0 [N]", "wheel_load_1 [N]", "nondimensional_load_0 [-]"]
+        assert header[:4] == ["t [s]", "wheel_load_1 [N]", "wheel_load_2 [N]", "nondimensional_load_1 [-]"]
         assert all(re.fullmatch(r"\w+ \[(N|-|m|rad|s|N m)\]", column) for column in header), header
-    assert "stop_moment_0 [N m]" in header and "spring_hysteresis_1 [N]" in header
+    assert "stop_moment_1 [N m]" in header and "spring_hysteresis_2 [N]" in header
 
 
 def test_design_show_prints_the_library_s_static_loads_summing_to_the_group_load(tmp_path, capsys):

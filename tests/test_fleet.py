@@ -72,7 +72,7 @@ def test_the_sample_follows_the_mix_and_the_seed_and_keeps_each_quantity_in_its_
     samples = bf.sample_fleet(fleet(axle_mix={"tandem": 0.25, "triaxle": 0.75}), n_bogies=40, seed=3)
     assert (samples["group"] == "tandem").sum() == 10  # a stratified design: the share to within one bogie
     assert samples["n_axles"].tolist() == [2 if g == "tandem" else 3 for g in samples["group"]]
-    assert samples["tyre_wear_2"][samples["group"] == "tandem"].eq(0.0).all()  # no third axle, no wear
+    assert samples["tyre_wear_3"][samples["group"] == "tandem"].eq(0.0).all()  # no third axle, no wear
     assert samples["bush_stiffness"].between(1.0, 3000.0).all() and set(samples["road_class"]) <= {"A", "B"}
     again = bf.sample_fleet(fleet(axle_mix={"tandem": 0.25, "triaxle": 0.75}), n_bogies=40, seed=3)
     pd.testing.assert_frame_equal(samples, again, check_exact=True)
@@ -88,7 +88,7 @@ def test_weighing_in_worker_processes_gives_the_table_of_this_process_bit_for_bi
     pd.testing.assert_frame_equal(here, there, check_exact=True)
     assert (here["status"] == "ok").all()
     # the static reading carries the group's weight: its axle loads sum to the group load, both sides [N]
-    loads = here[[f"axle_load_{i}" for i in range(3)]].to_numpy().sum(axis=1)
+    loads = here[[f"axle_load_{i + 1}" for i in range(3)]].to_numpy().sum(axis=1)
     np.testing.assert_allclose(loads, here["group_load"], rtol=1e-12)
 
 
@@ -99,7 +99,7 @@ def test_a_sample_that_is_no_valid_bogie_is_a_failed_row_with_its_reason_never_d
     assert runs["status"].astype(str).tolist() == ["ok", "failed", "ok"]
     failed = runs.iloc[1]
     assert "invalid bogie" in failed["message"] and "friction_coefficient" in failed["message"]
-    assert math.isnan(failed["axle_load_0"]) and pd.isna(failed["outside_5pct"])
+    assert math.isnan(failed["axle_load_1"]) and pd.isna(failed["outside_5pct"])
 
 
 @pytest.mark.parametrize(

@@ -140,7 +140,7 @@ def test_at_a_bound_means_within_two_percent_of_the_width_or_a_quarter_of_the_re
 def test_a_survey_file_gives_its_groups_their_records_and_halves(tmp_path):
     rng = np.random.default_rng(4)
     loads = np.round(8000.0 + 500.0 * rng.standard_normal((12, 3)))
-    frame = pd.DataFrame({"n_axles": 3, "group": "triaxle", **{f"axle_load_{i}": loads[:, i] for i in range(3)}})
+    frame = pd.DataFrame({"n_axles": 3, "group": "triaxle", **{f"axle_load_{i + 1}": loads[:, i] for i in range(3)}})
     K.write_csv_survey(frame, tmp_path / "s.csv")
     observed = L.observed_groups(observed_survey(tmp_path / "s.csv", "csv", position="trailer"))
     np.testing.assert_array_equal(observed.loads["triaxle"], loads)  # whole kilograms, as written

@@ -54,8 +54,8 @@ def hand_runs():
                 failed = c == 10 and slot == A.FLEET_SLOT
                 rows.append({
                     "design": design, "condition": c, "slot": slot, "status": "failed" if failed else "ok",
-                    "chassis_tilt": math.radians(t), "axle_load_0": math.nan if failed else 1e4 * (1 + s),
-                    "axle_load_1": math.nan if failed else 1e4 * (1 - s),
+                    "chassis_tilt": math.radians(t), "axle_load_1": math.nan if failed else 1e4 * (1 + s),
+                    "axle_load_2": math.nan if failed else 1e4 * (1 - s),
                     "outside_5pct": None if failed else 2 * abs(s) / (1 + abs(s)) > 0.05,
                     "over_10pct": None if failed else 1 + abs(s) > 1.10,
                     "max_deviation": math.nan if failed else abs(s),
@@ -149,7 +149,7 @@ def test_the_experiment_runs_every_design_over_the_same_conditions_and_tilts():
     free = exp.designs.set_index("design").loc["tandem-grid-01"]
     assert free["distance"] == pytest.approx(0.5, abs=1e-3)  # rank 0 of the bush, the other factors at their median
     assert exp.designs.set_index("design").loc["tandem-typical", "distance"] == pytest.approx(0.0, abs=1e-3)
-    for column in ("payload_fraction", "tyre_wear_0", "tyre_wear_1", "road_class", "road_seed", "chassis_tilt"):
+    for column in ("payload_fraction", "tyre_wear_1", "tyre_wear_2", "road_class", "road_seed", "chassis_tilt"):
         per = [rows.sort_values(["condition", "slot"])[column].tolist() for _, rows in exp.samples.groupby("design")]
         assert all(p == per[0] for p in per), column
     own = exp.samples[exp.samples["slot"] == A.FLEET_SLOT].drop_duplicates("condition")

@@ -58,7 +58,7 @@ def test_every_run_succeeds_with_finite_loads_or_fails_with_a_message(case):
         numbers = [v for v in row.values() if isinstance(v, float)]
         assert np.all(np.isfinite(numbers))
         if row["status"] == "ok":
-            loads = np.array([row[f"axle_load_{i}"] for i in range(bogie.n_axles)])
+            loads = np.array([row[f"axle_load_{i + 1}"] for i in range(bogie.n_axles)])
             # at rest every axle carries load; at road speed a wheel may be in the air as it crosses the sensor
             assert np.all(loads > 0.0) if protocol == "static" else np.all(loads >= 0.0) and loads.sum() > 0.0
             assert row["group_load"] == np.float64(loads.sum())

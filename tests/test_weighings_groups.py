@@ -37,7 +37,7 @@ def test_groups_sizes_and_positions_at_2_m(groups):
     assert groups["group_load"].tolist() == [6500, 9000, 24000, 6000, 18000, 7000, 18000, 24000, 5000, 6000, 6000,
                                              1200, 1100]  # fmt: skip
     tri = groups.iloc[2]
-    assert (tri["first_axle"], tri["axle_load_0"], tri["axle_load_2"], tri["spacing_1"]) == (2, 7400, 8600, 1.31)
+    assert (tri["first_axle"], tri["axle_load_1"], tri["axle_load_3"], tri["spacing_2"]) == (3, 7400, 8600, 1.31)
     # the MON file's own count of groups agrees with the 2 m rule here
     assert groups.groupby("line")["vehicle_groups"].first().tolist() == [3, 2, 3, 3, 2]
 
@@ -60,9 +60,9 @@ def test_every_group_after_the_second_is_a_trailer_group_a_b_doubles_lead_traile
     assert int(c["n_axles"].iloc[0]) == 6
     c["n_axles"] = 9
     for i, load in enumerate([6000, 9000, 9000, 8000, 8000, 8000, 7000, 7000, 7000]):
-        c[f"axle_load_{i}"] = load
+        c[f"axle_load_{i + 1}"] = load
     for i, spacing in enumerate([3.8, 1.35, 5.0, 1.31, 1.31, 6.5, 1.31, 1.31]):
-        c[f"spacing_{i}"] = spacing
+        c[f"spacing_{i + 1}"] = spacing
     wide = axle_groups(c)
     assert wide["group"].tolist() == ["other", "tandem", "triaxle", "triaxle"]
     assert wide["position"].tolist() == ["steer", "drive", "trailer", "trailer"]
@@ -149,8 +149,8 @@ def test_the_bulk_grouping_is_the_per_vehicle_rule_on_random_vehicles():
                                                                         (300, width - 1)), np.nan)  # fmt: skip
     vehicles = pd.DataFrame({
         "line": np.arange(300) + 1, "timestamp": pd.Timestamp("2026-01-01"), "speed": 22.0, "lane": 1, "n_axles": n,
-        **{f"axle_load_{i}": loads[:, i] for i in range(width)},
-        **{f"spacing_{i}": gaps[:, i] for i in range(width - 1)},
+        **{f"axle_load_{i + 1}": loads[:, i] for i in range(width)},
+        **{f"spacing_{i + 1}": gaps[:, i] for i in range(width - 1)},
     })  # fmt: skip
     got = axle_groups(vehicles, 2.0)
     expected = []
@@ -158,14 +158,14 @@ def test_the_bulk_grouping_is_the_per_vehicle_rule_on_random_vehicles():
         first = 0
         for i in range(1, int(n[v]) + 1):
             if i == n[v] or gaps[v, i - 1] > 2.0:
-                expected.append((v + 1, first, i - first, float(loads[v, first:i].sum())))
+                expected.append((v + 1, first + 1, i - first, float(loads[v, first:i].sum())))
                 first = i
     assert list(zip(got["line"], got["first_axle"], got["n_axles"], got["group_load"])) == expected
     for row in got.itertuples():
-        v, a, k = row.line - 1, row.first_axle, row.n_axles
-        shown = [getattr(row, f"axle_load_{i}") for i in range(3)]
+        v, a, k = row.line - 1, row.first_axle - 1, row.n_axles
+        shown = [getattr(row, f"axle_load_{i + 1}") for i in range(3)]
         if k <= 3:  # a tandem's or tri-axle's loads front first, NaN past them
             assert shown[:k] == list(loads[v, a : a + k]) and all(np.isnan(shown[k:]))
         else:  # a group of more than three: no loads in the three columns
             assert all(np.isnan(shown))
-        assert row.position == ("steer", "drive", "trailer")[min(row.group_index, 2)]
+        assert row.position == ("steer", "drive", "trailer")[min(row.group_index - 1, 2)]

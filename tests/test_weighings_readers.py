@@ -72,13 +72,13 @@ def test_every_format_reads_the_five_vehicles_and_counts_the_four_bad_records(fm
     assert (result.n_read, result.n_skipped) == (5, 4)
     assert v["n_axles"].tolist() == [5, 3, 6, 5, 2]
     for row, name in zip(v.itertuples(), "ABCDE"):
-        loads = [getattr(row, f"axle_load_{i}") for i in range(row.n_axles)]
+        loads = [getattr(row, f"axle_load_{i + 1}") for i in range(row.n_axles)]
         assert loads == pytest.approx(LOADS[name], abs=1e-9), name
     spacings = SPACINGS_DM if fmt in ("castor", "bedit", "ditis") else SPACINGS_MM
     for j, name in zip((0, 1, 2, 4), "ABCE"):
-        got = [v.loc[j, f"spacing_{i}"] for i in range(len(spacings[name]))]
+        got = [v.loc[j, f"spacing_{i + 1}"] for i in range(len(spacings[name]))]
         assert got == pytest.approx(spacings[name], abs=1e-9), name
-    assert math.isnan(v.loc[4, "spacing_1"])  # past E's one spacing
+    assert math.isnan(v.loc[4, "spacing_2"])  # past E's one spacing
     # speeds 82, 75, 88, 90, 100 km/h; dm/s formats round to 228, 208, 244, 250, 278 dm/s
     expected = [82, 75, 88, 90, 100] if fmt in ("csv", "mon") else [82.08, 74.88, 87.84, 90.0, 100.08]
     assert (3.6 * v["speed"]).tolist() == pytest.approx(expected, abs=1e-9)
@@ -109,15 +109,15 @@ def test_heads_groups_axle_widths_and_the_fields_only_some_formats_have():
     for fmt, expected in heads.items():
         v = read_weighings(DATA / f"site.{fmt}", fmt).vehicles
         assert v["head"].tolist() == expected, fmt
-        assert (fmt == "ditis") == ("axle_width_0" in v), fmt
+        assert (fmt == "ditis") == ("axle_width_1" in v), fmt
         assert (fmt == "mon") == v["n_groups"].notna().all(), fmt
     # MON's own count of axle groups (offset 28, I2)
     assert read_weighings(DATA / "site.mon", "mon").vehicles["n_groups"].tolist() == [3, 2, 3, 3, 2]
     # DITIS: an axle width (track) per axle, in cm: 205 for the steer axle, 180 or 185 for the others
     ditis = read_weighings(DATA / "site.ditis", "ditis").vehicles
-    assert [ditis.loc[0, f"axle_width_{i}"] for i in range(5)] == pytest.approx([2.05, 1.8, 1.85, 1.85, 1.85])
-    assert [ditis.loc[4, f"axle_width_{i}"] for i in range(2)] == pytest.approx([2.05, 1.8])
-    assert math.isnan(ditis.loc[4, "axle_width_2"])
+    assert [ditis.loc[0, f"axle_width_{i + 1}"] for i in range(5)] == pytest.approx([2.05, 1.8, 1.85, 1.85, 1.85])
+    assert [ditis.loc[4, f"axle_width_{i + 1}"] for i in range(2)] == pytest.approx([2.05, 1.8])
+    assert math.isnan(ditis.loc[4, "axle_width_3"])
 
 
 def test_each_layout_has_the_references_header_and_axle_stride_and_its_lines_their_lengths():
@@ -146,7 +146,7 @@ def test_a_line_longer_than_its_axles_need_is_read_and_one_character_short_of_th
     result = read_weighings(tmp_path / "x.mon", "mon")
     assert result.vehicles["line"].tolist() == [1, 2, 4]
     assert result.bad_lines == {TOO_SHORT: [3]}
-    assert result.vehicles["axle_load_2"].tolist() == [8500, 8500, 8500]
+    assert result.vehicles["axle_load_3"].tolist() == [8500, 8500, 8500]
 
 
 @pytest.mark.parametrize("text", ["085 0", "0850 ", "-8500", "     ", "\uff18\uff15\uff10\uff10\uff10"])

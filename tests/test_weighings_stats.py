@@ -20,16 +20,16 @@ def hand_groups() -> pd.DataFrame:
         {
             "group": ["tandem", "triaxle", "triaxle", "tandem"],
             "n_axles": [2, 3, 3, 2],
-            "axle_load_0": [8000.0, 9000.0, 8000.0, 6000.0],
-            "axle_load_1": [7000.0, 7000.0, 8000.0, 6100.0],
-            "axle_load_2": [99999.0, 8000.0, 8100.0, -5.0],
+            "axle_load_1": [8000.0, 9000.0, 8000.0, 6000.0],
+            "axle_load_2": [7000.0, 7000.0, 8000.0, 6100.0],
+            "axle_load_3": [99999.0, 8000.0, 8100.0, -5.0],
         }
     )
 
 
 def test_group_inequality_by_hand():
     g = hand_groups()
-    ineq = group_inequality(g[["axle_load_0", "axle_load_1", "axle_load_2"]].to_numpy(), g["n_axles"].to_numpy())
+    ineq = group_inequality(g[["axle_load_1", "axle_load_2", "axle_load_3"]].to_numpy(), g["n_axles"].to_numpy())
     # spreads: 8000-7000, 9000-7000, 8100-8000, 6100-6000
     assert ineq["spread"].tolist() == [1000.0, 2000.0, 100.0, 100.0]
     # over the mean axle load 7500, 8000, 8033.33, 6050
@@ -55,15 +55,15 @@ def test_survey_statistics_by_hand():
     assert (tandem["share_outside_5pct"], tandem["share_over_10pct"]) == (0.5, 0.0)
     assert (tri["share_outside_5pct"], tri["share_over_10pct"]) == (0.5, 0.5)
     # the front axle's load share, 8000/7500 = 1.0667 and 6000/6050 = 0.9917: median 1.0292 (linear)
-    assert tandem["load_share_0_p50"] == pytest.approx((8000 / 7500 + 6000 / 6050) / 2)
-    assert tandem["load_share_0_p05"] == pytest.approx(6000 / 6050 + 0.05 * (8000 / 7500 - 6000 / 6050))
-    assert math.isnan(tandem["load_share_2_p50"])  # a tandem has no third axle
-    assert tri["load_share_2_p50"] == pytest.approx((8000 / 8000 + 8100 / 8033.333333) / 2)
+    assert tandem["load_share_1_p50"] == pytest.approx((8000 / 7500 + 6000 / 6050) / 2)
+    assert tandem["load_share_1_p05"] == pytest.approx(6000 / 6050 + 0.05 * (8000 / 7500 - 6000 / 6050))
+    assert math.isnan(tandem["load_share_3_p50"])  # a tandem has no third axle
+    assert tri["load_share_3_p50"] == pytest.approx((8000 / 8000 + 8100 / 8033.333333) / 2)
 
 
 def test_loads_in_newtons_give_the_same_statistics_with_unit_per_kg():
     kg = hand_groups()
-    newton = kg.assign(**{c: kg[c] * GRAVITY for c in ("axle_load_0", "axle_load_1", "axle_load_2")})
+    newton = kg.assign(**{c: kg[c] * GRAVITY for c in ("axle_load_1", "axle_load_2", "axle_load_3")})
     a = survey_statistics(kg)
     b = survey_statistics(newton, unit_per_kg=GRAVITY)
     pd.testing.assert_frame_equal(a, b, rtol=1e-12)
@@ -78,7 +78,7 @@ def test_statistics_dict_is_json_ready_with_axles_numbered_from_the_front():
 
 
 def test_a_table_without_axle_loads_is_refused():
-    with pytest.raises(ValueError, match="needs n_axles and axle_load_0"):
+    with pytest.raises(ValueError, match="needs n_axles and axle_load_1"):
         survey_statistics(pd.DataFrame({"group": ["tandem"], "n_axles": [2], "load_1": [1.0]}))
 
 
@@ -90,8 +90,8 @@ def test_the_survey_stage_summary_uses_these_statistics():
     runs = pd.DataFrame({"protocol": "static", "group": "triaxle", "n_axles": 3, "status": "ok",
                          "chassis_tilt": 0.0, "max_deviation": 0.0, "road_wear_factor": 1.0,
                          "equaliser_on_stop": False, "wheel_airborne": False,
-                         **{f"tyre_wear_{i}": 0.0 for i in range(3)},
-                         **{f"axle_load_{i}": loads[:, i] for i in range(3)}})  # fmt: skip
+                         **{f"tyre_wear_{i + 1}": 0.0 for i in range(3)},
+                         **{f"axle_load_{i + 1}": loads[:, i] for i in range(3)}})  # fmt: skip
     runs["spread_kg"] = (loads.max(axis=1) - loads.min(axis=1)) / GRAVITY
     ok = inequality_columns(runs)
     legal = pd.DataFrame({"protocol": ["static"], "group": ["triaxle"], "frac_axle_over_group_legal": [0.0]})

@@ -103,11 +103,11 @@ def _table() -> pd.DataFrame:
         "transverse_position": TRANSVERSE,
     }
     for i in range(width):
-        data[f"axle_load_{i}"] = [float(x[i]) if i < len(x) else NAN for x in LOADS]
+        data[f"axle_load_{i + 1}"] = [float(x[i]) if i < len(x) else NAN for x in LOADS]
     for i in range(width - 1):
-        data[f"spacing_{i}"] = [x[i] if i < len(x) else NAN for x in SPACINGS]
+        data[f"spacing_{i + 1}"] = [x[i] if i < len(x) else NAN for x in SPACINGS]
     for i in range(width):
-        data[f"axle_width_{i}"] = [x[i] if i < len(x) else NAN for x in WIDTHS]
+        data[f"axle_width_{i + 1}"] = [x[i] if i < len(x) else NAN for x in WIDTHS]
     return pd.DataFrame(data)
 
 
@@ -164,20 +164,20 @@ def test_round_trip_fixed_width(tmp_path, fmt):
     else:
         assert got["n_groups"].isna().all()
     for j, n in enumerate(want["n_axles"]):
-        loads = got.loc[j, [f"axle_load_{i}" for i in range(n)]].to_numpy(float)
-        spacings = got.loc[j, [f"spacing_{i}" for i in range(n - 1)]].to_numpy(float)
+        loads = got.loc[j, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy(float)
+        spacings = got.loc[j, [f"spacing_{i + 1}" for i in range(n - 1)]].to_numpy(float)
         np.testing.assert_allclose(loads, want["loads"][j], rtol=0, atol=1e-9, err_msg=f"loads of {j}")
         np.testing.assert_allclose(spacings, want["spacings"][j], rtol=0, atol=1e-9, err_msg=f"spacings of {j}")
         if fmt == "ditis":
-            widths = got.loc[j, [f"axle_width_{i}" for i in range(n)]].to_numpy(float)
+            widths = got.loc[j, [f"axle_width_{i + 1}" for i in range(n)]].to_numpy(float)
             np.testing.assert_allclose(widths, want["widths"][j], rtol=0, atol=1e-9, err_msg=f"widths of {j}")
 
 
 def test_round_trip_csv(tmp_path):
     table = _table()
     table.loc[4, "lane"] = -1  # written blank, read -1
-    table.loc[0, "axle_load_0"] = 1234.5678901234567  # any float: the CSV keeps it exactly
-    table.loc[0, "spacing_0"] = 0.1 + 0.2 + 2.4
+    table.loc[0, "axle_load_1"] = 1234.5678901234567  # any float: the CSV keeps it exactly
+    table.loc[0, "spacing_1"] = 0.1 + 0.2 + 2.4
     path = tmp_path / "site.csv"
     assert write_weighings(table, path, "csv") == 6
     got = read_weighings(path, "csv").vehicles
@@ -187,7 +187,7 @@ def test_round_trip_csv(tmp_path):
     assert list(got["n_axles"]) == [len(x) for x in LOADS]
     for j, n in enumerate(got["n_axles"]):
         for name, count in (("axle_load", n), ("spacing", n - 1)):
-            cols = [f"{name}_{i}" for i in range(count)]
+            cols = [f"{name}_{i + 1}" for i in range(count)]
             assert got.loc[j, cols].tolist() == table.loc[j, cols].tolist()  # bitwise
 
 
@@ -214,14 +214,14 @@ B = pd.DataFrame(
         "lane": [1],
         "direction": [1],
         "transverse_position": [1.6],
-        "axle_load_0": [6000.0],
-        "axle_load_1": [9500.0],
-        "axle_load_2": [8500.0],
-        "spacing_0": [4.2],
-        "spacing_1": [1.35],
-        "axle_width_0": [2.05],
-        "axle_width_1": [2.1],
-        "axle_width_2": [1.8],
+        "axle_load_1": [6000.0],
+        "axle_load_2": [9500.0],
+        "axle_load_3": [8500.0],
+        "spacing_1": [4.2],
+        "spacing_2": [1.35],
+        "axle_width_1": [2.05],
+        "axle_width_2": [2.1],
+        "axle_width_3": [1.8],
     }
 )
 #: B's line by hand, field by field from wim-record-formats.md (zero-padded; the slot after the last axle 0)
@@ -291,22 +291,22 @@ def _ten_axles() -> pd.DataFrame:
     table = B.copy()
     table["n_axles"] = 10
     for i in range(10):
-        table[f"axle_load_{i}"] = 5000.0
+        table[f"axle_load_{i + 1}"] = 5000.0
     for i in range(9):
-        table[f"spacing_{i}"] = 1.3
+        table[f"spacing_{i + 1}"] = 1.3
     return table
 
 
 ERRORS = [
     # (format, table, the message's pieces: column, value, row, range, unit)
-    ("castor", _one(axle_load_1=100_000.0), ["axle_load_1 = 100000 kg", "row 0", "0-99 900 kg in kg/100", "3 digits"]),
+    ("castor", _one(axle_load_2=100_000.0), ["axle_load_2 = 100000 kg", "row 0", "0-99 900 kg in kg/100", "3 digits"]),
     ("castor", _ten_axles(), ["n_axles = 10", "row 0", "2-9 axles"]),
     ("mon", _one(direction=-1), ["direction = -1", "in 1 row (first: 0)", "1 or 2"]),
-    ("bedit", _one(spacing_0=-4.2), ["spacing_0 = -4.2 m", "row 0", "negative", "0-99.9 m in dm", "3 digits"]),
+    ("bedit", _one(spacing_1=-4.2), ["spacing_1 = -4.2 m", "row 0", "negative", "0-99.9 m in dm", "3 digits"]),
     ("castor", _one(timestamp=T("2070-05-01 12:00")), ["timestamp = 2070-05-01T12:00:00", "row 0", "1969-2068"]),
-    ("ditis", _one(axle_load_2=NAN), ["axle_load_2 = nan kg", "row 0", "NaN", "0-99 900 kg in kg/100", "3 digits"]),
+    ("ditis", _one(axle_load_3=NAN), ["axle_load_3 = nan kg", "row 0", "NaN", "0-99 900 kg in kg/100", "3 digits"]),
     ("mon", _one(lane=-1), ["lane = -1", "(first: 0)", "1-9"]),
-    ("csv", _one(axle_load_0=NAN), ["axle_load_0 = nan kg", "row 0", "NaN"]),
+    ("csv", _one(axle_load_1=NAN), ["axle_load_1 = nan kg", "row 0", "NaN"]),
 ]
 
 
@@ -328,12 +328,12 @@ def test_error_message_names_rows(tmp_path):
     with pytest.raises(ValueError, match=r"direction = -1 or NaN \(not given\) in 3 rows \(first: 2, 4, 5\)"):
         write_weighings(table, tmp_path / "x.castor", "castor")
     table = pd.concat([B] * 3, ignore_index=True)
-    table.loc[1, "axle_load_1"] = 104_500.0
+    table.loc[1, "axle_load_2"] = 104_500.0
     with pytest.raises(ValueError) as info:
         write_weighings(table, tmp_path / "x.castor", "castor")
     assert (
         str(info.value)
-        == "castor: axle_load_1 = 104500 kg in row 1 does not fit its field (0-99 900 kg in kg/100, 3 digits)"
+        == "castor: axle_load_2 = 104500 kg in row 1 does not fit its field (0-99 900 kg in kg/100, 3 digits)"
     )
 
 
@@ -341,7 +341,7 @@ def test_error_keeps_an_existing_file(tmp_path):
     path = tmp_path / "site.castor"
     path.write_text("old\n")
     with pytest.raises(ValueError):
-        write_weighings(_one(axle_load_0=NAN), path, "castor")
+        write_weighings(_one(axle_load_1=NAN), path, "castor")
     assert path.read_text() == "old\n"
     assert [p.name for p in tmp_path.iterdir()] == ["site.castor"]
 

@@ -169,7 +169,7 @@ def observed_groups(survey: ObservedSurvey) -> Observed:
     loads, record = {}, {}
     for size, n in SIZES.items():
         sel = (groups["group"] == size).to_numpy()
-        loads[size] = groups.loc[sel, [f"axle_load_{i}" for i in range(n)]].to_numpy(dtype=float)
+        loads[size] = groups.loc[sel, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy(dtype=float)
         record[size] = np.asarray(rank)[sel]
     if not any(len(v) >= MIN_GROUPS for v in loads.values()):
         counts = ", ".join(f"{len(v)} {k}" for k, v in loads.items())

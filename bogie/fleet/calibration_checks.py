@@ -63,7 +63,7 @@ def simulate_fleet(
     weight_step_kg: float | None = None, executor: Executor | Mapper | None = None,
 ) -> pd.DataFrame:  # fmt: skip
     """The calibration fleet with the quantities ``values``, weighed directly (no table): one row per group kept
-    (``slot``, ``group``, ``n_axles``, ``suspension``, ``tilt_deg`` [degree], wide loads ``axle_load_0..2`` [kg]),
+    (``slot``, ``group``, ``n_axles``, ``suspension``, ``tilt_deg`` [degree], wide loads ``axle_load_1..3`` [kg]),
     with the sensor's error, before the filters.
 
     ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``);
@@ -96,7 +96,7 @@ def simulate_fleet(
     frame = pd.DataFrame({
         "slot": keep, "group": table.size[keep], "n_axles": [SIZES[s] for s in table.size[keep]],
         "suspension": kinds[keep], "tilt_deg": tilt[keep],
-        **{f"axle_load_{i}": loads[:, i] for i in range(3)},
+        **{f"axle_load_{i + 1}": loads[:, i] for i in range(3)},
     })  # fmt: skip
     return frame
 
@@ -104,7 +104,7 @@ def simulate_fleet(
 def filtered(frame: pd.DataFrame, min_load_kg: float) -> pd.DataFrame:
     """The groups a survey keeps: weighed, every wheel on the road, laden (at least ``min_load_kg`` [kg])."""
     n = frame["n_axles"].to_numpy()
-    loads = frame[[f"axle_load_{i}" for i in range(3)]].to_numpy()
+    loads = frame[[f"axle_load_{i + 1}" for i in range(3)]].to_numpy()
     present = np.arange(3)[None, :] < n[:, None]
     ok = np.all(np.where(present, np.isfinite(loads) & (loads > 0.0), True), axis=1)
     total = np.nansum(np.where(present, loads, 0.0), axis=1)
@@ -116,7 +116,7 @@ def groups_stats(loads_by_size: Mapping[str, np.ndarray]) -> dict[str, Any]:
     rows = []
     for size, loads in loads_by_size.items():
         for w in loads:
-            rows.append({"group": size, "n_axles": SIZES[size], **{f"axle_load_{i}": w[i] for i in range(len(w))}})
+            rows.append({"group": size, "n_axles": SIZES[size], **{f"axle_load_{i + 1}": w[i] for i in range(len(w))}})
     frame = pd.DataFrame(rows)
     if frame.empty:
         return by_size(pd.DataFrame())
@@ -126,7 +126,7 @@ def groups_stats(loads_by_size: Mapping[str, np.ndarray]) -> dict[str, Any]:
 def frame_stats(frame: pd.DataFrame) -> dict[str, Any]:
     """:func:`groups_stats` of a simulated frame (:func:`simulate_fleet`)."""
     return groups_stats({
-        size: frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+        size: frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy()
         for size, n in SIZES.items()
     })  # fmt: skip
 
@@ -136,7 +136,7 @@ def frame_distance(frame: pd.DataFrame, obs: Mapping[str, np.ndarray], scales: M
     (:func:`bogie.fleet.calibration.observed_quantities` per size) over their ``scales``."""
     q, w = {}, {}
     for size, n in SIZES.items():
-        loads = frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+        loads = frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy()
         q[size] = observed_quantities(loads) if len(loads) else np.zeros((0, n + 1))
         w[size] = np.ones(len(loads))
     return distance(obs, {k: np.ones(len(v)) for k, v in obs.items()}, Simulated(q, w), scales)
@@ -161,7 +161,7 @@ def ablation(
     for variant in ("baseline", *INHIBITORS, "all"):
         frame = filtered(simulate_fleet(table, values, variant, steel_only=True, executor=executor), min_load_kg)
         for size, n in SIZES.items():
-            loads = frame.loc[frame["group"] == size, [f"axle_load_{i}" for i in range(n)]].to_numpy()
+            loads = frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy()
             if len(loads) == 0:
                 continue
             max_dev = max_deviation(loads)
@@ -386,11 +386,11 @@ def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 8
         if i < 2:
             load = np.full(len(frame), (steer, drive)[i])
         else:
-            column = frame[f"axle_load_{i - 2}"].to_numpy(dtype=float) if i - 2 < 3 else np.zeros(len(frame))
+            column = frame[f"axle_load_{i - 1}"].to_numpy(dtype=float) if i - 2 < 3 else np.zeros(len(frame))
             load = np.where(n_group > i - 2, np.round(column), np.nan)
-        vehicles[f"axle_load_{i}"] = load
+        vehicles[f"axle_load_{i + 1}"] = load
     for i in range(width - 1):
         gap = SYNTHETIC_TRACTOR["spacings_m"][i] if i < 2 else spacing_m
-        vehicles[f"spacing_{i}"] = np.where(2 + n_group - 1 > i, gap, np.nan)
+        vehicles[f"spacing_{i + 1}"] = np.where(2 + n_group - 1 > i, gap, np.nan)
     Path(path).parent.mkdir(parents=True, exist_ok=True)
     write_weighings(vehicles, path, "csv")

@@ -180,7 +180,7 @@ def _weigh_kg(sample: Mapping[str, Any], protocol: str, spec: Any) -> np.ndarray
     if row["status"] != "ok" or row["wheel_airborne"]:
         return out
     n = int(sample["n_axles"])
-    out[:n] = [row[f"axle_load_{i}"] / GRAVITY for i in range(n)]
+    out[:n] = [row[f"axle_load_{i + 1}"] / GRAVITY for i in range(n)]
     return out
 
 

@@ -18,7 +18,7 @@ GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
 #: connected bags (bogie.air.AirBogie)
 SUSPENSIONS: tuple[str, ...] = ("steel", "air")
 
-#: most axles in a group: the runs have columns axle_load_0..MAX_AXLES-1 [-]
+#: most axles in a group: the runs have columns axle_load_1..MAX_AXLES [-]
 MAX_AXLES: int = max(GROUP_AXLES.values())
 
 #: the weighbridge reads the mean over this last part of the settling time [s]

@@ -50,7 +50,7 @@ FINE_STEP_DEG = 0.01
 
 #: the columns :func:`analyse_designs` reads: of the runs, of the designs
 RUN_NEEDS: tuple[str, ...] = ("design", "condition", "slot", "status", "chassis_tilt", "outside_5pct", "over_10pct",
-                              "max_deviation", "axle_load_0", "axle_load_1")  # fmt: skip
+                              "max_deviation", "axle_load_1", "axle_load_2")  # fmt: skip
 DESIGN_NEEDS: tuple[str, ...] = ("design", "group", "kind", "suspension", *FACTORS, *HELD, "distance")
 
 
@@ -163,7 +163,7 @@ def _grid_loads(mine: pd.DataFrame, n_tilts: int, n_ax: int) -> np.ndarray:
     loads = np.full((n_c, n_tilts, n_ax), np.nan)
     g_ok = grid[grid["status"] == "ok"]
     loads[g_ok["condition"].to_numpy(), g_ok["slot"].to_numpy()] = g_ok[
-        [f"axle_load_{i}" for i in range(n_ax)]
+        [f"axle_load_{i + 1}" for i in range(n_ax)]
     ].to_numpy(dtype=float)
     return loads
 
@@ -177,7 +177,7 @@ def _checks(d: Any, fleet: pd.DataFrame, loads: np.ndarray, complete: np.ndarray
     for c, t in zip(direct.index.to_numpy(), np.degrees(direct["chassis_tilt"].to_numpy(dtype=float))):
         if c < n_c and complete[c]:
             est = np.array([np.interp(t, tilts, loads[c, :, i]) for i in range(n_ax)])
-            run_loads = direct.loc[c, [f"axle_load_{i}" for i in range(n_ax)]].to_numpy(dtype=float)
+            run_loads = direct.loc[c, [f"axle_load_{i + 1}" for i in range(n_ax)]].to_numpy(dtype=float)
             out.append({
                 "design": d.design, "group": d.group, "condition": int(c), "tilt_deg": float(t),
                 "max_deviation_direct": float(max_deviation(run_loads)),
@@ -233,7 +233,7 @@ def analyse_designs(
     runs
         The experiment's runs (:func:`bogie.fleet.design.weigh_designs`): columns ``design``, ``condition``,
         ``slot`` (:data:`FLEET_SLOT`: at the condition's own tilt; else the index into ``tilts``), ``status``,
-        ``chassis_tilt`` [rad], ``axle_load_0..`` [N], ``outside_5pct``, ``over_10pct``, ``max_deviation`` [-].
+        ``chassis_tilt`` [rad], ``axle_load_1..`` [N], ``outside_5pct``, ``over_10pct``, ``max_deviation`` [-].
         A failed run is left out of its design's shares and counted in ``n_failed``.
     designs
         The designs (:func:`bogie.fleet.design.design_points`): ``design``, ``group``, ``kind``, ``suspension``,

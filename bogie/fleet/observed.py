@@ -38,21 +38,21 @@ _AXLES = 3
 #: the run columns :func:`simulated_readings` reads
 READING_RUN_COLUMNS: tuple[str, ...] = (
     "sample_id", "group", "n_axles", "protocol", "status", "wheel_airborne", "group_load",
-    *(f"axle_load_{i}" for i in range(_AXLES)),
+    *(f"axle_load_{i + 1}" for i in range(_AXLES)),
 )  # fmt: skip
 #: per-group inequality quantities of both sides (bogie.weighings.stats.group_inequality's definitions)
 INEQUALITY_COLUMNS: tuple[str, ...] = (
-    *(f"load_share_{i}" for i in range(_AXLES)), "spread_kg", "spread_pct", "outside_5pct", "over_10pct",
+    *(f"load_share_{i + 1}" for i in range(_AXLES)), "spread_kg", "spread_pct", "outside_5pct", "over_10pct",
 )  # fmt: skip
 #: one simulated reading kept: sample, protocol, group, axles, group load [kg], axle loads [kg], inequality
 SIMULATED_COLUMNS: tuple[str, ...] = (
-    "sample_id", "protocol", "group", "n_axles", "group_load", *(f"axle_load_{i}" for i in range(_AXLES)),
+    "sample_id", "protocol", "group", "n_axles", "group_load", *(f"axle_load_{i + 1}" for i in range(_AXLES)),
     *INEQUALITY_COLUMNS,
 )  # fmt: skip
 
 
 def with_inequality(groups: pd.DataFrame) -> pd.DataFrame:
-    """``groups`` (wide: ``n_axles``, ``axle_load_0..2``) with each group's load shares, spread [kg, %] and flags.
+    """``groups`` (wide: ``n_axles``, ``axle_load_1..3``) with each group's load shares, spread [kg, %] and flags.
 
     Groups of more than three axles or single axles (``other``) get NaN shares and spread and False flags: the survey
     statistics cover tandems and tri-axles.
@@ -60,11 +60,11 @@ def with_inequality(groups: pd.DataFrame) -> pd.DataFrame:
     out = groups.reset_index(drop=True).copy()
     n = out["n_axles"].to_numpy(dtype=np.int64)
     surveyed = (n >= 2) & (n <= _AXLES)
-    loads = out[[f"axle_load_{i}" for i in range(_AXLES)]].to_numpy(dtype=float)[surveyed]
+    loads = out[[f"axle_load_{i + 1}" for i in range(_AXLES)]].to_numpy(dtype=float)[surveyed]
     ineq = group_inequality(loads, n[surveyed])
     for i in range(_AXLES):
-        out[f"load_share_{i}"] = np.nan
-        out.loc[surveyed, f"load_share_{i}"] = ineq["load_share"][:, i]
+        out[f"load_share_{i + 1}"] = np.nan
+        out.loc[surveyed, f"load_share_{i + 1}"] = ineq["load_share"][:, i]
     for name, column in (("spread", "spread_kg"), ("spread_pct", "spread_pct")):
         out[column] = np.nan
         out.loc[surveyed, column] = ineq[name]
@@ -110,7 +110,7 @@ def simulated_readings(
     n_axles = runs["n_axles"].to_numpy(dtype=np.int64)
     # each axle's reading [kg] at the file's resolution; a tandem's third load is no axle: NaN, as in the observed table
     loads = np.column_stack([
-        np.where(n_axles > i, runs[f"axle_load_{i}"].to_numpy(dtype=float) / GRAVITY, np.nan) for i in range(_AXLES)
+        np.where(n_axles > i, runs[f"axle_load_{i + 1}"].to_numpy(dtype=float) / GRAVITY, np.nan) for i in range(_AXLES)
     ])  # fmt: skip
     if weight_step_kg is not None:
         loads = at_resolution(loads, weight_step_kg)
@@ -133,7 +133,7 @@ def simulated_readings(
     kept_rows = np.asarray(kept, dtype=bool)
     frame["group_load"] = group_load[kept_rows]
     for i in range(_AXLES):
-        frame[f"axle_load_{i}"] = loads[kept_rows, i]
+        frame[f"axle_load_{i + 1}"] = loads[kept_rows, i]
     frame = frame.sort_values(["protocol", "sample_id"], kind="stable")
     return with_inequality(frame)[list(SIMULATED_COLUMNS)], counts
 

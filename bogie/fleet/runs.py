@@ -51,7 +51,7 @@ UNITS: dict[str, str] = {
     "spring_friction_band": "N", "spring_friction_decay": "m",
     "road_class": "-", "road_seed": "-", "sensor_seed": "-", "legal_group_load": "N", "payload_mass": "kg",
     "chassis_pitch_inertia": "kg m^2", "chassis_tilt_deg": "degree", "protocol": "-", "status": "-", "message": "-",
-    **{f"axle_load_{i}": "N" for i in range(MAX_AXLES)}, **{f"load_share_{i}": "-" for i in range(MAX_AXLES)},
+    **{f"axle_load_{i + 1}": "N" for i in range(MAX_AXLES)}, **{f"load_share_{i + 1}": "-" for i in range(MAX_AXLES)},
     "group_load": "N", "p": "-", "p1": "-", "max_deviation": "-", "spread": "N", "spread_kg": "kg",
     "road_wear_factor": "-", "chassis_pitch": "rad", "outside_5pct": "-", "over_10pct": "-", "wheel_airborne": "-",
     "equaliser_on_stop": "-",
@@ -59,7 +59,7 @@ UNITS: dict[str, str] = {
 
 #: the weighing's result: null in a failed row, never null in a successful one
 RESULT_COLUMNS: tuple[str, ...] = (
-    *(f"axle_load_{i}" for i in range(MAX_AXLES)), *(f"load_share_{i}" for i in range(MAX_AXLES)),
+    *(f"axle_load_{i + 1}" for i in range(MAX_AXLES)), *(f"load_share_{i + 1}" for i in range(MAX_AXLES)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",
     "outside_5pct", "over_10pct", "wheel_airborne", "equaliser_on_stop",
 )  # fmt: skip

@@ -51,7 +51,7 @@ VARIANTS: tuple[str, ...] = ("baseline", *INHIBITORS, "all")
 #: radius of gyration of the sprung mass about its centre of gravity in pitch [m]
 PITCH_RADIUS_OF_GYRATION = 3.5
 
-TYRE_WEAR_COLUMNS: tuple[str, ...] = tuple(f"tyre_wear_{i}" for i in range(MAX_AXLES))
+TYRE_WEAR_COLUMNS: tuple[str, ...] = tuple(f"tyre_wear_{i + 1}" for i in range(MAX_AXLES))
 
 #: the sampled quantities with one value per bogie, in the order of the fleet design's dimensions
 SCALAR_QUANTITIES: tuple[str, ...] = (

@@ -32,8 +32,8 @@ __all__ = [
     "wear_table",
 ]  # fmt: skip
 
-AXLE_LOAD_COLUMNS: tuple[str, ...] = tuple(f"axle_load_{i}" for i in range(MAX_AXLES))
-LOAD_SHARE_COLUMNS: tuple[str, ...] = tuple(f"load_share_{i}" for i in range(MAX_AXLES))
+AXLE_LOAD_COLUMNS: tuple[str, ...] = tuple(f"axle_load_{i + 1}" for i in range(MAX_AXLES))
+LOAD_SHARE_COLUMNS: tuple[str, ...] = tuple(f"load_share_{i + 1}" for i in range(MAX_AXLES))
 TILT_BIN_DEG = 0.5
 WEAR_BAND_MM = 2.0
 #: "nose up" for the rear-overload headline: tilt above this [degree]
@@ -76,8 +76,8 @@ def inequality_columns(runs: pd.DataFrame) -> pd.DataFrame:
     Parameters
     ----------
     runs
-        Succeeded runs with ``n_axles``, ``axle_load_0..2`` [N] (0 for a missing axle), ``chassis_tilt`` [rad] and
-        ``tyre_wear_0..2`` [m].
+        Succeeded runs with ``n_axles``, ``axle_load_1..3`` [N] (0 for a missing axle), ``chassis_tilt`` [rad] and
+        ``tyre_wear_1..3`` [m].
 
     Returns
     -------
@@ -145,7 +145,7 @@ def failure_table(runs: pd.DataFrame, examples: int = 5) -> pd.DataFrame:
 def _present(frame: pd.DataFrame, quantity: str) -> pd.DataFrame:
     """Rows where ``quantity`` exists: a load share only for groups that have that axle."""
     if quantity.startswith("load_share_"):
-        return frame[frame["n_axles"] > int(quantity.rsplit("_", 1)[1])]
+        return frame[frame["n_axles"] >= int(quantity.rsplit("_", 1)[1])]
     return frame
 
 
@@ -310,7 +310,7 @@ def wim_class(ok: pd.DataFrame, required_share: float = REQUIRED_SHARE) -> pd.Da
     classes = list(COST323_TOLERANCES)
     columns = ["group", "criterion", "n", "mean_error_pct", "sd_error_pct",
                *(f"share_within_{c}" for c in classes), "required_share", "class_reached"]  # fmt: skip
-    loads = [f"axle_load_{i}" for i in range(3)]
+    loads = [f"axle_load_{i + 1}" for i in range(3)]
     static = ok.loc[ok["protocol"] == "static", ["sample_id", "group", "n_axles", *loads]]
     wim = ok.loc[ok["protocol"] == "wim", ["sample_id", *loads]]
     pairs = static.merge(wim, on="sample_id", suffixes=("_static", "_wim"), validate="one_to_one")

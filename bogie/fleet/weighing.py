@@ -107,8 +107,8 @@ def result_rows(outcomes: Sequence[Outcome]) -> list[dict[str, Any]]:
             "equaliser_on_stop": [bool(outcomes[k].on_stop) for k in members],
         }
         for i in range(MAX_AXLES):
-            columns[f"axle_load_{i}"] = loads[:, i].tolist() if i < n else [0.0] * len(members)
-            columns[f"load_share_{i}"] = share[:, i].tolist() if i < n else [0.0] * len(members)
+            columns[f"axle_load_{i + 1}"] = loads[:, i].tolist() if i < n else [0.0] * len(members)
+            columns[f"load_share_{i + 1}"] = share[:, i].tolist() if i < n else [0.0] * len(members)
         names = list(columns)
         for k, values in zip(members, zip(*columns.values())):
             rows[k].update(zip(names, values))

@@ -30,8 +30,8 @@ _GROUP_COLUMNS = 3
 #: the columns of the group table (:func:`axle_groups`), in order; units in its docstring
 GROUP_TABLE_COLUMNS: tuple[str, ...] = (
     "line", "timestamp", "speed", "lane", "vehicle_groups", "group_index", "first_axle", "n_axles", "group",
-    "position", "group_load", *(f"axle_load_{i}" for i in range(_GROUP_COLUMNS)),
-    *(f"spacing_{i}" for i in range(_GROUP_COLUMNS - 1)),
+    "position", "group_load", *(f"axle_load_{i + 1}" for i in range(_GROUP_COLUMNS)),
+    *(f"spacing_{i + 1}" for i in range(_GROUP_COLUMNS - 1)),
 )  # fmt: skip
 
 
@@ -48,8 +48,8 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     Parameters
     ----------
     vehicles
-        The vehicle table of :func:`bogie.weighings.readers.read_weighings`: ``n_axles``, ``axle_load_0..`` [kg],
-        ``spacing_0..`` [m], ``line``, ``timestamp``, ``speed`` [m/s], ``lane``.
+        The vehicle table of :func:`bogie.weighings.readers.read_weighings`: ``n_axles``, ``axle_load_1..`` [kg],
+        ``spacing_1..`` [m], ``line``, ``timestamp``, ``speed`` [m/s], ``lane``.
     group_spacing_m
         Largest spacing between two consecutive axles of one group, in (0, 5] [m].
 
@@ -57,10 +57,11 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     -------
     pandas.DataFrame
         One row per group, front group first within a vehicle: ``line``, ``timestamp``, ``speed`` [m/s],
-        ``lane`` (of its vehicle), ``vehicle_groups`` (groups of the vehicle), ``group_index`` (0 = front),
-        ``first_axle`` (0 = the vehicle's front axle), ``n_axles``, ``group`` (size label), ``position``,
-        ``group_load`` [kg], ``axle_load_0..2`` [kg] (front first; NaN past the group's axles or for a group of
-        more than three) and ``spacing_0..1`` [m].
+        ``lane`` (of its vehicle), ``vehicle_groups`` (groups of the vehicle), ``group_index`` (1 = front),
+        ``first_axle`` (1 = the vehicle's front axle: axles and groups count from 1, as in the
+        CSV layout, the CLI and the JSON), ``n_axles``, ``group`` (size label), ``position``,
+        ``group_load`` [kg], ``axle_load_1..3`` [kg] (front first; NaN past the group's axles or for a group of
+        more than three) and ``spacing_1..2`` [m].
     """
     _check("group_spacing_m", group_spacing_m, 0.0, 5.0, "m", low_open=True)
     columns = list(GROUP_TABLE_COLUMNS)
@@ -69,8 +70,8 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     # every vehicle at once (a year of a WIM site is millions of vehicles): the axles as a (vehicles, axles) table
     n = vehicles["n_axles"].to_numpy(dtype=np.int64)
     width = int(n.max())
-    loads = vehicles[[f"axle_load_{i}" for i in range(width)]].to_numpy(dtype=float)
-    gaps = vehicles[[f"spacing_{i}" for i in range(width - 1)]].to_numpy(dtype=float).reshape(len(n), width - 1)
+    loads = vehicles[[f"axle_load_{i + 1}" for i in range(width)]].to_numpy(dtype=float)
+    gaps = vehicles[[f"spacing_{i + 1}" for i in range(width - 1)]].to_numpy(dtype=float).reshape(len(n), width - 1)
     axle = np.arange(width)[None, :]
     present = axle < n[:, None]
     # a new group starts at the front axle and after every spacing wider than group_spacing_m
@@ -93,7 +94,7 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     out = pd.DataFrame({
         "line": vehicles["line"].to_numpy()[vehicle_of], "timestamp": vehicles["timestamp"].to_numpy()[vehicle_of],
         "speed": vehicles["speed"].to_numpy()[vehicle_of], "lane": vehicles["lane"].to_numpy()[vehicle_of],
-        "vehicle_groups": n_groups[vehicle_of], "group_index": index, "first_axle": first_axle, "n_axles": size,
+        "vehicle_groups": n_groups[vehicle_of], "group_index": index + 1, "first_axle": first_axle + 1, "n_axles": size,
         "group": np.select([size == k for k in SIZES], list(SIZES.values()), "other"),
         "position": np.where(index == 0, "steer", np.where(index == 1, "drive", "trailer")),
         "group_load": group_load,
@@ -105,7 +106,7 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         column = np.full(total, np.nan)
         pick = (j == i) & narrow[group_of]
         column[group_of[pick]] = loads[present][pick]
-        out[f"axle_load_{i}"] = column
+        out[f"axle_load_{i + 1}"] = column
     gap_of = np.full((len(n), width), np.nan)
     gap_of[:, : width - 1] = gaps  # the spacing behind each axle (to the next one)
     behind = gap_of[present]
@@ -113,7 +114,7 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         column = np.full(total, np.nan)
         pick = (j == i) & (j < size[group_of] - 1) & narrow[group_of]
         column[group_of[pick]] = behind[pick]
-        out[f"spacing_{i}"] = column
+        out[f"spacing_{i + 1}"] = column
     return out[columns]
 
 

@@ -73,9 +73,9 @@ class ReadResult:
         ``timestamp``, ``speed`` [m/s], ``gross_weight`` [kg], ``length`` [m] (NaN where the format has none),
         ``n_axles``, ``n_groups`` (MON's own count; NaN otherwise), ``lane`` (1-based; -1 not given),
         ``direction`` (1 or 2 in every format: a zero-based code, BeDIT's and MON's 0 or 1, plus 1; -1 not
-        given), ``transverse_position`` [m] (NaN where not given), ``axle_load_0..`` [kg] (front first) and
-        ``spacing_0..`` [m] (``spacing_i`` between axles i and i + 1), NaN past the vehicle's axles; DITIS also
-        ``axle_width_0..`` [m].
+        given), ``transverse_position`` [m] (NaN where not given), ``axle_load_1..`` [kg] (front first) and
+        ``spacing_1..`` [m] (``spacing_i`` between axles i and i + 1), NaN past the vehicle's axles; DITIS also
+        ``axle_width_1..`` [m].
     format
         The format read (``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``).
     skipped
@@ -383,11 +383,11 @@ def _frame(parsed: dict) -> pd.DataFrame:
     pad = max(0, width - parsed["loads"].shape[1])
     loads = np.pad(parsed["loads"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
     spacings = np.pad(parsed["spacings"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, : width - 1]
-    extra = {f"axle_load_{i}": loads[:, i] for i in range(width)}
-    extra.update({f"spacing_{i}": spacings[:, i] for i in range(width - 1)})
+    extra = {f"axle_load_{i + 1}": loads[:, i] for i in range(width)}
+    extra.update({f"spacing_{i + 1}": spacings[:, i] for i in range(width - 1)})
     if parsed["widths"] is not None:
         widths = np.pad(parsed["widths"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
-        extra.update({f"axle_width_{i}": widths[:, i] for i in range(width)})
+        extra.update({f"axle_width_{i + 1}": widths[:, i] for i in range(width)})
     frame = pd.concat([frame, pd.DataFrame(extra)], axis=1)
     frame["timestamp"] = frame["timestamp"].astype("datetime64[us]")
     frame["n_axles"] = frame["n_axles"].astype(np.int64)

@@ -8,7 +8,7 @@ W_1..W_n,
 - **outside 5 %** (VSB 11 road-friendly rule): (max W - min W) / max W > 0.05;
 - **over 10 %** (load-sharing rule): an axle above 1.10 times the group's mean, max_i LSC_i > 1.10.
 
-The table of groups is *wide*: one row per group, ``n_axles`` and ``axle_load_0 .. axle_load_<k-1>`` (front axle
+The table of groups is *wide*: one row per group, ``n_axles`` and ``axle_load_1 .. axle_load_<k>`` (front axle
 first; columns past a group's own axles are ignored, whatever they hold). numpy and pandas only.
 """
 
@@ -55,13 +55,13 @@ def at_resolution(loads: ArrayLike, step_kg: float | None) -> NDArray:
 
 
 def axle_columns(n: int) -> list[str]:
-    """The axle load columns of a wide group table with room for ``n`` axles: ``axle_load_0 .. axle_load_<n-1>``."""
-    return [f"axle_load_{i}" for i in range(n)]
+    """The axle load columns of a wide group table with room for ``n`` axles: ``axle_load_1 .. axle_load_<n>``."""
+    return [f"axle_load_{i + 1}" for i in range(n)]
 
 
 def _width(table: pd.DataFrame) -> int:
     n = 0
-    while f"axle_load_{n}" in table.columns:
+    while f"axle_load_{n + 1}" in table.columns:
         n += 1
     return n
 
@@ -122,7 +122,7 @@ def survey_statistics(
     Parameters
     ----------
     groups
-        Wide table, one row per group: ``n_axles`` [-], ``axle_load_0 ..`` (front first) and the ``by`` columns.
+        Wide table, one row per group: ``n_axles`` [-], ``axle_load_1 ..`` (front first) and the ``by`` columns.
         Every row is used: filter (laden groups, positions, speeds) and drop bad readings first.
     by
         Column(s) to tabulate by, e.g. ``"group"`` (tandem, triaxle) or ``["protocol", "group"]``.
@@ -143,14 +143,14 @@ def survey_statistics(
     width = _width(groups)
     if width < 2 or "n_axles" not in groups.columns:
         raise ValueError(
-            f"groups has columns {list(groups.columns)}: needs n_axles and axle_load_0, axle_load_1, ... (wide)"
+            f"groups has columns {list(groups.columns)}: needs n_axles and axle_load_1, axle_load_2, ... (wide)"
         )
     ineq = group_inequality(groups[axle_columns(width)].to_numpy(dtype=float), groups["n_axles"].to_numpy())
     frame = groups[keys].assign(
         spread_kg=ineq["spread"] / unit_per_kg, spread_pct=ineq["spread_pct"],
         outside_5pct=ineq["outside_5pct"], over_10pct=ineq["over_10pct"],
     )  # fmt: skip
-    shares = [f"load_share_{i}" for i in range(width)]
+    shares = [f"load_share_{i + 1}" for i in range(width)]
     frame[shares] = ineq["load_share"]
     grouped = frame.groupby(keys, observed=True, sort=True)
     table = grouped.agg(
@@ -185,7 +185,7 @@ def statistics_dict(stats: pd.DataFrame, by: str = "group", digits: int = 4) -> 
         for key, value in row.items():
             if key.startswith("load_share_") and not pd.isna(value):
                 axle, q = key.removeprefix("load_share_").split("_")
-                quantiles.setdefault(f"axle_{int(axle) + 1}", {})[q] = num(value)
+                quantiles.setdefault(f"axle_{int(axle)}", {})[q] = num(value)
         entry["load_share_quantiles"] = quantiles
         out[str(row[by])] = entry
     return out

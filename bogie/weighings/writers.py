@@ -209,13 +209,13 @@ def _coded(vehicles: pd.DataFrame, fmt: str, name: str, allowed: str, ok) -> np.
 
 
 def _axle_values(vehicles: pd.DataFrame, fmt: str, prefix: str, n: np.ndarray, count: np.ndarray) -> np.ndarray:
-    """(rows, max count) SI values of ``prefix_0..``; NaN past each row's ``count``; a needed column must exist."""
+    """(rows, max count) SI values of ``prefix_1..``; NaN past each row's ``count``; a needed column must exist."""
     width = int(count.max(initial=0))
     out = np.full((len(n), width), np.nan)
     for i in range(width):
         rows = np.flatnonzero(count > i)
-        _require(vehicles, fmt, f"{prefix}_{i}", rows)
-        out[rows, i] = _column(vehicles, f"{prefix}_{i}", rows)
+        _require(vehicles, fmt, f"{prefix}_{i + 1}", rows)
+        out[rows, i] = _column(vehicles, f"{prefix}_{i + 1}", rows)
     return out
 
 
@@ -284,14 +284,14 @@ def _axle_ints(vehicles: pd.DataFrame, fmt: str, layout: FixedWidthLayout, n: np
         ints = np.zeros(si.shape, dtype=np.int64)
         for i in range(si.shape[1]):
             rows = np.flatnonzero(count > i)
-            ints[rows, i] = _scaled(fmt, f"{name}_{i}", si[rows, i], block[name], rows)
+            ints[rows, i] = _scaled(fmt, f"{name}_{i + 1}", si[rows, i], block[name], rows)
         axle_ints[name] = ints
     if "axle_width" in block:  # DITIS: 0 (not given, our assumption) where absent or NaN
         widths = np.zeros(loads.shape, dtype=np.int64)
         for i in range(loads.shape[1]):
             rows = np.flatnonzero(n > i)
-            si = _optional(vehicles, f"axle_width_{i}", 0.0)[rows]
-            widths[rows, i] = _scaled(fmt, f"axle_width_{i}", si, block["axle_width"], rows)
+            si = _optional(vehicles, f"axle_width_{i + 1}", 0.0)[rows]
+            widths[rows, i] = _scaled(fmt, f"axle_width_{i + 1}", si, block["axle_width"], rows)
         axle_ints["axle_width"] = widths
     return axle_ints
 
@@ -398,7 +398,7 @@ def _csv_lines(vehicles: pd.DataFrame) -> list[str]:
                 where = np.flatnonzero(mask)
                 if len(where):
                     raise ValueError(
-                        f"csv: {prefix}_{i} = {_val(values[where[0]])} {unit} in {_rows(rows[where])} {why} "
+                        f"csv: {prefix}_{i + 1} = {_val(values[where[0]])} {unit} in {_rows(rows[where])} {why} "
                         f"(a finite number, 0 or more, {unit})"
                     )
     width = int(n.max(initial=2))
@@ -454,13 +454,13 @@ def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
         The vehicle table of :func:`bogie.weighings.readers.read_weighings` (any index; row numbers in messages
         are 0-based positions, ``vehicles.iloc[row]``). Required: ``timestamp`` (no time zone; local time),
         ``speed`` [m/s], ``lane`` (1-based), ``n_axles`` (2 to the format's limit: CSV 20, CASTOR 9, BeDIT 20,
-        DITIS 20, MON 99), ``axle_load_0..n-1`` [kg] and ``spacing_0..n-2`` [m] (0-based, front first; cells
+        DITIS 20, MON 99), ``axle_load_1..n`` [kg] and ``spacing_1..n-1`` [m] (1-based, front first; cells
         past a row's axles are ignored); fixed-width formats also ``direction`` (1 or 2). Optional, with the
         value written where the column is absent or NaN: ``gross_weight`` [kg] -> the sum of the axle loads as
         written (the rounded loads, in the field's unit); ``length`` [m] -> 0 (the reader's "not given");
         ``transverse_position`` [m] -> 0; ``head`` (an integer, or a string of digits) -> 0, also for '' (the
         CSV reader's head); ``n_groups`` (MON only) -> counted: 1 + the spacings as written wider than
-        ``GROUP_SPACING_M`` (2.0 m; the rule of ``groups.axle_groups``); ``axle_width_0..n-1`` [m] (DITIS only)
+        ``GROUP_SPACING_M`` (2.0 m; the rule of ``groups.axle_groups``); ``axle_width_1..n`` [m] (DITIS only)
         -> 0, which this project takes as "not given" (an assumption: the reference has no missing value).
         CSV writes only its layout's columns: ``speed`` NaN and ``lane`` -1 or NaN are written blank.
     path

@@ -58,7 +58,7 @@ def reference_spec(spec):
 def differences(row: dict, reference: dict) -> dict[str, float]:
     """Largest |difference| of ``row`` from ``reference``: axle loads [N], group load [N], max_deviation [points]."""
     return {
-        "axle_load": max(abs(row[f"axle_load_{i}"] - reference[f"axle_load_{i}"]) for i in range(MAX_AXLES)),
+        "axle_load": max(abs(row[f"axle_load_{i + 1}"] - reference[f"axle_load_{i + 1}"]) for i in range(MAX_AXLES)),
         "group_load": abs(row["group_load"] - reference["group_load"]),
         "max_deviation_points": 100.0 * abs(row["max_deviation"] - reference["max_deviation"]),
     }

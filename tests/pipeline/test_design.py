@@ -80,8 +80,8 @@ def _runs(slopes, tilts, fleet_tilts, design="tandem-typical", failed=()):
             bad = (c, slot) in failed
             rows.append({
                 "design": design, "condition": c, "slot": slot, "status": "failed" if bad else "ok",
-                "chassis_tilt": math.radians(t), "axle_load_0": np.nan if bad else w0,
-                "axle_load_1": np.nan if bad else w1,
+                "chassis_tilt": math.radians(t), "axle_load_1": np.nan if bad else w0,
+                "axle_load_2": np.nan if bad else w1,
                 "outside_5pct": None if bad else bool((max(w0, w1) - min(w0, w1)) / max(w0, w1) > 0.05),
                 "over_10pct": None if bad else bool(max(w0, w1) / (0.5 * (w0 + w1)) > 1.10),
                 "max_deviation": np.nan if bad else abs(a * t),
@@ -138,7 +138,7 @@ def test_every_design_runs_over_the_same_conditions_and_tilts():
     assert len(samples) == len(designs) * 5 * (len(tilts) + 1)
     assert set(designs["kind"]) == {"typical", "grid", "space", "air"}
     per = samples.groupby("design")
-    for column in ("payload_fraction", "tyre_wear_0", "tyre_wear_1", "road_class", "road_seed", "chassis_tilt"):
+    for column in ("payload_fraction", "tyre_wear_1", "tyre_wear_2", "road_class", "road_seed", "chassis_tilt"):
         first = None
         for _, rows in per:
             values = rows.sort_values(["condition", "slot"])[column].tolist()

@@ -117,9 +117,9 @@ def test_runs_have_the_schema_and_one_row_per_sample_and_protocol(project, runs)
 def test_static_readings_balance_the_load_on_the_bogie(runs):
     ok = runs[(runs["status"] == "ok") & (runs["protocol"] == "static")]
     assert len(ok) > 0.8 * (runs["protocol"] == "static").sum()
-    loads = ok[[f"axle_load_{i}" for i in range(3)]].to_numpy()
+    loads = ok[[f"axle_load_{i + 1}" for i in range(3)]].to_numpy()
     np.testing.assert_allclose(loads.sum(axis=1), ok["group_load"], rtol=1e-12)
-    np.testing.assert_allclose(ok[[f"load_share_{i}" for i in range(3)]].sum(axis=1), ok["n_axles"], rtol=1e-12)
+    np.testing.assert_allclose(ok[[f"load_share_{i + 1}" for i in range(3)]].sum(axis=1), ok["n_axles"], rtol=1e-12)
     # moments about the king pin, both sides: sum_i A_i x_i = 2 (f m g x_cg + m_axle g sum_i x_i), with f the
     # payload fraction; tilt and pad contact move the forces' lines of action slightly off the axle positions
     for row in ok.itertuples():
@@ -136,7 +136,7 @@ def test_static_readings_balance_the_load_on_the_bogie(runs):
 def test_nose_up_tilt_overloads_the_rear_axle(runs):
     fleet = runs[(runs["study"] == "fleet") & (runs["protocol"] == "static") & (runs["status"] == "ok")]
     n = fleet["n_axles"].to_numpy()
-    shares = fleet[[f"load_share_{i}" for i in range(3)]].to_numpy()
+    shares = fleet[[f"load_share_{i + 1}" for i in range(3)]].to_numpy()
     rear = shares[np.arange(len(fleet)), n - 1]
     assert np.corrcoef(fleet["chassis_tilt"], rear)[0, 1] > 0.3
     nose_up = fleet["chassis_tilt"].to_numpy() > 0.0

@@ -92,8 +92,8 @@ def test_the_tables_columns_are_the_librarys_each_with_a_type_and_a_unit():
     assert tuple(GROUPS_SCHEMA.names) == (*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS)
     assert tuple(SIMULATED_SCHEMA.names) == SIMULATED_COLUMNS
     units = {f.name: f.metadata[b"unit"].decode() for f in (*GROUPS_SCHEMA, *SIMULATED_SCHEMA)}
-    assert units["speed"] == "m/s" and units["axle_load_2"] == "kg" and units["spacing_1"] == "m"
-    assert units["spread_pct"] == "%" and units["load_share_0"] == "-"
+    assert units["speed"] == "m/s" and units["axle_load_3"] == "kg" and units["spacing_2"] == "m"
+    assert units["spread_pct"] == "%" and units["load_share_1"] == "-"
 
 
 def test_the_schema_offers_the_formats_and_positions_of_the_readers():
@@ -111,9 +111,9 @@ def test_simulated_readings_leave_out_failed_airborne_and_light_groups_and_count
     assert readings.columns.tolist() == SIMULATED_SCHEMA.names
     static = readings[readings["protocol"] == "static"].set_index("sample_id")
     assert static.loc[0, "group_load"] == pytest.approx(17_000.0, rel=1e-12)  # N back to kg
-    assert np.isnan(static.loc[0, "axle_load_2"])  # a tandem has no third axle
+    assert np.isnan(static.loc[0, "axle_load_3"])  # a tandem has no third axle
     # bogie 3: loads 9, 8, 7 t: shares 9/8, 1, 7/8; spread 2000 kg, 25 % of the 8 t mean
-    assert static.loc[3, ["load_share_0", "load_share_1", "load_share_2"]].tolist() == pytest.approx([1.125, 1, 0.875])
+    assert static.loc[3, ["load_share_1", "load_share_2", "load_share_3"]].tolist() == pytest.approx([1.125, 1, 0.875])
     assert static.loc[3, "spread_kg"] == pytest.approx(2000.0)
     assert static.loc[3, "spread_pct"] == pytest.approx(25.0)
     stats = simulated_statistics(readings, counts)
@@ -178,8 +178,8 @@ def test_with_a_path_the_observed_statistics_are_those_of_bogie_weighings(tmp_pa
     assert len(groups) == 4 and set(groups["group"]) == {"tandem", "triaxle"}
     # line 3: a rigid truck's tandem of 9500 and 8500 kg: shares 19/18 and 17/18, spread 1000 kg
     row = groups[groups["line"] == 3].iloc[0]
-    assert [row["load_share_0"], row["load_share_1"]] == pytest.approx([19 / 18, 17 / 18])
-    assert row["spread_kg"] == 1000.0 and np.isnan(row["load_share_2"])
+    assert [row["load_share_1"], row["load_share_2"]] == pytest.approx([19 / 18, 17 / 18])
+    assert row["spread_kg"] == 1000.0 and np.isnan(row["load_share_3"])
 
 
 def test_a_drive_position_leaves_no_simulated_group_and_says_so(tmp_path):
@@ -245,9 +245,9 @@ def test_simulated_readings_are_read_at_the_observed_files_resolution_before_any
     # (9000, 8000, 7000) reads (9000, 9000, 6000), spread 3000 kg; group loads are the sums of the readings
     readings, _ = simulated_readings(fabricated_runs(raw_params()), 15_000.0, "all", weight_step_kg=3000.0)
     static = readings[readings["protocol"] == "static"].set_index("sample_id")
-    assert static.loc[0, ["axle_load_0", "axle_load_1"]].tolist() == [9000.0, 9000.0]
+    assert static.loc[0, ["axle_load_1", "axle_load_2"]].tolist() == [9000.0, 9000.0]
     assert (static.loc[0, "group_load"], static.loc[0, "spread_kg"]) == (18_000.0, 0.0)
-    assert static.loc[3, ["axle_load_0", "axle_load_1", "axle_load_2"]].tolist() == [9000.0, 9000.0, 6000.0]
+    assert static.loc[3, ["axle_load_1", "axle_load_2", "axle_load_3"]].tolist() == [9000.0, 9000.0, 6000.0]
     assert (static.loc[3, "group_load"], static.loc[3, "spread_kg"]) == (24_000.0, 3000.0)
 
 

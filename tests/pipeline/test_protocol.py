@@ -37,7 +37,7 @@ def test_a_reading_with_an_equaliser_on_its_stop_is_valid_and_flagged():
     assert free["status"] == "ok" and free["equaliser_on_stop"] is False
     # the stop holds the equaliser, so the loads part: the stopped group is the less equal one
     assert row["max_deviation"] > free["max_deviation"]
-    assert not row["wheel_airborne"] and np.isfinite(row["axle_load_0"])
+    assert not row["wheel_airborne"] and np.isfinite(row["axle_load_1"])
 
 
 def test_a_level_bogie_reads_off_its_stops():
@@ -138,8 +138,8 @@ def test_a_chunks_result_rows_are_each_weighings_own_metrics_bit_for_bit():
             "group_load": w.sum(), "p": metrics.p(w / w.mean()), "p1": metrics.p1(w / w.mean()),
             "max_deviation": metrics.max_deviation(w), "spread": metrics.spread(w),
             "road_wear_factor": metrics.road_wear_factor(w), "chassis_pitch": outcome.pitch,
-            **{f"axle_load_{i}": w[i] if i < n else 0.0 for i in range(MAX_AXLES)},
-            **{f"load_share_{i}": metrics.lsc(w)[i] if i < n else 0.0 for i in range(MAX_AXLES)},
+            **{f"axle_load_{i + 1}": w[i] if i < n else 0.0 for i in range(MAX_AXLES)},
+            **{f"load_share_{i + 1}": metrics.lsc(w)[i] if i < n else 0.0 for i in range(MAX_AXLES)},
         }  # fmt: skip
         for column, value in expected.items():
             assert row[column] == float(value), column  # exact: the same arithmetic, row by row
@@ -147,7 +147,7 @@ def test_a_chunks_result_rows_are_each_weighings_own_metrics_bit_for_bit():
     # by hand: axle loads 20, 40, 60 kN (mean 40): max deviation 0.5, spread 40 kN, shares 0.5/1/1.5, p = sqrt(2)/2
     last = rows[-1]
     assert last["group_load"] == 1.2e5 and last["spread"] == 4e4 and last["max_deviation"] == 0.5
-    assert [last[f"load_share_{i}"] for i in range(3)] == [0.5, 1.0, 1.5]
+    assert [last[f"load_share_{i + 1}"] for i in range(3)] == [0.5, 1.0, 1.5]
     assert math.isclose(last["p"], math.sqrt(0.5**2 + 0.5**2), rel_tol=1e-15)
     assert last["outside_5pct"] is True and last["over_10pct"] is True and last["wheel_airborne"] is False
     assert rows[5]["wheel_airborne"] is True and rows[5]["status"] == "ok"  # the failed row went in at 9, after it

@@ -89,10 +89,10 @@ def test_each_axle_reading_carries_the_sensors_error_drawn_from_the_samples_sens
                    sample["sensor_seed"])  # fmt: skip
     factors = sensor_factors(0.015, 0.02, sample["sensor_seed"], bogie.n_axles)
     assert run.reading == pytest.approx(run.reading_error_free * factors, rel=1e-14)
-    assert [row[f"axle_load_{i}"] for i in range(bogie.n_axles)] == pytest.approx(2.0 * run.reading)
+    assert [row[f"axle_load_{i + 1}"] for i in range(bogie.n_axles)] == pytest.approx(2.0 * run.reading)
     # another sensor seed: the same pass, other errors; the same seed: the same reading (deterministic)
     other = weigh(bogie, {**sample, "sensor_seed": sample["sensor_seed"] + 1}, "wim", spec)
-    assert other["axle_load_0"] != row["axle_load_0"]
+    assert other["axle_load_1"] != row["axle_load_1"]
     assert weigh(bogie, sample, "wim", spec) == row
     with pytest.raises(ValueError, match="needs a sensor_seed"):
         wim_pass(bogie, sample["payload_fraction"], sample["road_class"], sample["road_seed"], spec)

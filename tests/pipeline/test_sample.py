@@ -97,8 +97,8 @@ def test_axles_a_group_does_not_have_wear_nothing(studies):
     tandem = fleet[fleet["group"] == "tandem"]
     triaxle = fleet[fleet["group"] == "triaxle"]
     assert (tandem["n_axles"] == 2).all() and (triaxle["n_axles"] == 3).all()
-    assert (tandem["tyre_wear_2"] == 0.0).all()
-    assert (triaxle["tyre_wear_2"] > 0.0).all()
+    assert (tandem["tyre_wear_3"] == 0.0).all()
+    assert (triaxle["tyre_wear_3"] > 0.0).all()
 
 
 # ---- the fleet design --------------------------------------------------------------------------------------------
@@ -107,7 +107,7 @@ def test_latin_hypercube_puts_one_bogie_in_every_stratum_of_every_marginal():
     fleet = sample_fleet(config)
     n = len(fleet)
     edges_u = np.arange(n + 1) / n
-    for name in (*SCALARS, "payload_fraction", "tyre_wear_0", "tyre_wear_1"):
+    for name in (*SCALARS, "payload_fraction", "tyre_wear_1", "tyre_wear_2"):
         dist = config.distributions["tyre_wear" if name.startswith("tyre_wear") else name]
         x = np.sort(fleet[name].to_numpy())
         edges = dist.ppf(np.minimum(edges_u, 1.0))

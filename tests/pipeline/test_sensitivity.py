@@ -81,7 +81,7 @@ def additive_coefficients(config):
 def additive_output(frame, coef):
     y = np.zeros(len(frame))
     for name, c in coef.items():
-        columns = [f"tyre_wear_{i}" for i in range(3)] if name == "tyre_wear" else [name]
+        columns = [f"tyre_wear_{i + 1}" for i in range(3)] if name == "tyre_wear" else [name]
         for col in columns:
             y += c * _term(name, frame[col].to_numpy())
     return y
@@ -249,7 +249,7 @@ def ablation_runs(n_bogies=60, noise=0.0, seed=0, n_axles=None):
                     variant=variant,
                     chassis_tilt=0.0,
                 )
-                row.update(tyre_wear_0=0.0, tyre_wear_1=0.0, tyre_wear_2=0.0)
+                row.update(tyre_wear_1=0.0, tyre_wear_2=0.0, tyre_wear_3=0.0)
                 rows.append(row)
     return pd.DataFrame(rows)
 

@@ -111,7 +111,7 @@ def test_each_part_file_has_the_run_schema_and_no_missing_values(config, samples
         schema = pq.read_schema(path)
         assert len(schema.metadata[HASH_KEY]) == 64
         units = {f.name: f.metadata[b"unit"].decode() for f in schema}
-        assert (units["axle_load_0"], units["chassis_tilt"], units["chassis_tilt_deg"]) == ("N", "rad", "degree")
+        assert (units["axle_load_1"], units["chassis_tilt"], units["chassis_tilt_deg"]) == ("N", "rad", "degree")
         assert (units["bush_stiffness"], units["spread_kg"], units["outside_5pct"]) == ("N m/rad", "kg", "-")
     fleet = pd.read_parquet(out, filters=[("study", "==", "fleet")])
     assert set(fleet["study"].astype(str)) == {"fleet"}
@@ -363,7 +363,7 @@ def test_a_changed_protocol_setting_reruns_only_the_chunks_that_use_it(config, s
     static, wim = runs["protocol"] == "static", runs["protocol"] == "wim"
     pd.testing.assert_frame_equal(runs[static], reference[reference["protocol"] == "static"], check_exact=True)
     assert not np.array_equal(
-        runs.loc[wim, "axle_load_0"], reference.loc[reference["protocol"] == "wim", "axle_load_0"]
+        runs.loc[wim, "axle_load_1"], reference.loc[reference["protocol"] == "wim", "axle_load_1"]
     )
 
 

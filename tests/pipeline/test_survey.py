@@ -51,7 +51,7 @@ def run(sample_id, loads, protocol="static", tilt_deg=0.0, wear_mm=(0.0, 0.0, 0.
         base_id=sample_id,
         group="tandem" if n == 2 else "triaxle",
         chassis_tilt=math.radians(tilt_deg),
-        **{f"tyre_wear_{i}": w / 1000.0 for i, w in enumerate(wear_mm)},
+        **{f"tyre_wear_{i + 1}": w / 1000.0 for i, w in enumerate(wear_mm)},
     )
     return row
 
@@ -99,17 +99,17 @@ def test_distribution_stats_match_numpy_and_skip_the_missing_third_axle_of_tande
     ok = derived(rows)
     stats = distribution_stats(ok).set_index(["quantity", "group"])
     tri = ok[ok["group"] == "triaxle"]
-    row = stats.loc[("load_share_1", "triaxle")]
+    row = stats.loc[("load_share_2", "triaxle")]
     assert row["n"] == 40
-    assert row["mean"] == pytest.approx(tri["load_share_1"].mean())
-    assert row["sd"] == pytest.approx(tri["load_share_1"].std())
+    assert row["mean"] == pytest.approx(tri["load_share_2"].mean())
+    assert row["sd"] == pytest.approx(tri["load_share_2"].std())
     assert row[["p05", "p25", "p50", "p75", "p95"]].tolist() == pytest.approx(
-        np.percentile(tri["load_share_1"], [5, 25, 50, 75, 95])
+        np.percentile(tri["load_share_2"], [5, 25, 50, 75, 95])
     )
-    assert ("load_share_2", "tandem") not in stats.index
+    assert ("load_share_3", "tandem") not in stats.index
     assert ("road_wear_factor", "tandem") in stats.index
     # load shares of each group average to 1 (LSC sums to n)
-    shares = stats.xs("triaxle", level="group").loc[["load_share_0", "load_share_1", "load_share_2"], "mean"]
+    shares = stats.xs("triaxle", level="group").loc[["load_share_1", "load_share_2", "load_share_3"], "mean"]
     assert shares.sum() == pytest.approx(3.0)
 
 
@@ -145,7 +145,7 @@ def test_tilt_table_assigns_rows_to_bins_and_finds_the_rear_overload_nose_up():
     assert table["n"].to_dict() == {"[-1, -0.5)": 1, "[0, 0.5)": 1, "[0.5, 1)": 3}
     assert table.loc["[0.5, 1)", "rear_heaviest_share"] == pytest.approx(2 / 3)
     assert table.loc["[-1, -0.5)", "rear_heaviest_share"] == 0.0
-    assert table.loc["[0.5, 1)", "mean_load_share_2"] == pytest.approx(np.mean([90 / 80, 85 / 80, 75 / 80]))
+    assert table.loc["[0.5, 1)", "mean_load_share_3"] == pytest.approx(np.mean([90 / 80, 85 / 80, 75 / 80]))
     assert table.loc["[0.5, 1)", "tilt_deg_low"] == 0.5
     summary = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary.csv"].iloc[0]
     # nose up beyond 0.5 degree: rows 0 and 2 (row 1 sits on 0.5, not above)
@@ -155,7 +155,7 @@ def test_tilt_table_assigns_rows_to_bins_and_finds_the_rear_overload_nose_up():
 
 def test_tilt_table_leaves_the_tandems_third_axle_empty():
     table = tilt_table(derived([run(0, [40e3, 50e3], tilt_deg=1.2)]))
-    assert math.isnan(table["mean_load_share_2"].iloc[0])
+    assert math.isnan(table["mean_load_share_3"].iloc[0])
     assert table["rear_heaviest_share"].iloc[0] == 1.0
 
 
@@ -184,7 +184,7 @@ def test_static_and_wim_are_paired_by_sample_id_whatever_the_row_order():
     # max deviation i 1e3 / 80e3 static, three times that by WIM
     expected = np.array([0, 1, 2, 3, 5]) * 2e3 / 80e3
     assert pairs["dynamic_excess"].to_numpy() == pytest.approx(expected)
-    assert pairs["load_share_2_diff"].to_numpy() == pytest.approx(expected)
+    assert pairs["load_share_3_diff"].to_numpy() == pytest.approx(expected)
     row = summary.iloc[0]
     assert row["n_pairs"] == 5
     assert row["mean_dynamic_excess"] == pytest.approx(expected.mean())
@@ -481,10 +481,10 @@ def test_the_fleets_wim_readings_are_written_as_records_that_read_back_at_the_fo
     for k, (row, got) in enumerate(zip(wim.to_dict("records"), read.vehicles.to_dict("records"))):
         n = row["n_axles"]
         assert got["n_axles"] == n
-        loads = [row[f"axle_load_{i}"] / GRAVITY for i in range(n)]
-        assert [got[f"axle_load_{i}"] for i in range(n)] == pytest.approx(at(loads, step_kg), abs=1e-6)
+        loads = [row[f"axle_load_{i + 1}"] / GRAVITY for i in range(n)]
+        assert [got[f"axle_load_{i + 1}"] for i in range(n)] == pytest.approx(at(loads, step_kg), abs=1e-6)
         spacings = np.diff(bogie_from_sample(by_id.loc[row["sample_id"]].to_dict()).axle_x)
-        assert [got[f"spacing_{i}"] for i in range(n - 1)] == pytest.approx(at(spacings, step_m), abs=1e-9)
+        assert [got[f"spacing_{i + 1}"] for i in range(n - 1)] == pytest.approx(at(spacings, step_m), abs=1e-9)
         assert got["timestamp"] == pd.Timestamp("2026-01-01") + pd.Timedelta(seconds=10 * k)
 
 

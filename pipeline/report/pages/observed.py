@@ -57,7 +57,7 @@ def _load_share_boxes(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
     for k, name in enumerate(SOURCES):
         if name not in sides:
             continue
-        data = [sides[name][f"load_share_{i}"].to_numpy(dtype=float) for i in range(n)]
+        data = [sides[name][f"load_share_{i + 1}"].to_numpy(dtype=float) for i in range(n)]
         pos = np.arange(n) + (k - (len(SOURCES) - 1) / 2) * width
         color = SOURCE_COLOR[name]
         ax.boxplot(

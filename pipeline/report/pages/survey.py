@@ -32,7 +32,7 @@ def _marker_size(n: int) -> float:
 def _share_histogram(ax, sub: pd.DataFrame, group: str, protocol: str) -> None:
     """Histograms of each axle position's load share of one group and protocol."""
     n = n_axles(group)
-    shares = sub[[f"load_share_{i}" for i in range(n)]].to_numpy(dtype=float)
+    shares = sub[[f"load_share_{i + 1}" for i in range(n)]].to_numpy(dtype=float)
     # bins over this panel's central 99 %: the static readings crowd near 1, WIM's spread far wider, and
     # a few wheel-lift readings would otherwise squash every other bin into one
     span = np.percentile(shares, [0.5, 99.5]) if shares.size else (0.8, 1.2)
@@ -154,7 +154,7 @@ def _tilt_bands(ax, tilt: pd.DataFrame, group: str) -> None:
         mid = 0.5 * (band["tilt_deg_low"] + band["tilt_deg_high"])
         for i in range(n):
             color = AXLE_COLOR[axle_name(i, n)]
-            ax.plot(mid, band[f"mean_load_share_{i}"], ls=PROTOCOL_LINE[prot], marker="o", ms=3, color=color)
+            ax.plot(mid, band[f"mean_load_share_{i + 1}"], ls=PROTOCOL_LINE[prot], marker="o", ms=3, color=color)
         handles.append(Line2D([], [], color="0.3", ls=PROTOCOL_LINE[prot], label=PROTOCOL_LABEL[prot]))
     handles = [
         Line2D([], [], color=AXLE_COLOR[axle_name(i, n)], label=f"{axle_name(i, n)} axle") for i in range(n)
@@ -181,8 +181,8 @@ def _pair_scatter(ax_d, ax_s, pairs: pd.DataFrame, groups: Sequence[str]) -> Non
         for i in range(n):
             name = axle_name(i, n)
             ax_s.scatter(
-                sub[f"load_share_{i}_static"],
-                sub[f"load_share_{i}_wim"],
+                sub[f"load_share_{i + 1}_static"],
+                sub[f"load_share_{i + 1}_wim"],
                 s=size,
                 lw=0,
                 alpha=0.6,
