@@ -198,7 +198,7 @@ def _with_rules(raw: Mapping[str, Any], exc: ValidationError) -> ConfigError:
 
 
 def _read(path: str | Path) -> dict[str, Any]:
-    """:func:`load_params`, every way the file cannot be read as a mapping a :class:`ConfigError` (but OSError)."""
+    """:func:`load_params`, a file that is not a YAML mapping a :class:`ConfigError` (an OSError is left as it is)."""
     try:
         return load_params(path)
     except ConfigError:
