@@ -238,7 +238,7 @@ def main(argv: list[str] | None = None) -> int:
 def _stage(args: argparse.Namespace, log: Callable[[str], None]) -> int:
     """The stage's work while it owns its outputs: read, calibrate, write; the exit code."""
     try:
-        config = load_config(args.params)
+        config = load_config(args.params, note=lambda line: log(f"calibrate: {line}"))
         path = observed_file(config.observed, Path(args.params).resolve().parent)
         if path is None or config.calibrate is None:
             reason = (

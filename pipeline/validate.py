@@ -2,11 +2,12 @@
 
 ``python -m pipeline.validate`` reads params.yaml through the schema (:mod:`pipeline.config`: every bad key, every
 rule between keys, the bounds on the runs and on the memory the studies imply, against a fixed budget:
-:mod:`pipeline.config.rules`), checks that ``observed.path`` (if given) names a file, then writes the validated
-configuration in SI units to ``data/config.json``. Every other stage depends on that file, so a bad value stops the
-pipeline here, and DVC, which deletes a stage's outputs before running it, deletes only this small file: a failed
-``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the runs and the report in place (see the README for what
-DVC itself does to params.yaml and how to recover).
+:mod:`pipeline.config.rules`) and checks that ``observed.path`` (if given) names a file, all of it at once: one
+message, a line per bad key (:func:`pipeline.config.check_params`). Then it writes the validated configuration in SI
+units to ``data/config.json``, and nothing if anything is bad. Every other stage depends on that file, so a bad value
+stops the pipeline here, and DVC, which deletes a stage's outputs before running it, deletes only this small file: a
+failed ``dvc exp run -S fleet.n_bogies=-5`` leaves the samples, the runs and the report in place (see the README for
+what DVC itself does to params.yaml and how to recover).
 """
 
 from __future__ import annotations
@@ -23,7 +24,7 @@ import yaml
 
 from bogie.fleet.distributions import Distribution
 from pipeline.atomic import atomic_file, io_error
-from pipeline.config import ConfigError, load_config, observed_file
+from pipeline.config import ConfigError, check_params
 
 __all__ = ["as_json", "main"]
 
@@ -48,10 +49,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--out", default="data/config.json", help="validated configuration (default: data/config.json)")
     args = parser.parse_args(argv)
+    notes: list[str] = []
     try:
-        config = load_config(args.params)
-        # a wrong observed.path is found now, not after the simulation (the observed stage checks it again)
-        observed_file(config.observed, Path(args.params).parent)
+        # a wrong observed.path is found now, with the bad keys, not after the simulation (observed checks it again)
+        config = check_params(args.params, notes.append)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
         print(f"validate: {args.params}: {exc}", file=sys.stderr)
         return 2
@@ -62,6 +63,8 @@ def main(argv: list[str] | None = None) -> int:
         print(io_error("validate", exc), file=sys.stderr)
         return 2
     print(f"validate: {args.params} is valid; wrote {args.out}")
+    for note in notes:
+        print(f"validate: {note}")
     return 0
 
 

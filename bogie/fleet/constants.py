@@ -7,7 +7,8 @@ from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
 __all__ = [
     "AT_BOUND", "CALIBRATION_QUANTITIES", "GROUP_AXLES", "MAX_AXLES", "MAX_PHASE_STEPS", "PAIR_TOLERANCE", "PILED",
-    "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SUSPENSIONS", "TARE_FRACTION",
+    "PROTOCOLS", "READ_TIME", "ROUTE_MARGIN", "SHARE_TOLERANCE", "SITE_IRI_RANGE", "SURVEY_PROTOCOLS", "SUSPENSIONS",
+    "TARE_FRACTION",
     "TILTED_QUANTITIES", "WIM_QUANTITIES", "n_axles",
 ]  # fmt: skip
 
@@ -32,6 +33,9 @@ ROUTE_MARGIN: float = 4.0
 
 #: the weighing protocols: static weighbridge, weigh-in-motion pass
 PROTOCOLS: tuple[str, ...] = ("static", "wim")
+#: the kinds of observed survey, each with the protocol whose readings it is held against: a WIM file's records are
+#: WIM readings, a weighbridge file's are static ones
+SURVEY_PROTOCOLS: dict[str, str] = {"wim": "wim", "weighbridge": "static"}
 
 #: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``), each with its
 #: physical range and unit

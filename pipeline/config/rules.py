@@ -1,9 +1,15 @@
 """The rules between keys of params.yaml, and the bounds on what the settings cost, checked before any work.
 
-Each rule reads the values it needs through a :class:`View` of the mapping as written. :class:`pipeline.config.schema.
+Each rule reads the values it needs through a :class:`View` of the mapping as written, and yields every broken case
+it finds (each fit quantity, design factor, axle group on its own), not the first. :class:`pipeline.config.schema.
 Params` runs every rule once its fields are valid; when some field is bad, :func:`rule_errors` still runs each rule
-whose keys are all valid (a bad key it needs makes it :class:`Unavailable`), so a rule between keys is reported with
-the field errors, not only once they are fixed.
+whose keys are all valid (a bad key it needs makes it :class:`Unavailable`), so a rule is reported with the field
+errors, not only once they are fixed. The rules within one section (a group's payload, a phase's steps, the
+calibration's bounds, the design grid's levels) are rules here too, not the sections' model validators: pydantic runs
+a model's validator only once every field of that model is valid, so one bad key in a section hid them.
+
+A rule whose value is already reported bad does not run: a key that a field check, or an earlier rule, found bad is
+:class:`Unavailable` to the rules after it, so one mistake gives one line, not a line for each check that reads it.
 
 The costs are bounded on the numbers the settings imply, computed without building anything: runs of each study at
 most :data:`MAX_RUNS`, and the pipeline's peak memory, :data:`BYTES_PER_RUN` a row, at most
@@ -19,10 +25,20 @@ from typing import Any
 
 from pydantic import BaseModel, TypeAdapter, ValidationError
 
+from bogie.bogie_file import base_bogie
+from bogie.fleet.constants import (
+    CALIBRATION_QUANTITIES,
+    GROUP_AXLES,
+    MAX_PHASE_STEPS,
+    ROUTE_MARGIN,
+    SURVEY_PROTOCOLS,
+    WIM_QUANTITIES,
+)
 from bogie.fleet.distributions import ParameterError
 from bogie.params import INHIBITORS
 from pipeline.config.distributions import NumericSpec
 from pipeline.config.errors import locate
+from pipeline.config.quantities import QUANTITIES
 from pipeline.resources import MEMORY_BUDGET
 
 __all__ = [
@@ -32,10 +48,14 @@ __all__ = [
     "RuleError",
     "Unavailable",
     "View",
+    "DESIGN_FACTORS",
+    "calibration_protocol",
     "calibration_tilt_count",
     "design_tilt_count",
     "fleet_bounded",
     "rule_errors",
+    "survey_protocol",
+    "why_static",
 ]
 
 #: the most runs (sample rows) one study may have [-]: fleet.n_bogies' own bound; a larger study is a typo or a
@@ -71,6 +91,11 @@ def _touches(bad: str, path: str) -> bool:
     return any(a.startswith(b + sep) for a, b in ((path, bad), (bad, path)) for sep in (".", "["))
 
 
+def _above(bad: str, path: str) -> bool:
+    """Whether an error at key path ``bad`` is at ``path`` or above it (a mapping's own error, not an entry's)."""
+    return bad in ("", path) or any(path.startswith(bad + sep) for sep in (".", "["))
+
+
 class View:
     """The values of params.yaml as written, by dotted key path, with the schema's defaults for keys left out.
 
@@ -85,7 +110,7 @@ class View:
     """
 
     def __init__(self, schema: type[BaseModel], raw: Mapping[str, Any], bad: Sequence[str] = ()) -> None:
-        self.schema, self.raw, self.bad = schema, raw, tuple(bad)
+        self.schema, self.raw, self.bad = schema, raw, list(bad)
         #: what the rules derive from the file more than once (the tilt distribution's bounds), by name
         self.derived: dict[str, Any] = {}
 
@@ -93,6 +118,33 @@ class View:
         """The value at ``path``; raises :class:`Unavailable` if it is bad, or missing without a default."""
         if any(_touches(bad, path) for bad in self.bad):
             raise Unavailable(path)
+        return self._value(path)
+
+    def entries(self, path: str) -> dict[str, Any]:
+        """The entries of the mapping at ``path`` (a mapping with free keys: ``calibrate.fit``, ``design.grid``) whose
+        own values are valid, by key: a bad entry leaves the others to check. Raises :class:`Unavailable` if the
+        mapping itself, or a key above it, is bad."""
+        if any(_above(bad, path) for bad in self.bad):
+            raise Unavailable(path)
+        mapping = self._value(path)
+        if not isinstance(mapping, Mapping):
+            raise Unavailable(path)
+        good = lambda name: not any(_touches(bad, f"{path}.{name}") for bad in self.bad)  # noqa: E731
+        return {name: value for name, value in mapping.items() if isinstance(name, str) and good(name)}
+
+    def names(self, path: str) -> tuple[str, ...]:
+        """The keys of the mapping at ``path`` as written, whatever their values (see :meth:`entries`)."""
+        if any(_above(bad, path) for bad in self.bad) or not isinstance(mapping := self._value(path), Mapping):
+            raise Unavailable(path)
+        return tuple(name for name in mapping if isinstance(name, str))
+
+    def section(self, name: str) -> None:
+        """Raise :class:`Unavailable` if the optional section ``name`` is not given (null: no such study), or is itself
+        bad (a bad key inside it leaves the rest to check)."""
+        if any(_above(bad, name) for bad in self.bad) or self._value(name) is None:
+            raise Unavailable(name)
+
+    def _value(self, path: str) -> Any:
         parts = path.split(".")
         node: Any = self.raw
         for i, part in enumerate(parts):
@@ -107,11 +159,6 @@ class View:
             node = field.get_default(call_default_factory=True)
             node = node.model_dump() if isinstance(node, BaseModel) else node
         return node
-
-    def section(self, name: str) -> None:
-        """Raise :class:`Unavailable` if the optional section ``name`` is not given (null: no such study)."""
-        if self.get(name) is None:
-            raise Unavailable(name)
 
 
 Rule = Callable[[View], Iterator[RuleError]]
@@ -149,6 +196,181 @@ def _calibrates(view: View) -> None:
         raise Unavailable("observed.path")
 
 
+def survey_protocol(protocol: str, kind: str) -> str:
+    """The protocol a calibration holds against the survey: ``calibrate.protocol``, or for ``auto`` the one of
+    ``observed.kind`` (:data:`bogie.fleet.constants.SURVEY_PROTOCOLS`: a WIM file, wim; a weighbridge file, static)."""
+    return SURVEY_PROTOCOLS[kind] if protocol == "auto" else protocol
+
+
+def why_static(protocol: str) -> str:
+    """Why a calibration whose ``calibrate.protocol`` is ``protocol`` is static, in words."""
+    return "observed.kind is weighbridge" if protocol == "auto" else "calibrate.protocol is static"
+
+
+def calibration_protocol(view: View) -> str:
+    """:func:`survey_protocol` of params.yaml as written."""
+    return survey_protocol(view.get("calibrate.protocol"), view.get("observed.kind"))
+
+
+# ---- rules within a section -------------------------------------------------------------------------------------
+def _payloads(view: View) -> Iterator[RuleError]:
+    # the design bogie needs a positive payload: the legal load must exceed the group's own unsprung mass
+    for group, n_axles in GROUP_AXLES.items():
+        try:
+            name, tonnes = view.get(f"fleet.presets.{group}"), view.get(f"fleet.legal_group_load_t.{group}")
+        except Unavailable:
+            continue
+        unsprung = 2 * n_axles * base_bogie(name).axle_mass / 1000.0
+        if tonnes <= unsprung:
+            expected = f"must exceed the unsprung mass of the {name} axles, {unsprung:g} t"
+            yield RuleError(f"fleet.legal_group_load_t.{group}", tonnes, expected)
+
+
+def _too_many_steps(key: str, value: float, duration: float, dt: float) -> RuleError | None:
+    """A protocol phase of more than MAX_PHASE_STEPS time steps (its histories would not fit in memory), or None."""
+    steps = duration / dt
+    if steps <= MAX_PHASE_STEPS:
+        return None
+    expected = (
+        f"makes a phase of {duration:.4g} s, {steps:,.0f} steps of {dt:g} s, more than {MAX_PHASE_STEPS:,} "
+        "(about 250 bytes a step per worker): shorten it or raise dt_s"
+    )
+    return RuleError(key, value, expected)
+
+
+def _static_phases(view: View) -> Iterator[RuleError]:
+    static = "protocol.static."
+    dt, value = view.get(static + "dt_s"), lambda name: view.get(static + name)
+    durations: dict[str, Callable[[], float]] = {
+        "load_time_s": lambda: value("load_time_s"),
+        "crawl_speed_m_s": lambda: (value("approach_length_m") + ROUTE_MARGIN) / value("crawl_speed_m_s"),
+        "settle_time_s": lambda: value("settle_time_s"),
+    }
+    for name, duration in durations.items():
+        try:
+            error = _too_many_steps(static + name, view.get(static + name), duration(), dt)
+        except Unavailable:
+            continue
+        if error is not None:
+            # the phases share dt_s: a line for each further phase would repeat the one cause, a step too small
+            yield error
+            return
+
+
+def _wim_steps(view: View) -> Iterator[RuleError]:
+    approach = view.get("protocol.wim.approach_length_m")
+    route = (approach + ROUTE_MARGIN) / view.get("protocol.wim.speed_m_s")
+    error = _too_many_steps("protocol.wim.approach_length_m", approach, route, view.get("protocol.wim.dt_s"))
+    if error is not None:
+        yield error
+
+
+def _wim_site(view: View) -> Iterator[RuleError]:
+    approach, before = view.get("protocol.wim.approach_length_m"), view.get("protocol.wim.site_length_before_m")
+    if before > approach:
+        expected = (
+            f"must not exceed approach_length_m = {approach:g} m: the site lies on the approach road ahead of the "
+            "sensor"
+        )
+        yield RuleError("protocol.wim.site_length_before_m", before, expected)
+
+
+#: an address of a dask scheduler, in words (execution.dask_scheduler)
+DASK_ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
+
+
+def _dask_scheduler(view: View) -> Iterator[RuleError]:
+    if view.get("execution.backend") == "dask" and view.get("execution.dask_scheduler") is None:
+        yield RuleError("execution.dask_scheduler", None, f"backend dask needs the scheduler's address: {DASK_ADDRESS}")
+
+
+def _calibration_levels(view: View) -> Iterator[RuleError]:
+    view.section("calibrate")
+    levels = view.get("calibrate.site_iri_levels_m_km")
+    if any(b <= a for a, b in zip(levels, levels[1:])) or levels[0] <= 0.0:
+        yield RuleError("calibrate.site_iri_levels_m_km", levels, "must be positive and increasing [m/km]")
+
+
+def _fit_bounds(name: str, bounds: Any) -> str | None:
+    """What is wrong with one quantity of calibrate.fit on its own, the first thing found (a later check of a quantity
+    calibrate does not know, or of bounds of another form, would only repeat it), or None."""
+    if name not in CALIBRATION_QUANTITIES:
+        return f"is not a fleet quantity calibrate can fit; allowed: {', '.join(CALIBRATION_QUANTITIES)}"
+    low, high, unit = CALIBRATION_QUANTITIES[name]
+    if len(bounds) != 2 or not all(isinstance(b, int | float) and math.isfinite(b) for b in bounds):
+        return f"must be [low, high], two numbers in {unit}"
+    if not bounds[0] < bounds[1]:
+        return f"bounds inverted or equal: low must be below high [{unit}]"
+    if bounds[0] < low or bounds[1] > high:
+        return f"must lie within [{low:g}, {high:g}] {unit}"
+    return None
+
+
+def _calibration_fit(view: View) -> Iterator[RuleError]:
+    view.section("calibrate")
+    for name, bounds in view.entries("calibrate.fit").items():
+        key = f"calibrate.fit.{name}"
+        wrong = _fit_bounds(name, bounds)
+        if wrong is not None:
+            yield RuleError(key, bounds, wrong)
+            continue
+        if name != "site_iri_m_km":
+            continue
+        try:
+            # a static calibration drops the WIM quantities (pipeline.config.settings); the levels, once refused
+            # themselves (_calibration_levels, an earlier rule), are no range to hold the bounds against
+            if calibration_protocol(view) != "wim":
+                continue
+            levels = view.get("calibrate.site_iri_levels_m_km")
+        except Unavailable:
+            continue
+        if bounds[0] < levels[0] or bounds[1] > levels[-1]:
+            expected = f"must lie within site_iri_levels_m_km, [{levels[0]:g}, {levels[-1]:g}] m/km"
+            yield RuleError(key, bounds, expected)
+
+
+def _static_calibration_fits(view: View) -> Iterator[RuleError]:
+    view.section("calibrate")
+    names = view.names("calibrate.fit")
+    if names and calibration_protocol(view) == "static" and all(name in WIM_QUANTITIES for name in names):
+        why = why_static(view.get("calibrate.protocol"))
+        others = ", ".join(q for q in CALIBRATION_QUANTITIES if q not in WIM_QUANTITIES)
+        expected = (
+            f"names only WIM quantities, which a static calibration ({why}) does not fit: a weighbridge has no WIM "
+            f"site or sensor; name one of {others}"
+        )
+        yield RuleError("calibrate.fit", dict(view.entries("calibrate.fit")), expected)
+
+
+#: the design factors a ``design:`` study controls, by params.yaml key (keys of ``distributions:``): bush, arm, pad
+#: radius (contact movement), spring-end friction and the springs' interleaf band (``docs/design.md``)
+DESIGN_FACTORS: tuple[str, ...] = (
+    "bush_stiffness",
+    "equaliser_arm_mm",
+    "contact_roll_radius_mm",
+    "friction_coefficient",
+    "spring_friction_band_kn",
+)
+
+
+def _design_grid(view: View) -> Iterator[RuleError]:
+    view.section("design")
+    for name, levels in view.entries("design.grid").items():
+        key = f"design.grid.{name}"
+        if name not in DESIGN_FACTORS:
+            yield RuleError(key, levels, f"is not a design factor; allowed: {', '.join(DESIGN_FACTORS)}")
+            continue
+        q = QUANTITIES[name]
+        if not levels or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in levels):
+            yield RuleError(key, levels, f"must be a list of one or more numbers in {q.yaml_unit}")
+            continue
+        if len(set(levels)) != len(levels):
+            yield RuleError(key, levels, "lists a level twice")
+        for i, v in enumerate(levels):
+            if not (math.isfinite(v) and q.range.contains(q.to_si(float(v)))):
+                yield RuleError(f"{key}[{i}]", v, f"is outside the allowed range {q.range_text} of {q.name}")
+
+
 # ---- rules between sections ---------------------------------------------------------------------------------
 def _protocols_run(view: View) -> Iterator[RuleError]:
     run = view.get("protocol.run")
@@ -169,8 +391,7 @@ def fleet_bounded(view: View, key: str) -> int:
 
 def _calibration_tilt(view: View) -> Iterator[RuleError]:
     _calibrates(view)
-    fit = view.get("calibrate.fit")
-    if not {"chassis_tilt_mean_deg", "chassis_tilt_sd_deg"} & set(fit):
+    if not {"chassis_tilt_mean_deg", "chassis_tilt_sd_deg"} & set(view.names("calibrate.fit")):
         return
     tilt = view.get("distributions.chassis_tilt_deg")
     if tilt.get("kind") != "truncnormal":
@@ -181,7 +402,7 @@ def _calibration_tilt(view: View) -> Iterator[RuleError]:
         yield RuleError("distributions.chassis_tilt_deg.kind", tilt.get("kind"), expected)
         return
     low, high = _tilt_support(view)
-    bounds = fit.get("chassis_tilt_mean_deg")
+    bounds = view.entries("calibrate.fit").get("chassis_tilt_mean_deg")
     if bounds and (bounds[0] < low or bounds[1] > high):
         expected = f"must lie within the tilt distribution's bounds, [{low:g}, {high:g}] degree"
         yield RuleError("calibrate.fit.chassis_tilt_mean_deg", bounds, expected)
@@ -189,8 +410,8 @@ def _calibration_tilt(view: View) -> Iterator[RuleError]:
 
 def _calibration_site(view: View) -> Iterator[RuleError]:
     _calibrates(view)
-    fit = view.get("calibrate.fit")
-    if "site_iri_m_km" in fit:
+    fit = view.entries("calibrate.fit")
+    if "site_iri_m_km" in fit and calibration_protocol(view) == "wim":
         site = view.get("protocol.wim.site_length_before_m") + view.get("protocol.wim.site_length_after_m")
         if site <= 0.0:
             expected = (
@@ -217,7 +438,7 @@ def calibration_runs(view: View) -> tuple[int, str]:
     _calibrates(view)
     low, high = _tilt_support(view)
     tilts = calibration_tilt_count(low, high, view.get("calibrate.tilt_step_deg"))
-    levels = len(view.get("calibrate.site_iri_levels_m_km")) if view.get("calibrate.protocol") == "wim" else 1
+    levels = len(view.get("calibrate.site_iri_levels_m_km")) if calibration_protocol(view) == "wim" else 1
     n = fleet_bounded(view, "calibrate.n_bogies")
     return n * 2 * tilts * levels, f"{n:,} bogies x 2 suspensions x {tilts:,} tilts x {levels} site roughnesses"
 
@@ -279,8 +500,18 @@ def _memory(view: View) -> Iterator[RuleError]:
         yield RuleError(where, view.get(where), expected)
 
 
-#: every rule between keys, in the order of the file's sections
+#: every rule between keys: those within a section, then those between sections, each in the order of the file's
+#: sections (an earlier rule's bad key is unavailable to the later ones)
 RULES: tuple[Rule, ...] = (
+    _payloads,
+    _static_phases,
+    _wim_steps,
+    _wim_site,
+    _dask_scheduler,
+    _calibration_levels,
+    _calibration_fit,
+    _static_calibration_fits,
+    _design_grid,
     _calibration_tilt,
     _design_level,
     _protocols_run,
@@ -292,12 +523,17 @@ RULES: tuple[Rule, ...] = (
 
 
 def rule_errors(schema: type[BaseModel], raw: Mapping[str, Any], bad: Sequence[str] = ()) -> list[RuleError]:
-    """Every broken rule of :data:`RULES` whose keys are all valid (none at, above or below a key path of ``bad``)."""
+    """Every broken rule of :data:`RULES` whose keys are all valid (none at, above or below a key path of ``bad``, nor
+    of a broken rule before it)."""
     view = View(schema, raw, bad)
     found: list[RuleError] = []
     for rule in RULES:
+        broken: list[RuleError] = []
         try:
-            found.extend(rule(view))
+            for error in rule(view):
+                broken.append(error)
         except Unavailable:
-            continue
+            pass  # a rule that stops at a bad key keeps what it found before it
+        found += broken
+        view.bad += [error.key for error in broken]
     return found

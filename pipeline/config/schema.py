@@ -2,34 +2,28 @@
 
 Types are strict (a bool or a numeric text is not a number, an integer field takes no float), unknown keys are
 refused, ranges are field constraints, maps with fixed keys (``axle_mix: {tandem, triaxle}``) are sub-models and
-the distributions are unions tagged by ``kind`` (:mod:`pipeline.config.distributions`). Rules that span fields are
-model validators raising :func:`pipeline.config.errors.config_error`. Every field's ``json_schema_extra`` gives
-its ``unit`` (as in params.yaml), and ``what`` it is or the ``expected`` form in words, for the error messages.
+the distributions are unions tagged by ``kind`` (:mod:`pipeline.config.distributions`). A rule within one value
+(a list's distinct items, a power of 2) is a field validator raising :func:`pipeline.config.errors.config_error`;
+the rules that span keys, in a section or between sections, are :mod:`pipeline.config.rules`, which
+:class:`Params` runs (each rule as soon as its own keys are valid, every broken one reported). Every field's
+``json_schema_extra`` gives its ``unit`` (as in params.yaml), and ``what`` it is or the ``expected`` form in words,
+for the error messages.
 """
 
 from __future__ import annotations
 
-import math
 from pathlib import PurePosixPath
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import (
-    AfterValidator,
-    Field,
-    ValidatorFunctionWrapHandler,
-    model_validator,
-)
+from pydantic import AfterValidator, Field, ValidatorFunctionWrapHandler, model_validator
 
-from bogie.bogie_file import base_bogie
 from bogie.fleet.constants import (
     CALIBRATION_QUANTITIES,
     GROUP_AXLES,
-    MAX_PHASE_STEPS,
     PROTOCOLS,
     READ_TIME,
-    ROUTE_MARGIN,
     SITE_IRI_RANGE,
-    WIM_QUANTITIES,
+    SURVEY_PROTOCOLS,
 )
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
@@ -48,7 +42,7 @@ from pipeline.config.fields import (
     power_of_two,
 )
 from pipeline.config.quantities import QUANTITIES, Distributions
-from pipeline.config.rules import rule_errors
+from pipeline.config.rules import DASK_ADDRESS, DESIGN_FACTORS, rule_errors
 from pipeline.config.si import FrozenMap, ToConfig
 from pipeline.resources import MAX_JOBS
 
@@ -90,28 +84,6 @@ class Fleet(Strict):
     legal_axle_load_t: float = number("t", si="N", gt=0.0, le=100.0)
     """Legal load of a single axle, both sides together (a load: N in the config)."""
 
-    @model_validator(mode="after")
-    def _payload_is_positive(self) -> Fleet:
-        # the design bogie needs a positive payload: the legal load must exceed the group's own unsprung mass
-        for group, n_axles in GROUP_AXLES.items():
-            name, tonnes = getattr(self.presets, group), getattr(self.legal_group_load_t, group)
-            unsprung = 2 * n_axles * base_bogie(name).axle_mass / 1000.0
-            if tonnes <= unsprung:
-                expected = f"must exceed the unsprung mass of the {name} axles, {unsprung:g} t"
-                raise config_error(f"legal_group_load_t.{group}", tonnes, expected)
-        return self
-
-
-def _check_steps(key: str, value: float, duration: float, dt: float) -> None:
-    """Refuse a protocol phase of more than MAX_PHASE_STEPS time steps (its histories would not fit in memory)."""
-    steps = duration / dt
-    if steps > MAX_PHASE_STEPS:
-        expected = (
-            f"makes a phase of {duration:.4g} s, {steps:,.0f} steps of {dt:g} s, more than {MAX_PHASE_STEPS:,} "
-            "(about 250 bytes a step per worker): shorten it or raise dt_s"
-        )
-        raise config_error(key, value, expected)
-
 
 class Static(Strict):
     """``protocol.static:`` the static weighbridge (see :class:`pipeline.config.StaticProtocol`)."""
@@ -128,14 +100,6 @@ class Static(Strict):
     dt_s: float = number("s", gt=0.0, le=0.01)
     # null: fixed steps of dt_s; 1e-4 m per step is already a tenth of a millimetre, far coarser than a reading needs
     step_tolerance_m: float | None = Field(default=None, gt=0.0, le=1e-4, json_schema_extra={"unit": "m"})
-
-    @model_validator(mode="after")
-    def _phases_fit(self) -> Static:
-        route = (self.approach_length_m + ROUTE_MARGIN) / self.crawl_speed_m_s
-        for key, duration in (("load_time_s", self.load_time_s), ("crawl_speed_m_s", route),
-                              ("settle_time_s", self.settle_time_s)):  # fmt: skip
-            _check_steps(key, getattr(self, key), duration, self.dt_s)
-        return self
 
 
 class Wim(Strict):
@@ -164,18 +128,6 @@ class Wim(Strict):
     """The sd of the sensor's error common to a pass's axles; null: the sensor type's."""
     sensor_axle_error_pct: float | None = Field(ge=0.0, lt=50.0, json_schema_extra={"unit": "%"})
     """The sd of each axle reading's own sensor error; null: the sensor type's."""
-
-    @model_validator(mode="after")
-    def _pass_fits(self) -> Wim:
-        route = (self.approach_length_m + ROUTE_MARGIN) / self.speed_m_s
-        _check_steps("approach_length_m", self.approach_length_m, route, self.dt_s)
-        if self.site_length_before_m > self.approach_length_m:
-            expected = (
-                f"must not exceed approach_length_m = {self.approach_length_m:g} m: the site lies on the approach "
-                "road ahead of the sensor"
-            )
-            raise config_error("site_length_before_m", self.site_length_before_m, expected)
-        return self
 
 
 Protocol = Literal[PROTOCOLS]  # type: ignore[valid-type]
@@ -235,7 +187,7 @@ class Ablation(Strict):
     """The first ``n_bogies`` fleet bogies, each with the inhibitors removed in turn."""
 
 
-_ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
+_ADDRESS = DASK_ADDRESS
 #: the schemes of dask.distributed's network transports a scheduler listens on (``inproc`` is in-process only)
 DASK_SCHEMES: tuple[str, ...] = ("tcp", "tls", "ucx", "ws", "wss")
 
@@ -265,14 +217,8 @@ class Execution(Strict):
     )
     """The dask scheduler's address (backend ``dask``), else None."""
 
-    @model_validator(mode="after")
-    def _dask_has_a_scheduler(self) -> Execution:
-        if self.backend == "dask" and self.dask_scheduler is None:
-            raise config_error("dask_scheduler", None, f"backend dask needs the scheduler's address: {_ADDRESS}")
-        return self
 
-
-def _observed_path(value: str | None) -> str | None:
+def observed_path(value: str | None) -> str | None:
     """A path inside :data:`OBSERVED_DIR`, relative to the project root, as a normalised POSIX path."""
     if value is None:
         return None
@@ -292,10 +238,14 @@ def _observed_path(value: str | None) -> str | None:
 class Observed(Strict):
     """``observed:`` an observed survey (WIM or weighbridge records) to hold against the simulated fleet."""
 
-    path: Annotated[str | None, AfterValidator(_observed_path)] = Field(
+    path: Annotated[str | None, AfterValidator(observed_path)] = Field(
         json_schema_extra={"expected": f"null or a file in {OBSERVED_DIR}/, e.g. {OBSERVED_DIR}/site.mon"}
     )
     """The file of records, a POSIX path relative to the project root inside ``observed/``; None: no survey given."""
+    # a default, so that a params.yaml written before the key still reads: a WIM file, as it then had to be
+    kind: Literal[tuple(SURVEY_PROTOCOLS)] = named("survey kind", default="wim")  # type: ignore[valid-type]
+    """What the file's records are: ``wim`` (weigh-in-motion readings) or ``weighbridge`` (static weighings); a
+    calibration with ``calibrate.protocol: auto`` holds them against the readings of that protocol."""
     format: Literal[OBSERVED_FORMATS] = named("record format")  # type: ignore[valid-type]
     """Its record format: ``auto`` (the one layout the file's first lines fit), ``csv``, ``mon``, ``castor``, ``bedit``
     or ``ditis`` (``docs/weighings.md``)."""
@@ -321,8 +271,10 @@ class Survey(Strict):
 class Calibrate(Strict):
     """``calibrate:`` the fleet quantities fitted to the observed survey."""
 
-    protocol: Literal[PROTOCOLS] = named("protocol")  # type: ignore[valid-type]
-    """The protocol whose readings are held against the survey: ``wim`` or ``static``."""
+    protocol: Literal[("auto", *PROTOCOLS)] = named("protocol")  # type: ignore[valid-type]
+    """The protocol whose readings are held against the survey: ``auto``, the one of ``observed.kind`` (a WIM file:
+    ``wim``, a weighbridge file: ``static``), or ``wim`` or ``static`` whatever the file is. In the config, the
+    protocol itself; a static calibration fits no WIM quantity (``calibrate.fit``'s are dropped, with a note)."""
     n_bogies: int = integer(20, 100_000)
     """The calibration fleet: the first ``n_bogies`` fleet bogies, each as a steel and an air group."""
     fit: Annotated[
@@ -360,42 +312,6 @@ class Calibrate(Strict):
     posterior_draws: int = integer(0, 1_000_000)
     """Metropolis draws of the posterior kept, under the documented priors (0: no posterior)."""
 
-    @model_validator(mode="after")
-    def _quantities(self) -> Calibrate:
-        allowed = ", ".join(CALIBRATION_QUANTITIES)
-        levels = self.site_iri_levels_m_km
-        if any(b <= a for a, b in zip(levels, levels[1:])) or levels[0] <= 0.0:
-            raise config_error("site_iri_levels_m_km", levels, "must be positive and increasing [m/km]")
-        for name, bounds in self.fit.items():
-            key = f"fit.{name}"
-            if name not in CALIBRATION_QUANTITIES:
-                raise config_error(key, bounds, f"is not a fleet quantity calibrate can fit; allowed: {allowed}")
-            low, high, unit = CALIBRATION_QUANTITIES[name]
-            if len(bounds) != 2 or not all(isinstance(b, int | float) and math.isfinite(b) for b in bounds):
-                raise config_error(key, bounds, f"must be [low, high], two numbers in {unit}")
-            if not bounds[0] < bounds[1]:
-                raise config_error(key, bounds, f"bounds inverted or equal: low must be below high [{unit}]")
-            if bounds[0] < low or bounds[1] > high:
-                raise config_error(key, bounds, f"must lie within [{low:g}, {high:g}] {unit}")
-            if name in WIM_QUANTITIES and self.protocol != "wim":
-                expected = f"belongs to the WIM protocol, but calibrate.protocol is {self.protocol}"
-                raise config_error(key, bounds, expected)
-            if name == "site_iri_m_km" and (bounds[0] < levels[0] or bounds[1] > levels[-1]):
-                expected = f"must lie within site_iri_levels_m_km, [{levels[0]:g}, {levels[-1]:g}] m/km"
-                raise config_error(key, bounds, expected)
-        return self
-
-
-#: the design factors a ``design:`` study controls, by params.yaml key (keys of ``distributions:``): bush, arm, pad
-#: radius (contact movement), spring-end friction and the springs' interleaf band (``docs/design.md``)
-DESIGN_FACTORS: tuple[str, ...] = (
-    "bush_stiffness",
-    "equaliser_arm_mm",
-    "contact_roll_radius_mm",
-    "friction_coefficient",
-    "spring_friction_band_kn",
-)
-
 
 def _si_grid(grid: dict[str, list[float]]) -> FrozenMap:
     """The design grid by the factors' SI names, its levels in SI."""
@@ -428,23 +344,6 @@ class Design(Strict):
     """The share of bogies within 5 % the guidance asks for."""
     confidence_level: float = number("-", gt=0.0, lt=1.0)
     """Confidence level of the intervals."""
-
-    @model_validator(mode="after")
-    def _grid(self) -> Design:
-        allowed = ", ".join(DESIGN_FACTORS)
-        for key, levels in self.grid.items():
-            where = f"grid.{key}"
-            if key not in DESIGN_FACTORS:
-                raise config_error(where, levels, f"is not a design factor; allowed: {allowed}")
-            q = QUANTITIES[key]
-            if not levels or not all(isinstance(v, int | float) and not isinstance(v, bool) for v in levels):
-                raise config_error(where, levels, f"must be a list of one or more numbers in {q.yaml_unit}")
-            if len(set(levels)) != len(levels):
-                raise config_error(where, levels, "lists a level twice")
-            for i, v in enumerate(levels):
-                if not (math.isfinite(v) and q.range.contains(q.to_si(float(v)))):
-                    raise config_error(f"{where}[{i}]", v, f"is outside the allowed range {q.range_text} of {q.name}")
-        return self
 
 
 def _si_distributions(section: Any) -> FrozenMap:

@@ -6,26 +6,34 @@ converts every value to SI once, into the frozen dataclasses below: keys ending 
 ``_s`` / ``_m`` / ``_m_s`` give their unit in the name; everything in a :class:`Config` is SI ([m], [rad], [N],
 [s], [kg]). Bad values raise one :class:`ConfigError` (a ``ValueError``) with a line per bad key naming its key
 path, the value and the expected form, range and unit (:mod:`pipeline.config.errors`); a key given twice in the
-file is refused too (:mod:`pipeline.config.yaml_loader`).
+file is refused too (:mod:`pipeline.config.yaml_loader`). :func:`check_params`, the ``validate`` stage's check, adds
+the observed survey's file (:func:`observed_file`) to those errors.
+
+A calibration's protocol is the survey's (``calibrate.protocol: auto``, the default, follows ``observed.kind``: a
+weighbridge file is held against the static readings), and a static calibration fits no WIM quantity: the
+configuration holds the protocol itself and ``calibrate.fit`` without them, and ``note`` says which were dropped
+(:func:`calibration_note`), so that calibrating to a weighbridge file is the one switch ``observed.kind:
+weighbridge``.
 """
 
 from __future__ import annotations
 
+import dataclasses
 import os
-from collections.abc import Mapping
+from collections.abc import Callable, Mapping
 from pathlib import Path
 from typing import Any
 
 import yaml
 from pydantic import ValidationError
 
-from bogie.fleet.constants import GROUP_AXLES
+from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
 from pipeline.config.quantities import QUANTITIES, Quantity
-from pipeline.config.rules import rule_errors
+from pipeline.config.rules import rule_errors, survey_protocol, why_static
 from pipeline.config.schema import (
     BACKENDS,
     OBSERVED_DIR,
@@ -33,6 +41,7 @@ from pipeline.config.schema import (
     PROTOCOLS,
     SAMPLINGS,
     Params,
+    observed_path,
 )
 from pipeline.config.sections import (
     AblationConfig,
@@ -72,6 +81,8 @@ __all__ = [
     "SurveyConfig",
     "StaticProtocol",
     "WimProtocol",
+    "calibration_note",
+    "check_params",
     "load_config",
     "load_params",
     "observed_file",
@@ -104,19 +115,54 @@ def load_params(path: str | Path = "params.yaml") -> dict[str, Any]:
     return data
 
 
+def _static_drops(params: Params) -> tuple[str, ...]:
+    """The quantities of ``calibrate.fit`` a static calibration does not fit: the WIM site's and sensor's."""
+    cal = params.calibrate
+    if cal is None or survey_protocol(cal.protocol, params.observed.kind) != "static":
+        return ()
+    return tuple(name for name in cal.fit if name in WIM_QUANTITIES)
+
+
+def calibration_note(params: Params) -> str | None:
+    """One line saying which quantities of ``calibrate.fit`` a static calibration leaves out, and why; None if none."""
+    dropped = _static_drops(params)
+    if not dropped:
+        return None
+    cal = params.calibrate
+    why = why_static(cal.protocol)
+    kept = ", ".join(name for name in cal.fit if name not in dropped)
+    return (
+        f"a static calibration ({why}): calibrate.fit's {', '.join(dropped)} left out, a weighbridge has no WIM site "
+        f"or sensor; fitting {kept}"
+    )
+
+
 def to_config(params: Params) -> Config:
     """The validated params.yaml sections (:class:`~pipeline.config.schema.Params`) as a :class:`Config`, SI
-    (:func:`pipeline.config.si.to_config`)."""
-    return si.to_config(params)
+    (:func:`pipeline.config.si.to_config`), the calibration's protocol resolved and its WIM quantities dropped for a
+    static one (:func:`calibration_note`)."""
+    config = si.to_config(params)
+    if params.calibrate is None:
+        return config
+    cal = config.calibrate
+    dropped = _static_drops(params)
+    calibrate = dataclasses.replace(
+        cal,
+        protocol=survey_protocol(cal.protocol, params.observed.kind),
+        fit=FrozenMap((name, bounds) for name, bounds in cal.fit.items() if name not in dropped),
+    )
+    return dataclasses.replace(config, calibrate=calibrate)
 
 
-def parse_config(raw: Mapping[str, Any]) -> Config:
+def parse_config(raw: Mapping[str, Any], note: Callable[[str], None] | None = None) -> Config:
     """Validate the parsed params.yaml and convert it to SI.
 
     Parameters
     ----------
     raw
         The mapping read from params.yaml (:func:`load_params`).
+    note
+        Called with :func:`calibration_note`'s line when a static calibration drops quantities of ``calibrate.fit``.
 
     Returns
     -------
@@ -135,6 +181,8 @@ def parse_config(raw: Mapping[str, Any]) -> Config:
         params = Params.model_validate(dict(raw))
     except ValidationError as exc:
         raise _with_rules(raw, exc) from None
+    if note is not None and (line := calibration_note(params)) is not None:
+        note(line)
     return to_config(params)
 
 
@@ -149,8 +197,20 @@ def _with_rules(raw: Mapping[str, Any], exc: ValidationError) -> ConfigError:
     return ConfigError(lines[0][0], "\n".join(line for _, line in lines), lines)
 
 
-def load_config(path: str | Path = "params.yaml") -> Config:
-    """Read, validate and convert params.yaml (see :func:`parse_config`).
+def _read(path: str | Path) -> dict[str, Any]:
+    """:func:`load_params`, a file that is not a YAML mapping a :class:`ConfigError` (an OSError is left as it is)."""
+    try:
+        return load_params(path)
+    except ConfigError:
+        raise
+    except yaml.YAMLError as exc:
+        raise ConfigError("", f"{path} is not valid YAML: {exc}") from None
+    except ValueError as exc:
+        raise ConfigError("", str(exc)) from None
+
+
+def load_config(path: str | Path = "params.yaml", note: Callable[[str], None] | None = None) -> Config:
+    """Read, validate and convert params.yaml (see :func:`parse_config`, and its ``note``).
 
     Raises
     ------
@@ -159,15 +219,45 @@ def load_config(path: str | Path = "params.yaml") -> Config:
     OSError
         If the file cannot be read.
     """
+    return parse_config(_read(path), note)
+
+
+def check_params(path: str | Path = "params.yaml", note: Callable[[str], None] | None = None) -> Config:
+    """:func:`load_config` and the observed survey's file (:func:`observed_file`, under the directory of ``path``),
+    every error of both in one :class:`ConfigError`: a file that is missing is named with the bad keys, not once they
+    are fixed. The ``validate`` stage's check.
+
+    Raises
+    ------
+    ConfigError
+        For bad keys, a key given twice, a file that is not a YAML mapping, or an ``observed.path`` that names no file
+        in ``observed/``.
+    OSError
+        If params.yaml cannot be read.
+    """
+    raw, root = _read(path), Path(path).parent
     try:
-        raw = load_params(path)
-    except ConfigError:
-        raise
-    except yaml.YAMLError as exc:
-        raise ConfigError("", f"{path} is not valid YAML: {exc}") from None
-    except ValueError as exc:
-        raise ConfigError("", str(exc)) from None
-    return parse_config(raw)
+        config = parse_config(raw, note)
+    except ConfigError as exc:
+        raise _with_observed_file(exc, raw, root) from None
+    observed_file(config.observed, root)
+    return config
+
+
+def _with_observed_file(exc: ConfigError, raw: Mapping[str, Any], root: Path) -> ConfigError:
+    """``exc`` and, if ``observed.path`` itself is good (no error at it or above it), the error of its file."""
+    if any(key in ("", "observed", "observed.path") for key, _ in exc.errors):
+        return exc
+    observed = raw.get("observed")
+    path = observed.get("path") if isinstance(observed, Mapping) else None
+    if not isinstance(path, str):
+        return exc
+    try:
+        _survey_file(observed_path(path), root)
+    except ConfigError as missing:
+        errors = [*exc.errors, ("observed.path", str(missing))]
+        return ConfigError(exc.key, "\n".join(line for _, line in errors), errors)
+    return exc
 
 
 def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
@@ -189,10 +279,13 @@ def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
         Naming ``observed.path``, its value and where it was looked for, if it is not a file, or where it points if
         that is outside ``observed/``.
     """
-    if observed.path is None:
-        return None
-    path = Path(root) / observed.path
-    given = f"observed.path = {observed.path!r}"
+    return None if observed.path is None else _survey_file(observed.path, root)
+
+
+def _survey_file(name: str, root: str | Path) -> Path:
+    """:func:`observed_file` of the path ``name`` (``observed.path``, checked by the schema)."""
+    path = Path(root) / name
+    given = f"observed.path = {name!r}"
     try:
         target = path.resolve(strict=True)
     except FileNotFoundError:

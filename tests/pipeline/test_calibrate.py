@@ -272,7 +272,8 @@ def test_a_missing_survey_file_is_refused(tmp_path, capsys):
         ({"fit": {"payload_mass": [0.0, 1.0]}}, ["calibrate.fit.payload_mass", "not a fleet quantity"]),
         ({"fit": {"air_share": [0.8, 0.2]}}, ["calibrate.fit.air_share", "bounds inverted"]),
         ({"fit": {"air_share": [0.0, 1.5]}}, ["calibrate.fit.air_share", "within [0, 1]"]),
-        ({"protocol": "static", "fit": {"sensor_error_pct": [0, 5]}}, ["sensor_error_pct", "WIM protocol"]),
+        # a static calibration drops the WIM quantities (tests/pipeline/test_validate_weighbridge.py): none is left
+        ({"protocol": "static", "fit": {"sensor_error_pct": [0, 5]}}, ["calibrate.fit", "names only WIM quantities"]),
         ({"fit": {"site_iri_m_km": [0.5, 4.0]}}, ["site_iri_m_km", "site_iri_levels_m_km"]),
     ],
 )
