@@ -11,7 +11,19 @@ ROOT = Path(__file__).resolve().parents[1]
 #: import name of each distribution the library may use
 IMPORT_NAMES = {"numpy": "numpy", "scipy": "scipy", "pandas": "pandas", "matplotlib": "matplotlib", "numba": "numba"}
 #: what only the pipeline needs: the library must not import any of it
-PIPELINE_ONLY = ("pyarrow", "joblib", "dvc", "yaml", "pydantic", "tqdm", "SALib", "dask", "distributed", "jinja2")
+PIPELINE_ONLY = (
+    "pyarrow",
+    "joblib",
+    "dvc",
+    "yaml",
+    "pydantic",
+    "tqdm",
+    "SALib",
+    "dask",
+    "distributed",
+    "jinja2",
+    "vl_convert",
+)
 
 
 def third_party_imports(package: Path) -> set[str]:
