@@ -10,7 +10,7 @@ export PATH := $(abspath $(BIN)):$(PATH)
 export DVC_NO_ANALYTICS := 1
 export MPLBACKEND := Agg
 
-.PHONY: repro test lint bench validation-tables wim-site-study clean-venv
+.PHONY: repro test plots lint bench validation-tables wim-site-study clean-venv
 
 $(STAMP): pyproject.toml constraints.txt
 	@$(PYTHON) -c 'import sys; assert sys.version_info >= (3, 11), "Python >= 3.11 needed, found " + sys.version' 
@@ -24,12 +24,23 @@ $(STAMP): pyproject.toml constraints.txt
 	  status=$$(cat $(VENV)/.pip-status); [ "$$status" = 0 ] || { echo "make: pip failed ($$status); its log: $(VENV)/pip.log"; exit 1; }
 	@touch $(STAMP)
 
-repro: $(STAMP)
+# `dvc plots show`'s page template with Vega, Vega-Lite and Vega-Embed inlined from the installed vl-convert-python,
+# so that the page opens without internet; .dvc/config's plots.html_template points at it (not committed: 0.9 MB of
+# generated JavaScript). `make repro`, `make test` and `make plots` write it, so `dvc plots show` works after any.
+PLOTS_TEMPLATE := .dvc/plots.html
+$(PLOTS_TEMPLATE): $(STAMP) tools/plots_template.py
+	$(BIN)/python tools/plots_template.py $@
+
+repro: $(STAMP) $(PLOTS_TEMPLATE)
 	$(BIN)/dvc repro
+
+# the report's plot series (reports/plots/*.csv, dvc.yaml's `plots:`) as dvc_plots/index.html, readable offline
+plots: $(STAMP) $(PLOTS_TEMPLATE)
+	$(BIN)/dvc plots show
 
 # The report's tests render its pages with poppler's pdftoppm: installed here when missing and we are root (Debian),
 # otherwise those checks are skipped with the reason; a failed install never fails `make test`.
-test: $(STAMP)
+test: $(STAMP) $(PLOTS_TEMPLATE)
 	@command -v pdftoppm >/dev/null 2>&1 || { \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
 	    echo "make test: installing poppler-utils (pdftoppm) for the report's rendering checks"; \

@@ -18,7 +18,7 @@ IMPORT_NAMES = {
     "pyyaml": "yaml",
 }
 #: what only the pipeline needs: the library must not import any of it
-PIPELINE_ONLY = ("pyarrow", "joblib", "dvc", "pydantic", "tqdm", "SALib", "dask", "distributed", "jinja2")
+PIPELINE_ONLY = ("pyarrow", "joblib", "dvc", "pydantic", "tqdm", "SALib", "dask", "distributed", "jinja2", "vl_convert")
 
 
 def third_party_imports(package: Path) -> set[str]:
