@@ -127,6 +127,23 @@ def _weighings_table(survey) -> str:
         for axle, q in data[size]["load_share_quantiles"].items():
             values = " ".join(f"{num(q.get(k), fmt='.3f'):>6}" for k in ("p05", "p25", "p50", "p75", "p95"))
             lines.append(f"{size:<8} {axle.removeprefix('axle_'):>4} {values}")
+    road = survey.to_dict()["road"]
+    lines += ["", "what unequal sharing costs the road (docs/pavement.md): extra pavement wear over the same groups "
+              "shared equally (k = 4, the fourth power; k = 12, cemented layers), and axles over 10 t in groups within "
+              "their legal load (96/53/EC: tandem 18 t, tri-axle 24 t):",
+              f"{'group':<8} {'n':>5} {'extra wear k=4':>15} {'k=12':>7} {'per 1000 groups':>16} "
+              f"{'hidden overload':>16}",
+              f"{'':<8} {'':>5} {'[%]':>15} {'[%]':>7} {'[80 kN axles]':>16} {'[%]':>16}"]  # fmt: skip
+    for size in SURVEYED:
+        e = road[size]
+        if not e.get("n_groups"):
+            lines.append(f"{size:<8} {0:>5} {'-':>15} {'-':>7} {'-':>16} {'-':>16}")
+            continue
+        lines.append(
+            f"{size:<8} {e['n_groups']:>5} {num(e['extra_wear_overall'], 100, '.2f'):>15} "
+            f"{num(e['extra_wear_cemented'], 100, '.1f'):>7} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>16} "
+            f"{num(e['share_hidden_overload'], 100):>16}"
+        )
     return "\n".join(lines)
 
 

@@ -13,7 +13,7 @@ DATA = Path(__file__).parent / "data" / "weighings"
 def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert main(["weighings", str(DATA / "site.mon"), "--format", "mon", "--min-group-load-t", "15", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"records", "positions", "groups"}
+    assert set(out) == {"records", "positions", "groups", "road"}
     assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
     # every group of the file before the filters (test_weighings_groups.py): A, D steer | single | tri-axle; B steer |
     # tandem; C steer | tandem | tri-axle; E steer | single
@@ -31,6 +31,30 @@ def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     tri = out["groups"]["triaxle"]
     assert (tri["n_groups"], tri["mean_spread_kg"], tri["share_outside_5pct"], tri["share_over_10pct"]) == (
         2, 1600.0, 1.0, 0.5)  # fmt: skip
+
+
+def test_the_json_and_the_table_give_what_unequal_sharing_costs_the_road(tmp_path, capsys):
+    # two 5-axle vehicles (steer | drive | tri-axle): tri-axles of 8000/8200/7800 kg and 8100 kg each
+    path = tmp_path / "two.csv"
+    path.write_text(
+        "timestamp,speed_kmh,lane,n_axles,axle_load_1,axle_load_2,axle_load_3,axle_load_4,axle_load_5,"
+        "spacing_1,spacing_2,spacing_3,spacing_4\n"
+        "2026-01-05T06:00:00,80,1,5,6000,9000,8000,8200,7800,3.6,5.2,1.31,1.31\n"
+        "2026-01-05T06:00:05,80,1,5,6100,9100,8100,8100,8100,3.6,5.2,1.31,1.31\n"
+    )
+    assert main(["weighings", str(path), "--json"]) == 0
+    road = json.loads(capsys.readouterr().out)["road"]
+    assert road["tandem"] == {"n_groups": 0}
+    tri = road["triaxle"]
+    # sum D / sum D_eq - 1 at k = 4, worked by hand: the standard axle cancels
+    expected = (8000.0**4 + 8200.0**4 + 7800.0**4 + 3 * 8100.0**4) / (3 * 8000.0**4 + 3 * 8100.0**4) - 1.0
+    assert tri["n_groups"] == 2 and tri["extra_wear_overall"] == pytest.approx(expected, abs=5e-5)
+    assert tri["n_hidden"] == 0 and tri["share_hidden_overload"] == 0.0  # no axle over 10 t
+    assert tri["extra_wear_cemented"] > tri["extra_wear_subgrade"] > tri["extra_wear_asphalt"] > expected
+    assert main(["weighings", str(path)]) == 0
+    table = capsys.readouterr().out
+    assert "what unequal sharing costs the road" in table
+    assert f"triaxle      2 {100 * expected:>15.2f}" in table
 
 
 def test_the_json_follows_the_filters(capsys):

@@ -136,7 +136,7 @@ def survey_statistics(
     pandas.DataFrame
         One row per ``by`` value (sorted): ``n_groups``; ``mean_spread_kg`` [kg]; ``median_spread_pct`` [%];
         ``share_outside_5pct``, ``share_over_10pct`` (fractions 0..1 of the groups); and for each axle position
-        i (0 = front) and quantile q, ``load_share_<i>_p<100 q>`` (LSC [-], over the groups that have axle i;
+        i (1 = front) and quantile q, ``load_share_<i>_p<100 q>`` (LSC [-], over the groups that have axle i;
         NaN where none does).
     """
     keys = [by] if isinstance(by, str) else list(by)

@@ -18,6 +18,7 @@ import pandas as pd
 from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups
 from bogie.weighings.readers import ReadResult, read_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
+from bogie.weighings.wear import EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
 
 __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
 
@@ -45,12 +46,16 @@ class ObservedSurvey:
         How many groups of each position (steer, drive, trailer) and size (single, tandem, triaxle, other: 4 or
         more axles) the file has,
         before any filter: in a WIM file most laden tandems are tractors' drive tandems, not trailer groups.
+    road
+        :func:`bogie.weighings.wear.wear_statistics` of the tandems and tri-axles, one row each: the extra pavement
+        wear their unequal sharing causes and the overloaded axles hidden in legal groups.
     """
 
     groups: pd.DataFrame
     statistics: pd.DataFrame
     read: ReadResult
     positions: dict[str, dict[str, int]]
+    road: pd.DataFrame
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
@@ -58,9 +63,11 @@ class ObservedSurvey:
         ``{"records": {"read", "skipped", "weight_step_kg"}, "positions": {"steer": {"tandem": n, ...}, ...},
         "groups": {"tandem": {...}, "triaxle": {...}}}``; shares are fractions 0..1; a size with no group has
         ``n_groups`` 0 and None for its numbers; ``weight_step_kg`` is the file's weight resolution [kg] (None: not
-        whole kilograms).
+        whole kilograms). ``road`` per size: :func:`bogie.weighings.wear.wear_statistics`'s figures (extra wear as a
+        fraction, extra standard axles per 1,000 groups, hidden overloads, with their intervals).
         """
         stats = statistics_dict(self.statistics)
+        road = wear_dict(self.road, ["group"]) if len(self.road) else {}
         empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
         return {
             "records": {
@@ -70,6 +77,7 @@ class ObservedSurvey:
             },
             "positions": self.positions,
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
+            "road": {size: road.get(size, {"n_groups": 0}) for size in SURVEYED},
         }
 
 
@@ -80,6 +88,8 @@ def observed_survey(
     group_spacing_m: float = GROUP_SPACING_M,
     position: str = "all",
     speed_kmh: Sequence[float] | None = None,
+    legal_group_kg: dict[str, float] | None = None,
+    legal_axle_kg: float = EU_LEGAL_AXLE_KG,
 ) -> ObservedSurvey:
     """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
 
@@ -95,6 +105,9 @@ def observed_survey(
         ``all``, ``steer``, ``drive`` or ``trailer``.
     speed_kmh
         (lowest, highest) speed kept [km/h]; None keeps every speed.
+    legal_group_kg, legal_axle_kg
+        Legal load of each group size and of one axle, for the hidden overloads [kg]; None: Directive 96/53/EC's
+        (:data:`bogie.weighings.wear.EU_LEGAL_GROUP_KG`, 10 t an axle).
 
     Raises
     ------
@@ -113,4 +126,6 @@ def observed_survey(
     groups = filter_groups(every, min_group_load_t, position, speed_kmh)
     surveyed = groups[groups["group"].isin(SURVEYED)]
     statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
-    return ObservedSurvey(groups, statistics, read, positions)
+    legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
+    road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
+    return ObservedSurvey(groups, statistics, read, positions, road)

@@ -78,7 +78,7 @@ def tiny_params(n_bogies):
 def project(tmp_path):
     """A git repository with DVC holding a copy of the project and a tiny params.yaml, one commit."""
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
-    for name in ("bogie", "pipeline", "observed"):
+    for name in ("bogie", "pipeline", "observed", "bogies"):  # bogies/: a dependency of the stages (base bogie files)
         shutil.copytree(ROOT / name, tmp_path / name, ignore=ignore)
     for name in ("dvc.yaml", ".dvcignore", ".gitignore"):
         shutil.copy2(ROOT / name, tmp_path / name)

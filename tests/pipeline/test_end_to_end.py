@@ -65,7 +65,8 @@ def project(tmp_path_factory):
     """A copy of the project with tiny params.yaml after one `dvc repro`; returns (path, repro output)."""
     path = tmp_path_factory.mktemp("project")
     ignore = shutil.ignore_patterns("__pycache__", "*.pyc")
-    for name in ("bogie", "pipeline", "observed"):  # observed/: the observed stage's input directory
+    # observed/: the observed stage's input directory; bogies/: the base bogie files, a dependency of the stages
+    for name in ("bogie", "pipeline", "observed", "bogies"):
         shutil.copytree(ROOT / name, path / name, ignore=ignore)
     for name in ("dvc.yaml", ".dvcignore"):
         shutil.copy2(ROOT / name, path / name)

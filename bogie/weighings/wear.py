@@ -1,0 +1,276 @@
+"""What unequal sharing costs the road: relative pavement wear and overloaded axles hidden in legal groups.
+
+One definition for observed (WIM, weighbridge) and simulated groups, as :mod:`bogie.weighings.stats` is for the
+survey statistics; the derivation and the sources are in ``docs/pavement.md``.
+
+**Pavement wear.** The generalised power law: an axle of load W does the damage of (W / W_s)^k standard axles of
+load W_s (the AASHO Road Test's fourth power, k = 4, for the pavement's overall serviceability; the exponents of a
+mechanistic design guide for other kinds of damage, :data:`DAMAGE_EXPONENTS`). A group of n axles with loads
+W_1..W_n does D = sum_i (W_i / W_s)^k; shared equally, the same group load gives D_eq = n (W_mean / W_s)^k. The
+**extra wear** that inequality causes is D - D_eq [standard axles], and as a share of what the group would do
+shared equally,
+
+    D / D_eq - 1 = mean_i (W_i / W_mean)^k - 1,
+
+which does not depend on W_s and is zero for equal loads, positive otherwise (W^k is convex for k >= 1: Jensen).
+A tri-axle at 1.1, 1.0 and 0.9 times its mean does (1.1^4 + 1 + 0.9^4) / 3 - 1 = 4.0 % extra at k = 4. Over many
+groups the share is the ratio of the totals, sum D / sum D_eq - 1: the extra wear of the fleet over the wear of the
+same fleet with every group shared equally.
+
+*Assumption* (named in ``docs/pavement.md``): each axle counts as a load of its own. A design guide that takes a
+multi-axle group's load as one (Austroads' group standard loads) sees no effect of sharing within the group at all;
+the per-axle sum is the reading under which sharing matters, as the AASHO equivalence of single axles does.
+
+**Overloads hidden in legal groups.** A group whose load is within its legal group load while one of its axles is
+over the legal load of a single axle: a weighing of the group alone passes what an axle weighing would not.
+"""
+
+from __future__ import annotations
+
+import math
+from collections.abc import Mapping, Sequence
+
+import numpy as np
+import pandas as pd
+from numpy.typing import ArrayLike, NDArray
+
+from bogie.weighings.stats import _width, axle_columns
+
+__all__ = [
+    "DAMAGE_EXPONENTS",
+    "EU_LEGAL_AXLE_KG",
+    "EU_LEGAL_GROUP_KG",
+    "STANDARD_AXLE_KG",
+    "WEAR_COLUMNS",
+    "group_wear",
+    "hidden_overloads",
+    "wear_dict",
+    "wear_statistics",
+]
+
+#: damage exponent k of each kind of pavement damage: ``overall`` (the AASHO Road Test's fourth power, Austroads'
+#: ESA), ``asphalt`` (asphalt fatigue, 5), ``subgrade`` (rutting and shape loss, 7), ``cemented`` (cemented
+#: material fatigue, 12): Austroads, Guide to Pavement Technology Part 2 (AGPT02), chapter 7's standard axle
+#: repetitions SAR5, SAR7 and SAR12 (sources in docs/pavement.md) [-]
+DAMAGE_EXPONENTS: Mapping[str, int] = {"overall": 4, "asphalt": 5, "subgrade": 7, "cemented": 12}
+#: the standard axle W_s: 80 kN, the AASHO Road Test's 18-kip single axle and Austroads' standard single axle with
+#: dual tyres, in kg at the project's g = 9.81 m/s^2 (:data:`bogie.params.GRAVITY`) [kg]
+STANDARD_AXLE_KG: float = 80_000.0 / 9.81
+#: legal group loads of trailer axle groups, Directive 96/53/EC Annex I: 3.4, a trailer's tandem with its axles
+#: 1.3 m to under 1.8 m apart, 18 t; 3.5, a trailer's tri-axle with spacings over 1.3 m up to 1.4 m, 24 t [kg]
+EU_LEGAL_GROUP_KG: Mapping[str, float] = {"tandem": 18_000.0, "triaxle": 24_000.0}
+#: legal load of a single non-driving axle, Directive 96/53/EC Annex I 3.1, 10 t [kg]
+EU_LEGAL_AXLE_KG: float = 10_000.0
+#: the columns of :func:`wear_statistics` per exponent name ``<k>`` (see there)
+WEAR_COLUMNS: tuple[str, ...] = (
+    "extra_wear_{k}", "extra_wear_{k}_low", "extra_wear_{k}_high",
+    "extra_sa_per_1000_{k}", "extra_sa_per_1000_{k}_low", "extra_sa_per_1000_{k}_high",
+)  # fmt: skip
+
+
+def group_wear(loads: ArrayLike, n_axles: ArrayLike, k: float, standard_axle: float = 1.0) -> dict[str, NDArray]:
+    """The pavement wear of each group of axle loads, and of the same group shared equally.
+
+    Parameters
+    ----------
+    loads
+        (groups, width) axle loads, front first; entries past a group's ``n_axles`` are ignored [any unit].
+    n_axles
+        Axles of each group, 2 or more, at most ``width`` [-].
+    k
+        The damage exponent, 1 or more [-].
+    standard_axle
+        W_s, in the loads' unit: the damage is counted in standard axles of this load.
+
+    Returns
+    -------
+    dict of numpy.ndarray
+        ``damage`` D = sum_i (W_i / W_s)^k and ``damage_equal`` D_eq = n (W_mean / W_s)^k [standard axles];
+        ``extra`` D - D_eq [standard axles]; ``relative`` D / D_eq - 1 [-] (0 for equal loads; NaN for a group of
+        no load).
+    """
+    w = np.atleast_2d(np.asarray(loads, dtype=float))
+    n = np.asarray(n_axles, dtype=np.int64)
+    if not (math.isfinite(k) and k >= 1.0):
+        raise ValueError(f"k = {k!r}: a damage exponent is a number of 1 or more [-] (4: the fourth-power law)")
+    if not (math.isfinite(standard_axle) and standard_axle > 0.0):
+        raise ValueError(f"standard_axle = {standard_axle!r}: the standard axle's load is positive, in the loads' unit")
+    if n.shape != (w.shape[0],) or np.any(n < 2) or np.any(n > w.shape[1]):
+        raise ValueError(f"n_axles must give each of the {w.shape[0]} groups 2 to {w.shape[1]} axles [-]")
+    present = np.arange(w.shape[1]) < n[:, None]
+    x = np.where(present, w, 0.0) / standard_axle
+    damage = np.where(present, x**k, 0.0).sum(axis=1)
+    mean = x.sum(axis=1) / n
+    equal = n * mean**k
+    with np.errstate(invalid="ignore", divide="ignore"):
+        relative = damage / equal - 1.0
+    return {"damage": damage, "damage_equal": equal, "extra": damage - equal, "relative": relative}
+
+
+def hidden_overloads(
+    loads: ArrayLike, n_axles: ArrayLike, legal_group: ArrayLike, legal_axle: float
+) -> dict[str, NDArray]:
+    """Which groups are within their legal group load while an axle is over the legal load of one axle.
+
+    Parameters
+    ----------
+    loads
+        (groups, width) axle loads, front first; entries past a group's ``n_axles`` are ignored [any unit].
+    n_axles
+        Axles of each group [-].
+    legal_group
+        Each group's legal group load (one value, or one per group), in the loads' unit.
+    legal_axle
+        The legal load of one axle, in the loads' unit.
+
+    Returns
+    -------
+    dict of numpy.ndarray of bool
+        ``group_over`` (group load above its legal load), ``axle_over`` (some axle above the axle's legal load),
+        ``hidden`` (an axle over while the group is within: the overload a group weighing does not see).
+    """
+    w = np.atleast_2d(np.asarray(loads, dtype=float))
+    n = np.asarray(n_axles, dtype=np.int64)
+    present = np.arange(w.shape[1]) < n[:, None]
+    total = np.where(present, w, 0.0).sum(axis=1)
+    heaviest = np.where(present, w, -np.inf).max(axis=1)
+    group_over = total > np.broadcast_to(np.asarray(legal_group, dtype=float), total.shape)
+    axle_over = heaviest > legal_axle
+    return {"group_over": group_over, "axle_over": axle_over, "hidden": axle_over & ~group_over}
+
+
+def _wilson(k: int, n: int, z: float) -> tuple[float, float]:
+    """Wilson's score interval of a share k / n (E. B. Wilson, JASA 22, 1927); NaN for n = 0."""
+    if n == 0:
+        return math.nan, math.nan
+    p = k / n
+    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
+    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
+    return max(0.0, centre - half), min(1.0, centre + half)
+
+
+def wear_statistics(
+    groups: pd.DataFrame,
+    legal_group: Mapping[str, float],
+    legal_axle: float,
+    by: str | Sequence[str] = "group",
+    unit_per_kg: float = 1.0,
+    exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
+    resamples: int = 1000,
+    confidence: float = 0.95,
+    seed: int = 0,
+) -> pd.DataFrame:
+    """What unequal sharing costs the road, per value of ``by``: extra wear and hidden overloads, with intervals.
+
+    Parameters
+    ----------
+    groups
+        Wide table, one row per group: ``group`` (``tandem``, ``triaxle``, ...: the key of ``legal_group``),
+        ``n_axles``, ``axle_load_1 ..`` (front first) and the ``by`` columns; an optional ``status`` column leaves
+        out (and counts in ``n_failed``) every row whose status is not ``"ok"``.
+    legal_group
+        Legal group load of each ``group`` value [kg]; a group size it does not name has no overload figures (NaN).
+    legal_axle
+        Legal load of one axle [kg].
+    by
+        Column(s) to tabulate by, e.g. ``["group", "position", "suspension"]``.
+    unit_per_kg
+        The loads' unit per kilogram: 1 for kg, :data:`bogie.params.GRAVITY` for newtons [unit/kg].
+    exponents
+        Name -> damage exponent k (:data:`DAMAGE_EXPONENTS`).
+    resamples
+        Bootstrap resamples of the groups within each cell for the wear intervals (0: none) [-].
+    confidence
+        Level of the intervals (percentile bootstrap; Wilson's for the overload share) [-].
+    seed
+        Seed of the bootstrap (numpy's default generator; each cell draws from its own child stream) [-].
+
+    Returns
+    -------
+    pandas.DataFrame
+        One row per ``by`` value (sorted): ``n_groups`` (groups used), ``n_failed`` (rows left out); per exponent
+        name ``<k>``: ``extra_wear_<k>`` (sum D / sum D_eq - 1, the extra wear as a share of the equal-shared
+        groups' [-]) and ``extra_sa_per_1000_<k>`` (1000 x the mean of D - D_eq: the extra standard axles of 80 kN
+        per 1,000 groups [-]), each with ``_low`` and ``_high``; ``n_hidden``, ``share_hidden_overload`` (groups
+        within their legal load with an axle over the axle's) with ``_low`` and ``_high``, ``share_group_over``.
+    """
+    keys = [by] if isinstance(by, str) else list(by)
+    if not 0.0 < confidence < 1.0:
+        raise ValueError(f"confidence = {confidence!r}: must lie in (0, 1) [-]")
+    if resamples < 0:
+        raise ValueError(f"resamples = {resamples!r}: must be 0 or more [-]")
+    width = _width(groups)
+    if width < 2 or "n_axles" not in groups.columns or "group" not in groups.columns:
+        raise ValueError(
+            f"groups has columns {list(groups.columns)}: needs group, n_axles and axle_load_1, axle_load_2, ..."
+        )
+    ok = groups["status"].astype(str).eq("ok").to_numpy() if "status" in groups.columns else np.ones(len(groups), bool)
+    # a failed row (null loads) is carried as zeros and never used: its cell counts it in n_failed
+    loads = np.nan_to_num(groups[axle_columns(width)].to_numpy(dtype=float), nan=0.0) / unit_per_kg
+    n = groups["n_axles"].to_numpy(dtype=np.int64)
+    wear = {name: group_wear(loads[ok], n[ok], float(k), STANDARD_AXLE_KG) for name, k in exponents.items()}
+    legal = groups.loc[ok, "group"].astype(str).map(lambda g: legal_group.get(g, math.nan)).to_numpy(dtype=float)
+    over = hidden_overloads(loads[ok], n[ok], legal, legal_axle)
+    known = np.isfinite(legal)
+    position = np.cumsum(ok) - 1  # a kept row's index into the arrays above
+    alpha = (1.0 - confidence) / 2.0
+    z = float(_normal_quantile(1.0 - alpha))
+    root = np.random.SeedSequence(seed)
+    rows = []
+    cells = groups.groupby(keys, observed=True, sort=True).indices
+    streams = root.spawn(len(cells))
+    for (cell, rows_all), stream in zip(cells.items(), streams):
+        cell = cell if isinstance(cell, tuple) else (cell,)
+        index = position[rows_all[ok[rows_all]]]
+        row: dict = dict(zip(keys, cell))
+        row["n_groups"] = len(index)
+        row["n_failed"] = int(len(rows_all) - len(index))
+        rng = np.random.default_rng(stream)
+        draws = rng.integers(0, len(index), (resamples, len(index))) if resamples and len(index) else None
+        for name in exponents:
+            d, e = wear[name]["damage"][index], wear[name]["damage_equal"][index]
+            share = d.sum() / e.sum() - 1.0 if len(index) and e.sum() > 0 else math.nan
+            per_1000 = 1000.0 * float(np.mean(d - e)) if len(index) else math.nan
+            row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
+            if draws is not None:
+                shares = d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0
+                extra = 1000.0 * (d - e)[draws].mean(axis=1)
+                row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = np.quantile(shares, [alpha, 1 - alpha])
+                row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = np.quantile(
+                    extra, [alpha, 1 - alpha]
+                )
+            else:
+                for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
+                    row[f"{col}_low"] = row[f"{col}_high"] = math.nan
+        judged = index[known[index]]
+        hidden = int(over["hidden"][judged].sum())
+        row["n_hidden"] = hidden
+        row["share_hidden_overload"] = hidden / len(judged) if len(judged) else math.nan
+        row["share_hidden_overload_low"], row["share_hidden_overload_high"] = _wilson(hidden, len(judged), z)
+        row["share_group_over"] = float(over["group_over"][judged].mean()) if len(judged) else math.nan
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _normal_quantile(p: float) -> float:
+    """The standard normal's quantile (scipy is not needed for one number: the statistics module has it)."""
+    from statistics import NormalDist
+
+    return NormalDist().inv_cdf(p)
+
+
+def wear_dict(table: pd.DataFrame, by: Sequence[str], digits: int = 4) -> dict:
+    """:func:`wear_statistics` as nested JSON-ready dicts, ``by`` values as keys in order; NaN as None."""
+
+    def num(x: float) -> float | int | None:
+        if isinstance(x, (int, np.integer)):
+            return int(x)
+        return None if x is None or not math.isfinite(x) else round(float(x), digits)
+
+    out: dict = {}
+    for row in table.to_dict("records"):
+        node = out
+        for key in by[:-1]:
+            node = node.setdefault(str(row[key]), {})
+        node[str(row[by[-1]])] = {k: num(v) for k, v in row.items() if k not in by}
+    return out

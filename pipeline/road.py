@@ -1,0 +1,149 @@
+"""DVC stage ``road``: what unequal sharing costs the road -> data/road/, metrics/road.json (issue 32).
+
+``python -m pipeline.road`` reads the fleet's runs, the observed survey's groups (``data/observed``; none without a
+survey) and the design experiment (``data/design_runs``, ``data/design``; none with ``design: null``), and writes
+
+- ``data/road/wear.csv``: per source (``simulated`` with its protocol, ``observed``), group size, position and
+  suspension: the extra pavement wear that unequal sharing causes over the same groups shared equally, at each
+  damage exponent (:data:`bogie.weighings.wear.DAMAGE_EXPONENTS`), as a share and as extra standard axles per 1,000
+  laden groups, and the overloads hidden in legal groups, all with intervals
+  (:func:`bogie.weighings.wear.wear_statistics`, one definition for both sources; ``observed_wear.csv`` the
+  observed side's, by size and position);
+- ``data/road/savings.csv``: what acting would save against today's typical design, paired over the design
+  experiment's conditions (:func:`bogie.fleet.road.design_savings`): the best steel design, air suspension, the
+  chassis tilt held within the typical design's tolerance;
+- ``metrics/road.json``: the same figures, nested, with the legal loads and exponents used.
+
+Laden groups are those of at least ``observed.min_group_load_t``, the filter the observed page applies to both
+sides. The method, sources and assumptions are in ``docs/pavement.md``.
+"""
+
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from collections.abc import Mapping
+from pathlib import Path
+from typing import Any
+
+import pandas as pd
+import yaml
+
+from bogie.fleet.road import design_savings, fleet_wear
+from bogie.params import GRAVITY
+from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
+from pipeline.atomic import atomic_outputs, io_error
+from pipeline.config import ConfigError, load_config
+from pipeline.schema import read_runs_frame
+from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
+
+__all__ = ["RESAMPLES", "main", "observed_wear", "road_metrics"]
+
+#: bootstrap resamples of every interval of the stage [-]
+RESAMPLES = 1000
+#: the sizes the road figures are given for
+SIZES = ("tandem", "triaxle")
+
+
+def observed_wear(groups: pd.DataFrame, legal_group: Mapping[str, float], legal_axle: float, seed: int) -> pd.DataFrame:
+    """:func:`bogie.weighings.wear.wear_statistics` of the observed tandems and tri-axles (loads in kg), by size and
+    position; an empty table without a survey."""
+    surveyed = groups[groups["group"].astype(str).isin(SIZES)] if len(groups) else groups
+    if not len(surveyed):
+        return pd.DataFrame()
+    surveyed = surveyed.assign(group=surveyed["group"].astype(str), position=surveyed["position"].astype(str))
+    return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES, seed=seed)
+
+
+def road_metrics(
+    simulated: pd.DataFrame,
+    observed: pd.DataFrame,
+    savings: pd.DataFrame,
+    legal_group: Mapping[str, float],
+    legal_axle: float,
+    min_group_load: float,
+    design_note: str | None,
+) -> dict[str, Any]:
+    """metrics/road.json: the settings, the simulated and observed figures and the savings, NaN as null."""
+    return {
+        "legal_group_load_kg": {k: round(float(v), 1) for k, v in legal_group.items()},
+        "legal_axle_load_kg": round(float(legal_axle), 1),
+        "min_group_load_kg": round(float(min_group_load), 1),
+        "standard_axle_kg": round(STANDARD_AXLE_KG, 1),
+        "exponents": dict(DAMAGE_EXPONENTS),
+        "confidence_level": 0.95,
+        "simulated": wear_dict(simulated, ["protocol", "group", "suspension"]) if len(simulated) else {},
+        "observed": wear_dict(observed, ["group", "position"]) if len(observed) else None,
+        "savings": wear_dict(savings, ["group", "scenario"]) if len(savings) else None,
+        "savings_note": design_note,
+    }
+
+
+def _design_inputs(config, design_runs: Path, design_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, Any] | None:
+    """The design experiment's runs (with design, condition, slot), its design table and tilt grid; None without a
+    design study."""
+    if config.design is None:
+        return None
+    from bogie.fleet.design import experiment_runs
+    from pipeline.design import experiment
+
+    exp = experiment(config)
+    runs = experiment_runs(exp, read_runs_frame(design_runs))
+    return runs, pd.read_csv(design_dir / "designs.csv"), exp.tilts
+
+
+def main(argv: list[str] | None = None) -> int:
+    """Run the stage; exit 2 with the reason on bad input, leaving the old outputs."""
+    parser = argparse.ArgumentParser(prog="python -m pipeline.road", description=__doc__.splitlines()[0])
+    parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
+    parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
+    parser.add_argument("--observed", default="data/observed", help="observed groups (default: data/observed)")
+    parser.add_argument("--design-runs", default="data/design_runs", help="default: data/design_runs")
+    parser.add_argument("--design", default="data/design", help="design tables (default: data/design)")
+    parser.add_argument("--out", default="data/road", help="output directory (default: data/road)")
+    parser.add_argument("--metrics", default="metrics/road.json", help="default: metrics/road.json")
+    args = parser.parse_args(argv)
+    try:
+        config = load_config(args.params)
+        legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
+        legal_axle = float(config.fleet.legal_axle_load) / GRAVITY
+        min_load = float(config.observed.min_group_load)
+        runs = read_runs(args.runs, SURVEY_STUDY)
+        groups_file = Path(args.observed) / "groups.parquet"
+        groups = pd.read_parquet(groups_file) if groups_file.exists() else pd.DataFrame()
+        design = _design_inputs(config, Path(args.design_runs), Path(args.design))
+    except (ConfigError, RunsError, OSError, ValueError, KeyError, yaml.YAMLError) as exc:
+        print(f"road: {exc}", file=sys.stderr)
+        return 2
+    simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, seed=config.seed)
+    observed = observed_wear(groups, legal_group, legal_axle, config.seed)
+    if design is None:
+        savings, note = pd.DataFrame(), "design is null in params.yaml: no design experiment to compare designs over"
+    else:
+        savings = design_savings(*design, legal_group, legal_axle, resamples=RESAMPLES, seed=config.seed)
+        note = None
+    metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
+    try:
+        with atomic_outputs(files=[args.metrics], dirs=[args.out]) as ((tmp_json,), (tmp_dir,)):
+            with open(tmp_json, "w", encoding="utf-8") as fh:
+                json.dump(metrics, fh, indent=2, allow_nan=False)
+                fh.write("\n")
+            simulated.assign(source="simulated").to_csv(tmp_dir / "wear.csv", index=False, float_format="%.6g")
+            if len(observed):
+                observed.assign(source="observed").to_csv(
+                    tmp_dir / "observed_wear.csv", index=False, float_format="%.6g"
+                )
+            savings.to_csv(tmp_dir / "savings.csv", index=False, float_format="%.6g")
+    except OSError as exc:
+        print(io_error("road", exc), file=sys.stderr)
+        return 2
+    told = "no observed survey" if not len(observed) else f"{int(observed['n_groups'].sum())} observed groups"
+    print(
+        f"road: {int(simulated['n_groups'].sum())} simulated laden readings, {told}; wrote {args.out}, {args.metrics}"
+    )
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
