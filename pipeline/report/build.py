@@ -31,6 +31,7 @@ from pipeline.report.pages import (
     guidance,
     observed,
     reference,
+    road,
     sensitivity,
     survey,
 )  # fmt: skip
@@ -55,6 +56,7 @@ PAGES: tuple[tuple[str, Callable[[Context], list[Page]]], ...] = (
     ("reference: step runs", reference.step_runs),
     ("design guidance", guidance.pages),
     ("fleet correlations by design", design.page),
+    ("what unequal sharing costs the road", road.page),
     ("appendix A: parameters", appendix.parameters),
     ("appendix B: definitions", appendix.definitions),
     ("appendix C: failed runs", appendix.failures),

@@ -72,6 +72,9 @@ class ReportInputs:
     design, design_metrics
         The tables of data/design (:data:`DESIGN_TABLES`) and metrics/design.json; none and a skipped study (with
         its reason) when the design stage did not run or was not asked for.
+    road_metrics
+        metrics/road.json (what unequal sharing costs the road, docs/pavement.md); empty when the road stage has not
+        run.
     """
 
     raw_params: dict[str, Any]
@@ -90,6 +93,7 @@ class ReportInputs:
     calibration_metrics: dict[str, Any] = field(default_factory=lambda: skipped_calibration(NO_CALIBRATION))
     design: dict[str, pd.DataFrame] = field(default_factory=dict)
     design_metrics: dict[str, Any] = field(default_factory=lambda: {"designs": [], "skipped": NO_DESIGN})
+    road_metrics: dict[str, Any] = field(default_factory=dict)
 
 
 #: the reason of a calibration whose metrics file is missing
@@ -207,6 +211,8 @@ def read_inputs(
     calibration, calibration_metrics = calibration_inputs(calibration_dir, metrics_dir / "calibration.json")
     design_dir = Path(survey_dir).with_name("design") if design_dir is None else design_dir
     design, design_metrics = design_inputs(design_dir, metrics_dir / "design.json")
+    road_file = metrics_dir / "road.json"
+    road_metrics = json.loads(road_file.read_text()) if road_file.is_file() else {}
     return ReportInputs(
         raw_params=load_params(params),
         config=config,
@@ -224,4 +230,5 @@ def read_inputs(
         calibration_metrics=calibration_metrics,
         design=design,
         design_metrics=design_metrics,
+        road_metrics=road_metrics,
     )
