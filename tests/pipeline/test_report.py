@@ -21,7 +21,7 @@ import pytest
 import yaml
 from matplotlib.image import imread
 
-from pipeline import calibrate, design, observed, report, sensitivity, survey
+from pipeline import calibrate, design, observed, report, road, sensitivity, survey
 from pipeline.config import load_params, parse_config
 from pipeline.report import style
 from pipeline.report.context import Context
@@ -31,10 +31,10 @@ from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parents[2]
-#: title, summary, sensitivity, 2 survey, observed, calibration (skipped), Figure 2, L01-L03, step runs, 2 design
-#: guidance, fleet correlations, appendices A, B, C
-#: the report of a run without an observed survey and without failed runs: no calibration page, no Appendix C
-PAGES = 17
+#: title, summary, summary in numbers, sensitivity, 2 survey, observed, Figure 2, L01-L03, step runs, 2 design
+#: guidance, fleet correlations, the road, appendices A and B: a run without an observed survey (no calibration page)
+#: and without failed runs (no Appendix C)
+PAGES = 18
 SITE = ROOT / "tests" / "data" / "weighings" / "site30.csv"
 PLANTED = "planted failure: Newton iteration did not converge at t = 1.234 s"
 NEEDS_POPPLER = pytest.mark.skipif(
@@ -111,6 +111,10 @@ def project(tmp_path_factory):
     out = ["--runs", str(path / "data/design_runs"), "--out", str(path / "data/design"), "--metrics",
            str(path / "metrics/design.json")]  # fmt: skip
     assert design.main(["--params", str(path / "params.yaml"), *out]) == 0
+    out = ["--runs", str(path / "data/runs"), "--observed", str(path / "data/observed"), "--design-runs",
+           str(path / "data/design_runs"), "--design", str(path / "data/design"), "--out", str(path / "data/road"),
+           "--metrics", str(path / "metrics/road.json")]  # fmt: skip
+    assert road.main(["--params", str(path / "params.yaml"), *out]) == 0
     return path
 
 
@@ -174,6 +178,7 @@ def test_report_has_every_page_numbered_and_every_chart_page_as_png(built, proje
             "design_experiment",
             "design_tolerance",
             "design_guidance",
+            "road",
             "parameters",
         ]
     )
@@ -311,6 +316,29 @@ def test_page_two_gives_three_findings_one_figure_and_what_to_do(built, pages):
     expected = sorted(round(100.0 * a[v]["mean_max_deviation"], 6) for a in ss["ablation"].values()
                       for v in ("baseline", *ss["ranking"], "all"))  # fmt: skip
     assert drawn == pytest.approx(expected, abs=0.0051)  # the metrics hold four decimals of a fraction
+
+
+# ---- the road page ------------------------------------------------------------------------------------------------
+def test_the_road_page_draws_the_wear_of_every_side_and_the_savings_and_says_them(built, pages):
+    _, inputs = built
+    m = inputs.road_metrics
+    [(section, name, fig)] = [p for p in pages if p.name == "road"]
+    assert section == "What unequal sharing costs the road"
+    text = figure_text(fig)
+    charts = [ax for ax in fig.get_axes() if ax.has_data()]
+    assert len(charts) == 2  # the wear by kind of damage; the savings (the tiny run has a design study)
+    # the wear chart's bars are the metrics' extra wear [%] of each simulated steel side at each exponent
+    drawn = sorted(round(p.get_height(), 6) for p in charts[0].patches)
+    expected = sorted(
+        round(100.0 * e["steel"][f"extra_wear_{k}"], 6)
+        for groups in m["simulated"].values() for e in groups.values() if "steel" in e
+        for k in m["exponents"]
+    )  # fmt: skip
+    assert drawn == pytest.approx(expected, abs=1e-6)
+    for words in ("more each kind of pavement damage", "Overloads hidden in legal groups", "Directive 96/53/EC",
+                  "Assumption: every axle is a load of its own", "docs/pavement.md"):  # fmt: skip
+        assert words in text, words
+    assert set(m["savings"]["triaxle"]) == {"best", "air", "tilt_held"}
 
 
 # ---- the calibration page ---------------------------------------------------------------------------------------
