@@ -174,9 +174,11 @@ def test_summary_findings_give_three_findings_and_explain_what_gets_worse():
     n["survey"]["wim"] = {"tandem": {**n["survey"]["static"]["tandem"], "share_outside_5pct": 0.5}}
     n["ablation"]["wim"] = {**n["ablation"]["static"], "contact_roll_radius": ablation_entry(0.03, 0.0021)}
     worse = {"static": ["bush_stiffness"], "wim": ["bush_stiffness", "all"]}
+    none = {"observed": None, "calibrated": None, "calibration_reason": ""}
     paras = text.render("summary_findings.j2", numbers=n, nose_up_deg=0.5, worse=worse,
-                        n_bogies={"tandem": "600", "triaxle": "1,400"})  # fmt: skip
+                        n_bogies={"tandem": "600", "triaxle": "1,400"}, **none)  # fmt: skip
     assert paras[0].startswith("The fleet: 600 tandem and 1,400 tri-axle bogies sampled from params.yaml's")
+    assert "No observed survey was given (observed.path is null), so nothing was calibrated" in paras[0]
     assert paras[1].startswith("## 1. Equalised bogies often do not share load equally")
     assert paras[2] == (
         "On a static weighbridge, 12 % of tandem and n/a of tri-axle groups have their lightest axle more than 5 % "
@@ -200,17 +202,27 @@ def test_summary_findings_give_three_findings_and_explain_what_gets_worse():
     )
     assert "On the weighbridge, spring-end friction holds a tilted bogie's equalisers" in paras[6]
     assert len(paras) == 7
-    paras = text.render("summary_findings.j2", numbers=n, nose_up_deg=0.5, worse={"wim": ["all"]},
-                        n_bogies={"tandem": "600"})  # fmt: skip
+    paras = text.render("summary_findings.j2", numbers=n, nose_up_deg=0.5, worse={"wim": ["all"]}, observed=None,
+                        calibrated=None, calibration_reason="", n_bogies={"tandem": "600"})  # fmt: skip
     assert paras[6].startswith("The fleet is worse by WIM with all five removed (the whole")
     assert "On the weighbridge" not in paras[6]
     paras = text.render("summary_findings.j2", numbers=numbers(survey=False), nose_up_deg=0.5, worse={},
-                        n_bogies={"tandem": "10"})  # fmt: skip
+                        observed=None, calibrated=None, calibration_reason="", n_bogies={"tandem": "10"})  # fmt: skip
     assert [p for p in paras if p.startswith("## ")] == [
         "## 1. Of the five inhibitors, contact roll radius matters most; the chassis tilt is the cause they act "
         "through.",
         "## 2. Removing any one inhibitor never makes the weighings worse.",
     ]
+
+
+def test_summary_findings_name_the_survey_and_the_calibration_when_there_are_some():
+    observed = {"path": "observed/site.mon", "groups": {"tandem": {"n_groups": 12}, "triaxle": {"n_groups": 30}}}
+    common = {"numbers": numbers(), "nose_up_deg": 0.5, "worse": {}, "n_bogies": {"tandem": "10"}, "observed": observed}
+    [intro] = text.render("summary_findings.j2", calibrated="air_share 0.42", calibration_reason="", **common)[:1]
+    assert "An observed survey, observed/site.mon (42 tandems and tri-axles after the filters), is held" in intro
+    assert "fitted to it on the calibration pages (air_share 0.42)" in intro
+    [intro] = text.render("summary_findings.j2", calibrated=None, calibration_reason="calibrate is null", **common)[:1]
+    assert "the fleet was not calibrated to it (calibrate is null)" in intro
 
 
 def test_summary_action_gives_the_design_advice_or_says_none_ran():

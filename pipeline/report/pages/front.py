@@ -236,12 +236,19 @@ def summary(ctx: Context) -> list[Page]:
     guidance = ctx.inputs.design_metrics.get("guidance", [])
     design = [line for line in guidance if line.startswith(("With ", "Today's typical"))]
     worse = worse_without(numbers)
+    cal = ctx.inputs.calibration_metrics
+    fitted = None if cal.get("skipped", True) else ", ".join(
+        f"{q} {e['value']:.3g}" for q, e in (cal.get("fitted") or {}).items()
+    )  # fmt: skip
     findings = text.render(
         "summary_findings.j2",
         numbers=numbers,
         nose_up_deg=NOSE_UP_DEG,
         n_bogies=fleet_words(ctx.inputs.fleet, ctx.inputs.config),
         worse=worse,
+        observed=ctx.inputs.observed_metrics.get("observed"),
+        calibrated=fitted,
+        calibration_reason=cal.get("reason", ""),
     )
     abl = ctx.inputs.sensitivity["ablation.csv"]
     rows = abl[(abl["group"] == "all") & (abl["statistic"] == "mean_max_deviation")]
