@@ -74,28 +74,28 @@ def wear_bars(ax, m: Mapping[str, Any]) -> list[str]:
 
 
 def savings_bars(ax, savings: Mapping[str, Any]) -> None:
-    """The extra wear at k = 4 [%] of today's typical design and of each way of acting, per group, the saving's
-    interval on each scenario's bar."""
-    groups = [g for g in GROUP_LABEL if g in savings]
+    """What each way of acting saves: the typical design's extra wear at k = 4 minus the scenario's [percentage
+    points], one bar per group and scenario, whiskers the paired bootstrap interval of the saving."""
     rows: list[tuple[str, float, float, float, str]] = []
-    for g in groups:
+    for j, g in enumerate(g for g in GROUP_LABEL if g in savings):
         typical = 100.0 * next(iter(savings[g].values()))["extra_wear_overall_typical"]
-        rows.append((f"{GROUP_LABEL[g]}: typical design", typical, 0.0, 0.0, "0.55"))
         for scenario, entry in savings[g].items():
-            value = 100.0 * (entry.get("extra_wear_overall") or 0.0)
             saved, lo, hi = (entry.get(k) for k in ("saved_wear_overall", "saved_wear_overall_low",
                                                      "saved_wear_overall_high"))  # fmt: skip
-            # the scenario's value is the typical's minus the saving: its interval is the saving's, mirrored
-            minus = 100.0 * (hi - saved) if hi is not None and saved is not None else 0.0
-            plus = 100.0 * (saved - lo) if lo is not None and saved is not None else 0.0
-            rows.append((f"{GROUP_LABEL[g]}: {SCENARIO_LABEL.get(scenario, scenario)}", value, minus, plus, "C2"))
+            if saved is None:
+                continue
+            label = f"{GROUP_LABEL[g]} (typical {typical:.2f} %): {SCENARIO_LABEL.get(scenario, scenario)}"
+            lo = saved if lo is None else lo
+            hi = saved if hi is None else hi
+            rows.append((label, 100.0 * saved, 100.0 * (saved - lo), 100.0 * (hi - saved), f"C{j}"))
     y = np.arange(len(rows))[::-1]
-    ax.barh(y, [r[1] for r in rows], 0.7, color=[r[4] for r in rows],
+    ax.barh(y, [r[1] for r in rows], 0.7, color=[r[4] for r in rows], alpha=0.85,
             xerr=np.clip(np.array([[r[2] for r in rows], [r[3] for r in rows]]), 0.0, None),
-            error_kw={"lw": 0.7, "capsize": 1.5})  # fmt: skip
+            error_kw={"lw": 0.8, "capsize": 2})  # fmt: skip
     ax.set_yticks(y, [r[0] for r in rows], fontsize=7.5)
-    ax.set_xlabel("extra wear at k = 4 over equal sharing [%] (static weighbridge)")
-    ax.set_title("What acting would save (the design experiment's conditions)")
+    ax.axvline(0.0, color="0.3", lw=0.6)
+    ax.set_xlabel("extra wear at k = 4 saved against today's typical design [percentage points]")
+    ax.set_title("What acting would save (static weighbridge, the design experiment's conditions, paired)")
     ax.grid(axis="x", lw=0.4, alpha=0.6)
 
 
