@@ -227,10 +227,18 @@ def test_summary_findings_name_the_survey_and_the_calibration_when_there_are_som
 
 def test_summary_action_gives_the_design_advice_or_says_none_ran():
     advice = ["With a free bearing ...", "Today's typical tri-axle ..."]
-    assert text.render("summary_action.j2", numbers=numbers(), design=advice) == [
+    assert text.render("summary_action.j2", numbers=numbers(), design=advice, savings=None) == [
         "## What to do", "- With a free bearing ...", "- Today's typical tri-axle ..."
     ]  # fmt: skip
-    paras = text.render("summary_action.j2", numbers=numbers(), design=[])
+    savings = {"triaxle": {"best": {"extra_wear_overall_typical": 0.036, "extra_wear_overall": 0.0023},
+                           "air": {"extra_wear_overall_typical": 0.036, "extra_wear_overall": 0.0002}}}  # fmt: skip
+    paras = text.render("summary_action.j2", numbers=numbers(), design=advice, savings=savings)
+    assert paras[-1] == (
+        "- For the road (extra pavement wear at the fourth power over equal sharing, the design experiment's "
+        "conditions): today's typical tri-axle does 3.60 %, the best steel design 0.23 %, air suspension 0.02 % "
+        '(page "What unequal sharing costs the road").'
+    )
+    paras = text.render("summary_action.j2", numbers=numbers(), design=[], savings=None)
     assert paras[1].startswith("- No design study ran (design: null in params.yaml). The ablation's largest single")
     assert "gain is from removing contact roll radius;" in paras[1]
 

@@ -253,7 +253,9 @@ def summary(ctx: Context) -> list[Page]:
     abl = ctx.inputs.sensitivity["ablation.csv"]
     rows = abl[(abl["group"] == "all") & (abl["statistic"] == "mean_max_deviation")]
     caption = text.render("summary_figure.j2", numbers=numbers)
-    action = text.render("summary_action.j2", numbers=numbers, design=design)
+    action = text.render(
+        "summary_action.j2", numbers=numbers, design=design, savings=ctx.inputs.road_metrics.get("savings")
+    )
     first = Page("Summary", "summary", findings_page(findings, rows, caption, action))
     header, table = summary_table(numbers)
     table_title = (
