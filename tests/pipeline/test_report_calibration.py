@@ -146,8 +146,12 @@ def written(tmp_path, metrics, tables):
     return calibration_inputs(out, metrics_file)
 
 
-def pages_of(tables, metrics):
-    ctx = SimpleNamespace(inputs=SimpleNamespace(calibration=tables, calibration_metrics=metrics))
+def pages_of(tables, metrics, survey=True):
+    """The calibration pages of ``tables`` and ``metrics``; ``survey``: whether an observed survey was given."""
+    observed = {"observed": {"path": "observed/site.mon"} if survey else None}
+    ctx = SimpleNamespace(
+        inputs=SimpleNamespace(calibration=tables, calibration_metrics=metrics, observed_metrics=observed)
+    )
     with matplotlib.rc_context(STYLE):
         return calibration.page(ctx)
 
@@ -197,15 +201,17 @@ def test_the_calibration_pages_follow_the_observed_page():
 
 
 # ---- the pages ----------------------------------------------------------------------------------------------------
-def test_skipped_gives_one_page_that_says_why_and_how_to_give_a_survey(tmp_path):
-    reason = "no observed survey given (observed.path is null in params.yaml; docs/observed.md)"
+def test_skipped_with_a_survey_gives_one_page_that_says_why_and_without_one_none(tmp_path):
+    reason = "calibrate is null in params.yaml"
     tables, metrics = written(tmp_path, skipped_calibration(reason), {})
+    assert pages_of(tables, metrics, survey=False) == []  # the observed page says what a survey brings
     [(section, name, fig)] = pages_of(tables, metrics)
     assert (section, name) == ("Calibration", "")
     assert not fig.get_axes()
     page = figure_text(fig)
     assert f"The calibrate stage was skipped: {reason}." in page
-    for words in ("observed.path: observed/site.mon", "calibrate section", "calibrate.fit", "docs/calibration.md"):
+    for words in ("observed.path: observed/site.mon", "observed.kind: weighbridge", "calibrate section",
+                  "calibrate.fit", "docs/calibration.md"):  # fmt: skip
         assert words in page, words
     assert_text_above_the_footer(fig)
 
