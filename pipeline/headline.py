@@ -3,8 +3,9 @@
 ``dvc metrics show`` prints every metric of every file on one line; ``metrics/survey.json`` and
 ``metrics/sensitivity.json`` hold over two hundred. ``python -m pipeline.headline`` reads them (and the status
 column of every run) and writes the headline: the inhibitors' ranking with their total Sobol' indices and chassis
-tilt's, the share of groups outside the 5 % tolerance and the mean heaviest-minus-lightest spread [kg] for each
-axle group and protocol, and the runs and failures of all studies. ``dvc metrics show metrics/headline.json`` reads
+tilt's, the share of groups outside the 5 % tolerance, the mean heaviest-minus-lightest spread [kg] and the extra
+pavement wear at the fourth power (metrics/road.json) for each axle group and protocol, and the runs and failures
+of all studies. ``dvc metrics show metrics/headline.json`` reads
 it in one screen; the README shows a ``dvc exp show`` that compares experiments on it.
 """
 
@@ -26,13 +27,20 @@ from pipeline.schema import read_runs_frame
 __all__ = ["headline", "main"]
 
 
-def headline(survey: Mapping[str, Any], sensitivity: Mapping[str, Any], status: pd.Series) -> dict[str, Any]:
-    """The headline figures from the two metrics files and the ``status`` of every run (all studies).
+def headline(
+    survey: Mapping[str, Any],
+    sensitivity: Mapping[str, Any],
+    status: pd.Series,
+    road: Mapping[str, Any] | None = None,
+) -> dict[str, Any]:
+    """The headline figures from the metrics files and the ``status`` of every run (all studies).
 
     Keys: ``ranking`` (the inhibitors, most influential first, as one string), ``ST_<factor>`` (total Sobol' index
     of the ranking measure for the five inhibitors and chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
     groups whose lightest axle is more than 5 % below the heaviest [-]), ``spread_kg_<protocol>_<group>`` (mean
-    heaviest minus lightest axle load [kg]), ``runs`` and ``failed`` [-]. A figure the metrics lack is left out.
+    heaviest minus lightest axle load [kg]), ``extra_wear_<protocol>_<group>`` (the extra pavement wear at the
+    fourth power of the laden steel groups over equal sharing [-], from ``road``: metrics/road.json, None: none),
+    ``runs`` and ``failed`` [-]. A figure the metrics lack is left out.
     """
     out: dict[str, Any] = {"ranking": " > ".join(sensitivity["ranking"])}
     indices = sensitivity["sobol"]["indices"]
@@ -45,6 +53,11 @@ def headline(survey: Mapping[str, Any], sensitivity: Mapping[str, Any], status: 
                 value = survey.get(protocol, {}).get(group, {}).get(key)
                 if value is not None:
                     out[f"{name}_{protocol}_{group}"] = value
+    for protocol in PROTOCOLS:
+        for group in GROUP_AXLES:
+            entry = ((road or {}).get("simulated") or {}).get(protocol, {}).get(group, {}).get("steel") or {}
+            if entry.get("extra_wear_overall") is not None:
+                out[f"extra_wear_{protocol}_{group}"] = entry["extra_wear_overall"]
     out["runs"] = int(len(status))
     out["failed"] = int((status != "ok").sum())
     return out
@@ -61,12 +74,14 @@ def main(argv: list[str] | None = None) -> int:
     try:
         survey = json.loads((metrics / "survey.json").read_text(encoding="utf-8"))
         sensitivity = json.loads((metrics / "sensitivity.json").read_text(encoding="utf-8"))
+        road_file = metrics / "road.json"  # the road stage's (docs/pavement.md); a project without it has none
+        road = json.loads(road_file.read_text(encoding="utf-8")) if road_file.is_file() else None
         # every part file verified (pipeline.schema.read_runs_frame): a damaged one is refused, not counted
         status = read_runs_frame(args.runs, columns=["status"])["status"].astype(str)
     except (OSError, ValueError, KeyError) as exc:
         print(f"headline: {exc}", file=sys.stderr)
         return 2
-    figures = headline(survey, sensitivity, status)
+    figures = headline(survey, sensitivity, status, road)
     try:
         with atomic_file(Path(args.out)) as tmp:
             tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")

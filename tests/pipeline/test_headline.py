@@ -31,6 +31,12 @@ def test_headline_takes_each_figure_from_its_metric_and_counts_failures():
     assert "outside_5pct_wim_triaxle" not in out  # not in the metrics: left out, not invented
     assert (out["runs"], out["failed"]) == (5, 2)
     assert len(out) == 1 + 5 + 3 + 3 + 2
+    road = {"simulated": {"static": {"triaxle": {"steel": {"extra_wear_overall": 0.0447}},
+                                     "tandem": {"air": {"extra_wear_overall": 0.001}}}}}  # fmt: skip
+    out = headline(SURVEY, SENSITIVITY, status, road)
+    # the steel groups' figure only; the air-only tandem and the missing WIM side are left out
+    assert out["extra_wear_static_triaxle"] == 0.0447 and len(out) == 1 + 5 + 3 + 3 + 1 + 2
+    assert list(out)[-3:] == ["extra_wear_static_triaxle", "runs", "failed"]
 
 
 def test_stage_writes_the_file(tmp_path):
