@@ -271,7 +271,15 @@ def test_summary_notes_and_sensitivity_caption():
     assert len(notes) == 1
     assert "of max_deviation (static, triaxle) from 63 of 64 Saltelli blocks (2 failed runs" in notes[0]
     assert "(200 resamples, 95 %). Ablation (static, 40 fleet bogies)" in notes[0]
-    caption = text.render("sensitivity.j2", numbers=n)
+    caption = text.render("sensitivity.j2", numbers=n, worse={})
+    assert len(caption) == 2
+    worse = {"static": ["bush_stiffness"], "wim": ["bush_stiffness", "all"]}
+    explained = text.render("sensitivity.j2", numbers=n, worse=worse)[2]
+    assert explained.startswith(
+        'Bars longer than "none removed" are removals that make the fleet worse: bush '
+        "stiffness (static weighbridge); bush stiffness, all five removed (weigh-in-motion)."
+    )
+    assert "the model's only dissipation" in explained and "holds a tilted bogie's equalisers" in explained
     assert (
         "of the tri-axle bogie's axle loads at the static weighbridge (63 Saltelli blocks, base size 64)" in caption[0]
     )

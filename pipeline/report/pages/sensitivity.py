@@ -10,7 +10,7 @@ from matplotlib.figure import Figure
 
 from pipeline.report import text
 from pipeline.report.context import Context, Page
-from pipeline.report.layout import new_page, text_block
+from pipeline.report.layout import first_fit, new_page, text_block
 from pipeline.report.style import MEASURE_LABEL, PROTOCOL_LABEL, factor_label
 
 __all__ = ["ablation_bars", "page", "sensitivity_page"]
@@ -105,29 +105,39 @@ def sensitivity_page(
     caption
         Paragraphs under the charts.
     """
-    fig = new_page("Sensitivity: which inhibitor matters", body=(0.06, 0.24, 0.88, 0.69))
-    (ax_s, ax_m), (ax_a, ax_o) = fig.subplots(2, 2, gridspec_kw={"width_ratios": (1.2, 1.0)})
-    main = indices[indices["measure"] == ranking_measure].sort_values("ST")
-    _index_bars(ax_s, main, ranking_measure)
-    _measure_bars(ax_m, indices, list(main["factor"]), ranking_measure)
-    for ax, statistic, scale, label in (
-        (ax_a, "mean_max_deviation", 100.0, "fleet mean of max. deviation [%]"),
-        (ax_o, "share_outside_5pct", 100.0, "groups outside 5 % [%]"),
-    ):
-        ablation_bars(ax, ablation[ablation["statistic"] == statistic], scale)
-        ax.set_xlabel(label)
-    ax_a.set_title("Ablation: mean inequality")
-    ax_o.set_title("Ablation: outside 5 %")
-    ax_o.set_yticklabels([])
-    text_block(fig, 0.215, caption, size=8.2)
-    return fig
+
+    def draw(layout: tuple[float, float]) -> tuple[Figure, float]:
+        bottom, size = layout
+        fig = new_page("Sensitivity: which inhibitor matters", body=(0.06, bottom, 0.88, 0.93 - bottom))
+        (ax_s, ax_m), (ax_a, ax_o) = fig.subplots(2, 2, gridspec_kw={"width_ratios": (1.2, 1.0)})
+        main = indices[indices["measure"] == ranking_measure].sort_values("ST")
+        _index_bars(ax_s, main, ranking_measure)
+        _measure_bars(ax_m, indices, list(main["factor"]), ranking_measure)
+        for ax, statistic, scale, label in (
+            (ax_a, "mean_max_deviation", 100.0, "fleet mean of max. deviation [%]"),
+            (ax_o, "share_outside_5pct", 100.0, "groups outside 5 % [%]"),
+        ):
+            ablation_bars(ax, ablation[ablation["statistic"] == statistic], scale)
+            ax.set_xlabel(label)
+        ax_a.set_title("Ablation: mean inequality")
+        ax_o.set_title("Ablation: outside 5 %")
+        ax_o.set_yticklabels([])
+        return fig, text_block(fig, bottom - 0.035, caption, size=size)
+
+    return first_fit(SENSITIVITY_FITS, draw)
+
+
+#: (bottom of the charts [page fraction], caption type size [pt]) the page tries, first that ends above the footer
+SENSITIVITY_FITS = ((0.24, 8.2), (0.26, 8.0), (0.28, 7.8), (0.30, 7.6), (0.32, 7.4))
 
 
 def page(ctx: Context) -> list[Page]:
     """Page 3: Sobol' indices (data/sensitivity/sobol_indices.csv) and the ablation (ablation.csv, group all)."""
     tables = ctx.inputs.sensitivity
     abl = tables["ablation.csv"]
-    caption = text.render("sensitivity.j2", numbers=ctx.numbers)
+    from pipeline.report.pages.front import worse_without
+
+    caption = text.render("sensitivity.j2", numbers=ctx.numbers, worse=worse_without(ctx.numbers))
     measure = ctx.inputs.sensitivity_metrics["sobol"]["measure"]
     fig = sensitivity_page(tables["sobol_indices.csv"], abl[abl["group"] == "all"], measure, caption)
     return [Page("Sensitivity", "sensitivity", fig)]
