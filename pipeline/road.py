@@ -32,28 +32,30 @@ import yaml
 
 from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
+from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
 from pipeline.atomic import atomic_outputs, io_error
 from pipeline.config import ConfigError, load_config
 from pipeline.schema import read_runs_frame
 from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
 
-__all__ = ["RESAMPLES", "main", "observed_wear", "road_metrics"]
+__all__ = ["CONFIDENCE", "RESAMPLES", "main", "observed_wear", "road_metrics"]
 
 #: bootstrap resamples of every interval of the stage [-]
 RESAMPLES = 1000
-#: the sizes the road figures are given for
-SIZES = ("tandem", "triaxle")
+#: the level of every interval of the stage [-]
+CONFIDENCE = 0.95
 
 
 def observed_wear(groups: pd.DataFrame, legal_group: Mapping[str, float], legal_axle: float, seed: int) -> pd.DataFrame:
     """:func:`bogie.weighings.wear.wear_statistics` of the observed tandems and tri-axles (loads in kg), by size and
     position; an empty table without a survey."""
-    surveyed = groups[groups["group"].astype(str).isin(SIZES)] if len(groups) else groups
+    surveyed = groups[groups["group"].astype(str).isin(SURVEYED)] if len(groups) else groups
     if not len(surveyed):
         return pd.DataFrame()
     surveyed = surveyed.assign(group=surveyed["group"].astype(str), position=surveyed["position"].astype(str))
-    return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES, seed=seed)
+    return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES,
+                           confidence=CONFIDENCE, seed=seed)  # fmt: skip
 
 
 def road_metrics(
@@ -72,7 +74,7 @@ def road_metrics(
         "min_group_load_kg": round(float(min_group_load), 1),
         "standard_axle_kg": round(STANDARD_AXLE_KG, 1),
         "exponents": dict(DAMAGE_EXPONENTS),
-        "confidence_level": 0.95,
+        "confidence_level": CONFIDENCE,
         "simulated": wear_dict(simulated, ["protocol", "group", "suspension"]) if len(simulated) else {},
         "observed": wear_dict(observed, ["group", "position"]) if len(observed) else None,
         "savings": wear_dict(savings, ["group", "scenario"]) if len(savings) else None,
@@ -116,12 +118,14 @@ def main(argv: list[str] | None = None) -> int:
     except (ConfigError, RunsError, OSError, ValueError, KeyError, yaml.YAMLError) as exc:
         print(f"road: {exc}", file=sys.stderr)
         return 2
-    simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, seed=config.seed)
+    simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence=CONFIDENCE,
+                           seed=config.seed)  # fmt: skip
     observed = observed_wear(groups, legal_group, legal_axle, config.seed)
     if design is None:
         savings, note = pd.DataFrame(), "design is null in params.yaml: no design experiment to compare designs over"
     else:
-        savings = design_savings(*design, legal_group, legal_axle, resamples=RESAMPLES, seed=config.seed)
+        savings = design_savings(*design, legal_group, legal_axle, resamples=RESAMPLES, confidence=CONFIDENCE,
+                                 seed=config.seed)  # fmt: skip
         note = None
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
     try:

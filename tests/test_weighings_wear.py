@@ -20,10 +20,6 @@ LEGAL_GROUP = {"tandem": 18_000.0, "triaxle": 24_000.0}  # Directive 96/53/EC An
 LEGAL_AXLE = 10_000.0  # 96/53/EC Annex I 3.1, a single non-driving axle [kg]
 
 
-def test_the_standard_axle_is_80_kn_at_the_projects_gravity():
-    assert STANDARD_AXLE_KG * GRAVITY == pytest.approx(80_000.0, rel=1e-15)
-
-
 def test_equal_loads_do_no_extra_wear_at_any_exponent():
     loads = np.array([[8000.0, 8000.0, 8000.0], [9000.0, 9000.0, np.nan]])
     for k in (1, 4, 5, 7, 12):

@@ -34,6 +34,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from bogie.fleet.design_table import wilson_interval
+from bogie.params import GRAVITY
 from bogie.weighings.stats import _width, axle_columns
 
 __all__ = [
@@ -54,8 +56,8 @@ __all__ = [
 #: repetitions SAR5, SAR7 and SAR12 (sources in docs/pavement.md) [-]
 DAMAGE_EXPONENTS: Mapping[str, int] = {"overall": 4, "asphalt": 5, "subgrade": 7, "cemented": 12}
 #: the standard axle W_s: 80 kN, the AASHO Road Test's 18-kip single axle and Austroads' standard single axle with
-#: dual tyres, in kg at the project's g = 9.81 m/s^2 (:data:`bogie.params.GRAVITY`) [kg]
-STANDARD_AXLE_KG: float = 80_000.0 / 9.81
+#: dual tyres, in kg at the project's g (:data:`bogie.params.GRAVITY`) [kg]
+STANDARD_AXLE_KG: float = 80_000.0 / GRAVITY
 #: legal group loads of trailer axle groups, Directive 96/53/EC Annex I: 3.4, a trailer's tandem with its axles
 #: 1.3 m to under 1.8 m apart, 18 t; 3.5, a trailer's tri-axle with spacings over 1.3 m up to 1.4 m, 24 t [kg]
 EU_LEGAL_GROUP_KG: Mapping[str, float] = {"tandem": 18_000.0, "triaxle": 24_000.0}
@@ -139,16 +141,6 @@ def hidden_overloads(
     return {"group_over": group_over, "axle_over": axle_over, "hidden": axle_over & ~group_over}
 
 
-def _wilson(k: int, n: int, z: float) -> tuple[float, float]:
-    """Wilson's score interval of a share k / n (E. B. Wilson, JASA 22, 1927); NaN for n = 0."""
-    if n == 0:
-        return math.nan, math.nan
-    p = k / n
-    centre = (p + z * z / (2 * n)) / (1 + z * z / n)
-    half = z * math.sqrt(p * (1 - p) / n + z * z / (4 * n * n)) / (1 + z * z / n)
-    return max(0.0, centre - half), min(1.0, centre + half)
-
-
 def wear_statistics(
     groups: pd.DataFrame,
     legal_group: Mapping[str, float],
@@ -214,7 +206,6 @@ def wear_statistics(
     known = np.isfinite(legal)
     position = np.cumsum(ok) - 1  # a kept row's index into the arrays above
     alpha = (1.0 - confidence) / 2.0
-    z = float(_normal_quantile(1.0 - alpha))
     root = np.random.SeedSequence(seed)
     rows = []
     cells = groups.groupby(keys, observed=True, sort=True).indices
@@ -246,17 +237,11 @@ def wear_statistics(
         hidden = int(over["hidden"][judged].sum())
         row["n_hidden"] = hidden
         row["share_hidden_overload"] = hidden / len(judged) if len(judged) else math.nan
-        row["share_hidden_overload_low"], row["share_hidden_overload_high"] = _wilson(hidden, len(judged), z)
+        (low,), (high,) = wilson_interval(np.array([hidden]), np.array([len(judged)]), confidence)
+        row["share_hidden_overload_low"], row["share_hidden_overload_high"] = float(low), float(high)
         row["share_group_over"] = float(over["group_over"][judged].mean()) if len(judged) else math.nan
         rows.append(row)
     return pd.DataFrame(rows)
-
-
-def _normal_quantile(p: float) -> float:
-    """The standard normal's quantile (scipy is not needed for one number: the statistics module has it)."""
-    from statistics import NormalDist
-
-    return NormalDist().inv_cdf(p)
 
 
 def wear_dict(table: pd.DataFrame, by: Sequence[str], digits: int = 4) -> dict:

@@ -6,11 +6,11 @@ every other key of its section was valid; and validate looked for the observed s
 file was valid. A user fixing params.yaml got the errors a few at a time.
 """
 
-import copy
 from pathlib import Path
 
 import pytest
 import yaml
+from test_validate_costs import changed
 
 from pipeline import validate
 from pipeline.config import ConfigError, check_params, load_params, parse_config
@@ -21,18 +21,6 @@ PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
 @pytest.fixture(scope="module")
 def raw():
     return load_params(PARAMS)
-
-
-def changed(raw, **values):
-    """A deep copy of ``raw`` with each dotted key (``__`` for ``.``) set."""
-    new = copy.deepcopy(raw)
-    for path, value in values.items():
-        *parents, last = path.split("__")
-        node = new
-        for key in parents:
-            node = node[key]
-        node[last] = value
-    return new
 
 
 def refused(raw, **values) -> ConfigError:

@@ -13,6 +13,7 @@ from pathlib import Path
 
 import pytest
 import yaml
+from test_validate_costs import changed
 
 from bogie.fleet.constants import WIM_QUANTITIES
 from pipeline import calibrate, validate
@@ -30,18 +31,6 @@ NOTE = (
 @pytest.fixture(scope="module")
 def raw():
     return load_params(PARAMS)
-
-
-def changed(raw, **values):
-    """A deep copy of ``raw`` with each dotted key (``__`` for ``.``) set."""
-    new = copy.deepcopy(raw)
-    for path, value in values.items():
-        *parents, last = path.split("__")
-        node = new
-        for key in parents:
-            node = node[key]
-        node[last] = value
-    return new
 
 
 def without(raw, path):
