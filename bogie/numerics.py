@@ -40,12 +40,20 @@ __all__ = [
     "arctan2",
     "compile_target",
     "matmul",
+    "cholesky",
     "cos",
+    "cov",
     "exp",
+    "expm1",
     "fix_compile_target",
+    "geomspace",
+    "inv",
     "log",
+    "log1p",
+    "multivariate_normal",
     "power",
     "sin",
+    "sinc",
     "solve",
 ]
 
@@ -130,6 +138,14 @@ def _ufuncs():  # the numba ufuncs, made on first use (importing numba's vectori
         return math.log(x) if x > 0.0 else (-math.inf if x == 0.0 else math.nan)
 
     @vectorize(sig1, cache=True)
+    def _log1p(x):
+        return math.log1p(x) if x > -1.0 else (-math.inf if x == -1.0 else math.nan)
+
+    @vectorize(sig1, cache=True)
+    def _expm1(x):
+        return math.expm1(x)
+
+    @vectorize(sig1, cache=True)
     def _sin(x):
         return math.sin(x)
 
@@ -145,7 +161,10 @@ def _ufuncs():  # the numba ufuncs, made on first use (importing numba's vectori
     def _arctan2(y, x):
         return math.atan2(y, x)
 
-    return {"exp": _exp, "log": _log, "sin": _sin, "cos": _cos, "power": _power, "arctan2": _arctan2}
+    return {
+        "exp": _exp, "log": _log, "log1p": _log1p, "expm1": _expm1, "sin": _sin, "cos": _cos, "power": _power,
+        "arctan2": _arctan2,
+    }  # fmt: skip
 
 
 _CACHE: dict = {}
@@ -175,6 +194,16 @@ def log(x):
     return _apply("log", x)
 
 
+def log1p(x):
+    """ln(1 + x), element by element, with the C library's bits (-inf at -1, nan below) [-]."""
+    return _apply("log1p", x)
+
+
+def expm1(x):
+    """e^x - 1, element by element, with the C library's bits [-]."""
+    return _apply("expm1", x)
+
+
 def sin(x):
     """sin x (x in rad), element by element, with the C library's bits [-]."""
     return _apply("sin", x)
@@ -196,39 +225,6 @@ def arctan2(y, x):
     return _apply("arctan2", y, x)
 
 
-def _linalg():  # the compiled product and solve, made on first use
-    from numba import njit
-
-    from bogie._lu import lu_factor, lu_solve
-
-    @njit(cache=True)
-    def _matmul(a, b):
-        n, m, p = a.shape[0], a.shape[1], b.shape[1]
-        c = np.zeros((n, p))
-        for i in range(n):
-            for j in range(p):
-                s = 0.0
-                for k in range(m):
-                    s += a[i, k] * b[k, j]
-                c[i, j] = s
-        return c
-
-    @njit(cache=True)
-    def _solve(a, b):
-        lu = a.copy()
-        piv = np.zeros(a.shape[0], dtype=np.int64)
-        x = b.copy()
-        if not lu_factor(lu, piv):
-            return x, False
-        for j in range(x.shape[1]):
-            col = x[:, j].copy()
-            lu_solve(lu, piv, col)
-            x[:, j] = col
-        return x, True
-
-    return {"matmul": _matmul, "solve": _solve}
-
-
 def matmul(a, b) -> np.ndarray:
     """The matrix product a b with every sum taken in index order, one multiply and one add at a time [-].
 
@@ -245,9 +241,9 @@ def matmul(a, b) -> np.ndarray:
     b2 = b_arr.reshape(-1, 1) if b_arr.ndim == 1 else b_arr
     if b2.ndim != 2 or a2.shape[1] != b2.shape[0]:
         raise ValueError(f"matmul: shapes {a_arr.shape} and {b_arr.shape} do not match")
-    if not _LINALG:
-        _LINALG.update(_linalg())
-    c = _LINALG["matmul"](np.ascontiguousarray(a2), np.ascontiguousarray(b2))
+    from bogie import _numerics_core
+
+    c = _numerics_core.matmul(np.ascontiguousarray(a2), np.ascontiguousarray(b2))
     lead = a_arr.shape[:-1]
     tail = () if b_arr.ndim == 1 else (b2.shape[1],)
     return c.reshape(lead + tail)
@@ -264,12 +260,78 @@ def solve(a, b) -> np.ndarray:
     b_arr = np.asarray(b, dtype=np.float64)
     if a_arr.ndim != 2 or a_arr.shape[0] != a_arr.shape[1] or b_arr.shape[:1] != a_arr.shape[:1]:
         raise ValueError(f"solve: a must be square and b have as many rows, got {a_arr.shape} and {b_arr.shape}")
-    if not _LINALG:
-        _LINALG.update(_linalg())
-    x, ok = _LINALG["solve"](a_arr, np.ascontiguousarray(b_arr.reshape(b_arr.shape[0], -1)))
+    from bogie import _numerics_core
+
+    x, ok = _numerics_core.solve(a_arr, np.ascontiguousarray(b_arr.reshape(b_arr.shape[0], -1)))
     if not ok:
         raise np.linalg.LinAlgError("Singular matrix")
     return x.reshape(b_arr.shape)
 
 
-_LINALG: dict = {}
+def geomspace(start: float, stop: float, num: int) -> np.ndarray:
+    """``num`` points from ``start`` to ``stop`` (both > 0) evenly spaced on a log scale, the ends exact [-]:
+    ``numpy.geomspace``'s formula (10 to the power of an even spacing of the ends' logarithms) with the C library's
+    ``pow`` and ``log10``."""
+    if not (start > 0.0 and stop > 0.0 and math.isfinite(start) and math.isfinite(stop)):
+        raise ValueError(f"geomspace: start = {start!r} and stop = {stop!r} must be finite and > 0")
+    out = power(10.0, np.linspace(math.log10(start), math.log10(stop), num))
+    out = np.atleast_1d(out)
+    if num > 0:
+        out[0] = start
+    if num > 1:
+        out[-1] = stop
+    return out
+
+
+def sinc(x):
+    """sin(pi x) / (pi x), 1 at 0, element by element [-]: numpy's ``sinc`` (its formula) with the C library's sine."""
+    y = np.pi * np.where(np.asarray(x, dtype=np.float64) == 0.0, 1.0e-20, x)
+    out = sin(y) / y
+    return float(out) if np.ndim(out) == 0 else out
+
+
+def inv(a) -> np.ndarray:
+    """The inverse of a square matrix by :func:`solve` against the identity, every sum in index order [-]."""
+    a_arr = np.asarray(a, dtype=np.float64)
+    if a_arr.ndim != 2 or a_arr.shape[0] != a_arr.shape[1]:
+        raise ValueError(f"inv: a must be a square matrix, got shape {a_arr.shape}")
+    return solve(a_arr, np.eye(a_arr.shape[0]))
+
+
+def cov(x) -> np.ndarray:
+    """The sample covariance of the columns of ``x`` (rows: observations), divided by n - 1, as
+    ``numpy.cov(x, rowvar=False)`` computes it but with the product's sums in index order [-]. A (d, d) matrix, also
+    for one column."""
+    arr = np.asarray(x, dtype=np.float64)
+    if arr.ndim != 2 or arr.shape[0] < 2:
+        raise ValueError(f"cov: x must be a 2-D array of at least 2 rows (observations), got shape {arr.shape}")
+    centred = arr - arr.mean(axis=0)
+    return matmul(centred.T, centred) / (arr.shape[0] - 1)
+
+
+def cholesky(a) -> np.ndarray:
+    """The lower triangular L with a = L L' of a symmetric positive definite matrix, sums in index order [-]. Raises
+    ``numpy.linalg.LinAlgError`` if ``a`` is not positive definite, as numpy does."""
+    from bogie import _numerics_core
+
+    a_arr = np.ascontiguousarray(a, dtype=np.float64)
+    if a_arr.ndim != 2 or a_arr.shape[0] != a_arr.shape[1]:
+        raise ValueError(f"cholesky: a must be a square matrix, got shape {a_arr.shape}")
+    low, ok = _numerics_core.cholesky(a_arr)
+    if not ok:
+        raise np.linalg.LinAlgError("Matrix is not positive definite")
+    return low
+
+
+def multivariate_normal(rng: np.random.Generator, mean, covariance) -> np.ndarray:
+    """One draw of N(mean, covariance) from ``rng``: mean + L z, L the :func:`cholesky` factor and z ``rng``'s d
+    standard normals [-].
+
+    ``Generator.multivariate_normal`` factors the covariance by LAPACK's SVD, whose kernels OpenBLAS picks by the CPU,
+    so its draws differ in the last bits between machines (and, through an accept/reject step, in more than that).
+    Needs a positive definite covariance (a semi-definite one raises ``numpy.linalg.LinAlgError``)."""
+    m = np.asarray(mean, dtype=np.float64)
+    low = cholesky(covariance)
+    if low.shape[0] != m.shape[0]:
+        raise ValueError(f"multivariate_normal: mean has {m.shape[0]} entries, covariance is {low.shape}")
+    return m + matmul(low, rng.standard_normal(m.shape[0]))

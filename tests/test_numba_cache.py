@@ -154,3 +154,86 @@ def test_a_directory_gone_between_the_listing_and_its_stat_takes_no_place_among_
     removed = prune(root, keep=2)
     assert sorted(removed) == sorted(entries[2:])
     assert directories(root) == sorted(entries[:2])
+
+
+#: a process that uses every family of compiled functions: bogie.numerics's ufuncs, products, solves and Cholesky
+#: factor, the static and linear models, and weighings of each kind (static and WIM, tandem and tri-axle, steel and
+#: air) through the simulate stage's own code; prints each function numba compiled (not loaded from the cache)
+EVERY_KERNEL = textwrap.dedent(
+    """
+    import math, sys
+    from numba.core import event
+
+    compiled = []
+
+    class Listener(event.Listener):
+        def on_start(self, ev):
+            compiled.append(ev.data["dispatcher"].py_func.__qualname__)
+
+        def on_end(self, ev):
+            pass
+
+    event.register("numba:compile", Listener())
+
+    import numpy as np
+    import pipeline
+    from bogie import cases, numerics
+    from bogie.static import wheel_loads
+    from bogie.params import triaxle_stage1
+    from pipeline.config import load_config
+    from pipeline.sample import sample_studies
+    from pipeline.simulate import chunk_table, study_protocols
+
+    x = np.linspace(0.1, 2.0, 5)
+    for f in (numerics.exp, numerics.log, numerics.log1p, numerics.expm1, numerics.sin, numerics.cos):
+        f(x)
+    numerics.power(x, 2.5), numerics.arctan2(x, x), numerics.sinc(x), numerics.geomspace(1.0, 2.0, 3)
+    a = np.array([[4.0, 1.0], [1.0, 3.0]])
+    numerics.solve(a, x[:2]), numerics.matmul(a, a), numerics.cholesky(a), numerics.inv(a), numerics.cov(a)
+    wheel_loads(triaxle_stage1(), 0.057, math.radians(1.0))
+    cases.run("L01")
+    config = load_config(sys.argv[1])
+    for study, frame in sample_studies(config).items():
+        if study != "fleet":
+            continue
+        for suspension in ("steel", "air"):
+            for group in ("tandem", "triaxle"):
+                pick = frame[(frame["suspension"] == suspension) & (frame["group"] == group)].iloc[:1]
+                rows = {c: pick[c].tolist() for c in pick.columns if c != "study"}
+                chunk_table(rows, study_protocols(config, study))
+    print(" ".join(sorted(set(compiled))) or "nothing")
+    """
+)
+
+
+def _cache_files(root: Path) -> dict[str, tuple[int, int]]:
+    return {p.relative_to(root).as_posix(): (p.stat().st_size, p.stat().st_mtime_ns) for p in root.rglob("*")
+            if p.is_file() and p.suffix in (".nbi", ".nbc")}  # fmt: skip
+
+
+def test_a_fresh_process_compiles_nothing_and_writes_nothing_once_the_cache_is_warm(tmp_path):
+    # issue 39 Must 6: a function made anew in each process (a closure) missed the cache and compiled every time
+    import yaml
+
+    raw = yaml.safe_load((ROOT / "params.yaml").read_text(encoding="utf-8"))
+    raw["fleet"]["n_bogies"] = 24
+    raw["fleet"]["suspension_mix"] = {"tandem": {"steel": 0.5, "air": 0.5}, "triaxle": {"steel": 0.5, "air": 0.5}}
+    params = tmp_path / "params.yaml"
+    params.write_text(yaml.safe_dump(raw), encoding="utf-8")
+    env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
+    env["XDG_CACHE_HOME"] = str(tmp_path / "cache")  # an empty cache: the first process compiles everything
+
+    def run() -> str:
+        out = subprocess.run([sys.executable, "-c", EVERY_KERNEL, str(params)], cwd=ROOT, env=env,
+                             capture_output=True, text=True, timeout=1200)  # fmt: skip
+        assert out.returncode == 0, out.stderr[-3000:]
+        return out.stdout.strip().splitlines()[-1]
+
+    first = run()
+    assert first != "nothing" and "matmul" in first.split()  # the listener does see compilations
+    before = _cache_files(tmp_path / "cache")
+    assert before
+    second = run()
+    assert second == "nothing", f"compiled again in a new process: {second}"
+    after = _cache_files(tmp_path / "cache")
+    assert after == before, f"cache entries written again: {sorted(set(after.items()) - set(before.items()))[:5]}"
