@@ -55,6 +55,8 @@ test: $(STAMP) $(PLOTS_TEMPLATE)
 lint: $(STAMP)
 	$(BIN)/ruff check bogie pipeline tests bench tools
 	$(BIN)/ruff format --check bogie pipeline tests bench tools
+	$(BIN)/python tools/numerics_rule.py
+	$(BIN)/python tools/conflict_markers.py
 
 bench: $(STAMP)
 	$(BIN)/python -m bench

@@ -75,7 +75,7 @@ def beam_local_stiffness(
     k[np.ix_([0, 3], [0, 3])] = a * np.array([[1.0, -1.0], [-1.0, 1.0]])
     if release_i and release_j:
         return k
-    b = ei / L**3
+    b = ei / L**3  # numerics-ok: floats, not arrays (libm pow)
     bend = b * np.array(
         [
             [12.0, 6.0 * L, -12.0, 6.0 * L],
@@ -351,16 +351,16 @@ class FrameModel:
         k_exp, f_exp = self._assemble()
         numbering, n_glob = self._global_map()
         tie_map = sp.csr_matrix((np.ones(n_exp), (np.arange(n_exp), numbering)), shape=(n_exp, n_glob))
-        k_glob = (tie_map.T @ k_exp @ tie_map).tocsr()
-        f_glob = tie_map.T @ f_exp
+        k_glob = (tie_map.T @ k_exp @ tie_map).tocsr()  # numerics-ok: scipy.sparse products (its own loops, no BLAS)
+        f_glob = tie_map.T @ f_exp  # numerics-ok: a scipy.sparse product (its own loops, no BLAS)
         u_glob, is_prescribed = self._prescribed_values(numbering, n_glob)
         free = np.flatnonzero(~is_prescribed)
         if free.size:
             k_ff = k_glob[free][:, free]
-            rhs = f_glob[free] - k_glob[free][:, is_prescribed] @ u_glob[is_prescribed]
+            rhs = f_glob[free] - k_glob[free][:, is_prescribed] @ u_glob[is_prescribed]  # numerics-ok: scipy.sparse
             u_glob[free] = self._solve_free(k_ff.tocsc(), rhs, free, numbering)
         u_exp = u_glob[numbering]
-        reactions = k_exp @ u_exp - f_exp
+        reactions = k_exp @ u_exp - f_exp  # numerics-ok: a scipy.sparse product (its own loops, no BLAS)
         forces = {}
         for name, el in self.elements.items():
             idx = np.concatenate([np.arange(3 * n, 3 * n + 3) for n in el.nodes])
@@ -380,7 +380,7 @@ class FrameModel:
             self._raise_mechanism(np.flatnonzero(diag <= 0.0), free, numbering, None)
         # Jacobi scaling puts translations and rotations on one footing for the singularity test
         scale = 1.0 / np.sqrt(diag)
-        k_scaled = sp.diags(scale) @ k_ff @ sp.diags(scale)
+        k_scaled = sp.diags(scale) @ k_ff @ sp.diags(scale)  # numerics-ok: scipy.sparse products (no BLAS)
         # dense LU with partial pivoting in compiled code (bogie._lu), every sum in index order: SuperLU's dense
         # blocks go through BLAS, whose kernel, and so the last bits, OpenBLAS picks by the CPU (bogie/numerics.py).
         # The models have tens to a few hundred free DOFs, where this costs milliseconds.
@@ -403,7 +403,7 @@ class FrameModel:
         if zero_rows is None:
             # the free modes are the eigenvectors with round-off eigenvalues; a mechanism is a modelling error,
             # reported once, so a dense eigen-solve is affordable here
-            vals, vecs = np.linalg.eigh(k_scaled.toarray())
+            vals, vecs = np.linalg.eigh(k_scaled.toarray())  # numerics-ok: names a mechanism in an error, no value
             null = vecs[:, vals <= max(vals[0], _PIVOT_TOL * vals[-1])]
             mode = np.sqrt(np.sum(null * null, axis=1))  # size of each DOF over the whole null space
             zero_rows = np.flatnonzero(mode >= 0.5 * mode.max())

@@ -243,7 +243,9 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
         ends = (x[i] - bogie.spring_front_half_length[i], x[i] + bogie.spring_rear_half_length[i])
         seat = radius[i] + _SEAT_RISE
         # an arched leaf: a parabola through its front pad, its seat on the axle and its rear pad, three leaves deep
-        fit = np.polyfit([ends[0], x[i], ends[1]], [pad(ends[0]), seat, pad(ends[1])], 2)
+        fit = np.polyfit(  # numerics-ok: the leaf drawn in a figure, no number out
+            [ends[0], x[i], ends[1]], [pad(ends[0]), seat, pad(ends[1])], 2
+        )
         xs = np.linspace(ends[0], ends[1], 60)
         for k, depth in enumerate((0.0, 0.018, 0.036)):
             cut = xs[np.abs(xs - x[i]) <= (1.0 - 0.25 * k) * max(x[i] - ends[0], ends[1] - x[i])]

@@ -192,7 +192,7 @@ def _percentile_bootstrap(
     """Paired percentile bootstrap interval of ``statistic(value, baseline)``; NaN if a resample is not finite."""
     if len(value) < 2:  # scipy needs two observations; one pair has no sampling distribution to speak of
         return np.nan, np.nan
-    result = stats.bootstrap(
+    result = stats.bootstrap(  # numerics-ok: percentile method: integer resampling, means, np.percentile
         (value, baseline), statistic, n_resamples=draws.num_resamples, paired=True, vectorized=True,
         confidence_level=conf_level, method="percentile", rng=draws.generator(),
     )  # fmt: skip
@@ -207,7 +207,7 @@ def _paired_effect(value: np.ndarray, baseline: np.ndarray, draws: _PairedDraws,
     with warnings.catch_warnings():
         # a statistic that is constant over the resamples (e.g. no group outside 10 % in any variant) is a
         # degenerate, zero-width interval, which is the right answer here
-        warnings.simplefilter("ignore", stats.DegenerateDataWarning)
+        warnings.simplefilter("ignore", stats.DegenerateDataWarning)  # numerics-ok: a warning class
         diff_low, diff_high = _percentile_bootstrap(_difference, value, baseline, draws, conf_level)
         rel_low, rel_high = _percentile_bootstrap(_relative_reduction, value, baseline, draws, conf_level)
     base_mean = baseline.mean()

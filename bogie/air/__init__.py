@@ -167,7 +167,7 @@ class AirBogie(AxleGroup):
     def gas_constant(self) -> float:
         """K of p_abs = K rho^n [Pa (m^3/kg)^n]."""
         p_abs = self.design_gauge_pressure + self.atmospheric_pressure
-        return p_abs / self.design_density**self.polytropic_index
+        return p_abs / self.design_density**self.polytropic_index  # numerics-ok: floats, not arrays (libm pow)
 
     @property
     def design_tyre_compression(self) -> float:

@@ -164,5 +164,6 @@ def coupled_time_constants(bogie: air.AirBogie) -> NDArray[np.float64]:
         p = state_loads(bogie, equilibrium(bogie, gas_mass=m))["bag_pressure"]
         jac[:, j] = (p - p_base) / step
     proj = np.eye(n) - np.full((n, n), 1.0 / n)
+    # numerics-ok: LAPACK's eigenvalues, a time scale for the docs and tests (to 3 digits), on no pipeline output
     rates = np.sort(np.abs(np.real(np.linalg.eigvals(bogie.pipe_conductance * proj @ jac))))
     return 1.0 / rates[1:]

@@ -262,7 +262,7 @@ def _energy(u: _SortedSample, v: _SortedSample) -> float:
     deltas = np.diff(both)
     fu = u.cdf[u.x.searchsorted(both[:-1], "right")]
     fv = v.cdf[v.x.searchsorted(both[:-1], "right")]
-    return math.sqrt(2.0) * math.sqrt(float(np.dot(np.square(fu - fv), deltas)))
+    return math.sqrt(2.0) * math.sqrt(float(np.sum(np.square(fu - fv) * deltas)))
 
 
 def _sorted_sides(obs: Mapping[str, np.ndarray], weights: Mapping[str, np.ndarray]) -> dict[str, list[_SortedSample]]:

@@ -24,6 +24,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie import numerics
 from bogie.fleet.calibration import Problem, _values, simulated
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.fleet.priors import Prior, log_prior
@@ -37,7 +38,7 @@ BOOTSTRAP = 200
 
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.maximum(np.einsum("i,ij->j", w, (x - mean) ** 2) / w.sum(), 0.0))
+    return np.sqrt(np.maximum((w[:, None] * (x - mean) ** 2).sum(axis=0) / w.sum(), 0.0))
 
 
 def summaries(quantities: Mapping[str, np.ndarray], weights: Mapping[str, np.ndarray]) -> np.ndarray:
@@ -51,7 +52,7 @@ def summaries(quantities: Mapping[str, np.ndarray], weights: Mapping[str, np.nda
         if len(q) == 0 or w.sum() <= 0.0:
             out.extend([math.nan] * (n - 1 + (n if n > 2 else 1) + 2))
             continue
-        mean = np.einsum("i,ij->j", w, q) / w.sum()
+        mean = (w[:, None] * q).sum(axis=0) / w.sum()
         sd = _weighted_sd(q, w, mean)
         out.extend([*mean[: n - 1], *sd[: (n if n > 2 else 1)], mean[n], sd[n]])
     return np.asarray(out, dtype=float)
@@ -78,7 +79,9 @@ class SyntheticLikelihood:
 
     def __call__(self, theta: np.ndarray) -> float:
         r = self.observed - self.simulated(theta)
-        return -0.5 * float(r @ self.precision @ r) if np.all(np.isfinite(r)) else -math.inf
+        if not np.all(np.isfinite(r)):
+            return -math.inf
+        return -0.5 * float(numerics.matmul(numerics.matmul(r, self.precision), r))
 
 
 def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> SyntheticLikelihood:
@@ -98,10 +101,10 @@ def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> Synth
         slots = rng.multinomial(n, np.full(n, 1.0 / n)).astype(float)
         sim = simulated(problem.table, values, problem.min_load_kg, slots, problem.weight_step_kg)
         sim_draws.append(_sim_summaries(problem, sim))
-    c_obs, c_sim = (np.cov(np.asarray(d), rowvar=False) for d in (obs_draws, sim_draws))
+    c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
     cov = c_obs + c_sim
     cov = cov + np.eye(len(cov)) * 1e-9 * max(float(np.trace(cov)) / len(cov), 1e-30)  # a ridge against rounding
-    return SyntheticLikelihood(problem, s_obs, np.linalg.inv(cov), c_obs, c_sim)
+    return SyntheticLikelihood(problem, s_obs, numerics.inv(cov), c_obs, c_sim)
 
 
 @dataclass
@@ -146,8 +149,8 @@ def posterior(
     for step in range(burn + draws):
         if step < burn and step >= 100 and step % 50 == 0:  # Haario's adaptive proposal, during burn-in only
             past = np.asarray(chain[-min(len(chain), 2000) :])
-            cov = (2.38**2 / d) * np.cov(past, rowvar=False).reshape(d, d) + np.diag((width * 1e-4) ** 2)
-        proposal = rng.multivariate_normal(theta, cov)
+            cov = (2.38**2 / d) * numerics.cov(past.reshape(len(past), d)) + np.diag((width * 1e-4) ** 2)
+        proposal = numerics.multivariate_normal(rng, theta, cov)
         lp_new, ll_new = _log_post(like, priors, problem, proposal)
         if math.log(rng.random()) < lp_new - lp:
             theta, lp, ll = proposal, lp_new, ll_new

@@ -20,10 +20,9 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.stats import truncnorm
 
 from bogie.fleet.constants import TILTED_QUANTITIES
-from bogie.fleet.distributions import Distribution, TruncNormal
+from bogie.fleet.distributions import Distribution, TruncNormal, truncated_standard_normal_cdf
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import bogie_from_sample, suspension_draw
 from bogie.fleet.tilted import Tilted
@@ -339,7 +338,7 @@ def build_table(
 
 def _cdf(dist: TruncNormal, x: np.ndarray) -> np.ndarray:
     a, b = (dist.low - dist.mean) / dist.sd, (dist.high - dist.mean) / dist.sd
-    return truncnorm.cdf(x, a, b, loc=dist.mean, scale=dist.sd)
+    return truncated_standard_normal_cdf((np.asarray(x, dtype=float) - dist.mean) / dist.sd, a, b)
 
 
 def bogie_tilts(table: Table, values: Mapping[str, float]) -> np.ndarray:

@@ -12,7 +12,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.stats import binomtest
+from scipy.stats import binomtest  # numerics-ok: for its Wilson interval, scalar arithmetic (wilson_interval)
 
 from bogie import numerics
 from bogie.fleet.constants import GROUP_AXLES
@@ -50,6 +50,7 @@ def wilson_interval(
     k, n = np.asarray(k), np.asarray(n)
     low, high = np.full(k.shape, np.nan), np.full(k.shape, np.nan)
     for i in np.flatnonzero(n > 0):
+        # numerics-ok: the Wilson interval is scalar arithmetic on floats and scipy.special.ndtri (no numpy ufunc)
         ci = binomtest(int(round(float(k.flat[i]))), int(n.flat[i])).proportion_ci(confidence, method="wilson")
         low.flat[i], high.flat[i] = ci.low, ci.high
     return low, high

@@ -26,6 +26,7 @@ from dataclasses import dataclass
 import numpy as np
 from scipy.optimize import brentq
 
+from bogie import numerics
 from bogie.fleet.distributions import Distribution, LogUniform, Uniform
 
 __all__ = ["MAX_TILT", "Tilted", "effective_fraction"]
@@ -66,7 +67,7 @@ class Tilted:
 
     def _y(self, x: np.ndarray | float) -> np.ndarray:
         x = np.asarray(x, dtype=float) * self.scale
-        return np.log(x) if self.log else x
+        return numerics.log(x) if self.log else x
 
     @property
     def ends(self) -> tuple[float, float]:
@@ -115,7 +116,7 @@ class Tilted:
         if t == 0.0:
             return np.ones(np.shape(x))
         u = self._u(x)
-        return np.exp(t * (u - 1.0)) if t > 0.0 else np.exp(t * u)
+        return numerics.exp(t * (u - 1.0)) if t > 0.0 else numerics.exp(t * u)
 
     def moved(self, x: np.ndarray, t: float) -> np.ndarray:
         """Each value moved to its rank under the fleet's distribution, under the tilt ``t``: the direct simulation's
@@ -124,12 +125,12 @@ class Tilted:
             return np.asarray(x, dtype=float)
         p = self._u(x)
         if t < 0.0:
-            u = np.log1p(p * math.expm1(t)) / t
+            u = numerics.log1p(p * math.expm1(t)) / t
         else:
-            u = 1.0 - np.log1p((1.0 - p) * math.expm1(-t)) / (-t)
+            u = 1.0 - numerics.log1p((1.0 - p) * math.expm1(-t)) / (-t)
         a, b = self.ends
         y = a + np.clip(u, 0.0, 1.0) * (b - a)
-        return (np.exp(y) if self.log else y) / self.scale
+        return (numerics.exp(y) if self.log else y) / self.scale
 
 
 def effective_fraction(weights: np.ndarray) -> float:

@@ -21,7 +21,7 @@ from bogie.road._checks import _check_range, _finite_array, _frozen, _uniform_in
 ISO8608_N0 = 0.1
 
 #: ISO 8608 class -> geometric-mean displacement PSD G_d(n0) [m^3]: 16e-6 * 4**k for classes A..H (k = 0..7)
-ISO8608_CLASSES: dict[str, float] = {c: 16e-6 * 4.0**k for k, c in enumerate("ABCDEFGH")}
+ISO8608_CLASSES: dict[str, float] = {c: 16e-6 * 4.0**k for k, c in enumerate("ABCDEFGH")}  # numerics-ok: floats
 
 #: points of the ISO 8608 interpolation grid per wavelength of the highest harmonic [-]
 _GRID_POINTS_PER_WAVELENGTH = 64
@@ -123,7 +123,7 @@ class ISO8608Profile:
         # self.psd(freqs), without its checks of a frequency array the harmonics make positive and finite
         amps = np.sqrt(2.0 * (self.psd_n0 * numerics.power(freqs / ISO8608_N0, -self.waviness)) / length)
         phases = np.random.default_rng(self.seed).uniform(0.0, 2.0 * np.pi, size=k_hi)[k_lo - 1 :]
-        n_grid = 2 ** math.ceil(math.log2(_GRID_POINTS_PER_WAVELENGTH * k_hi))
+        n_grid = 2 ** math.ceil(math.log2(_GRID_POINTS_PER_WAVELENGTH * k_hi))  # numerics-ok: integers
         spectrum = np.zeros(n_grid // 2 + 1, dtype=complex)
         # irfft(X)[j] = (2 / N) Re sum_k X_k e^(2 pi i k j / N) for 0 < k < N / 2
         spectrum[k] = 0.5 * n_grid * amps * (numerics.cos(phases) + 1j * numerics.sin(phases))

@@ -23,6 +23,9 @@ from bogie.weighings._records import (
 )
 from bogie.weighings.formats import CSV_COLUMNS, KMH
 
+#: 10^k for the decimal places a field may have (at most 15 digits), exact: 10^k is a float up to k = 22
+_POWERS_OF_TEN = np.array([float(10**k) for k in range(16)])  # numerics-ok: Python integers, exact
+
 #: an ISO 8601 local date and time, character by character: the positions of the date's and the time's digits and
 #: separators (``YYYY-MM-DD``, then ``[T ]HH:MM``, ``:SS``, ``[.,]fraction`` of 1-9 digits)
 _DATE_DIGITS = (0, 1, 2, 3, 5, 6, 8, 9)
@@ -114,7 +117,7 @@ def _decimals(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         digits += is_digit
         dots += is_dot
     ok &= (digits >= 1) & (digits <= 15) & (dots <= 1)
-    value = np.where(negative, -1.0, 1.0) * whole / 10.0**places
+    value = np.where(negative, -1.0, 1.0) * whole / _POWERS_OF_TEN[places]  # exact, not numpy's power
     return value, ok
 
 

@@ -34,6 +34,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from bogie import numerics
 from bogie.fleet.design_table import wilson_interval
 from bogie.params import GRAVITY
 from bogie.weighings.stats import _width, axle_columns
@@ -101,9 +102,9 @@ def group_wear(loads: ArrayLike, n_axles: ArrayLike, k: float, standard_axle: fl
         raise ValueError(f"n_axles must give each of the {w.shape[0]} groups 2 to {w.shape[1]} axles [-]")
     present = np.arange(w.shape[1]) < n[:, None]
     x = np.where(present, w, 0.0) / standard_axle
-    damage = np.where(present, x**k, 0.0).sum(axis=1)
+    damage = np.where(present, numerics.power(x, k), 0.0).sum(axis=1)  # not x**k: numpy's power is the CPU's
     mean = x.sum(axis=1) / n
-    equal = n * mean**k
+    equal = n * numerics.power(mean, k)
     with np.errstate(invalid="ignore", divide="ignore"):
         relative = damage / equal - 1.0
     return {"damage": damage, "damage_equal": equal, "extra": damage - equal, "relative": relative}

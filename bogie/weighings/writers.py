@@ -69,7 +69,7 @@ def _rows(rows: np.ndarray) -> str:
 
 def _field_range(field: Field) -> str:
     """'0-99 900 kg in kg/100, 3 digits' (the field's range in SI, its unit as written, its width)."""
-    top = 10**field.width - 1
+    top = 10**field.width - 1  # numerics-ok: integers
     if field.scale is None:
         return f"0-{_num(top)}, {field.width} digit{'s' if field.width > 1 else ''}"
     si = _SI.get(field.unit, field.unit)
@@ -120,7 +120,7 @@ def _scaled(fmt: str, name: str, values: np.ndarray, field: Field, rows: np.ndar
             )
     q = values if field.scale is None else values / field.scale
     written = _round_half_away(q)
-    where = np.flatnonzero(~(written <= 10**field.width - 1))
+    where = np.flatnonzero(~(written <= 10**field.width - 1))  # numerics-ok: integers
     if len(where):
         raise ValueError(
             f"{fmt}: {name} = {_val(values[where[0]])}{shown} in {_rows(rows[where])} does not fit its field "
@@ -245,7 +245,7 @@ def _time_fields(stamps: pd.DatetimeIndex, fmt: str, layout: FixedWidthLayout) -
             )
         year = year % 100
     else:
-        bad = np.flatnonzero(year > 10**layout.year_digits - 1)
+        bad = np.flatnonzero(year > 10**layout.year_digits - 1)  # numerics-ok: integers
         if len(bad):
             raise ValueError(f"{fmt}: timestamp = {stamps[bad[0]].isoformat()} in {_rows(bad)}: year too large")
     sub_ns = (rounded.asi8 % 1_000_000_000).astype(np.int64)
@@ -262,9 +262,9 @@ def _fixed_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
     layout = LAYOUTS[fmt]
     header = {f.name: f for f in layout.header}
     stamps = _timestamps(vehicles, fmt)
-    n = _axle_counts(vehicles, fmt, min(layout.max_axles, 10 ** header["n_axles"].width - 1))
+    n = _axle_counts(vehicles, fmt, min(layout.max_axles, 10 ** header["n_axles"].width - 1))  # numerics-ok: integers
     direction = _coded(vehicles, fmt, "direction", "1 or 2", lambda d: (d == 1) | (d == 2))
-    lane_top = 10 ** header["lane"].width - 1
+    lane_top = 10 ** header["lane"].width - 1  # numerics-ok: integers
     lane = _coded(vehicles, fmt, "lane", f"1-{lane_top}, 1-based", lambda v: (v >= 1) & (v <= lane_top))
     _require(vehicles, fmt, "speed")
     axle_ints = _axle_ints(vehicles, fmt, layout, n)
@@ -331,7 +331,7 @@ def _text(fmt: str, layout: FixedWidthLayout, values: dict, axle_ints: dict, n: 
     """The records: zero-padded, right-aligned fields; the spacing slot after the last axle written as zeros. Every
     header value is checked to fit its field first."""
     for f in layout.header:
-        top = 10**f.width - 1
+        top = 10**f.width - 1  # numerics-ok: integers
         bad = np.flatnonzero((values[f.name] < 0) | (values[f.name] > top))
         if len(bad):  # calendar fields and codes; the scaled ones are checked above
             raise ValueError(

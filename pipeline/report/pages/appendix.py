@@ -10,6 +10,7 @@ import numpy as np
 import pandas as pd
 from matplotlib.figure import Figure
 
+from bogie import numerics
 from bogie.fleet.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
 from bogie.fleet.survey import NOSE_UP_DEG
 from pipeline.report import text
@@ -34,7 +35,7 @@ def _panel(ax, panel: dict) -> None:
         x = np.asarray(panel["values"], dtype=float)
         lo, hi = float(np.min(x)), float(np.max(x))
         log = panel.get("log") and lo > 0.0
-        bins = np.geomspace(lo, hi, 26) if log and hi > lo else 25
+        bins = numerics.geomspace(lo, hi, 26) if log and hi > lo else 25
         ax.hist(x, bins=bins, color="C0", alpha=0.8)
         if log:
             ax.set_xscale("log")
