@@ -9,6 +9,7 @@ import copy
 import dataclasses
 import json
 import math
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -320,3 +321,41 @@ def test_the_calibration_table_on_a_local_dask_cluster_is_the_table_on_this_mach
     # the same weighings, bit for bit, whoever computed them (each worker's numerics checked against this process's)
     np.testing.assert_array_equal(dask.loads, loky.loads)
     assert loky.loads.shape[:2] == (2, 20) and np.isfinite(loky.loads[..., 0]).mean() > 0.9
+
+
+# ---- the same bits whoever computes (issue 39 Must 4) ------------------------------------------------------------
+def _outputs(root: Path) -> dict[str, bytes]:
+    files = [*sorted((root / "data" / "calibration").rglob("*")), root / "metrics" / "calibration.json"]
+    return {p.relative_to(root).as_posix(): p.read_bytes() for p in files if p.is_file()}
+
+
+def test_the_calibration_is_the_same_bits_with_one_worker_two_or_a_dask_cluster(tmp_path):
+    # every output: the fitted values, the posterior's draws and intervals, the bootstrap, the attribution, the tables
+    from dask.distributed import LocalCluster
+
+    survey = tmp_path / "survey.csv"
+    synthetic_survey(survey, n_vehicles=200)
+    small = dict(tilt_step_deg=1.0, bootstrap_resamples=3, maxiter=3, popsize=3, posterior_draws=150)
+
+    def calibrate(name: str, **execution) -> dict[str, bytes]:
+        root = tmp_path / name
+        (root / "observed").mkdir(parents=True)
+        shutil.copy2(survey, root / "observed" / "s.csv")
+        raw = raw_params(30, **small)
+        raw["execution"].update(execution)
+        args = project(root, raw)
+        assert C.main(args) == 0
+        return _outputs(root)
+
+    one = calibrate("one", n_jobs=1)
+    two = calibrate("two", n_jobs=2, chunk_size=3)
+    with LocalCluster(
+        n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1", dashboard_address=None
+    ) as cluster:
+        dask = calibrate("dask", backend="dask", dask_scheduler=cluster.scheduler_address)
+    assert "metrics/calibration.json" in one and any(k.endswith("posterior.csv") or "posterior" in k for k in one), (
+        sorted(one)
+    )
+    assert sorted(one) == sorted(two) == sorted(dask)
+    assert [k for k in one if one[k] != two[k]] == []
+    assert [k for k in one if one[k] != dask[k]] == []
