@@ -104,7 +104,10 @@ def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> Synth
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
     cov = c_obs + c_sim
     cov = cov + np.eye(len(cov)) * 1e-9 * max(float(np.trace(cov)) / len(cov), 1e-30)  # a ridge against rounding
-    return SyntheticLikelihood(problem, s_obs, numerics.inv(cov), c_obs, c_sim)
+    # a summary that is NaN in a resample (a size with no weight in it) leaves the covariance NaN: the precision is NaN
+    # then, as numpy's inverse gave it, every likelihood NaN and no proposal accepted (issue 43 is to treat it)
+    precision = numerics.inv(cov) if np.all(np.isfinite(cov)) else np.full_like(cov, np.nan)
+    return SyntheticLikelihood(problem, s_obs, precision, c_obs, c_sim)
 
 
 @dataclass
