@@ -23,10 +23,11 @@ import tempfile
 from collections.abc import Callable, Iterator, Sequence
 from contextlib import ExitStack, contextmanager
 from pathlib import Path
+from typing import Any
 
 __all__ = [
-    "LockedError", "atomic_outputs", "atomic_file", "io_error", "output_lock", "remove_leftovers", "replace_dir",
-    "stage_outputs",
+    "OUTPUT_MARKER", "LockedError", "OutputError", "atomic_outputs", "atomic_file", "guard_outputs", "io_error",
+    "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "stage_outputs",
 ]  # fmt: skip
 
 #: the random part of a ``tempfile`` name: 8 characters of its alphabet (``tempfile._RandomNameSequence``)
@@ -41,14 +42,145 @@ def io_error(stage: str, exc: OSError) -> str:
     return f"{stage}: cannot write {path}: {cause}"
 
 
+#: the file every output directory of a stage holds, with the stage's name: what proves the directory is the stage's
+OUTPUT_MARKER = ".bogie-output"
+
+
+class OutputError(ValueError):
+    """An output option names a place a stage must not replace (the project, a parent of it, home, another's files)."""
+
+
+def _protected() -> dict[Path, str]:
+    """The folders no output may be: the file system's root, home, the working directory and the project root, and
+    every parent of the last three, with what each is."""
+    from pipeline.deps import ROOT
+
+    out: dict[Path, str] = {Path("/").resolve(): "the file system's root"}
+    for place, what in ((Path.home(), "your home folder"), (Path.cwd(), "the working directory"),
+                        (ROOT, "the project root")):  # fmt: skip
+        place = place.resolve()
+        for parent in reversed(place.parents):
+            out.setdefault(parent, f"a parent of {what} ({place})")
+        out[place] = what
+    return out
+
+
+def guard_outputs(
+    stage: str, files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = (), own: Sequence[str | Path] = ()
+) -> None:
+    """Refuse outputs that replacing would destroy what the stage did not write, before anything is touched.
+
+    A directory output may not be the file system's root, home, the working directory, the project root or any
+    parent of these (symlinks resolved), nor an existing file; an existing directory that is not empty must be the
+    stage's own: it holds :data:`OUTPUT_MARKER` naming the stage (every directory :func:`atomic_outputs` writes for a
+    stage does), or it is one of ``own`` (the stage's default outputs, written before the marker existed). A file
+    output may not be an existing directory nor one of the protected folders. Nothing is moved or deleted here.
+
+    Raises
+    ------
+    OutputError
+        Naming the output, what it is and what to do.
+    """
+    protected = _protected()
+    own_paths = {Path(p).resolve() for p in own}
+    for raw in dirs:
+        path = Path(raw)
+        real = path.resolve()
+        if real in protected:
+            raise OutputError(
+                f"{stage}: the output folder {raw} is {protected[real]}: a stage replaces its output folder whole, so "
+                "it must be a folder of its own, e.g. the default under data/"
+            )
+        if os.path.lexists(path) and not path.is_dir():
+            raise OutputError(f"{stage}: the output folder {raw} is an existing file, not a folder: name a folder")
+        if not path.is_dir() or real in own_paths:
+            continue
+        marker = path / OUTPUT_MARKER
+        try:
+            writer = marker.read_text(encoding="utf-8").strip() if marker.is_file() else None
+        except OSError:
+            writer = None
+        if writer == stage:
+            continue
+        try:
+            entries = [entry.name for entry in os.scandir(path)]
+        except OSError as exc:
+            raise OutputError(f"{stage}: the output folder {raw} cannot be listed: {exc}") from None
+        if not entries:
+            continue
+        whose = f"the {writer} stage's output" if writer else "files the stage did not write"
+        shown = ", ".join(sorted(entries)[:3]) + (", ..." if len(entries) > 3 else "")
+        raise OutputError(
+            f"{stage}: the output folder {raw} holds {whose} ({shown}): the stage replaces its output folder whole "
+            "and would delete them; name a new or empty folder, or move them away first"
+        )
+    for raw in files:
+        path = Path(raw)
+        real = path.resolve()
+        if real in protected or path.is_dir():
+            what = protected.get(real, "an existing folder")
+            raise OutputError(f"{stage}: the output file {raw} is {what}: name a file")
+
+
+def refuse_outputs(
+    stage: str, parser: Any, args: Any, files: Sequence[str] = (), dirs: Sequence[str] = ()
+) -> tuple[str | None, list[Path]]:
+    """:func:`guard_outputs` on a stage's output options (``args``' attributes ``files`` and ``dirs``), the parser's
+    defaults being the stage's own folders: ``(the error line or None, those defaults)``. A stage calls it right
+    after parsing its arguments, so that a refused output costs no work."""
+    own = [Path(parser.get_default(name)) for name in dirs]
+    try:
+        guard_outputs(stage, [getattr(args, n) for n in files], [getattr(args, n) for n in dirs], own)
+    except OutputError as exc:
+        return str(exc), own
+    return None, own
+
+
 def _umask() -> int:
     mask = os.umask(0)
     os.umask(mask)
     return mask
 
 
+def _exchange():
+    """Linux's renameat2 with RENAME_EXCHANGE (two paths swapped in one step), or None where there is none."""
+    if not sys.platform.startswith("linux"):
+        return None
+    try:
+        import ctypes
+
+        libc = ctypes.CDLL(None, use_errno=True)
+        rename2 = libc.renameat2
+    except (OSError, AttributeError):
+        return None
+    rename2.argtypes = [ctypes.c_int, ctypes.c_char_p, ctypes.c_int, ctypes.c_char_p, ctypes.c_uint]
+    rename2.restype = ctypes.c_int
+    at_fdcwd, rename_exchange = -100, 2
+
+    def exchange(a: Path, b: Path) -> bool:
+        if rename2(at_fdcwd, os.fsencode(a), at_fdcwd, os.fsencode(b), rename_exchange) == 0:
+            return True
+        errno = ctypes.get_errno()
+        if errno in (22, 38, 95):  # EINVAL, ENOSYS, EOPNOTSUPP: the file system or kernel cannot; rename instead
+            return False
+        raise OSError(errno, os.strerror(errno), str(b))
+
+    return exchange
+
+
+_EXCHANGE = _exchange()
+
+
 def replace_dir(tmp: Path, final: Path) -> None:
-    """Replace directory ``final`` (if any) by ``tmp`` with renames; the old directory is removed after."""
+    """Replace directory ``final`` (if any) by ``tmp``; the old directory is removed after.
+
+    Where the system can (Linux's ``renameat2``), the two are swapped in one step, so ``final`` is never missing, not
+    even if the process is killed here: the old content is then left under ``tmp``'s temporary name, which the next
+    run removes (:func:`remove_leftovers`). Elsewhere ``final`` is first renamed to ``.<name>.old``, which the next
+    run puts back if it was killed between the two renames."""
+    if final.is_dir() and not final.is_symlink() and _EXCHANGE is not None and _EXCHANGE(tmp, final):
+        shutil.rmtree(tmp, ignore_errors=True)
+        return
     old = final.with_name(f".{final.name}.old")
     shutil.rmtree(old, ignore_errors=True)
     if final.exists():
@@ -64,13 +196,18 @@ def replace_dir(tmp: Path, final: Path) -> None:
 
 @contextmanager
 def atomic_outputs(
-    files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = ()
-) -> Iterator[tuple[list[Path], list[Path]]]:
+    files: Sequence[str | Path] = (), dirs: Sequence[str | Path] = (), stage: str | None = None,
+    own: Sequence[str | Path] = (),
+) -> Iterator[tuple[list[Path], list[Path]]]:  # fmt: skip
     """Yield temporary paths ``(file_tmps, dir_tmps)`` for ``files`` and ``dirs``; on success move them into place.
 
-    Each temporary file exists (empty) and each temporary directory exists (empty) when the block starts; parent
-    directories are created. Directories are put in place first, files last, in the order given.
+    With ``stage``, the outputs are first checked by :func:`guard_outputs` (``own``: the stage's default outputs),
+    before anything is created, and each directory gets :data:`OUTPUT_MARKER` naming the stage. Each temporary file
+    exists (empty) and each temporary directory exists (empty) when the block starts; parent directories are
+    created. Directories are put in place first, files last, in the order given.
     """
+    if stage is not None:
+        guard_outputs(stage, files, dirs, own)
     files, dirs = [Path(f) for f in files], [Path(d) for d in dirs]
     for path in (*files, *dirs):
         path.parent.mkdir(parents=True, exist_ok=True)
@@ -86,6 +223,8 @@ def atomic_outputs(
         yield file_tmps, dir_tmps
         mask = _umask()
         for tmp, final in zip(dir_tmps, dirs):
+            if stage is not None:
+                (tmp / OUTPUT_MARKER).write_text(f"{stage}\n", encoding="utf-8")
             os.chmod(tmp, 0o777 & ~mask)  # its files were created with the umask already
             replace_dir(tmp, final)
         for tmp, final in zip(file_tmps, files):

@@ -37,7 +37,7 @@ from bogie.fleet.calibration_checks import calibrate_survey
 from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.resources import worker_count
@@ -203,9 +203,11 @@ def fleet_study_overrides(values: Mapping[str, float], config: Config) -> dict[s
     return {"set": settings, "command": command, "not_settable": not_settable}
 
 
-def write_outputs(metrics: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], out_dir, metrics_path) -> None:
+def write_outputs(
+    metrics: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], out_dir, metrics_path, own: Sequence[Path] = ()
+) -> None:
     """data/calibration/ and metrics/calibration.json, all or nothing."""
-    with atomic_outputs(files=[metrics_path], dirs=[out_dir]) as ((tmp_json,), (tmp_dir,)):
+    with atomic_outputs(files=[metrics_path], dirs=[out_dir], stage="calibrate", own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
@@ -222,11 +224,15 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/calibration", help="output directory (default: data/calibration)")
     parser.add_argument("--metrics", default="metrics/calibration.json", help="default: metrics/calibration.json")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("calibrate", parser, args, files=["metrics"], dirs=["out"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
     try:
         # a second calibrate is refused here, and what a killed one left beside the outputs is removed
         with stage_outputs("calibrate", files=[args.metrics], dirs=[args.out], log=log):
-            return _stage(args, log)
+            return _stage(args, log, own)
     except LockedError as exc:
         print(f"calibrate: {exc}", file=sys.stderr)
         return 2
@@ -235,7 +241,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
-def _stage(args: argparse.Namespace, log: Callable[[str], None]) -> int:
+def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[Path] = ()) -> int:
     """The stage's work while it owns its outputs: read, calibrate, write; the exit code."""
     try:
         config = load_config(args.params, note=lambda line: log(f"calibrate: {line}"))
@@ -252,7 +258,7 @@ def _stage(args: argparse.Namespace, log: Callable[[str], None]) -> int:
         print(f"calibrate: {exc}", file=sys.stderr)
         return 2
     try:
-        write_outputs(metrics, tables, args.out, args.metrics)
+        write_outputs(metrics, tables, args.out, args.metrics, own)
     except OSError as exc:
         print(io_error("calibrate", exc), file=sys.stderr)
         return 2

@@ -28,7 +28,7 @@ import yaml
 from bogie.fleet.design import DesignExperiment, DesignSettings, design_experiment, experiment_runs, typical_design
 from bogie.fleet.design_analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
 from bogie.fleet.sampling import COLUMNS
-from pipeline.atomic import LockedError, atomic_outputs, io_error, stage_outputs
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import fleet_model
@@ -137,10 +137,11 @@ def metrics(
 
 
 def write_outputs(
-    tables: Mapping[str, pd.DataFrame], summary: Mapping[str, Any], out_dir: Path, metrics_path: Path
-) -> None:
+    tables: Mapping[str, pd.DataFrame], summary: Mapping[str, Any], out_dir: Path, metrics_path: Path,
+    own: Sequence[str | Path] = (),
+) -> None:  # fmt: skip
     """data/design/ (one CSV per table) and metrics/design.json, all or nothing."""
-    with atomic_outputs(files=[metrics_path], dirs=[out_dir]) as ((tmp_json,), (tmp_dir,)):
+    with atomic_outputs(files=[metrics_path], dirs=[out_dir], stage="design", own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(summary, fh, indent=2, allow_nan=False)
             fh.write("\n")
@@ -195,6 +196,10 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/design", help="tables directory (default: data/design)")
     parser.add_argument("--metrics", default="metrics/design.json", help="metrics file (default: metrics/design.json)")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("design", parser, args, files=["metrics"], dirs=["out"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
@@ -205,7 +210,7 @@ def main(argv: list[str] | None = None) -> int:
     try:
         # a second design is refused here, and what a killed one left beside the outputs is removed
         with stage_outputs("design", files=[metrics_path], dirs=[out], log=log):
-            return _stage(config, Path(args.runs), out, metrics_path, log)
+            return _stage(config, Path(args.runs), out, metrics_path, log, own)
     except LockedError as exc:
         print(f"design: {exc}", file=sys.stderr)
         return 2
@@ -214,7 +219,9 @@ def main(argv: list[str] | None = None) -> int:
         return 2
 
 
-def _stage(config: Config, runs_dir: Path, out: Path, metrics_path: Path, log: Callable[[str], None]) -> int:
+def _stage(
+    config: Config, runs_dir: Path, out: Path, metrics_path: Path, log: Callable[[str], None], own: Sequence[Path] = ()
+) -> int:
     """The stage's work while it owns its outputs: run, analyse, write; the exit code."""
     try:
         if config.design is None:
@@ -226,7 +233,7 @@ def _stage(config: Config, runs_dir: Path, out: Path, metrics_path: Path, log: C
         print(f"design: {exc}", file=sys.stderr)
         return 2
     try:
-        write_outputs(frames, summary, out, metrics_path)
+        write_outputs(frames, summary, out, metrics_path, own)
     except OSError as exc:
         print(io_error("design", exc), file=sys.stderr)
         return 2

@@ -45,7 +45,7 @@ from bogie.fleet.observed import (
 )
 from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
 
@@ -193,9 +193,10 @@ def write_outputs(
     metrics: Mapping[str, Any],
     out_dir: str | Path,
     metrics_path: str | Path,
+    own: Sequence[str | Path] = (),
 ) -> None:
     """Write data/observed/ (groups.parquet, simulated.parquet) and the metrics JSON, all or nothing."""
-    with atomic_outputs(files=[metrics_path], dirs=[out_dir]) as ((tmp_json,), (tmp_dir,)):
+    with atomic_outputs(files=[metrics_path], dirs=[out_dir], stage="observed", own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
@@ -211,6 +212,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/observed", help="output directory (default: data/observed)")
     parser.add_argument("--metrics", default="metrics/observed.json", help="default: metrics/observed.json")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("observed", parser, args, files=["metrics"], dirs=["out"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
+    try:
+        # a second observed is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("observed", files=[args.metrics], dirs=[args.out]):
+            return _stage(args, own)
+    except LockedError as exc:
+        print(f"observed: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("observed", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
+    """The stage's work while it owns its outputs: read, compute, write; the exit code."""
     try:
         config = load_config(args.params)
         observed = config.observed
@@ -226,7 +245,7 @@ def main(argv: list[str] | None = None) -> int:
     readings, counts = simulated_readings(runs, observed.min_group_load, observed.position, step)
     metrics = observed_metrics(observed, observed_stats, simulated_statistics(readings, counts), config.protocol.wim)
     try:
-        write_outputs(groups, readings, metrics, args.out, args.metrics)
+        write_outputs(groups, readings, metrics, args.out, args.metrics, own=own)
     except OSError as exc:
         print(io_error("observed", exc), file=sys.stderr)
         return 2

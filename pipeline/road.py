@@ -23,7 +23,7 @@ from __future__ import annotations
 import argparse
 import json
 import sys
-from collections.abc import Mapping
+from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
@@ -34,7 +34,7 @@ from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, load_config
 from pipeline.schema import read_runs_frame
 from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
@@ -106,6 +106,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/road", help="output directory (default: data/road)")
     parser.add_argument("--metrics", default="metrics/road.json", help="default: metrics/road.json")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("road", parser, args, files=["metrics"], dirs=["out"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
+    try:
+        # a second road is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("road", files=[args.metrics], dirs=[args.out]):
+            return _stage(args, own)
+    except LockedError as exc:
+        print(f"road: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("road", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
+    """The stage's work while it owns its outputs: read, compute, write; the exit code."""
     try:
         config = load_config(args.params)
         legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
@@ -113,6 +131,11 @@ def main(argv: list[str] | None = None) -> int:
         min_load = float(config.observed.min_group_load)
         runs = read_runs(args.runs, SURVEY_STUDY)
         groups_file = Path(args.observed) / "groups.parquet"
+        if config.observed.path is not None and not groups_file.is_file():
+            raise ValueError(
+                f"observed.path names a survey ({config.observed.path}) but {groups_file} is missing: run the observed "
+                "stage first (dvc repro observed), or set observed.path: null"
+            )
         groups = pd.read_parquet(groups_file) if groups_file.exists() else pd.DataFrame()
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
     except (ConfigError, RunsError, OSError, ValueError, KeyError, yaml.YAMLError) as exc:
@@ -129,7 +152,7 @@ def main(argv: list[str] | None = None) -> int:
         note = None
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
     try:
-        with atomic_outputs(files=[args.metrics], dirs=[args.out]) as ((tmp_json,), (tmp_dir,)):
+        with atomic_outputs(files=[args.metrics], dirs=[args.out], stage="road", own=own) as ((tmp_json,), (tmp_dir,)):
             with open(tmp_json, "w", encoding="utf-8") as fh:
                 json.dump(metrics, fh, indent=2, allow_nan=False)
                 fh.write("\n")

@@ -30,7 +30,7 @@ from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.survey import REQUIRED_COLUMNS, SUSPENSION_STATISTICS, inequality_columns, readings, survey_tables
 from bogie.params import GRAVITY
 from bogie.weighings.writers import write_weighings
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, load_config
 from pipeline.schema import SchemaError, check_runs, read_runs_frame
 
@@ -204,7 +204,7 @@ def _write_table(frame: pd.DataFrame, path: Path) -> None:
 
 def write_outputs(
     tables: Mapping[str, pd.DataFrame], out_dir: str | Path, metrics: Mapping[str, Any], metrics_path: str | Path,
-    records: tuple[str, pd.DataFrame, str] | None = None,
+    records: tuple[str, pd.DataFrame, str] | None = None, stage: str = "survey", own: Sequence[str | Path] = (),
 ) -> None:  # fmt: skip
     """Write the tables into ``out_dir`` and the metrics JSON, all or nothing; ``records`` (file name, vehicle table,
     format) is written with :func:`bogie.weighings.writers.write_weighings` into ``out_dir`` too.
@@ -213,7 +213,7 @@ def write_outputs(
     temporary file renamed last: a reader sees the old outputs or the new ones, never a mix or half a file, and an
     error while writing leaves the old outputs in place. Parent directories are created.
     """
-    with atomic_outputs(files=[metrics_path], dirs=[out_dir]) as ((tmp_json,), (tmp_dir,)):
+    with atomic_outputs(files=[metrics_path], dirs=[out_dir], stage=stage, own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
@@ -233,6 +233,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/survey", help="output directory (default: data/survey)")
     parser.add_argument("--metrics", default="metrics/survey.json", help="metrics file (default: metrics/survey.json)")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("survey", parser, args, files=["metrics"], dirs=["out"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
+    try:
+        # a second survey is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("survey", files=[args.metrics], dirs=[args.out]):
+            return _stage(args, own)
+    except LockedError as exc:
+        print(f"survey: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("survey", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
+    """The stage's work while it owns its outputs: read, compute, write; the exit code."""
     try:
         config = load_config(args.params)
         runs = read_runs(args.runs, SURVEY_STUDY, (*REQUIRED_COLUMNS, *DESIGN_COLUMNS))
@@ -255,7 +273,7 @@ def main(argv: list[str] | None = None) -> int:
         records = (f"fleet_wim.{fmt}", vehicles, fmt)
         metrics["export"] = {"format": fmt, "file": f"fleet_wim.{fmt}", **counts}
     try:
-        write_outputs(tables, args.out, metrics, args.metrics, records)
+        write_outputs(tables, args.out, metrics, args.metrics, records, own=own)
     except (OSError, ValueError) as exc:  # ValueError: a reading that does not fit the format's fields
         print(io_error("survey", exc) if isinstance(exc, OSError) else f"survey: {exc}", file=sys.stderr)
         return 2

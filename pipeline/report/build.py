@@ -18,7 +18,7 @@ import yaml
 from matplotlib.backends.backend_pdf import PdfPages
 
 from bogie.results import DynamicResult
-from pipeline.atomic import atomic_outputs, io_error
+from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
@@ -107,6 +107,7 @@ def write_report(
     png_dir: str | Path,
     plots_dir: str | Path,
     code: str,
+    own: Sequence[str | Path] = (),
 ) -> None:
     """Number the pages and write the PDF, the PNG pages and the plot series, all or nothing (pipeline.atomic).
 
@@ -116,7 +117,10 @@ def write_report(
     number_pages([p.figure for p in pages], f"{front.TITLE} · code {code[:12]}")
     for page in pages:
         freeze_layout(page.figure)
-    with atomic_outputs(files=[pdf_path], dirs=[png_dir, plots_dir]) as ((tmp_pdf,), (tmp_png, tmp_plots)):
+    with atomic_outputs(files=[pdf_path], dirs=[png_dir, plots_dir], stage="report", own=own) as (
+        (tmp_pdf,),
+        (tmp_png, tmp_plots),
+    ):
         metadata = {"Title": front.TITLE, "Subject": front.SUBTITLE, "Creator": "bogie pipeline.report"}
         with PdfPages(tmp_pdf, metadata={**metadata, "CreationDate": None}) as pdf:
             for page in pages:
@@ -130,7 +134,7 @@ def write_report(
 
 def make_report(
     inputs: ReportInputs, pdf: str | Path, png_dir: str | Path, plots_dir: str | Path,
-    progress: Callable[[str], None] | None = None,
+    progress: Callable[[str], None] | None = None, own: Sequence[str | Path] = (),
 ) -> dict[str, Any]:  # fmt: skip
     """Build and write the whole report; returns the summary's numbers and the page count (key ``pages``).
     ``progress`` is told each step (the reference cases, each part, the writing; None: nothing)."""
@@ -140,7 +144,7 @@ def make_report(
     with matplotlib.rc_context(STYLE):
         pages, numbers = build_pages(inputs, runs, progress)
         say(f"report: writing {len(pages)} pages to the PDF and the PNG pages")
-        write_report(pages, report_series(inputs), pdf, png_dir, plots_dir, inputs.facts["code_sha256"])
+        write_report(pages, report_series(inputs), pdf, png_dir, plots_dir, inputs.facts["code_sha256"], own)
     return {**numbers, "pages": len(pages)}
 
 
@@ -166,6 +170,24 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--png", default="reports/figures/report", help="directory of the PNG pages")
     parser.add_argument("--plots", default="reports/plots", help="directory of the DVC plot series")
     args = parser.parse_args(argv)
+    refused, own = refuse_outputs("report", parser, args, files=["pdf"], dirs=["png", "plots"])
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
+    try:
+        # a second report is refused here, and what a killed one left beside the outputs is removed
+        with stage_outputs("report", files=[args.pdf], dirs=[args.png, args.plots]):
+            return _stage(args, own)
+    except LockedError as exc:
+        print(f"report: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error("report", exc), file=sys.stderr)
+        return 2
+
+
+def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
+    """The stage's work while it owns its outputs: read, compute, write; the exit code."""
     try:
         dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration, args.design)
         inputs = read_inputs(args.params, args.samples, args.runs, *dirs)
@@ -174,7 +196,7 @@ def main(argv: list[str] | None = None) -> int:
         return 2
     try:
         numbers = make_report(
-            inputs, args.pdf, args.png, args.plots, lambda text: print(text, file=sys.stderr, flush=True)
+            inputs, args.pdf, args.png, args.plots, lambda text: print(text, file=sys.stderr, flush=True), own
         )
     except OSError as exc:
         print(io_error("report", exc), file=sys.stderr)
