@@ -71,6 +71,11 @@ WEAR_COLUMNS: tuple[str, ...] = (
 )  # fmt: skip
 
 
+#: the most bootstrap indices drawn at once (a block of resamples): 2^21 int64 indices, 16 MiB, and a gather of
+#: each damage array as large; a convention that bounds the memory whatever the survey's size
+BOOTSTRAP_BLOCK = 1 << 21
+
+
 def group_wear(loads: ArrayLike, n_axles: ArrayLike, k: float, standard_axle: float = 1.0) -> dict[str, NDArray]:
     """The pavement wear of each group of axle loads, and of the same group shared equally.
 
@@ -218,15 +223,25 @@ def wear_statistics(
         row["n_groups"] = len(index)
         row["n_failed"] = int(len(rows_all) - len(index))
         rng = np.random.default_rng(stream)
-        draws = rng.integers(0, len(index), (resamples, len(index))) if resamples and len(index) else None
+        m = len(index)
+        boot = {name: ([], []) for name in exponents} if resamples and m else None
+        if boot is not None:
+            # drawn in blocks of rows (each row one resample), at most BOOTSTRAP_BLOCK indices at a time: the same
+            # draws as one (resamples, m) call, in the same order, so the same bits, in bounded memory
+            rows_per_block = max(1, BOOTSTRAP_BLOCK // m)
+            for start in range(0, resamples, rows_per_block):
+                draws = rng.integers(0, m, (min(rows_per_block, resamples - start), m))
+                for name in exponents:
+                    d, e = wear[name]["damage"][index], wear[name]["damage_equal"][index]
+                    boot[name][0].append(d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0)
+                    boot[name][1].append(1000.0 * (d - e)[draws].mean(axis=1))
         for name in exponents:
             d, e = wear[name]["damage"][index], wear[name]["damage_equal"][index]
-            share = d.sum() / e.sum() - 1.0 if len(index) and e.sum() > 0 else math.nan
-            per_1000 = 1000.0 * float(np.mean(d - e)) if len(index) else math.nan
+            share = d.sum() / e.sum() - 1.0 if m and e.sum() > 0 else math.nan
+            per_1000 = 1000.0 * float(np.mean(d - e)) if m else math.nan
             row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
-            if draws is not None:
-                shares = d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0
-                extra = 1000.0 * (d - e)[draws].mean(axis=1)
+            if boot is not None:
+                shares, extra = np.concatenate(boot[name][0]), np.concatenate(boot[name][1])
                 row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = np.quantile(shares, [alpha, 1 - alpha])
                 row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = np.quantile(
                     extra, [alpha, 1 - alpha]

@@ -29,6 +29,7 @@ from pydantic import ValidationError
 
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.weighings._records import MEMORY_PER_BYTE, survey_memory, uncompressed_size
 from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
@@ -57,6 +58,7 @@ from pipeline.config.sections import (
     SurveyConfig,
 )
 from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
+from pipeline.resources import MEMORY_BUDGET
 
 __all__ = [
     "BACKENDS",
@@ -310,5 +312,14 @@ def _survey_file(name: str, root: str | Path) -> Path:
             "observed.path",
             f"{given}: is not a file (looked for {path}); put the survey's records there or set observed.path: null "
             "(docs/observed.md)",
+        )
+    need = survey_memory(target)
+    if need > MEMORY_BUDGET:
+        raise ConfigError(
+            "observed.path",
+            f"{given}: its {uncompressed_size(target) / 2**30:.2f} GiB of records need about {need / 2**30:.0f} GiB "
+            f"to read and summarise ({MEMORY_PER_BYTE} bytes a byte, bogie.weighings._records.MEMORY_PER_BYTE), "
+            f"more than the memory budget of {MEMORY_BUDGET / 2**30:g} GiB (pipeline.resources.MEMORY_BUDGET): "
+            "split the survey, or give a part of it",
         )
     return target
