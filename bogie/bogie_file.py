@@ -27,6 +27,7 @@ from typing import Any, NamedTuple
 
 import yaml
 
+from bogie.guarded_yaml import read_text_file, read_yaml
 from bogie.params import Bogie
 from bogie.presets import PRESETS, preset, preset_fields
 from bogie.ranges import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, FieldRange
@@ -109,20 +110,6 @@ class BogieFileError(ValueError):
     key with its value, the allowed range and the unit."""
 
 
-class _Loader(yaml.SafeLoader):
-    """PyYAML's safe loader that refuses a key given twice (``safe_load`` would keep the last without a word)."""
-
-    def construct_mapping(self, node: yaml.MappingNode, deep: bool = False) -> dict[Any, Any]:
-        seen: dict[Any, int] = {}
-        for key_node, _ in node.value:
-            key = self.construct_object(key_node, deep=deep)
-            line = key_node.start_mark.line + 1
-            if key in seen:
-                raise BogieFileError(f"key {key!r} given twice, at lines {seen[key]} and {line}")
-            seen[key] = line
-        return super().construct_mapping(node, deep=deep)
-
-
 def _range_in_file_units(rng: FieldRange, key: FileKey) -> str:
     def show(si: float) -> str:
         return f"{math.degrees(si):g}" if key.scale is None else f"{si / float(key.scale):g}"
@@ -203,11 +190,11 @@ def read_bogie_text(text: str, source: str = "<bogie file>") -> Bogie:
         bogie whose fields do not fit together (the chain does not close, say).
     """
     try:
-        data = yaml.load(text, Loader=_Loader)  # noqa: S506 (a SafeLoader)
+        data = read_yaml(text, source)  # a key given twice, deep nesting, alias bombs and huge integers refused
     except yaml.YAMLError as exc:
         raise BogieFileError(f"{source}: not valid YAML: {exc}") from None
-    except BogieFileError as exc:
-        raise BogieFileError(f"{source}: {exc}") from None
+    except ValueError as exc:  # DuplicateKeyError, DocumentTooLargeError: they name the file
+        raise BogieFileError(str(exc)) from None
     if not isinstance(data, dict):
         raise BogieFileError(f"{source}: must be a mapping of keys to values (docs/bogie-file.md), not {_kind(data)}")
     unknown = [k for k in data if k != BASE_KEY and k not in _FIELD_OF_KEY]
@@ -294,10 +281,12 @@ def load_bogie(path: str | os.PathLike[str]) -> Bogie:
     if path.suffix.lower() not in SUFFIXES:
         raise BogieFileError(f"{path}: a bogie file must end in {' or '.join(SUFFIXES)}")
     try:
-        text = path.read_text(encoding="utf-8")
+        text = read_text_file(path)  # a regular file of at most 1 MiB: a FIFO, a device, /dev/zero refused
     except FileNotFoundError:
         raise BogieFileError(f"{path}: no such bogie file (relative to {Path.cwd()})") from None
-    except (OSError, UnicodeDecodeError) as exc:
+    except ValueError as exc:  # not a regular file, too large, not UTF-8
+        raise BogieFileError(f"{path}: cannot be read as a bogie file: {exc}") from None
+    except OSError as exc:
         raise BogieFileError(f"{path}: cannot be read: {exc}") from None
     return read_bogie_text(text, str(path))
 

@@ -1,6 +1,6 @@
 """params.yaml: its schema, its rules, its errors and the validated configuration the stages read.
 
-The package's modules, in the order a file goes through them: :mod:`~pipeline.config.yaml_loader` reads the YAML
+The package's modules, in the order a file goes through them: :mod:`bogie.guarded_yaml` reads the YAML
 (a key given twice refused), :mod:`~pipeline.config.schema` validates it against the pydantic models (their
 distributions in :mod:`~pipeline.config.distributions`), :mod:`~pipeline.config.rules` checks the rules between
 keys and the bounds on the costs, :mod:`~pipeline.config.errors` words every bad key as one line, and

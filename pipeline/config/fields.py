@@ -9,6 +9,7 @@ holds as :class:`~pipeline.config.si.FrozenMap`.
 from __future__ import annotations
 
 from collections.abc import Callable
+from pathlib import Path
 from typing import Any, ClassVar
 
 from pydantic import AfterValidator, Field, ValidationInfo, create_model, field_validator, model_validator
@@ -71,6 +72,29 @@ class _Mix(_Map):
         return self
 
 
+#: the folder of the project's bogie files: ``fleet.presets`` may name files there only
+BOGIES_DIR = "bogies"
+
+
+def _inside_bogies(name: str) -> None:
+    """Refuse a bogie file outside the project's ``bogies/`` (absolute, ``..``, or a symlink leading out), before it is
+    opened: the message names where it points, never what it holds."""
+    path = Path(name)
+    allowed = (Path.cwd() / BOGIES_DIR).resolve()
+    if path.is_absolute() or ".." in path.parts or not path.parts or path.parts[0] != BOGIES_DIR:
+        raise config_error("", name, f"a bogie file must lie in the project's {BOGIES_DIR}/ folder, named relative "
+                           f"to the project root ({BOGIES_DIR}/my_triaxle.yaml; docs/bogie-file.md)")  # fmt: skip
+    try:
+        target = (Path.cwd() / path).resolve(strict=True)
+    except FileNotFoundError:
+        return  # the loader says no such file
+    except (OSError, RuntimeError) as exc:
+        raise config_error("", name, f"cannot be resolved: {exc}") from None
+    if not target.is_relative_to(allowed):
+        raise config_error("", name, f"points to {target}, outside the project's {BOGIES_DIR}/ ({allowed}; symlinks "
+                           f"followed): copy the bogie file into {BOGIES_DIR}/")  # fmt: skip
+
+
 class _Presets(_Map):
     @field_validator("*")
     @classmethod
@@ -81,6 +105,8 @@ class _Presets(_Map):
                 "", name, f"must be a preset ({', '.join(PRESETS)}) or a bogie file's path ending in .yaml or .yml, "
                 "relative to the project root (docs/bogie-file.md)"
             )  # fmt: skip
+        if is_bogie_file(name):
+            _inside_bogies(name)
         try:
             bogie = base_bogie(name)
         except BogieFileError as exc:

@@ -6,7 +6,7 @@ converts every value to SI once, into the frozen dataclasses below: keys ending 
 ``_s`` / ``_m`` / ``_m_s`` give their unit in the name; everything in a :class:`Config` is SI ([m], [rad], [N],
 [s], [kg]). Bad values raise one :class:`ConfigError` (a ``ValueError``) with a line per bad key naming its key
 path, the value and the expected form, range and unit (:mod:`pipeline.config.errors`); a key given twice in the
-file is refused too (:mod:`pipeline.config.yaml_loader`). :func:`check_params`, the ``validate`` stage's check, adds
+file is refused too (:mod:`bogie.guarded_yaml`). :func:`check_params`, the ``validate`` stage's check, adds
 the observed survey's file (:func:`observed_file`) to those errors.
 
 A calibration's protocol is the survey's (``calibrate.protocol: auto``, the default, follows ``observed.kind``: a
@@ -29,6 +29,7 @@ from pydantic import ValidationError
 
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
 from bogie.weighings._records import MEMORY_PER_BYTE, survey_memory, uncompressed_size
 from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
@@ -57,7 +58,6 @@ from pipeline.config.sections import (
     SensitivityConfig,
     SurveyConfig,
 )
-from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
 from pipeline.resources import MEMORY_BUDGET
 
 __all__ = [
@@ -104,12 +104,11 @@ def load_params(path: str | Path = "params.yaml") -> dict[str, Any]:
     yaml.YAMLError
         If the file is not valid YAML.
     """
-    with open(path, encoding="utf-8") as fh:
-        try:
-            data = read_yaml(fh, str(path))
-        except DuplicateKeyError as exc:
-            keys = [(key, line) for (key, _, _), line in zip(exc.duplicates, str(exc).splitlines())]
-            raise ConfigError(keys[0][0], str(exc), keys) from None
+    try:
+        data = read_yaml_file(path)
+    except DuplicateKeyError as exc:
+        keys = [(key, line) for (key, _, _), line in zip(exc.duplicates, str(exc).splitlines())]
+        raise ConfigError(keys[0][0], str(exc), keys) from None
     if data is None:
         return {}
     if not isinstance(data, dict):

@@ -5,8 +5,8 @@ from pathlib import Path
 import pytest
 import yaml
 
+from bogie.guarded_yaml import DuplicateKeyError, read_yaml
 from pipeline.config import ConfigError, load_config, load_params
-from pipeline.config.yaml_loader import DuplicateKeyError, read_yaml
 
 PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
 

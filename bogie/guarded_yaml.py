@@ -1,4 +1,7 @@
-"""A YAML reader for params.yaml that refuses a key given twice in one mapping.
+"""A YAML reader for the files a user writes (params.yaml, bogie files) that refuses what would hang, exhaust memory
+or silently drop a value.
+
+It refuses a key given twice in one mapping.
 
 PyYAML's ``safe_load`` keeps the last of two equal keys without a word, so a value edited in one place and left
 in another would silently win or lose. :func:`read_yaml` composes the document, checks every mapping at every
@@ -7,11 +10,19 @@ depth for a repeated key (naming its key path and both line numbers), then const
 A document too large to be a parameter file is refused before it is built, in bounded time and memory
 (:class:`DocumentTooLargeError`): nesting deeper than :data:`MAX_DEPTH` (PyYAML composes recursively, 5,000 nested
 ``[`` raised a RecursionError), or more than :data:`MAX_NODES` values once every alias is expanded (a "billion laughs"
-of nested aliases is a few lines that expand to 10^9 values, which validation and its message would walk).
+of nested aliases is a few lines that expand to 10^9 values, which validation and its message would walk), or an
+integer of more than :data:`MAX_INT_DIGITS` digits (a 401-digit integer overflowed the conversion to a float).
+:func:`read_yaml_file` reads only a regular file of at most :data:`MAX_FILE_BYTES` (a FIFO waited for ever, /dev/zero
+filled the memory).
+
+params.yaml (``pipeline.config``) and bogie files (``bogie.bogie_file``) are both read through it.
 """
 
 from __future__ import annotations
 
+import os
+import stat
+from pathlib import Path
 from typing import IO, Any
 
 import yaml
@@ -23,6 +34,10 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 MAX_DEPTH = 32
 #: the most values (scalars, lists, mappings) a parameter file may hold, aliases expanded (params.yaml: about 400) [-]
 MAX_NODES = 100_000
+#: the most digits an integer may have [-]: a count or a seed fits in 20 (2^64 has 20); more is a typo
+MAX_INT_DIGITS = 20
+#: the largest file read [bytes]: 1 MiB (params.yaml is about 20 KiB, a bogie file 2 KiB)
+MAX_FILE_BYTES = 2**20
 
 
 class DocumentTooLargeError(ValueError):
@@ -47,6 +62,18 @@ class _Loader(yaml.SafeLoader):
             return super().compose_node(parent, index)
         finally:
             self.depth -= 1
+
+    def construct_yaml_int(self, node: yaml.ScalarNode) -> int:
+        digits = sum(c.isdigit() for c in str(node.value))
+        if digits > MAX_INT_DIGITS:
+            raise DocumentTooLargeError(
+                f"{self.source}: an integer of {digits} digits at line {node.start_mark.line + 1}: at most "
+                f"{MAX_INT_DIGITS} digits; a number that large is a typo"
+            )
+        return super().construct_yaml_int(node)
+
+
+_Loader.add_constructor("tag:yaml.org,2002:int", _Loader.construct_yaml_int)
 
 
 def _expanded_size(node: yaml.Node, sizes: dict[int, int]) -> int:
@@ -147,3 +174,38 @@ def read_yaml(stream: str | IO[str], source: str = "params.yaml") -> Any:
         return loader.construct_document(node)
     finally:
         loader.dispose()
+
+
+def read_text_file(path: str | os.PathLike[str], max_bytes: int = MAX_FILE_BYTES) -> str:
+    """The UTF-8 text of a regular file of at most ``max_bytes`` bytes; a FIFO, a device, a folder or a larger file
+    is refused before it is read.
+
+    Raises
+    ------
+    DocumentTooLargeError
+        A file larger than ``max_bytes``.
+    ValueError
+        Not a regular file (symlinks followed).
+    OSError, UnicodeDecodeError
+        The file cannot be read, or is not UTF-8.
+    """
+    path = Path(path)
+    status = os.stat(path)
+    if not stat.S_ISREG(status.st_mode):
+        mode = status.st_mode
+        kind = (
+            "a folder" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
+            else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a file"
+        )  # fmt: skip
+        raise ValueError(f"{path}: is {kind}, not a regular file")
+    with open(path, "rb") as fh:
+        data = fh.read(max_bytes + 1)
+    if len(data) > max_bytes:
+        raise DocumentTooLargeError(f"{path}: more than {max_bytes:,} bytes: not a parameter or bogie file")
+    return data.decode("utf-8")
+
+
+def read_yaml_file(path: str | os.PathLike[str], source: str | None = None) -> Any:
+    """:func:`read_yaml` of the file ``path`` (:func:`read_text_file`: a regular file of at most
+    :data:`MAX_FILE_BYTES`)."""
+    return read_yaml(read_text_file(path), str(path) if source is None else source)
