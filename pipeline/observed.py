@@ -31,7 +31,6 @@ from typing import Any
 
 import pandas as pd
 import pyarrow as pa
-import pyarrow.parquet as pq
 import yaml
 
 from bogie.fleet.observed import (
@@ -47,6 +46,7 @@ from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
+from pipeline.schema import checksummed_content
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
 
 __all__ = [
@@ -200,8 +200,8 @@ def write_outputs(
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
-        pq.write_table(_table(groups, GROUPS_SCHEMA), tmp_dir / "groups.parquet")
-        pq.write_table(_table(readings, SIMULATED_SCHEMA), tmp_dir / "simulated.parquet")
+        (tmp_dir / "groups.parquet").write_bytes(checksummed_content(_table(groups, GROUPS_SCHEMA)))
+        (tmp_dir / "simulated.parquet").write_bytes(checksummed_content(_table(readings, SIMULATED_SCHEMA)))
 
 
 def main(argv: list[str] | None = None) -> int:

@@ -36,7 +36,7 @@ from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
 from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, load_config
-from pipeline.schema import read_runs_frame
+from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
 
 __all__ = ["CONFIDENCE", "RESAMPLES", "main", "observed_wear", "road_metrics"]
@@ -136,7 +136,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
                 f"observed.path names a survey ({config.observed.path}) but {groups_file} is missing: run the observed "
                 "stage first (dvc repro observed), or set observed.path: null"
             )
-        groups = pd.read_parquet(groups_file) if groups_file.exists() else pd.DataFrame()
+        rerun = "delete it and rerun the observed stage"
+        groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
     except (ConfigError, RunsError, OSError, ValueError, KeyError, yaml.YAMLError) as exc:
         print(f"road: {exc}", file=sys.stderr)

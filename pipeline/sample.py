@@ -36,9 +36,10 @@ from bogie.fleet.sampling import (
 )
 from bogie.fleet.sampling import sample_fleet as fleet_sample
 from bogie.params import INHIBITORS
-from pipeline.atomic import atomic_file, io_error
+from pipeline.atomic import io_error
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.resources import available_memory
+from pipeline.schema import write_checksummed
 
 STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
 
@@ -183,9 +184,9 @@ def sample_studies(config: Config) -> dict[str, pd.DataFrame]:
 
 # ---- output ----------------------------------------------------------------------------------------------------
 def write_parquet_atomic(frame: pd.DataFrame, path: str | Path) -> None:
-    """Write ``frame`` to ``path`` through a temporary file in the same directory, so no reader sees half a file."""
-    with atomic_file(path) as tmp:
-        frame.to_parquet(tmp, index=False)
+    """Write ``frame`` to ``path`` through a temporary file in the same directory, so no reader sees half a file, with
+    a part file's checksums (:func:`pipeline.schema.write_checksummed`): simulate and the report verify them."""
+    write_checksummed(frame, path)
 
 
 #: memory one sampled bogie costs at the pipeline's peak: its sample row and design point (about 0.6 KiB with

@@ -234,19 +234,16 @@ def _checksum_offset(content: bytes, value: bytes) -> int | None:
     return at + len(CHECKSUM_KEY) + len(_VALUE_HEADER)
 
 
-def read_runs_content(content: bytes, where: str) -> pa.Table:
-    """The runs table of the part file ``content`` (named ``where`` in errors), verified.
-
-    The file's SHA-256 (:data:`CHECKSUM_KEY`) must match its bytes, every page's CRC32 its data, and its fields the
-    runs schema's (:func:`check_file_schema`). A changed bit anywhere, in a data page, a page's statistics or the
-    footer, is an error, not a silently different number.
+def verified_table(content: bytes, where: str, rerun: str) -> pa.Table:
+    """The Arrow table of the Parquet file ``content`` (named ``where`` in errors) written by
+    :func:`checksummed_content`, verified: its SHA-256 (:data:`CHECKSUM_KEY`) must match its bytes and every page's
+    CRC32 its data. ``rerun`` says what to do about a damaged file (``delete it and rerun the sample stage``).
 
     Raises
     ------
     RunsFileError
         Naming ``where`` and what failed.
     """
-    rerun = "delete it and rerun the simulate stage (make repro) to recompute it"
     if len(content) < 12 or content[:4] != b"PAR1" or content[-4:] != b"PAR1":
         raise RunsFileError(f"{where} is not a whole Parquet file (no PAR1 marks at both ends): {rerun}")
     try:
@@ -255,8 +252,8 @@ def read_runs_content(content: bytes, where: str) -> pa.Table:
         raise RunsFileError(f"{where} is damaged: its footer does not read ({exc}); {rerun}") from None
     if stored is None:
         raise RunsFileError(
-            f"{where} carries no checksum (metadata key {CHECKSUM_KEY.decode()}): not a part file of this version "
-            f"of simulate; {rerun}"
+            f"{where} carries no checksum (metadata key {CHECKSUM_KEY.decode()}): not written by this version of the "
+            f"pipeline; {rerun}"
         )
     at = _checksum_offset(content, stored)
     if at is None or _file_digest(content, at) != stored:
@@ -265,9 +262,45 @@ def read_runs_content(content: bytes, where: str) -> pa.Table:
             f"a page's statistics or the footer); {rerun}"
         )
     try:
-        table = pq.ParquetFile(pa.BufferReader(content), page_checksum_verification=True).read()
+        return pq.ParquetFile(pa.BufferReader(content), page_checksum_verification=True).read()
     except (OSError, pa.ArrowException) as exc:
         raise RunsFileError(f"{where} is damaged: {exc}; {rerun}") from None
+
+
+def read_checksummed(path: str | Path, rerun: str) -> pa.Table:
+    """:func:`verified_table` of the file ``path``: every Parquet file a stage writes for another to read (samples,
+    observed groups, survey tables) carries the checksums of a part file and is read through this.
+
+    Raises
+    ------
+    RunsFileError
+        Naming the file, what failed and ``rerun``.
+    OSError
+        If the file cannot be read.
+    """
+    return verified_table(Path(path).read_bytes(), str(path), rerun)
+
+
+def write_checksummed(frame: pd.DataFrame | pa.Table, path: str | Path) -> None:
+    """Write a frame or an Arrow table to the Parquet file ``path`` with a part file's checksums
+    (:func:`checksummed_content`), atomically; read it back with :func:`read_checksummed`."""
+    table = frame if isinstance(frame, pa.Table) else pa.Table.from_pandas(frame, preserve_index=False)
+    write_file(checksummed_content(table), path)
+
+
+def read_runs_content(content: bytes, where: str) -> pa.Table:
+    """The runs table of the part file ``content`` (named ``where`` in errors), verified.
+
+    The file's SHA-256 (:data:`CHECKSUM_KEY`) must match its bytes, every page's CRC32 its data
+    (:func:`verified_table`), and its fields the runs schema's (:func:`check_file_schema`). A changed bit anywhere, in
+    a data page, a page's statistics or the footer, is an error, not a silently different number.
+
+    Raises
+    ------
+    RunsFileError
+        Naming ``where`` and what failed.
+    """
+    table = verified_table(content, where, "delete it and rerun the simulate stage (make repro) to recompute it")
     check_file_schema(table.schema, where)
     return table
 

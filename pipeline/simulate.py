@@ -67,7 +67,7 @@ from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
 from pipeline.portable import warn_if_unportable
 from pipeline.resources import worker_count
 from pipeline.sample import STUDIES
-from pipeline.schema import failed_runs, runs_frame, table_from_rows
+from pipeline.schema import failed_runs, read_checksummed, runs_frame, table_from_rows
 from pipeline.workers import Feed, OtherNumericsError, check_numerics, local_executor
 
 
@@ -395,7 +395,7 @@ def read_samples(samples_dir: str | Path, studies: Sequence[str] = STUDIES) -> d
     samples = {}
     for study in studies:
         path = Path(samples_dir) / f"{study}.parquet"
-        frame = pd.read_parquet(path)
+        frame = read_checksummed(path, "delete it and rerun the sample stage").to_pandas()
         missing = [c for c in COLUMNS if c not in frame.columns]
         if missing:
             raise ValueError(f"{path} lacks the columns {', '.join(missing)}: rerun the sample stage")

@@ -22,7 +22,7 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import pyarrow.parquet as pq
+import pyarrow as pa
 import yaml
 
 from bogie.fleet.design_table import DESIGN_COLUMNS, design_table
@@ -32,7 +32,7 @@ from bogie.params import GRAVITY
 from bogie.weighings.writers import write_weighings
 from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
 from pipeline.config import ConfigError, load_config
-from pipeline.schema import SchemaError, check_runs, read_runs_frame
+from pipeline.schema import SchemaError, check_runs, checksummed_content, read_checksummed, read_runs_frame
 
 #: the study a roadside survey samples
 SURVEY_STUDY = "fleet"
@@ -197,7 +197,7 @@ def wim_records(runs: pd.DataFrame, samples: pd.DataFrame, speed: float) -> tupl
 
 def _write_table(frame: pd.DataFrame, path: Path) -> None:
     if path.suffix == ".parquet":
-        frame.to_parquet(path, index=False)
+        path.write_bytes(checksummed_content(pa.Table.from_pandas(frame, preserve_index=False)))
     else:
         frame.to_csv(path, index=False, float_format="%.6g")
 
@@ -265,7 +265,9 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     fmt = config.survey.export_format
     if fmt is not None:
         try:
-            samples = pq.read_table(Path(args.samples) / f"{SURVEY_STUDY}.parquet").to_pandas()
+            samples = read_checksummed(
+                Path(args.samples) / f"{SURVEY_STUDY}.parquet", "delete it and rerun the sample stage"
+            ).to_pandas()
         except OSError as exc:
             print(f"survey: {exc}", file=sys.stderr)
             return 2

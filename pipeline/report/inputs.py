@@ -17,7 +17,7 @@ import bogie
 import pipeline
 from bogie.fleet.survey import REQUIRED_COLUMNS, inequality_columns, readings
 from pipeline.config import Config, load_config, load_params
-from pipeline.schema import SchemaError, read_runs_frame
+from pipeline.schema import SchemaError, read_checksummed, read_runs_frame
 from pipeline.survey import RunsError, read_runs
 
 __all__ = [
@@ -165,7 +165,8 @@ def read_tables(directory: str | Path, required: Sequence[str]) -> dict[str, pd.
     missing = [name for name in required if not (directory / name).is_file()]
     if missing:
         raise RunsError(f"{directory}/ lacks {', '.join(missing)}: run the stage that writes it first")
-    read = {".csv": pd.read_csv, ".parquet": pd.read_parquet}
+    rerun = f"delete it and rerun the stage that writes {directory}/"
+    read = {".csv": pd.read_csv, ".parquet": lambda f: read_checksummed(f, rerun).to_pandas()}
     return {f.name: read[f.suffix](f) for f in sorted(directory.iterdir()) if f.suffix in read}
 
 
@@ -217,7 +218,7 @@ def read_inputs(
         raw_params=load_params(params),
         config=config,
         facts=facts,
-        fleet=pd.read_parquet(Path(samples) / "fleet.parquet"),
+        fleet=read_checksummed(Path(samples) / "fleet.parquet", "delete it and rerun the sample stage").to_pandas(),
         runs=every,
         ok=ok,
         survey=read_tables(survey_dir, SURVEY_TABLES),
