@@ -14,7 +14,6 @@ so a temporary found while holding it belongs to no live process.
 
 from __future__ import annotations
 
-import fcntl
 import os
 import re
 import shutil
@@ -29,6 +28,37 @@ __all__ = [
     "OUTPUT_MARKER", "LockedError", "OutputError", "atomic_outputs", "atomic_file", "guard_outputs", "io_error",
     "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "stage_outputs",
 ]  # fmt: skip
+
+try:  # POSIX: flock; Windows has no fcntl, and locks a byte of the file with msvcrt instead
+    import fcntl
+except ImportError:  # pragma: no cover - Windows
+    fcntl = None  # type: ignore[assignment]
+    import msvcrt
+
+
+def _try_lock(handle: Any) -> bool:
+    """Take the exclusive lock of an open lock file without waiting; False if another process holds it."""
+    if fcntl is not None:
+        try:
+            fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
+        except BlockingIOError:
+            return False
+        return True
+    try:  # pragma: no cover - Windows
+        handle.seek(0)
+        msvcrt.locking(handle.fileno(), msvcrt.LK_NBLCK, 1)
+    except OSError:  # pragma: no cover - Windows
+        return False
+    return True  # pragma: no cover - Windows
+
+
+def _unlock(handle: Any) -> None:
+    if fcntl is not None:
+        fcntl.flock(handle, fcntl.LOCK_UN)
+        return
+    handle.seek(0)  # pragma: no cover - Windows
+    msvcrt.locking(handle.fileno(), msvcrt.LK_UNLCK, 1)  # pragma: no cover - Windows
+
 
 #: the random part of a ``tempfile`` name: 8 characters of its alphabet (``tempfile._RandomNameSequence``)
 _RANDOM = "[a-z0-9_]{8}"
@@ -317,11 +347,12 @@ def output_lock(path: str | Path, stage: str) -> Iterator[None]:
                 handle = open(lock_path, "a+", encoding="utf-8")
             except FileNotFoundError:  # a finishing holder removed the directory it had made
                 continue
-            try:
-                fcntl.flock(handle, fcntl.LOCK_EX | fcntl.LOCK_NB)
-            except BlockingIOError:
+            if not _try_lock(handle):
                 handle.seek(0)
-                holder = handle.read().strip() or "unknown"
+                try:
+                    holder = handle.read().strip() or "unknown"
+                except OSError:  # Windows: the holder's locked byte cannot be read
+                    holder = "unknown"
                 handle.close()
                 raise LockedError(
                     f"{shown} is being written by another {stage} process (pid {holder}, lock {lock_path}): wait "
@@ -341,8 +372,11 @@ def output_lock(path: str | Path, stage: str) -> Iterator[None]:
         try:
             yield
         finally:
-            lock_path.unlink(missing_ok=True)
-            fcntl.flock(handle, fcntl.LOCK_UN)
+            try:
+                lock_path.unlink(missing_ok=True)
+            except PermissionError:  # Windows: an open file cannot be removed; it is left, unlocked
+                pass
+            _unlock(handle)
             handle.close()
     finally:
         for directory in created:

@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import os
 import stat
+from pathlib import Path
 
 import pytest
 
@@ -81,3 +82,30 @@ def test_io_error_names_the_path_and_the_cause():
 
     full = OSError(28, "No space left on device", "data/survey")
     assert io_error("survey", full) == "survey: cannot write data/survey: [Errno 28] No space left on device"
+
+
+def test_the_pipeline_imports_where_there_is_no_fcntl():
+    # Windows has no fcntl (issue 40 item 9): the locks take a byte with msvcrt there. The lock module imports without
+    # it, and no other module of ours imports fcntl but inside a try (third-party packages are theirs to port)
+    import ast
+    import subprocess
+    import sys
+
+    code = (
+        "import sys, types\n"
+        "sys.modules['fcntl'] = None\n"
+        "fake = types.ModuleType('msvcrt'); fake.LK_NBLCK, fake.LK_UNLCK = 2, 0; fake.locking = lambda *a: None\n"
+        "sys.modules['msvcrt'] = fake\n"
+        "import pipeline.atomic as a\n"
+        "assert a.fcntl is None and a._try_lock(open(sys.argv[1], 'a+'))\n"
+        "print('ok')\n"
+    )
+    out = subprocess.run([sys.executable, "-c", code, __file__], capture_output=True, text=True, timeout=300)
+    assert out.stdout.strip() == "ok", out.stderr[-2000:]
+    root = Path(__file__).resolve().parents[2]
+    for path in [*root.glob("bogie/**/*.py"), *root.glob("pipeline/**/*.py")]:
+        tree = ast.parse(path.read_text(encoding="utf-8"))
+        guarded = {id(n) for t in ast.walk(tree) if isinstance(t, ast.Try) for b in t.body for n in ast.walk(b)}
+        for node in ast.walk(tree):
+            if isinstance(node, ast.Import) and any(a.name == "fcntl" for a in node.names):
+                assert id(node) in guarded, f"{path}:{node.lineno} imports fcntl outside a try"
