@@ -201,3 +201,26 @@ def test_bad_arguments_are_refused_naming_the_argument_its_value_and_unit(make, 
         make()
     for word in words:
         assert word in str(err.value), str(err.value)
+
+
+def test_the_ablation_states_a_size_the_baseline_has_no_laden_group_of(monkeypatch):
+    # issue 40 item 3: calibrate.n_bogies 20 on a 1,500-vehicle MON survey ended in KeyError: 'triaxle' when the
+    # baseline kept no laden tri-axle and a variant did; now its buys_points is NaN (null in the metrics)
+    import numpy as np
+    import pandas as pd
+
+    from bogie.fleet import calibration_checks as K
+
+    def fake(table, values, variant, steel_only=False, executor=None):
+        rows = [{"group": "tandem", "n_axles": 2, "axle_load_1": 8000.0, "axle_load_2": 8200.0, "axle_load_3": np.nan}]
+        if variant != "baseline":
+            rows.append({"group": "triaxle", "n_axles": 3, "axle_load_1": 7000.0, "axle_load_2": 7600.0,
+                         "axle_load_3": 8100.0})  # fmt: skip
+        return pd.DataFrame(rows)
+
+    monkeypatch.setattr(K, "simulate_fleet", fake)
+    table = K.ablation(None, {}, 0.0)
+    tri = table[table["group"] == "triaxle"]
+    assert len(tri) and tri["buys_points"].isna().all()
+    tandem = table[(table["group"] == "tandem") & (table["variant"] == "baseline")]
+    assert float(tandem["buys_points"].iloc[0]) == 0.0

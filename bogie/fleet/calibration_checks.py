@@ -170,10 +170,14 @@ def ablation(
                 "variant": variant, "group": size, "n_groups": len(loads),
                 "mean_max_deviation_pct": 100.0 * float(max_dev.mean()), "share_outside_5pct": float(outside.mean()),
             })  # fmt: skip
-    table_ = pd.DataFrame(rows)
+    columns = ["variant", "group", "n_groups", "mean_max_deviation_pct", "share_outside_5pct"]
+    table_ = pd.DataFrame(rows, columns=columns)
     base = table_[table_["variant"] == "baseline"].set_index("group")
+    # a size the baseline has no laden group of (a small calibration fleet) has nothing to buy against: NaN, stated
+    # by the baseline's missing row, not a KeyError
     table_["buys_points"] = [
-        base.loc[g, "mean_max_deviation_pct"] - m for g, m in zip(table_["group"], table_["mean_max_deviation_pct"])
+        base.loc[g, "mean_max_deviation_pct"] - m if g in base.index else math.nan
+        for g, m in zip(table_["group"], table_["mean_max_deviation_pct"])
     ]
     return table_
 
