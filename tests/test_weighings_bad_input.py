@@ -247,3 +247,29 @@ def test_a_csv_date_that_does_not_exist_is_an_invalid_date_and_the_others_are_re
     assert result.bad_lines == {"invalid date or time": [3]}
     stamps = result.vehicles["timestamp"].dt.strftime("%Y-%m-%d %H:%M").tolist()
     assert stamps == ["2026-03-14 07:01", "2024-02-29 00:00"]
+
+
+@pytest.mark.parametrize("fmt", ["mon", "castor", "bedit", "ditis"])
+def test_lane_0_is_a_counted_bad_record_in_every_fixed_width_format(tmp_path, fmt):
+    # issue 40 item 9: the formats count lanes from 1 (wim-record-formats.md); lane 0 was read silently
+    from bogie.weighings.formats import LAYOUTS
+    from bogie.weighings.readers import read_weighings
+
+    lane = next(f for f in LAYOUTS[fmt].header if f.name == "lane")
+    source = Path(__file__).resolve().parent / "data" / "weighings" / f"site.{fmt}"
+    good = read_weighings(source, fmt)
+    lines = source.read_bytes().split(b"\n")
+    target = int(good.vehicles["line"].iloc[0]) - 1
+    edited = bytearray(lines[target])
+    edited[lane.start : lane.start + lane.width] = b"0" * lane.width
+    lines[target] = bytes(edited)
+    path = tmp_path / f"x.{fmt}"
+    path.write_bytes(b"\n".join(lines))
+    try:
+        result = read_weighings(path, fmt)
+    except ValueError as exc:  # too many bad records for the file to be this format: the lane is named among them
+        assert "lane 0" in str(exc)
+        return
+    reason = next(r for r in result.skipped if r.startswith("lane 0"))
+    assert result.skipped[reason] == 1 and result.bad_lines[reason] == [target + 1]
+    assert len(result.vehicles) == len(good.vehicles) - 1

@@ -223,6 +223,7 @@ def _checked_stamp(layout: FixedWidthLayout, reasons: _Reasons, raw: dict[str, n
         reasons.flag((raw["n_groups"] < 1) | (raw["n_groups"] > n), "implausible number of axle groups")
     base = layout.direction_base
     reasons.flag((raw["direction"] != base) & (raw["direction"] != base + 1), f"direction not {base} or {base + 1}")
+    reasons.flag(raw["lane"] < 1, "lane 0 (the formats count lanes from 1)")
     year = raw["year"]
     if layout.year_digits == 2:  # the century is not written: POSIX %y
         year = year + np.where(year >= TWO_DIGIT_PIVOT, 1900, 2000)
