@@ -315,6 +315,10 @@ def main(argv: Sequence[str] | None = None) -> int:
         devnull = os.open(os.devnull, os.O_WRONLY)
         os.dup2(devnull, sys.stdout.fileno())
         return 128 + 13
+    except OSError as exc:  # a file that cannot be read or written (--out /proc/x.png): one line, no traceback
+        where = exc.filename if exc.filename is not None else "?"
+        print(f"bogie: error: cannot write or read {where}: {exc.strerror or exc}", file=sys.stderr)
+        return 2
 
 
 if __name__ == "__main__":

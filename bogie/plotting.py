@@ -38,9 +38,13 @@ def save_figure(fig: Figure, path: str | Path, dpi: int = 150) -> None:
     out.parent.mkdir(parents=True, exist_ok=True)
     tmp = out.with_name(f".{out.name}.tmp{out.suffix}")
     # SVG element ids are random unless salted
-    with matplotlib.rc_context({"svg.hashsalt": "bogie"}):
-        fig.savefig(tmp, dpi=dpi, metadata=_NO_DATE.get(out.suffix.lower()))
-    tmp.replace(out)
+    try:
+        with matplotlib.rc_context({"svg.hashsalt": "bogie"}):
+            fig.savefig(tmp, dpi=dpi, metadata=_NO_DATE.get(out.suffix.lower()))
+        tmp.replace(out)
+    except BaseException:
+        tmp.unlink(missing_ok=True)  # nothing half-written left behind
+        raise
 
 
 def figure2(

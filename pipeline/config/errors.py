@@ -300,6 +300,9 @@ def _line(schema: type[BaseModel], error: ErrorDetails) -> tuple[str, str]:
         text = f"{name} = {shown(value)}: is text, not a number (must be {expected(place)})"
         if _YAML_TEXT_EXPONENT.fullmatch(value.strip()):
             return key, f"{text}; YAML reads 1e3 and 1.0e3 as text, write 1.0e+3"
+        if value.strip().lstrip("+-").lower() in ("nan", "inf", "infinity"):
+            # unquoted NaN or inf is text to YAML (its own are .nan, .inf), and no quantity takes them anyway
+            return key, f"{name} = {shown(value)}: is not a number a quantity takes: must be {expected(place)}"
         return key, f"{text}; write it without quotes"
     if kind == "too_short" and get_origin(place.node) is list and (ctx.get("min_length") or 0) > 1:
         return key, f"{name} = {shown(value)}: must be {expected(place)}: at least {ctx['min_length']} items"

@@ -222,6 +222,8 @@ def observed_path(value: str | None) -> str | None:
     """A path inside :data:`OBSERVED_DIR`, relative to the project root, as a normalised POSIX path."""
     if value is None:
         return None
+    if "\0" in value:  # no file system takes it: a path cannot be resolved with one (it raised a traceback)
+        raise config_error("", value, "a path must not contain a NUL byte (\\0); name a file in observed/")
     path = PurePosixPath(value.replace("\\", "/"))
     parts = [p for p in path.parts if p != "."]
     inside = not path.is_absolute() and ".." not in parts and len(parts) >= 2 and parts[0] == OBSERVED_DIR
