@@ -165,3 +165,23 @@ def test_road_refuses_a_named_survey_whose_observed_stage_has_not_run(tmp_path, 
     err = capsys.readouterr().err
     assert "observed.path names a survey" in err and "run the observed stage first" in err, err
     assert not (tmp_path / "road").exists() and not (tmp_path / "road.json").exists()
+
+
+@pytest.mark.parametrize("stage", ["road", "observed", "survey", "sensitivity", "report"])
+def test_what_a_killed_run_left_beside_the_outputs_is_removed_by_the_next_run(stage, place, capsys):
+    # issue 40 item 6: a kill -9 while road, observed or report wrote left temporaries no rerun removed (git status
+    # showed them); every stage now owns its outputs as calibrate does, and cleans them first
+    _, project = place
+    module, dirs, files = STAGES[stage]
+    parser_defaults = {opt: None for opt in (*dirs, *files)}
+    args: list[str] = ["--params", "missing.yaml"]
+    for option in parser_defaults:
+        target = project / "out" / f"{stage}{option.replace('--', '_')}"
+        args += [option, str(target)]
+        target.parent.mkdir(parents=True, exist_ok=True)
+        leftover = target.parent / f".{target.name}.k2x9a_7q.tmp"
+        leftover.mkdir() if option in dirs else leftover.write_text("half")
+    assert run(stage, *args) == 2  # the params file is missing: the stage fails after cleaning
+    err = capsys.readouterr().err
+    assert not [p for p in (project / "out").iterdir() if p.name.endswith(".tmp")], list((project / "out").iterdir())
+    assert err.count("left by an interrupted run") == len(parser_defaults), err
