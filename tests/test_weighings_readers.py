@@ -24,6 +24,7 @@ import math
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
 from bogie.weighings.formats import LAYOUTS
@@ -259,3 +260,49 @@ def test_format_auto_refuses_when_no_layout_or_two_fit_naming_the_candidates(tmp
         read_weighings(tmp_path / "mixed.txt")
     with pytest.raises(ValueError, match=r"no records: format auto found an empty file"):
         read_weighings(DATA / "empty.ditis")
+
+
+# ---- every good record read: comparisons in the file's units (issue 41 Must 1) ------------------------------------
+def _float_breaking_pair(unit: float) -> tuple[int, int]:
+    """Two plausible spacings (1.2 to 9.9 m) in a format's units whose sum in metres, summed as floats, exceeds their
+    sum's length in metres."""
+    lo, hi = round(1.2 / unit), round(9.9 / unit)
+    for a in range(lo, hi):
+        for b in range(lo, min(hi, lo + 50)):
+            if np.nansum([a * unit, b * unit]) > (a + b) * unit:
+                return a, b
+    raise AssertionError("no pair found")
+
+
+@pytest.mark.parametrize("fmt", ["mon", "castor", "bedit", "ditis"])
+def test_a_length_equal_to_the_wheelbase_is_read_and_one_unit_shorter_is_not(tmp_path, fmt):
+    # 146 of a real MON file's 5,000 records were lost: their stated length equals the sum of the spacings to the
+    # unit, and the check summed the spacings in metres in floating point (2.95 + 1.35 = 4.300000000000001 > 4.3)
+    from bogie.weighings.formats import LAYOUTS
+    from bogie.weighings.writers import write_weighings
+
+    unit = LAYOUTS[fmt].axle_field("spacing").scale
+    a, b = _float_breaking_pair(unit)
+    base = read_weighings(DATA / "site.mon", "mon").vehicles
+    row = base[base["n_axles"] == 3].iloc[:1].copy()
+    row["head"] = 1
+    row["spacing_1"], row["spacing_2"] = a * unit, b * unit
+    equal, shorter = row.copy(), row.copy()
+    equal["length"] = (a + b) * unit
+    shorter["length"] = (a + b - 1) * unit
+    frame = pd.concat([equal, shorter, equal], ignore_index=True)
+    frame["timestamp"] = frame["timestamp"].iloc[0] + pd.to_timedelta([0, 1, 2], unit="s")
+    path = tmp_path / f"x.{fmt}"
+    write_weighings(frame, path, fmt)
+    result = read_weighings(path, fmt)
+    assert result.vehicles["line"].tolist() == [1, 3], result.reasons()
+    assert result.skipped == {"length shorter than the wheelbase": 1}
+    assert np.nansum([a * unit, b * unit]) > result.vehicles["length"].iloc[0]  # the float sum would have lost it
+
+
+def test_values_at_a_ranges_ends_are_in():
+    from bogie.weighings.readers import _outside
+
+    lo, hi = 0.6, 18.75
+    assert not _outside(np.array([60 * 0.01, 1875 * 0.01, 6 * 0.1]), lo, hi).any()
+    assert _outside(np.array([59 * 0.01, 1876 * 0.01]), lo, hi).all()

@@ -100,3 +100,25 @@ def test_the_survey_stage_summary_uses_these_statistics():
     assert summary["share_outside_5pct"] == ours["share_outside_5pct"]
     assert summary["share_over_10pct"] == ours["share_over_10pct"]
     assert summary["mean_spread_kg"] == pytest.approx(ours["mean_spread_kg"], rel=1e-14)
+
+
+def test_a_group_at_a_limit_is_within_it_whatever_the_last_bit():
+    # issue 41 Must 1: 9994.0 and 9494.3 kg differ by exactly 5 % of the heavier, but (h - l) / h rounds above 0.05
+    from bogie.weighings.stats import group_inequality
+
+    h, l = 9994.0, 9494.3
+    assert (h - l) / h > 0.05  # what the exact comparison saw
+    at = group_inequality(np.array([[h, l], [h, l - 0.1], [11000.0, 9000.0]]), np.array([2, 2, 2]))
+    assert at["outside_5pct"].tolist() == [False, True, True]
+    assert at["over_10pct"].tolist() == [False, False, False]  # 11000 is 1.1 times the mean: at the limit, within
+    over = group_inequality(np.array([[11001.0, 8999.0]]), np.array([2]))
+    assert over["over_10pct"].tolist() == [True]
+
+
+def test_a_load_at_its_legal_limit_is_not_over_it():
+    from bogie.weighings.wear import hidden_overloads
+
+    loads = np.array([[6000.1, 6000.1, 5999.8], [10000.0, 8000.0, 0.0], [10000.1, 7000.0, 0.0]])  # kg
+    out = hidden_overloads(loads, np.array([3, 2, 2]), np.array([18000.0, 18000.0, 18000.0]), 10000.0)
+    assert out["group_over"].tolist() == [False, False, False]  # each group at its legal load exactly
+    assert out["axle_over"].tolist() == [False, False, True]

@@ -101,6 +101,12 @@ _GZIP_MAGIC = b"\x1f\x8b"
 _BOM = b"\xef\xbb\xbf"
 
 
+#: the relative tolerance of a comparison of a value derived from a file's fields with a limit or another value [-]:
+#: a field is an integer times its unit (or a decimal), and the conversion and a sum round in the last bits (about
+#: 1e-16 relative); 1e-9 is far below any field's resolution (1 kg in 22,680 kg, 1 mm in 18.75 m), so a value
+#: written at a limit is at it, not past it
+REL_TOL = 1e-9
+
 #: peak memory of reading a survey and computing its statistics and road figures, per byte of its records
 #: (uncompressed) [bytes/byte]: measured 1.34 GB for a MON file of 1,000,000 records, 91.3 MB (``bogie weighings
 #: --json``, 6 December 2026), 14.7; rounded up

@@ -17,6 +17,8 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from bogie.weighings._records import REL_TOL
+
 __all__ = ["GROUP_SPACING_M", "GROUP_TABLE_COLUMNS", "POSITIONS", "SIZES", "axle_groups", "filter_groups"]
 
 #: largest spacing of two axles of one group [m] (issue 13's default; see the module text)
@@ -77,7 +79,8 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     # a new group starts at the front axle and after every spacing wider than group_spacing_m
     starts = np.zeros((len(n), width), bool)
     starts[:, 0] = True
-    starts[:, 1:] = (gaps > group_spacing_m) & present[:, 1:]
+    # a spacing equal to the limit (read from the file as an integer times its unit) is within the group
+    starts[:, 1:] = (gaps > group_spacing_m * (1.0 + REL_TOL)) & present[:, 1:]
     in_vehicle = np.cumsum(starts, axis=1) - 1  # each axle's group index within its vehicle
     n_groups = in_vehicle[np.arange(len(n)), n - 1] + 1
     first_group = np.concatenate(([0], np.cumsum(n_groups)[:-1]))  # each vehicle's first group, in the group table

@@ -37,6 +37,7 @@ from bogie.weighings._records import (
     MAX_BAD_FRACTION,
     NO_AXLES,
     NON_NUMERIC,
+    REL_TOL,
     SHORT_HEADER,
     SNIFF_LINES,
     SPACING_RANGE,
@@ -256,6 +257,9 @@ def _scaled(layout: FixedWidthLayout, raw: dict[str, np.ndarray], axles: dict[st
     return {
         "columns": columns, "loads": loads, "spacings": spacings, "widths": widths,
         "gross_step": scale["gross_weight"], "load_step": load_unit,
+        # the wheelbase check's integers: the length and the spacings in the format's own units
+        "length_units": (raw["length"], scale["length"]),
+        "spacing_units": (axles["spacing"], layout.axle_field("spacing").scale),
     }  # fmt: skip
 
 
@@ -290,13 +294,15 @@ def _check_vehicles(parsed: dict) -> float | None:
     reasons: _Reasons = parsed["reasons"]
     col = parsed["columns"]
     loads, spacings = parsed["loads"], parsed["spacings"]
+    # each range's ends are in: a value derived from a field (an integer times its unit) is compared with a tolerance
+    # of REL_TOL, so that a field written at an end (18.75 m as 1875 cm) is not lost to a float's last bit
     lo, hi = AXLE_LOAD_RANGE
-    reasons.flag(((loads < lo) | (loads > hi)).any(axis=1), f"implausible axle load (allowed {lo:g}-{hi:g} kg)")
+    reasons.flag(_outside(loads, lo, hi).any(axis=1), f"implausible axle load (allowed {lo:g}-{hi:g} kg)")
     lo, hi = SPACING_RANGE
-    reasons.flag(((spacings < lo) | (spacings > hi)).any(axis=1), f"implausible axle spacing (allowed {lo:g}-{hi:g} m)")
+    reasons.flag(_outside(spacings, lo, hi).any(axis=1), f"implausible axle spacing (allowed {lo:g}-{hi:g} m)")
     lo, hi = SPEED_RANGE
     speed = col["speed"]
-    reasons.flag((speed < lo) | (speed > hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
+    reasons.flag(_outside(speed, lo, hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
     step = _weight_step(loads, reasons.ok)
     total = np.nansum(loads, axis=1)
     gross = col["gross_weight"]
@@ -306,9 +312,31 @@ def _check_vehicles(parsed: dict) -> float | None:
         gross_half = max(step or 0.0, parsed["gross_step"]) / 2
         slack = GROSS_TOLERANCE * total + gross_half + col["n_axles"] * load_half
         reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
-    length = col["length"]
-    reasons.flag((length > 0) & (length < np.nansum(spacings, axis=1)), "length shorter than the wheelbase")
+    reasons.flag(_shorter_than_wheelbase(parsed), "length shorter than the wheelbase")
     return step
+
+
+def _outside(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
+    """``values`` outside [lo, hi], the ends in, to a relative :data:`REL_TOL` (NaN is never outside)."""
+    return (values < lo - REL_TOL * abs(lo)) | (values > hi + REL_TOL * abs(hi))
+
+
+def _shorter_than_wheelbase(parsed: dict) -> np.ndarray:
+    """Records whose stated length is shorter than the sum of their axle spacings (a length of 0: not given).
+
+    In a fixed-width format the two are compared as the integers the file holds, in the format's unit (every
+    layout writes the length and the spacings in one unit): a length equal to the wheelbase to the unit is not
+    shorter. Summing the spacings in metres in floating point lost 2.9 % of a real MON file's records (2.95 + 1.35 =
+    4.300000000000001 > 4.3). Where the units differ, or the values are decimals (CSV), the comparison allows
+    :data:`REL_TOL`."""
+    length = parsed["columns"]["length"]
+    if "length_units" in parsed:
+        (length_int, length_unit), (spacing_int, spacing_unit) = parsed["length_units"], parsed["spacing_units"]
+        if length_unit == spacing_unit:
+            wheelbase = np.where(spacing_int > 0, spacing_int, 0).sum(axis=1)
+            return (length_int > 0) & (length_int < wheelbase)
+    wheelbase = np.nansum(parsed["spacings"], axis=1)
+    return (length > 0) & (length < wheelbase * (1.0 - REL_TOL))
 
 
 def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:

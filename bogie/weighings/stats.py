@@ -20,6 +20,8 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from bogie.weighings._records import REL_TOL
+
 __all__ = [
     "PAIR_TOLERANCE", "QUANTILES", "SHARE_TOLERANCE", "STATISTICS_COLUMNS", "at_resolution", "axle_columns",
     "group_inequality", "statistics_dict", "survey_statistics",
@@ -103,8 +105,9 @@ def group_inequality(loads: ArrayLike, n_axles: ArrayLike) -> dict[str, NDArray]
         "spread_pct": 100.0 * (heaviest - lightest) / mean,
         "pair_difference": pair_difference,
         "max_load_share": max_load_share,
-        "outside_5pct": pair_difference > PAIR_TOLERANCE,
-        "over_10pct": max_load_share > 1.0 + SHARE_TOLERANCE,
+        # a group at a limit is within it: the ratios of loads read at a file's resolution round in the last bit
+        "outside_5pct": pair_difference > PAIR_TOLERANCE * (1.0 + REL_TOL),
+        "over_10pct": max_load_share > (1.0 + SHARE_TOLERANCE) * (1.0 + REL_TOL),
         "heaviest_axle": np.argmax(np.where(present, loads, -np.inf), axis=1),
         # as bogie.metrics.lsc: n W_i / sum_j W_j
         "load_share": np.where(present, n[:, None] * loads / total[:, None], np.nan),

@@ -37,6 +37,7 @@ from numpy.typing import ArrayLike, NDArray
 from bogie import numerics
 from bogie.fleet.design_table import wilson_interval
 from bogie.params import GRAVITY
+from bogie.weighings._records import REL_TOL
 from bogie.weighings.stats import _width, axle_columns
 
 __all__ = [
@@ -142,8 +143,9 @@ def hidden_overloads(
     present = np.arange(w.shape[1]) < n[:, None]
     total = np.where(present, w, 0.0).sum(axis=1)
     heaviest = np.where(present, w, -np.inf).max(axis=1)
-    group_over = total > np.broadcast_to(np.asarray(legal_group, dtype=float), total.shape)
-    axle_over = heaviest > legal_axle
+    # a load at its legal limit is within it (REL_TOL: a sum of loads read at a file's resolution rounds in a last bit)
+    group_over = total > np.broadcast_to(np.asarray(legal_group, dtype=float), total.shape) * (1.0 + REL_TOL)
+    axle_over = heaviest > legal_axle * (1.0 + REL_TOL)
     return {"group_over": group_over, "axle_over": axle_over, "hidden": axle_over & ~group_over}
 
 
