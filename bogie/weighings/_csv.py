@@ -117,7 +117,8 @@ def _decimals(cells: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
         digits += is_digit
         dots += is_dot
     ok &= (digits >= 1) & (digits <= 15) & (dots <= 1)
-    value = np.where(negative, -1.0, 1.0) * whole / _POWERS_OF_TEN[places]  # exact, not numpy's power
+    # exact, not numpy's power; a cell of more than 15 digits (places past the table) is not ok already
+    value = np.where(negative, -1.0, 1.0) * whole / _POWERS_OF_TEN[np.minimum(places, len(_POWERS_OF_TEN) - 1)]
     return value, ok
 
 

@@ -79,7 +79,7 @@ def recovered(tmp_path_factory):
 
 # ---- recovery ----------------------------------------------------------------------------------------------------
 def test_a_synthetic_survey_of_known_fleet_values_is_recovered_within_the_intervals(recovered):
-    _, metrics = recovered
+    root, metrics = recovered
     assert set(metrics["fitted"]) == set(FIT)
     for name, entry in metrics["fitted"].items():
         assert entry["low"] <= TRUTH[name] <= entry["high"], (name, entry)
@@ -94,9 +94,17 @@ def test_a_synthetic_survey_of_known_fleet_values_is_recovered_within_the_interv
     # the posterior: its draws written, each quantity's credible interval around the truth, no draw piled up
     post = metrics["posterior"]
     assert set(post["quantities"]) == set(FIT) and set(post["priors"]) == set(FIT)
+    # each truth inside its credible interval, at the level that makes the five checks together a 90 % one
+    # (Bonferroni: 1 - 0.10 / 5 = 98 % each, from the draws). Five 90 % intervals all cover their truth only 59 % of
+    # the time, whatever the code: the old check passed on 5d77e52's random stream by chance and failed when the
+    # proposal's draws changed (issue 39: the proposal from an order-fixed Cholesky factor, not LAPACK's SVD), with
+    # chassis_tilt_sd_deg's truth 0.5 just above its 90 % interval [0.134, 0.4999]
+    draws = pd.read_csv(root / "data" / "calibration" / "posterior.csv")
+    level = 1.0 - 0.10 / len(FIT)
     for name, entry in post["quantities"].items():
-        assert entry["low"] <= TRUTH[name] <= entry["high"], (name, entry)
-        assert entry["piled"] is None
+        low, high = np.quantile(draws[name], [(1 - level) / 2, (1 + level) / 2])
+        assert low <= TRUTH[name] <= high, (name, low, high, entry)
+        assert entry["low"] <= entry["median"] <= entry["high"] and entry["piled"] is None
 
 
 def test_the_fit_is_closer_to_the_survey_than_the_default_fleet(recovered):
@@ -134,7 +142,7 @@ def test_outputs_have_the_weighings_shape_and_the_held_out_half(recovered):
         "distance_halves"])  # fmt: skip
     assert sorted(p.name for p in (root / "data" / "calibration").iterdir()) == sorted(
         ["ablation.csv", "attribution.csv", "bootstrap.csv", "calibrated.csv", "posterior.csv", "profiles.csv",
-         "valley.csv"]
+         "valley.csv", ".bogie-output"]
     )  # fmt: skip
     # every variant of the ablation was weighed on the calibrated fleet's tri-axles
     variants = {key.split("/")[0] for key in metrics["ablation"] if key.endswith("/triaxle")}

@@ -151,7 +151,11 @@ def test_without_a_path_the_stage_writes_the_simulated_side_and_an_empty_groups_
     assert groups.schema.field("group_load").metadata[b"unit"] == b"kg"
     assert groups.schema.field("speed").metadata[b"unit"] == b"m/s"
     assert pq.read_table(root / "data" / "observed" / "simulated.parquet").num_rows == 5
-    assert sorted(p.name for p in (root / "data" / "observed").iterdir()) == ["groups.parquet", "simulated.parquet"]
+    assert sorted(p.name for p in (root / "data" / "observed").iterdir()) == [
+        ".bogie-output",
+        "groups.parquet",
+        "simulated.parquet",
+    ]
     assert [p.name for p in (root / "metrics").iterdir()] == ["observed.json"]
 
 

@@ -414,7 +414,7 @@ def test_stage_writes_indices_ablation_and_a_ranking_json(tmp_path, config, stud
     assert static["baseline"]["n_bogies"] == config.ablation.n_bogies
     out = tmp_path / "data" / "sensitivity"
     assert sorted(p.name for p in out.iterdir()) == sorted(
-        ["sobol_indices.csv", "sobol_excluded.csv", "ablation.csv", "ablation_pairs.parquet"]
+        ["sobol_indices.csv", "sobol_excluded.csv", "ablation.csv", "ablation_pairs.parquet", ".bogie-output"]
     )
     assert len(pd.read_csv(out / "sobol_indices.csv")) == 3 * len(config.sensitivity.factors)
     # small enough for `dvc metrics show`: an inhibitor costs about 600 characters (its ranking and rank entries,

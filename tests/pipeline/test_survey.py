@@ -31,7 +31,7 @@ from bogie.fleet.survey import (
 from bogie.fleet.weighing import result_row
 from bogie.params import GRAVITY
 from pipeline.config import load_params, parse_config
-from pipeline.sample import sample_studies
+from pipeline.sample import sample_studies, write_parquet_atomic
 from pipeline.schema import RUNS_SCHEMA, checksummed_content, read_runs_file, runs_frame, write_runs_file
 from pipeline.survey import RunsError, headline_metrics, main, read_runs, write_outputs
 
@@ -356,7 +356,7 @@ def test_stage_writes_every_table_and_the_metrics(stage_dir):
     assert sorted(p.name for p in out.iterdir()) == sorted(
         ["summary.csv", "by_suspension.csv", "counts.csv", "failures.csv", "distributions.csv", "histograms.csv",
          "tilt.csv", "tyre_wear.csv", "static_vs_wim.csv", "static_vs_wim_pairs.parquet", "legal.csv", "wim_class.csv",
-         "design_guidance.csv"]
+         "design_guidance.csv", ".bogie-output"]
     )  # fmt: skip
     metrics = json.loads((stage_dir / "metrics" / "survey.json").read_text())
     assert (metrics["n_runs"], metrics["n_failed"]) == (80, 1)
@@ -412,7 +412,7 @@ def test_an_error_while_writing_leaves_the_old_outputs_and_no_temporary_files(tm
     with pytest.raises(Exception, match="(?i)conversion|convert|type"):
         write_outputs(bad, tmp_path / "out", {"v": 2}, tmp_path / "m" / "metrics.json")
     assert pd.read_csv(tmp_path / "out" / "a.csv")["x"].tolist() == [1.0]
-    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == ["a.csv"]
+    assert sorted(p.name for p in (tmp_path / "out").iterdir()) == [".bogie-output", "a.csv"]
     assert json.loads((tmp_path / "m" / "metrics.json").read_text()) == {"v": 1}
     assert sorted(p.name for p in tmp_path.iterdir()) == ["m", "out"]
     assert [p.name for p in (tmp_path / "m").iterdir()] == ["metrics.json"]
@@ -451,7 +451,7 @@ def export_dir(stage_dir, fmt):
     (stage_dir / "params.yaml").write_text(yaml.safe_dump(raw))
     fleet = sample_studies(parse_config(raw))["fleet"]
     (stage_dir / "data" / "samples").mkdir(parents=True, exist_ok=True)
-    fleet.to_parquet(stage_dir / "data" / "samples" / "fleet.parquet", index=False)
+    write_parquet_atomic(fleet, stage_dir / "data" / "samples" / "fleet.parquet")  # as the sample stage writes it
     return fleet, [*stage_args(stage_dir), "--samples", str(stage_dir / "data" / "samples")]
 
 
