@@ -3,6 +3,7 @@
 import copy
 import math
 import pickle
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -395,11 +396,12 @@ def test_a_bogie_file_may_be_a_group_s_base_bogie(raw, monkeypatch):
     ],
 )  # fmt: skip
 def test_a_bad_bogie_file_is_named_with_its_key_and_what_is_wrong(raw, monkeypatch, tmp_path, presets, key, words):
-    monkeypatch.chdir(PARAMS.parent)
-    bad = tmp_path / "bad.yaml"
-    bad.write_text("base: triaxle_stage1\ntyre_radius_mm: 5000\n")
-    presets = {g: str(bad) if v == "BAD" else v for g, v in presets.items()}
-    words = [str(bad) if w == "'BAD'" else w for w in words]
+    monkeypatch.chdir(tmp_path)  # a project of its own: bogie files are read from its bogies/ only (issue 40)
+    (tmp_path / "bogies").mkdir()
+    shutil.copy(PARAMS.parent / "bogies" / "example_triaxle.yaml", tmp_path / "bogies")
+    (tmp_path / "bogies" / "bad.yaml").write_text("base: triaxle_stage1\ntyre_radius_mm: 5000\n")
+    presets = {g: "bogies/bad.yaml" if v == "BAD" else v for g, v in presets.items()}
+    words = ["bogies/bad.yaml" if w == "'BAD'" else w for w in words]
     with pytest.raises(ConfigError) as excinfo:
         parse_config(changed(raw, "fleet.presets", presets))
     message = str(excinfo.value)
