@@ -197,7 +197,7 @@ def test_the_axle_count_follows_the_file(tmp_path):
         ("base: tandem_trrl\nequaliser_front_arm_mm: [200]\n", ["does not close", "equaliser_front_arm_mm [mm]"]),
         # bad YAML, a key twice, not a mapping
         ("base: tandem_trrl\naxle_x_m: [7.0, 8.3\n", ["not valid YAML"]),
-        ("base: tandem_trrl\nbase: tandem_trrl\n", ["'base' given twice", "lines 1 and 2"]),
+        ("base: tandem_trrl\nbase: tandem_trrl\n", ["duplicated key base at line 2 (first at line 1)"]),
         ("- 1\n- 2\n", ["must be a mapping"]),
     ],
 )  # fmt: skip
