@@ -8,7 +8,7 @@ an ulp from one machine to the other. Which loops a process gets depends on the 
 when numpy was imported (``NPY_DISABLE_CPU_FEATURES``), so the bits depended on the import order of pytest, a
 notebook or a dask worker.
 
-This module's functions take that choice away by construction: each is a numba ufunc whose loop calls the C
+This module's functions take that choice away by construction: each is a compiled loop (bogie/_numerics_core.py) that calls the C
 library's scalar function once per element (``math.exp`` compiled by numba is a call to libm's ``exp``), so their bits
 are the C library's, whatever numpy dispatches and whatever the environment said. glibc picks its own variant of
 ``exp``, ``log``, ``pow``, ``sin``, ``cos`` and ``atan2`` by the CPU's features too, but on every x86-64 machine with
@@ -124,64 +124,18 @@ def compile_target() -> str:
     return f"{config.CPU_NAME} {config.CPU_FEATURES or ''}".strip()
 
 
-def _ufuncs():  # the numba ufuncs, made on first use (importing numba's vectorize costs nothing then)
-    from numba import vectorize
-
-    sig1, sig2 = ["float64(float64)"], ["float64(float64, float64)"]
-
-    @vectorize(sig1, cache=True)
-    def _exp(x):
-        return math.exp(x)
-
-    @vectorize(sig1, cache=True)
-    def _log(x):
-        return math.log(x) if x > 0.0 else (-math.inf if x == 0.0 else math.nan)
-
-    @vectorize(sig1, cache=True)
-    def _log1p(x):
-        return math.log1p(x) if x > -1.0 else (-math.inf if x == -1.0 else math.nan)
-
-    @vectorize(sig1, cache=True)
-    def _expm1(x):
-        return math.expm1(x)
-
-    @vectorize(sig1, cache=True)
-    def _sin(x):
-        return math.sin(x)
-
-    @vectorize(sig1, cache=True)
-    def _cos(x):
-        return math.cos(x)
-
-    @vectorize(sig2, cache=True)
-    def _power(x, y):
-        return math.pow(x, y) if not (x < 0.0 and y != math.floor(y)) else math.nan
-
-    @vectorize(sig2, cache=True)
-    def _arctan2(y, x):
-        return math.atan2(y, x)
-
-    return {
-        "exp": _exp, "log": _log, "log1p": _log1p, "expm1": _expm1, "sin": _sin, "cos": _cos, "power": _power,
-        "arctan2": _arctan2,
-    }  # fmt: skip
-
-
-_CACHE: dict = {}
-
-
-def _get(name: str):
-    if not _CACHE:
-        _CACHE.update(_ufuncs())
-    return _CACHE[name]
-
-
 def _apply(name: str, *args):
-    arrays = [np.asarray(a, dtype=np.float64) for a in args]
-    out = _get(name)(*arrays)
-    if all(a.ndim == 0 for a in arrays):
-        return float(out)
-    return out
+    """The compiled loop of ``name`` (:mod:`bogie._numerics_core`) over ``args`` broadcast: a float for scalars, else an
+    array of the broadcast shape."""
+    from bogie import _numerics_core
+
+    arrays = np.broadcast_arrays(*[np.asarray(a, dtype=np.float64) for a in args])
+    flat = [np.ascontiguousarray(a).ravel() for a in arrays]
+    out = np.empty(flat[0].size)
+    getattr(_numerics_core, f"{name}_loop")(*flat, out)
+    if all(np.ndim(a) == 0 for a in args):
+        return float(out[0])
+    return out.reshape(arrays[0].shape)
 
 
 def exp(x):
