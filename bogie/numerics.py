@@ -8,12 +8,12 @@ an ulp from one machine to the other. Which loops a process gets depends on the 
 when numpy was imported (``NPY_DISABLE_CPU_FEATURES``), so the bits depended on the import order of pytest, a
 notebook or a dask worker.
 
-This module's functions take that choice away by construction: each is a compiled loop (bogie/_numerics_core.py) that calls the C
-library's scalar function once per element (``math.exp`` compiled by numba is a call to libm's ``exp``), so their bits
-are the C library's, whatever numpy dispatches and whatever the environment said. glibc picks its own variant of
-``exp``, ``log``, ``pow``, ``sin``, ``cos`` and ``atan2`` by the CPU's features too, but on every x86-64 machine with
-AVX2 and FMA (the x86-64-v3 level, which every AVX-512 machine has) it picks the same FMA variant, so these are
-the same bits on all of them; on aarch64 they are that machine's libm's.
+This module's functions take that choice away by construction: each is a compiled loop (``bogie/_numerics_core.py``)
+that calls the C library's scalar function once per element (``math.exp`` compiled by numba is a call to libm's
+``exp``), so their bits are the C library's, whatever numpy dispatches and whatever the environment said. glibc
+picks its own variant of ``exp``, ``log``, ``pow``, ``sin``, ``cos`` and ``atan2`` by the CPU's features too, but on
+every x86-64 machine with AVX2 and FMA (the x86-64-v3 level, which every AVX-512 machine has) it picks the same FMA
+variant, so these are the same bits on all of them; on aarch64 they are that machine's libm's.
 
 :func:`fix_compile_target` fixes the CPU numba compiles bogie's kernels for (x86-64-v3 on a host with that level),
 from Python, before the first kernel is compiled: the kernels' ``fastmath`` contraction fuses multiplies and adds
