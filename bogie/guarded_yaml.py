@@ -21,11 +21,12 @@ params.yaml (``pipeline.config``) and bogie files (``bogie.bogie_file``) are bot
 from __future__ import annotations
 
 import os
-import stat
 from pathlib import Path
 from typing import IO, Any
 
 import yaml
+
+from bogie._files import regular_file
 
 #: YAML's merge key ``<<``, which may legitimately appear more than once
 _MERGE_TAG = "tag:yaml.org,2002:merge"
@@ -34,9 +35,9 @@ _MERGE_TAG = "tag:yaml.org,2002:merge"
 MAX_DEPTH = 32
 #: the most values (scalars, lists, mappings) a parameter file may hold, aliases expanded (params.yaml: about 400) [-]
 MAX_NODES = 100_000
-#: the most digits an integer may have [-]: a count or a seed fits in 20 (2^64 has 20); more is a typo
+#: the most digits an integer may have [-]: a count or a seed fits in 20 (2^64 has 20); more is a typo (a convention)
 MAX_INT_DIGITS = 20
-#: the largest file read [bytes]: 1 MiB (params.yaml is about 20 KiB, a bogie file 2 KiB)
+#: the largest file read [bytes]: 1 MiB, about 90 times params.yaml (11 KiB; a bogie file is 2 KiB): a convention
 MAX_FILE_BYTES = 2**20
 
 
@@ -190,14 +191,7 @@ def read_text_file(path: str | os.PathLike[str], max_bytes: int = MAX_FILE_BYTES
         The file cannot be read, or is not UTF-8.
     """
     path = Path(path)
-    status = os.stat(path)
-    if not stat.S_ISREG(status.st_mode):
-        mode = status.st_mode
-        kind = (
-            "a folder" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
-            else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a file"
-        )  # fmt: skip
-        raise ValueError(f"{path}: is {kind}, not a regular file")
+    regular_file(path)
     with open(path, "rb") as fh:
         data = fh.read(max_bytes + 1)
     if len(data) > max_bytes:

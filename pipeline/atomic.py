@@ -26,7 +26,7 @@ from typing import Any
 
 __all__ = [
     "OUTPUT_MARKER", "LockedError", "OutputError", "atomic_outputs", "atomic_file", "guard_outputs", "io_error",
-    "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "stage_outputs",
+    "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "run_stage", "stage_outputs",
 ]  # fmt: skip
 
 try:  # POSIX: flock; Windows has no fcntl, and locks a byte of the file with msvcrt instead
@@ -410,3 +410,29 @@ def stage_outputs(
             for leftover in remove_leftovers(path):
                 log(f"{stage}: removed {leftover}, left by an interrupted run of the stage")
         yield
+
+
+def run_stage(
+    stage: str, parser: Any, args: Any, work: Callable[[list[Path]], int], files: Sequence[str] = (),
+    dirs: Sequence[str] = (),
+) -> int:  # fmt: skip
+    """A stage's command around its ``work``: refuse output options that would destroy what the stage did not write
+    (:func:`refuse_outputs`, before any work), own the outputs while it runs (:func:`stage_outputs`: a second process
+    refused, a killed run's leftovers removed), then ``work(own)`` (``own``: the stage's default output folders) and
+    its exit code. A refused output, a locked one or an error of the file system is one line on stderr and exit 2.
+
+    ``files`` and ``dirs`` name the options (``args``' attributes) of the stage's output files and folders.
+    """
+    refused, own = refuse_outputs(stage, parser, args, files=files, dirs=dirs)
+    if refused:
+        print(refused, file=sys.stderr)
+        return 2
+    try:
+        with stage_outputs(stage, files=[getattr(args, n) for n in files], dirs=[getattr(args, n) for n in dirs]):
+            return work(own)
+    except LockedError as exc:
+        print(f"{stage}: {exc}", file=sys.stderr)
+        return 2
+    except OSError as exc:
+        print(io_error(stage, exc), file=sys.stderr)
+        return 2

@@ -37,7 +37,7 @@ from bogie.fleet.calibration_checks import calibrate_survey
 from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.resources import worker_count
@@ -224,21 +224,8 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/calibration", help="output directory (default: data/calibration)")
     parser.add_argument("--metrics", default="metrics/calibration.json", help="default: metrics/calibration.json")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("calibrate", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
-    try:
-        # a second calibrate is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("calibrate", files=[args.metrics], dirs=[args.out], log=log):
-            return _stage(args, log, own)
-    except LockedError as exc:
-        print(f"calibrate: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("calibrate", exc), file=sys.stderr)
-        return 2
+    return run_stage("calibrate", parser, args, lambda own: _stage(args, log, own), files=["metrics"], dirs=["out"])
 
 
 def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[Path] = ()) -> int:

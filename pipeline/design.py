@@ -28,7 +28,7 @@ import yaml
 from bogie.fleet.design import DesignExperiment, DesignSettings, design_experiment, experiment_runs, typical_design
 from bogie.fleet.design_analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
 from bogie.fleet.sampling import COLUMNS
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import fleet_model
@@ -196,27 +196,18 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/design", help="tables directory (default: data/design)")
     parser.add_argument("--metrics", default="metrics/design.json", help="metrics file (default: metrics/design.json)")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("design", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
+    return run_stage("design", parser, args, lambda own: _configured(args, own), files=["metrics"], dirs=["out"])
+
+
+def _configured(args: argparse.Namespace, own: Sequence[Path]) -> int:
+    """Read params.yaml, then the stage's work (:func:`_stage`); the exit code."""
     try:
         config = load_config(args.params)
     except (ConfigError, OSError, yaml.YAMLError) as exc:
         print(f"design: {args.params}: {exc}", file=sys.stderr)
         return 2
-    out, metrics_path = Path(args.out), Path(args.metrics)
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
-    try:
-        # a second design is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("design", files=[metrics_path], dirs=[out], log=log):
-            return _stage(config, Path(args.runs), out, metrics_path, log, own)
-    except LockedError as exc:
-        print(f"design: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("design", exc), file=sys.stderr)
-        return 2
+    return _stage(config, Path(args.runs), Path(args.out), Path(args.metrics), log, own)
 
 
 def _stage(

@@ -44,7 +44,7 @@ from bogie.fleet.observed import (
 )
 from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
 from pipeline.schema import checksummed_content
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
@@ -212,20 +212,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/observed", help="output directory (default: data/observed)")
     parser.add_argument("--metrics", default="metrics/observed.json", help="default: metrics/observed.json")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("observed", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
-    try:
-        # a second observed is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("observed", files=[args.metrics], dirs=[args.out]):
-            return _stage(args, own)
-    except LockedError as exc:
-        print(f"observed: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("observed", exc), file=sys.stderr)
-        return 2
+    return run_stage("observed", parser, args, lambda own: _stage(args, own), files=["metrics"], dirs=["out"])
 
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:

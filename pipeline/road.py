@@ -34,7 +34,7 @@ from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError, load_config
 from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
@@ -106,20 +106,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/road", help="output directory (default: data/road)")
     parser.add_argument("--metrics", default="metrics/road.json", help="default: metrics/road.json")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("road", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
-    try:
-        # a second road is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("road", files=[args.metrics], dirs=[args.out]):
-            return _stage(args, own)
-    except LockedError as exc:
-        print(f"road: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("road", exc), file=sys.stderr)
-        return 2
+    return run_stage("road", parser, args, lambda own: _stage(args, own), files=["metrics"], dirs=["out"])
 
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:

@@ -42,7 +42,7 @@ from pipeline.ablation import (
     ablation_metrics,
     ablation_pairs,
 )
-from pipeline.atomic import LockedError, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import io_error, run_stage
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import sensitivity_problem
 from pipeline.survey import RunsError, read_runs, rounded, write_outputs
@@ -359,20 +359,7 @@ def main(argv: list[str] | None = None) -> int:
         "--metrics", default="metrics/sensitivity.json", help="metrics file (default: metrics/sensitivity.json)"
     )
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("sensitivity", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
-    try:
-        # a second sensitivity is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("sensitivity", files=[args.metrics], dirs=[args.out]):
-            return _stage(args, own)
-    except LockedError as exc:
-        print(f"sensitivity: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("sensitivity", exc), file=sys.stderr)
-        return 2
+    return run_stage("sensitivity", parser, args, lambda own: _stage(args, own), files=["metrics"], dirs=["out"])
 
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:

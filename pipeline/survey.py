@@ -30,7 +30,7 @@ from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.survey import REQUIRED_COLUMNS, SUSPENSION_STATISTICS, inequality_columns, readings, survey_tables
 from bogie.params import GRAVITY
 from bogie.weighings.writers import write_weighings
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError, load_config
 from pipeline.schema import SchemaError, check_runs, checksummed_content, read_checksummed, read_runs_frame
 
@@ -233,20 +233,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--out", default="data/survey", help="output directory (default: data/survey)")
     parser.add_argument("--metrics", default="metrics/survey.json", help="metrics file (default: metrics/survey.json)")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("survey", parser, args, files=["metrics"], dirs=["out"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
-    try:
-        # a second survey is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("survey", files=[args.metrics], dirs=[args.out]):
-            return _stage(args, own)
-    except LockedError as exc:
-        print(f"survey: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("survey", exc), file=sys.stderr)
-        return 2
+    return run_stage("survey", parser, args, lambda own: _stage(args, own), files=["metrics"], dirs=["out"])
 
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:

@@ -5,7 +5,6 @@ is skipped, a file's bytes as lines, and the calendar checks. Private: the publi
 from __future__ import annotations
 
 import os
-import stat
 import zlib
 from collections import Counter
 from dataclasses import dataclass
@@ -13,6 +12,7 @@ from pathlib import Path
 
 import numpy as np
 
+from bogie._files import regular_file
 from bogie.weighings.formats import KMH
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
@@ -104,7 +104,7 @@ _BOM = b"\xef\xbb\xbf"
 #: the relative tolerance of a comparison of a value derived from a file's fields with a limit or another value [-]:
 #: a field is an integer times its unit (or a decimal), and the conversion and a sum round in the last bits (about
 #: 1e-16 relative); 1e-9 is far below any field's resolution (1 kg in 22,680 kg, 1 mm in 18.75 m), so a value
-#: written at a limit is at it, not past it
+#: written at a limit is at it, not past it. A convention of this project (no published source), named as one
 REL_TOL = 1e-9
 
 #: peak memory of reading a survey and computing its statistics and road figures, per byte of its records
@@ -117,17 +117,8 @@ MAX_FILE_BYTES = 2**30
 
 
 def _regular(path: Path) -> os.stat_result:
-    """``path``'s status if it is a regular file (symlinks followed); a FIFO, a device or a folder is refused before
-    it is opened (reading a FIFO waits for a writer, a device never ends)."""
-    status = os.stat(path)  # a missing file: FileNotFoundError, as open() gives
-    if not stat.S_ISREG(status.st_mode):
-        mode = status.st_mode
-        kind = (
-            "a folder" if stat.S_ISDIR(mode) else "a FIFO (named pipe)" if stat.S_ISFIFO(mode)
-            else "a device" if stat.S_ISCHR(mode) or stat.S_ISBLK(mode) else "not a file"
-        )  # fmt: skip
-        raise ValueError(f"{path}: is {kind}, not a regular file: give a file of WIM or weighbridge records")
-    return status
+    """``path``'s status if it is a regular file (:func:`bogie._files.regular_file`), refused before it is opened."""
+    return regular_file(path, "give a file of WIM or weighbridge records")
 
 
 def uncompressed_size(path: str | Path) -> int:
@@ -172,8 +163,9 @@ def _file_bytes(path: Path, cap: int | None = None) -> bytes:
     a device or a folder is refused, and so is a file of more than ``cap`` bytes (:data:`MAX_FILE_BYTES`),
     compressed or not."""
     cap = MAX_FILE_BYTES if cap is None else cap
-    if _regular(path).st_size > cap:
-        raise ValueError(f"{path}: {_regular(path).st_size / 2**30:.2f} GiB is more than "
+    size = _regular(path).st_size
+    if size > cap:
+        raise ValueError(f"{path}: {size / 2**30:.2f} GiB is more than "
                          f"{cap / 2**30:g} GiB (bogie.weighings._records.MAX_FILE_BYTES): split the survey into "
                          "smaller files")  # fmt: skip
     data = path.read_bytes()

@@ -226,6 +226,7 @@ def wear_statistics(
         row["n_failed"] = int(len(rows_all) - len(index))
         rng = np.random.default_rng(stream)
         m = len(index)
+        cell_wear = {name: (wear[name]["damage"][index], wear[name]["damage_equal"][index]) for name in exponents}
         boot = {name: ([], []) for name in exponents} if resamples and m else None
         if boot is not None:
             # drawn in blocks of rows (each row one resample), at most BOOTSTRAP_BLOCK indices at a time: the same
@@ -234,11 +235,11 @@ def wear_statistics(
             for start in range(0, resamples, rows_per_block):
                 draws = rng.integers(0, m, (min(rows_per_block, resamples - start), m))
                 for name in exponents:
-                    d, e = wear[name]["damage"][index], wear[name]["damage_equal"][index]
+                    d, e = cell_wear[name]
                     boot[name][0].append(d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0)
                     boot[name][1].append(1000.0 * (d - e)[draws].mean(axis=1))
         for name in exponents:
-            d, e = wear[name]["damage"][index], wear[name]["damage_equal"][index]
+            d, e = cell_wear[name]
             share = d.sum() / e.sum() - 1.0 if m and e.sum() > 0 else math.nan
             per_1000 = 1000.0 * float(np.mean(d - e)) if m else math.nan
             row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000

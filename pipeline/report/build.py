@@ -18,7 +18,7 @@ import yaml
 from matplotlib.backends.backend_pdf import PdfPages
 
 from bogie.results import DynamicResult
-from pipeline.atomic import LockedError, atomic_outputs, io_error, refuse_outputs, stage_outputs
+from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
@@ -170,20 +170,7 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--png", default="reports/figures/report", help="directory of the PNG pages")
     parser.add_argument("--plots", default="reports/plots", help="directory of the DVC plot series")
     args = parser.parse_args(argv)
-    refused, own = refuse_outputs("report", parser, args, files=["pdf"], dirs=["png", "plots"])
-    if refused:
-        print(refused, file=sys.stderr)
-        return 2
-    try:
-        # a second report is refused here, and what a killed one left beside the outputs is removed
-        with stage_outputs("report", files=[args.pdf], dirs=[args.png, args.plots]):
-            return _stage(args, own)
-    except LockedError as exc:
-        print(f"report: {exc}", file=sys.stderr)
-        return 2
-    except OSError as exc:
-        print(io_error("report", exc), file=sys.stderr)
-        return 2
+    return run_stage("report", parser, args, lambda own: _stage(args, own), files=["pdf"], dirs=["png", "plots"])
 
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
