@@ -116,13 +116,13 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
         legal_axle = float(config.fleet.legal_axle_load) / GRAVITY
         min_load = float(config.observed.min_group_load)
-        runs = read_runs(args.runs, SURVEY_STUDY)
         groups_file = Path(args.observed) / "groups.parquet"
         if config.observed.path is not None and not groups_file.is_file():
             raise ValueError(
                 f"observed.path names a survey ({config.observed.path}) but {groups_file} is missing: run the observed "
                 "stage first (dvc repro observed), or set observed.path: null"
             )
+        runs = read_runs(args.runs, SURVEY_STUDY)
         rerun = "delete it and rerun the observed stage"
         groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))

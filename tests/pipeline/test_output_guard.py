@@ -160,7 +160,7 @@ def test_road_refuses_a_named_survey_whose_observed_stage_has_not_run(tmp_path, 
     (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw))
     args = ["--params", str(tmp_path / "params.yaml"), "--observed", str(tmp_path / "missing"),
             "--out", str(tmp_path / "road"), "--metrics", str(tmp_path / "road.json"),
-            "--runs", str(ROOT / "data" / "runs")]  # fmt: skip
+            "--runs", str(tmp_path / "no-runs")]  # fmt: skip
     assert run("road", *args) == 2
     err = capsys.readouterr().err
     assert "observed.path names a survey" in err and "run the observed stage first" in err, err
