@@ -153,7 +153,8 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     from bogie.weighings.survey import observed_survey
 
     try:
-        survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position)
+        survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position,
+                                 resolution_kg=args.resolution_kg)  # fmt: skip
     except OSError as exc:
         print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
         return 2
@@ -161,7 +162,7 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
         print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
         return 0
     shown = args.format if args.format != "auto" else f"format auto: {survey.read.format}"
-    print(f"{args.path} ({shown}): {survey.read.summary()}; {survey.read.resolution()}")
+    print(f"{args.path} ({shown}): {survey.read.summary()}; {survey.read.describe_resolution()}")
     counts = "; ".join(
         f"{where} {sum(sizes.values())} ({', '.join(f'{n} {size}' for size, n in sizes.items() if n)})"
         if sum(sizes.values()) else f"{where} 0"
@@ -272,6 +273,11 @@ def build_parser() -> argparse.ArgumentParser:
     weigh.add_argument("--position", choices=("all", "steer", "drive", "trailer"), default="all",
                        help="which groups: all (default), the steer, drive (second) or trailer (third and later) "
                        "groups")  # fmt: skip
+    weigh.add_argument(
+        "--resolution-kg", type=_range("--resolution-kg", 0.0, 1000.0, "kg"), default=None,
+        help="the file's weight resolution [kg], a multiple of the format's unit (default: detected from the axle "
+        "loads, tolerant of a one-unit offset, and reported with its evidence)",
+    )  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
     weigh.set_defaults(func=_cmd_weighings, parser=weigh)
     design = sub.add_parser("design", help="a bogie of your own: 'show' draws it and prints its static axle loads")

@@ -105,8 +105,8 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         The columns of :data:`GROUPS_SCHEMA`; no row for no survey.
     statistics : dict or None
         ``{"path", "format" (the one read), "format_asked" (``auto`` or that one), "sha256", "records": {"read",
-        "skipped", "weight_step_kg", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or None for no
-        survey.
+        "skipped", "weight_step_kg", "resolution", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or
+        None for no survey.
 
     Raises
     ------
@@ -117,7 +117,12 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         empty = pd.DataFrame({f.name: pd.Series(dtype=f.type.to_pandas_dtype()) for f in GROUPS_SCHEMA})
         return empty, None
     survey = observed_survey(
-        path, observed.format, observed.min_group_load / 1000.0, observed.group_spacing, observed.position
+        path,
+        observed.format,
+        observed.min_group_load / 1000.0,
+        observed.group_spacing,
+        observed.position,
+        resolution_kg=observed.resolution_kg,
     )
     stats = survey.to_dict()
     stats["records"]["skipped_by_reason"] = dict(sorted(survey.read.skipped.items()))

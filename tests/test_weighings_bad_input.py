@@ -217,8 +217,10 @@ def test_the_command_into_a_closed_pipe_is_not_a_traceback(tmp_path):
 
 
 # ---- resolution ----------------------------------------------------------------------------------------------------
-def test_the_weight_resolution_is_the_largest_step_dividing_every_axle_load(tmp_path):
-    assert read_weighings(DATA / "site.castor", "castor").resolution() == "weight resolution 100 kg (the format's unit)"
+def test_the_weight_resolution_is_the_largest_step_the_loads_support(tmp_path):
+    castor = read_weighings(DATA / "site.castor", "castor")
+    assert castor.resolution.step_kg == 100.0 and castor.resolution.source == "format"
+    assert castor.describe_resolution().startswith("weight resolution 100 kg (the format's unit")
     # site.mon's loads are all whole hundreds of kilograms: a 100 kg file, though MON writes kg
     assert read_weighings(DATA / "site.mon", "mon").weight_step_kg == 100.0
     path = tmp_path / "ten.mon"
@@ -226,7 +228,9 @@ def test_the_weight_resolution_is_the_largest_step_dividing_every_axle_load(tmp_
     path.write_text("\n".join([mon_at(1), a[:50] + "06510" + a[55:80] + "07390" + a[85:]]) + "\n")  # +10, -10 kg
     result = read_weighings(path, "mon")
     assert result.n_read == 2 and result.weight_step_kg == 10.0
-    assert "every axle load read is a multiple of 10 kg" in result.resolution()
+    assert "detected: 10 of 10 axle loads within 1 kg of a multiple of 10 kg: 100.0 % on one" in (
+        result.describe_resolution()
+    )
     csv = tmp_path / "decimal.csv"
     csv.write_text(CSV_HEADER + csv_row(1) + "2026-03-14T07:02:00,80,1,2,5000.5,6000,3.2,R2\n")
     assert read_weighings(csv, "csv").weight_step_kg is None

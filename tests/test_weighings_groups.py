@@ -99,6 +99,7 @@ def test_a_group_spacing_out_of_range_is_refused():
 def test_observed_survey_statistics_by_hand():
     survey = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15)
     out = survey.to_dict()
+    assert out["records"].pop("resolution")["source"] == "detected"
     assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
     tandem, tri = out["groups"]["tandem"], out["groups"]["triaxle"]
     # tandems B (9500, 8500) and C (9000, 9000): spreads 1000 and 0 kg -> mean 500 kg;
@@ -124,8 +125,15 @@ def test_observed_survey_statistics_by_hand():
 
 def test_every_format_gives_the_same_survey_of_the_same_vehicles():
     ref = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15).to_dict()
+    assert ref["records"].pop("resolution")["unit_kg"] == 1.0
     for fmt in ("mon", "castor", "bedit", "ditis"):
-        assert observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_t=15).to_dict() == ref, fmt
+        out = observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_t=15).to_dict()
+        # the same 100 kg, detected in kilograms (CSV, MON) or the kg/100 formats' own unit
+        resolution = out["records"].pop("resolution")
+        assert (resolution["step_kg"], resolution["source"]) == (
+            (100.0, "detected") if fmt == "mon" else (100.0, "format")
+        ), fmt
+        assert out == ref, fmt
 
 
 def test_a_filter_that_leaves_no_tandem_gives_an_empty_entry_not_an_error():

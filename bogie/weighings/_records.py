@@ -44,9 +44,6 @@ MAX_BAD_FRACTION: float = 0.5
 #: step for the gross weight and for each axle (a WIM system's gross weight is the sum of its axle weights,
 #: Enright and OBrien 2011) [-]
 GROSS_TOLERANCE: float = 0.02
-#: the weight steps a file's resolution is detected among [kg]: the largest that divides every axle load of the
-#: good records (MON files are seen at 10 kg and at 100 kg; CASTOR, BeDIT and DITIS write kg/100)
-WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 #: line numbers of bad records shown per reason
 EXAMPLES: int = 5
 #: non-blank lines ``fmt="auto"`` tries every layout on [-]

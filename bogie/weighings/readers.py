@@ -44,7 +44,6 @@ from bogie.weighings._records import (
     SPEED_RANGE,
     TOO_SHORT,
     TWO_DIGIT_PIVOT,
-    WEIGHT_STEPS_KG,
     YEAR_RANGE,
     _check_calendar,
     _file_bytes,
@@ -56,6 +55,13 @@ from bogie.weighings._records import (
     _timestamps,
 )
 from bogie.weighings.formats import FORMATS, LAYOUTS, FixedWidthLayout
+from bogie.weighings.resolution import (
+    WEIGHT_STEPS_KG,
+    ResidueCounts,
+    Resolution,
+    check_resolution_kg,
+    detect_resolution,
+)
 
 __all__ = [
     "AXLE_LOAD_RANGE", "CSV_LANE_RANGE", "CSV_MAX_AXLES", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES",
@@ -83,10 +89,13 @@ class ReadResult:
         Bad records per reason.
     bad_lines
         The first :data:`EXAMPLES` line numbers of each reason.
+    resolution
+        The file's weight resolution (:class:`bogie.weighings.resolution.Resolution`): detected from the axle loads
+        of the records that passed the checks before the gross weight's, tolerant of a one-unit offset (loads
+        ending in 00 or 99 are a 100 kg file), or set by the caller; its evidence and its source.
     weight_step_kg
-        The file's weight resolution [kg]: the largest of :data:`WEIGHT_STEPS_KG` that divides every axle load of
-        the records that passed the checks before the gross weight's; None when the loads are not whole kilograms
-        (a CSV file of other data) or no record has loads.
+        The resolution in use [kg] (``resolution.step_kg``); None when the loads are not whole kilograms (a CSV
+        file of other data) or no record has loads.
     format_step_kg
         The step of the format's weight field [kg]: 1 for MON, 100 for CASTOR, BeDIT and DITIS (kg/100), None for
         CSV (decimal numbers).
@@ -96,7 +105,12 @@ class ReadResult:
     format: str
     skipped: Counter = field(default_factory=Counter)
     bad_lines: dict[str, list[int]] = field(default_factory=dict)
-    weight_step_kg: float | None = None
+    resolution: Resolution | None = None
+
+    @property
+    def weight_step_kg(self) -> float | None:
+        """The weight resolution in use [kg] (None: none)."""
+        return None if self.resolution is None else self.resolution.step_kg
 
     @property
     def format_step_kg(self) -> float | None:
@@ -122,14 +136,11 @@ class ReadResult:
             for reason, n in self.skipped.most_common()
         )
 
-    def resolution(self) -> str:
-        """The weight resolution in words: the step, and whether it is the format's or coarser."""
-        if self.weight_step_kg is None:
-            return "weight resolution: none detected (axle loads not whole kilograms)"
-        step = f"{self.weight_step_kg:g} kg"
-        if self.format_step_kg is not None and self.weight_step_kg == self.format_step_kg:
-            return f"weight resolution {step} (the format's unit)"
-        return f"weight resolution {step} (every axle load read is a multiple of {step})"
+    def describe_resolution(self) -> str:
+        """The weight resolution in words: the step, where it came from and how sure its detection is."""
+        if self.resolution is None:
+            return "weight resolution: none detected (no axle loads)"
+        return self.resolution.describe()
 
     def summary(self) -> str:
         """One line: records read and skipped, each reason with its first line numbers."""
@@ -278,19 +289,16 @@ def _stray_bytes(lines: _Lines) -> np.ndarray:
 
 
 # ---- checks every format shares ------------------------------------------------------------------------------------
-def _weight_step(loads: np.ndarray, ok: np.ndarray) -> float | None:
-    """The largest of :data:`WEIGHT_STEPS_KG` dividing every axle load of the ``ok`` records; None if the loads are
-    not whole kilograms or there is none."""
-    values = loads[ok]
-    values = values[~np.isnan(values)]
-    if not len(values) or not (np.round(values) == values).all():
-        return None
-    whole = np.round(values).astype(np.int64)
-    return float(next(step for step in reversed(WEIGHT_STEPS_KG) if step == 1 or not (whole % step).any()))
+def _resolution(parsed: dict, ok: np.ndarray, set_kg: float | None) -> Resolution:
+    """The weight resolution of the axle loads of the ``ok`` records (:mod:`bogie.weighings.resolution`), or the
+    caller's ``set_kg``."""
+    counts = ResidueCounts(parsed["load_step"] or 1.0)
+    counts.add(parsed["loads"][ok])
+    return detect_resolution(counts, set_kg)
 
 
-def _check_vehicles(parsed: dict) -> float | None:
-    """The plausibility checks, in their order, on every record not bad yet; returns the weight step detected."""
+def _check_vehicles(parsed: dict, set_kg: float | None = None) -> Resolution:
+    """The plausibility checks, in their order, on every record not bad yet; returns the weight resolution."""
     reasons: _Reasons = parsed["reasons"]
     col = parsed["columns"]
     loads, spacings = parsed["loads"], parsed["spacings"]
@@ -303,7 +311,8 @@ def _check_vehicles(parsed: dict) -> float | None:
     lo, hi = SPEED_RANGE
     speed = col["speed"]
     reasons.flag(_outside(speed, lo, hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
-    step = _weight_step(loads, reasons.ok)
+    resolution = _resolution(parsed, reasons.ok, set_kg)
+    step = resolution.step_kg
     total = np.nansum(loads, axis=1)
     gross = col["gross_weight"]
     if not np.isnan(gross).all():
@@ -313,7 +322,7 @@ def _check_vehicles(parsed: dict) -> float | None:
         slack = GROSS_TOLERANCE * total + gross_half + col["n_axles"] * load_half
         reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
     reasons.flag(_shorter_than_wheelbase(parsed), "length shorter than the wheelbase")
-    return step
+    return resolution
 
 
 def _outside(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -375,7 +384,7 @@ def _utf8(data: bytes) -> bytes:
     return data
 
 
-def _parse(data: bytes, fmt: str, path: str) -> dict:
+def _parse(data: bytes, fmt: str, path: str, resolution_kg: float | None = None) -> dict:
     """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's."""
     if fmt == "csv":
         data = _utf8(data)
@@ -391,7 +400,7 @@ def _parse(data: bytes, fmt: str, path: str) -> dict:
         parsed = _parse_fixed(lines, LAYOUTS[fmt])
         parsed["line"] = lines.line
         stamps = None
-    parsed["step"] = _check_vehicles(parsed)
+    parsed["resolution"] = _check_vehicles(parsed, resolution_kg)
     if stamps is None:
         stamps = _timestamps(parsed["reasons"].ok, *parsed["stamp"])
     _flag_repeats(parsed, stamps)
@@ -480,7 +489,12 @@ def detect_format(lines: list[str], path: str = "") -> str:
     return _detect(_head(data, SNIFF_LINES), path)
 
 
-def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
+def _unit_kg(fmt: str) -> float | None:
+    """The weight unit of format ``fmt`` [kg]: its axle load field's scale; None for CSV (decimal numbers)."""
+    return None if fmt == "csv" else LAYOUTS[fmt].axle_field("axle_load").scale
+
+
+def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | None = None) -> ReadResult:
     """Read a file of weighings (one vehicle a record) in format ``fmt``.
 
     Parameters
@@ -492,6 +506,9 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
         ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``), or ``auto``
         (default): the one layout in which most of the first :data:`SNIFF_LINES` non-blank lines parse
         (:func:`detect_format`); ``ReadResult.format`` says which.
+    resolution_kg
+        The file's weight resolution [kg], in (0, 1000] and a whole multiple of the format's weight unit; None
+        (default): detected from the loads (:mod:`bogie.weighings.resolution`), and reported either way.
 
     Returns
     -------
@@ -508,6 +525,7 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
     """
     if fmt != "auto" and fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
+    check_resolution_kg(resolution_kg, None)  # its type and range before the file is read; its unit once known
     path = Path(path)
     data = _file_bytes(path)
     if fmt == "auto":
@@ -516,15 +534,16 @@ def read_weighings(path: str | Path, fmt: str = "auto") -> ReadResult:
             raise ValueError(f"{path}: no records: format auto found an empty file")
         fmt = _detect(head, str(path))
     name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
+    resolution_kg = check_resolution_kg(resolution_kg, _unit_kg(fmt))
     try:
-        parsed = _parse(data, fmt, str(path))
+        parsed = _parse(data, fmt, str(path), resolution_kg)
     except ValueError as exc:  # a CSV header that is not the layout's
         raise ValueError(f"{exc}{_sniff(data, fmt)}") from None
     if not parsed or not len(parsed["reasons"].code):
         found = "a header and no record" if parsed or _head(data, 1).strip() else "an empty file"
         raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
     skipped, bad_lines = parsed["reasons"].counted(parsed["line"])
-    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["step"])
+    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["resolution"])
     total = result.n_read + result.n_skipped
     if result.n_skipped > MAX_BAD_FRACTION * total:
         first = _head(data, 1).decode("utf-8", errors="replace").rstrip()

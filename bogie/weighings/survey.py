@@ -62,9 +62,11 @@ class ObservedSurvey:
 
         ``{"records": {"read", "skipped", "weight_step_kg"}, "positions": {"steer": {"tandem": n, ...}, ...},
         "groups": {"tandem": {...}, "triaxle": {...}}}``; shares are fractions 0..1; a size with no group has
-        ``n_groups`` 0 and None for its numbers; ``weight_step_kg`` is the file's weight resolution [kg] (None: not
-        whole kilograms). ``road`` per size: :func:`bogie.weighings.wear.wear_statistics`'s figures (extra wear as a
-        fraction, extra standard axles per 1,000 groups, hidden overloads, with their intervals).
+        ``n_groups`` 0 and None for its numbers; ``weight_step_kg`` is the file's weight resolution in use [kg]
+        (None: not whole kilograms), ``resolution`` where it came from and the evidence
+        (:meth:`bogie.weighings.resolution.Resolution.to_dict`). ``road`` per size:
+        :func:`bogie.weighings.wear.wear_statistics`'s figures (extra wear as a fraction, extra standard axles per
+        1,000 groups, hidden overloads, with their intervals).
         """
         stats = statistics_dict(self.statistics)
         road = wear_dict(self.road, ["group"]) if len(self.road) else {}
@@ -74,6 +76,7 @@ class ObservedSurvey:
                 "read": self.read.n_read,
                 "skipped": self.read.n_skipped,
                 "weight_step_kg": self.read.weight_step_kg,
+                "resolution": None if self.read.resolution is None else self.read.resolution.to_dict(),
             },
             "positions": self.positions,
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
@@ -90,6 +93,7 @@ def observed_survey(
     speed_kmh: Sequence[float] | None = None,
     legal_group_kg: dict[str, float] | None = None,
     legal_axle_kg: float = EU_LEGAL_AXLE_KG,
+    resolution_kg: float | None = None,
 ) -> ObservedSurvey:
     """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
 
@@ -108,13 +112,16 @@ def observed_survey(
     legal_group_kg, legal_axle_kg
         Legal load of each group size and of one axle, for the hidden overloads [kg]; None: Directive 96/53/EC's
         (:data:`bogie.weighings.wear.EU_LEGAL_GROUP_KG`, 10 t an axle).
+    resolution_kg
+        The file's weight resolution [kg]; None: detected from its loads
+        (:func:`bogie.weighings.readers.read_weighings`).
 
     Raises
     ------
     ValueError
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
-    read = read_weighings(path, fmt)
+    read = read_weighings(path, fmt, resolution_kg)
     every = axle_groups(read.vehicles, group_spacing_m)
     axles = every["n_axles"].to_numpy()
     size = np.select([axles == k for k in SIZE_LABELS], list(SIZE_LABELS.values()), "other")

@@ -259,6 +259,10 @@ class Observed(Strict):
     """Largest spacing of two axles of one observed group."""
     position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
     """Group position kept: ``all``, ``steer``, ``drive`` or ``trailer``."""
+    # bogie.weighings.resolution.check_resolution_kg's range; a multiple of the format's unit, checked by the reader.
+    # A default, so that a params.yaml written before the key still reads
+    resolution_kg: float | None = Field(default=None, gt=0.0, le=1000.0, json_schema_extra={"unit": "kg"})
+    """The file's weight resolution, applied to the simulated readings; None: detected from the file's loads."""
 
 
 class Survey(Strict):

@@ -1,0 +1,202 @@
+"""The weight resolution of a file of weighings: detected from the axle loads' residues, or set by the user.
+
+A scale that weighs to 100 kg writes every axle load as a multiple of 100 kg, whatever unit its file format uses:
+a MON file (kilograms) from such a site holds loads ending in 00. A unit conversion on the way (pounds to kilograms,
+a truncation) can move each load one unit off the step: a real MON file held loads ending in 00 (12,776) or 99
+(6,827) and almost never anything else (issue 41). The resolution is then 100 kg, not the format's 1 kg.
+
+**Rule** (derivation and conventions in ``docs/weighings.md``, "Weight resolution"). For each candidate step s of
+:data:`WEIGHT_STEPS_KG` that is a whole multiple of the format's unit u (1 kg for MON and for CSV files of whole
+kilograms, 100 kg for CASTOR, BeDIT, DITIS and TMG 2001), count the loads on a multiple of s (*on*), and those at
+most one unit from one (*near*: on, one unit below or one unit above). If the loads had the resolution u and their
+residues modulo s were spread evenly, a load would be *on* with probability p_on = u / s and *near* with p_near =
+3 u / s. A step is *supported* when at least :data:`ON_GRID_SHARE` of the loads are on (or, for s >= 10 u, near)
+and the Chernoff bound of that happening by chance, exp(-N KL(share || p)), is at most :data:`MAX_CHANCE`. The
+resolution is the largest supported step (the format's unit when none is). The counts add up over the chunks of a
+file (:class:`ResidueCounts`), so that a file read in pieces gives the same answer as one read whole.
+
+Loads that are not whole multiples of the format's unit (a CSV file of decimal kilograms) have no detected
+resolution (None).
+"""
+
+from __future__ import annotations
+
+import math
+from dataclasses import dataclass, field
+
+import numpy as np
+
+__all__ = [
+    "MAX_CHANCE", "MAX_RESOLUTION_KG", "ON_GRID_SHARE", "TOLERANT_FROM", "WEIGHT_STEPS_KG", "Resolution",
+    "ResidueCounts", "check_resolution_kg", "detect_resolution",
+]  # fmt: skip
+
+#: the weight steps a file's resolution is detected among [kg] (MON files are seen at 10 kg and at 100 kg; CASTOR,
+#: BeDIT, DITIS and TMG 2001 write kg/100)
+WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+#: the least share of the axle loads on (or near) a multiple of a step for the step to be supported [-]: a real
+#: file's odd loads (a WIM system's correction, a hand-edited record) are tolerated up to 1 in 100. A convention of
+#: this project (no published source), named as one
+ON_GRID_SHARE: float = 0.99
+#: the largest chance, bounded by Chernoff's inequality, that loads of the format's resolution fall on a coarser
+#: step's grid as often as they do [-]: over the ten candidate steps, a false detection has a chance below 1e-5.
+#: A convention of this project, named as one
+MAX_CHANCE: float = 1e-6
+#: the one-unit tolerance applies to steps of at least this many units [-]: below, "near" covers 30 % or more of
+#: all residues and says little
+TOLERANT_FROM: int = 10
+#: the largest resolution a user may set [kg] (the coarsest candidate step)
+MAX_RESOLUTION_KG: float = float(WEIGHT_STEPS_KG[-1])
+
+
+def check_resolution_kg(value: float | None, unit_kg: float | None, name: str = "resolution_kg") -> float | None:
+    """A user's weight resolution [kg], checked: None (detect it), or a number in (0, :data:`MAX_RESOLUTION_KG`] kg
+    and a whole multiple of the format's unit ``unit_kg`` (a scale cannot read finer than its file can write)."""
+    if value is None:
+        return None
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
+        raise ValueError(f"{name} = {value!r}: a weight resolution is a number of kilograms in (0, "
+                         f"{MAX_RESOLUTION_KG:g}] kg, or none to detect it from the file")  # fmt: skip
+    if not 0.0 < value <= MAX_RESOLUTION_KG:
+        raise ValueError(f"{name} = {value!r} kg outside the allowed range (0, {MAX_RESOLUTION_KG:g}] kg")
+    if unit_kg is not None:
+        units = value / unit_kg
+        if abs(units - round(units)) > 1e-9 * units or round(units) < 1:
+            raise ValueError(f"{name} = {value!r} kg is not a whole multiple of the format's weight unit "
+                             f"({unit_kg:g} kg): the file cannot hold loads at that resolution")  # fmt: skip
+    return float(value)
+
+
+@dataclass
+class ResidueCounts:
+    """How many axle loads lie on, one unit below and one unit above a multiple of each candidate step.
+
+    ``unit_kg`` is the format's weight unit (None for loads that are not whole kilograms). :meth:`add` takes the
+    loads of one chunk; the counts of chunks add up."""
+
+    unit_kg: float | None
+    n: int = 0
+    whole: bool = True
+    on: dict[int, int] = field(default_factory=dict)
+    below: dict[int, int] = field(default_factory=dict)
+    above: dict[int, int] = field(default_factory=dict)
+
+    def steps(self) -> list[int]:
+        """The candidate steps [kg]: the multiples of the unit among :data:`WEIGHT_STEPS_KG`."""
+        if self.unit_kg is None:
+            return []
+        unit = int(round(self.unit_kg))
+        return [s for s in WEIGHT_STEPS_KG if s >= unit and s % unit == 0]
+
+    def add(self, loads_kg: np.ndarray) -> None:
+        """Count the loads of one chunk [kg] (NaN: no axle, ignored)."""
+        values = np.asarray(loads_kg, dtype=float)
+        values = values[~np.isnan(values)]
+        if not len(values):
+            return
+        self.n += len(values)
+        if self.unit_kg is None or not self.whole:
+            return
+        if not (np.round(values) == values).all():  # not whole kilograms: no resolution (a CSV file of decimals)
+            self.whole = False
+            return
+        kg = np.round(values).astype(np.int64)
+        unit = int(round(self.unit_kg))
+        for s in self.steps():
+            r = kg % s
+            self.on[s] = self.on.get(s, 0) + int((r == 0).sum())
+            self.below[s] = self.below.get(s, 0) + int((r == s - unit).sum()) if s > unit else 0
+            self.above[s] = self.above.get(s, 0) + int((r == unit).sum()) if s > 2 * unit else 0
+
+
+def _chance_log10(share: float, p: float, n: int) -> float:
+    """log10 of the Chernoff bound exp(-n KL(share || p)) on a binomial(n, p) reaching ``share`` n (0: no bound)."""
+    if share <= p:
+        return 0.0
+    kl = share * math.log(share / p)  # numerics-ok: one scalar of a decision with a margin, not a stored result
+    if share < 1.0:
+        kl += (1.0 - share) * math.log((1.0 - share) / (1.0 - p))  # numerics-ok: as above
+    return -n * kl / math.log(10.0)  # numerics-ok: as above
+
+
+@dataclass(frozen=True)
+class Resolution:
+    """A file's weight resolution: the step in use, where it came from, and the evidence for the detected one.
+
+    ``step_kg`` is the resolution applied (None: none, the loads are not whole kilograms); ``source`` is
+    ``detected`` (from the loads), ``format`` (no coarser step supported: the format's unit) or ``set`` (by the
+    user; ``detected_kg`` is what detection found). ``on``, ``below``, ``above`` are the loads on, one unit below
+    and one unit above a multiple of the detected step, of ``n_loads``; ``chance_log10`` is log10 of the bound on
+    that many being near by chance (0 when the detected step is the unit itself)."""
+
+    step_kg: float | None
+    source: str
+    detected_kg: float | None
+    unit_kg: float | None
+    n_loads: int
+    on: int = 0
+    below: int = 0
+    above: int = 0
+    chance_log10: float = 0.0
+
+    def describe(self) -> str:
+        """The resolution in words: the step, where it came from and how sure the detection is."""
+        if self.source == "set":
+            found = f"{self.detected_kg:g} kg" if self.detected_kg is not None else "none"
+            return f"weight resolution {self.step_kg:g} kg (set; detected from the file: {found})"
+        if self.step_kg is None:
+            return "weight resolution: none detected (axle loads not whole kilograms)"
+        unit = f"{self.unit_kg:g} kg"
+        if self.source == "format":
+            return f"weight resolution {self.step_kg:g} kg (the format's unit; no coarser step fits the loads)"
+        n = max(self.n_loads, 1)
+        parts = [f"{100 * self.on / n:.1f} % on one"]
+        if self.below:
+            parts.append(f"{100 * self.below / n:.1f} % {unit} below")
+        if self.above:
+            parts.append(f"{100 * self.above / n:.1f} % {unit} above")
+        near = self.on + self.below + self.above
+        return (
+            f"weight resolution {self.step_kg:g} kg (detected: {near:,} of {self.n_loads:,} axle loads within {unit} "
+            f"of a multiple of {self.step_kg:g} kg: {', '.join(parts)}; loads of {unit} resolution would do so by "
+            f"chance with probability below 1e{math.floor(self.chance_log10):d})"
+        )
+
+    def to_dict(self) -> dict:
+        """The JSON form: ``step_kg``, ``source``, ``detected_kg``, ``unit_kg``, ``n_loads``, ``on``, ``below``,
+        ``above`` (loads) and ``chance_log10``."""
+        return {
+            "step_kg": self.step_kg, "source": self.source, "detected_kg": self.detected_kg, "unit_kg": self.unit_kg,
+            "n_loads": self.n_loads, "on": self.on, "below": self.below, "above": self.above,
+            "chance_log10": round(self.chance_log10, 1),
+        }  # fmt: skip
+
+
+def detect_resolution(counts: ResidueCounts, set_kg: float | None = None) -> Resolution:
+    """The resolution the counts support (module text), or ``set_kg`` [kg] if given (the detection kept beside it)."""
+    detected = _detect(counts)
+    if set_kg is None:
+        return detected
+    return Resolution(float(set_kg), "set", detected.step_kg, counts.unit_kg, counts.n, detected.on, detected.below,
+                      detected.above, detected.chance_log10)  # fmt: skip
+
+
+def _detect(counts: ResidueCounts) -> Resolution:
+    if counts.unit_kg is None or not counts.whole or not counts.n:
+        return Resolution(None, "detected", None, counts.unit_kg, counts.n)
+    unit = int(round(counts.unit_kg))
+    n = counts.n
+    for s in reversed(counts.steps()):
+        if s == unit:
+            break
+        on, below, above = counts.on[s], counts.below[s], counts.above[s]
+        tests = [(on / n, unit / s)]
+        if s >= TOLERANT_FROM * unit:
+            tests.append(((on + below + above) / n, 3 * unit / s))
+        for share, p in tests:
+            bound = _chance_log10(share, p, n)
+            if share >= ON_GRID_SHARE and bound <= math.log10(MAX_CHANCE):  # numerics-ok: a constant's log
+                tolerant = len(tests) == 2 and share > on / n
+                return Resolution(float(s), "detected", float(s), counts.unit_kg, n, on,
+                                  below if tolerant else 0, above if tolerant else 0, bound)  # fmt: skip
+    return Resolution(float(unit), "format", float(unit), counts.unit_kg, n, n)
