@@ -131,19 +131,22 @@ def _weighings_table(survey) -> str:
     lines += ["", "what unequal sharing costs the road (docs/pavement.md): extra pavement wear over the same groups "
               "shared equally (k = 4, the fourth power; k = 12, cemented layers), and axles over 10 t in groups within "
               "their legal load (96/53/EC: tandem 18 t, tri-axle 24 t):",
-              f"{'group':<8} {'n':>5} {'extra wear k=4':>15} {'k=12':>7} {'per 1000 groups':>16} "
-              f"{'hidden overload':>16}",
-              f"{'':<8} {'':>5} {'[%]':>15} {'[%]':>7} {'[80 kN axles]':>16} {'[%]':>16}"]  # fmt: skip
+              f"{'group':<8} {'n':>5} {'extra wear k=4':>15} {'k=12':>7} {'per 1000 groups k=4':>20} "
+              f"{'over legal group':>17} {'hidden overload':>16}",
+              f"{'':<8} {'':>5} {'[%]':>15} {'[%]':>7} {'[80 kN axles]':>20} {'[%]':>17} {'[%]':>16}"]  # fmt: skip
     for size in SURVEYED:
         e = road[size]
         if not e.get("n_groups"):
-            lines.append(f"{size:<8} {0:>5} {'-':>15} {'-':>7} {'-':>16} {'-':>16}")
+            lines.append(f"{size:<8} {0:>5} {'-':>15} {'-':>7} {'-':>20} {'-':>17} {'-':>16}")
             continue
         lines.append(
             f"{size:<8} {e['n_groups']:>5} {num(e['extra_wear_overall'], 100, '.2f'):>15} "
-            f"{num(e['extra_wear_cemented'], 100, '.1f'):>7} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>16} "
-            f"{num(e['share_hidden_overload'], 100):>16}"
+            f"{num(e['extra_wear_cemented'], 100, '.1f'):>7} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>20} "
+            f"{num(e.get('share_group_over'), 100):>17} {num(e['share_hidden_overload'], 100):>16}"
         )
+    legal = survey.to_dict()["settings"].get("legal_loads_kg", {})
+    if legal:
+        lines.append(f"legal loads: {legal.get('source', '')}")
     return "\n".join(lines)
 
 
@@ -154,7 +157,7 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
 
     try:
         survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position,
-                                 resolution_kg=args.resolution_kg)  # fmt: skip
+                                 resolution_kg=args.resolution_kg, grouping=args.grouping)  # fmt: skip
     except OSError as exc:
         print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
         return 2
@@ -171,8 +174,11 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     print(f"groups in the file by position: {counts} (steer: the first group; drive: the second; trailer: the rest)")
     print(
         f"{len(survey.groups)} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
-        f"{args.position}, axles at most {args.group_spacing_m:g} m apart"
+        f"{args.position}; grouping {survey.settings['grouping']}"
     )
+    for station, entry in (survey.stations or {}).items():
+        sizes = ", ".join(f"{entry['groups'][s]['n_groups']} {s}" for s in entry["groups"])
+        print(f"station {station}: {entry['vehicles']} vehicles, {sizes} kept (--json has its statistics)")
     print(_weighings_table(survey))
     return 0
 
@@ -273,6 +279,11 @@ def build_parser() -> argparse.ArgumentParser:
     weigh.add_argument("--position", choices=("all", "steer", "drive", "trailer"), default="all",
                        help="which groups: all (default), the steer, drive (second) or trailer (third and later) "
                        "groups")  # fmt: skip
+    weigh.add_argument(
+        "--grouping", choices=("spacing", "us-tandem"), default="spacing",
+        help="how axles form groups: spacing (default: at most --group-spacing-m apart) or us-tandem (23 CFR 658.5: "
+        "consecutive axles more than 40 in and at most 96 in apart)",
+    )  # fmt: skip
     weigh.add_argument(
         "--resolution-kg", type=_range("--resolution-kg", 0.0, 1000.0, "kg"), default=None,
         help="the file's weight resolution [kg], a multiple of the format's unit (default: detected from the axle "

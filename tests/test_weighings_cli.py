@@ -13,13 +13,21 @@ DATA = Path(__file__).parent / "data" / "weighings"
 def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert main(["weighings", str(DATA / "site.mon"), "--format", "mon", "--min-group-load-t", "15", "--json"]) == 0
     out = json.loads(capsys.readouterr().out)
-    assert set(out) == {"records", "positions", "groups", "road"}
+    assert set(out) == {"settings", "records", "positions", "groups", "road"}
+    settings = out["settings"]
+    assert (settings["format"], settings["format_asked"]) == ("mon", "mon")
+    assert settings["filters"] == {"min_group_load_t": 15.0, "position": "all", "speed_kmh": None}
+    assert settings["grouping"] == "spacing: consecutive axles at most 2 m apart"
+    assert settings["legal_loads_kg"]["tandem"] == 18_000.0 and settings["legal_loads_kg"]["axle"] == 10_000.0
+    assert settings["damage_exponents"] == {"overall": 4, "asphalt": 5, "subgrade": 7, "cemented": 12}
+    assert settings["resolution"].startswith("weight resolution 100 kg (detected: 21 of 21 axle loads")
     resolution = out["records"].pop("resolution")
     assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
     # the 5 good records' 21 loads (A 5, B 3, C 6, D 5, E 2 axles) all on 100 kg, of MON's 1 kg: the chance bound
     # is (1/100)^21, log10 -42.0
     assert resolution == {"step_kg": 100.0, "source": "detected", "detected_kg": 100.0, "unit_kg": 1.0,
-                          "n_loads": 21, "on": 21, "below": 0, "above": 0, "chance_log10": -42.0}  # fmt: skip
+                          "n_loads": 21, "on": 21, "below": 0, "above": 0, "chance_log10": -42.0,
+                          "base": "kg"}  # fmt: skip
     # every group of the file before the filters (test_weighings_groups.py): A, D steer | single | tri-axle; B steer |
     # tandem; C steer | tandem | tri-axle; E steer | single
     assert out["positions"] == {

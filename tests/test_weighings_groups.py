@@ -126,10 +126,12 @@ def test_observed_survey_statistics_by_hand():
 def test_every_format_gives_the_same_survey_of_the_same_vehicles():
     ref = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15).to_dict()
     assert ref["records"].pop("resolution")["unit_kg"] == 1.0
+    assert ref.pop("settings")["format"] == "csv"
     for fmt in ("mon", "castor", "bedit", "ditis"):
         out = observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_t=15).to_dict()
         # the same 100 kg, detected in kilograms (CSV, MON) or the kg/100 formats' own unit
         resolution = out["records"].pop("resolution")
+        assert out.pop("settings")["format"] == fmt
         assert (resolution["step_kg"], resolution["source"]) == (
             (100.0, "detected") if fmt == "mon" else (100.0, "format")
         ), fmt

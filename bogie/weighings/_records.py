@@ -227,6 +227,29 @@ def _head(data: bytes, n: int) -> bytes:
     return b"\n".join(lines) + b"\n"
 
 
+#: a space's byte minus '0''s, wrapped around in uint8 (what :func:`_gather` sees for a space)
+_SPACE_MINUS_ZERO = np.uint8(256 + 32 - 48)
+
+
+def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: int) -> tuple[np.ndarray, np.ndarray]:
+    """The unsigned integer ``line[offset:offset + width]`` of each line in ``rows`` and whether it is one:
+    leading spaces, then ASCII digits only (no sign, no inner or trailing space, not all blank).
+
+    One character column at a time (a gather of one byte per record), so that memory is a few arrays of the
+    number of records, whatever the width."""
+    pos = lines.start[rows] + offset
+    value = np.zeros(len(rows), np.int64)
+    seen = np.zeros(len(rows), bool)
+    ok = np.ones(len(rows), bool)
+    for j in range(width):
+        digit = lines.buf[pos + j] - np.uint8(48)  # wraps around below '0': a digit is < 10
+        is_digit = digit < 10
+        ok &= is_digit | ((digit == _SPACE_MINUS_ZERO) & ~seen)  # a space only before the first digit
+        seen |= is_digit
+        value = value * 10 + np.where(is_digit, digit, 0)
+    return value, ok & seen
+
+
 def _days_in_month(year: np.ndarray, month: np.ndarray) -> np.ndarray:
     leap = ((year % 4 == 0) & (year % 100 != 0)) | (year % 400 == 0)
     days = np.array([31, 28, 31, 30, 31, 30, 31, 31, 30, 31, 30, 31])[np.clip(month, 1, 12) - 1]

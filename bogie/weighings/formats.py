@@ -24,6 +24,7 @@ from dataclasses import dataclass
 
 __all__ = [
     "CM", "CSV_COLUMNS", "DM", "DMS", "FORMATS", "KG", "KG100", "KMH", "LAYOUTS", "MM", "MS", "REFERENCE", "S100",
+    "TMG_FORMATS",
     "AxleBlock", "Field", "FixedWidthLayout",
 ]  # fmt: skip
 
@@ -256,5 +257,9 @@ LAYOUTS: dict[str, FixedWidthLayout] = {
 #: axles, then axle_load_1..n [kg] and spacing_1..n-1 [m]; a file may have more axle columns and other columns
 CSV_COLUMNS: tuple[str, ...] = ("timestamp", "speed_kmh", "lane", "n_axles")
 
+#: the US truck weight record's editions (FHWA Traffic Monitoring Guide, "W" record; layouts in
+#: ``bogie.weighings._tmg.TMG_LAYOUTS``)
+TMG_FORMATS: tuple[str, ...] = ("tmg2001", "tmg2013")
+
 #: every format the readers take, CSV first
-FORMATS: tuple[str, ...] = ("csv", *LAYOUTS)
+FORMATS: tuple[str, ...] = ("csv", *LAYOUTS, *TMG_FORMATS)

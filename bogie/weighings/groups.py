@@ -19,10 +19,19 @@ import pandas as pd
 
 from bogie.weighings._records import REL_TOL
 
-__all__ = ["GROUP_SPACING_M", "GROUP_TABLE_COLUMNS", "POSITIONS", "SIZES", "axle_groups", "filter_groups"]
+__all__ = [
+    "GROUPING_RULES", "GROUP_SPACING_M", "GROUP_TABLE_COLUMNS", "POSITIONS", "SIZES", "US_TANDEM_M", "axle_groups",
+    "filter_groups", "grouping_rule",
+]  # fmt: skip
 
 #: largest spacing of two axles of one group [m] (issue 13's default; see the module text)
 GROUP_SPACING_M: float = 2.0
+#: the US tandem axle (23 CFR 658.5): consecutive axles more than 40 in and not more than 96 in apart [m] (an inch
+#: is 0.0254 m exactly)
+US_TANDEM_M: tuple[float, float] = (40 * 0.0254, 96 * 0.0254)
+#: the grouping rules :func:`axle_groups` applies: ``spacing`` (axles at most ``group_spacing_m`` apart) and
+#: ``us-tandem`` (23 CFR 658.5's spacing band, :data:`US_TANDEM_M`)
+GROUPING_RULES: tuple[str, ...] = ("spacing", "us-tandem")
 #: group labels by number of axles
 SIZES: dict[int, str] = {2: "tandem", 3: "triaxle"}
 #: group positions a filter can ask for
@@ -44,7 +53,18 @@ def _check(name: str, value: float, low: float, high: float, unit: str, low_open
         raise ValueError(f"{name} = {value!r} {unit} outside the allowed range {bracket}{low:g}, {high:g}] {unit}")
 
 
-def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M) -> pd.DataFrame:
+def grouping_rule(rule: str, group_spacing_m: float = GROUP_SPACING_M) -> str:
+    """The grouping rule in words, as the outputs name it."""
+    if rule == "us-tandem":
+        low, high = US_TANDEM_M
+        return (f"us-tandem: consecutive axles more than 40 in ({low:g} m) and at most 96 in ({high:g} m) apart "
+                "(23 CFR 658.5)")  # fmt: skip
+    return f"spacing: consecutive axles at most {group_spacing_m:g} m apart"
+
+
+def axle_groups(
+    vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M, rule: str = "spacing"
+) -> pd.DataFrame:
     """Split each vehicle into axle groups.
 
     Parameters
@@ -53,7 +73,11 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         The vehicle table of :func:`bogie.weighings.readers.read_weighings`: ``n_axles``, ``axle_load_1..`` [kg],
         ``spacing_1..`` [m], ``line``, ``timestamp``, ``speed`` [m/s], ``lane``.
     group_spacing_m
-        Largest spacing between two consecutive axles of one group, in (0, 5] [m].
+        Largest spacing between two consecutive axles of one group, in (0, 5] [m] (rule ``spacing``).
+    rule
+        ``spacing`` (default) or ``us-tandem``: two consecutive axles are in one group when their spacing is more
+        than 40 in and at most 96 in (23 CFR 658.5's tandem axle), ``group_spacing_m`` not used. A spacing read
+        at 0.1 m (TMG 2001) is compared as read: 2.4 m is in, 2.5 m out; the file cannot place 2.4384 m closer.
 
     Returns
     -------
@@ -66,6 +90,8 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
         more than three) and ``spacing_1..2`` [m].
     """
     _check("group_spacing_m", group_spacing_m, 0.0, 5.0, "m", low_open=True)
+    if rule not in GROUPING_RULES:
+        raise ValueError(f"rule = {rule!r} unknown; allowed: {', '.join(GROUPING_RULES)}")
     columns = list(GROUP_TABLE_COLUMNS)
     if not len(vehicles):
         return pd.DataFrame(columns=columns)
@@ -80,7 +106,12 @@ def axle_groups(vehicles: pd.DataFrame, group_spacing_m: float = GROUP_SPACING_M
     starts = np.zeros((len(n), width), bool)
     starts[:, 0] = True
     # a spacing equal to the limit (read from the file as an integer times its unit) is within the group
-    starts[:, 1:] = (gaps > group_spacing_m * (1.0 + REL_TOL)) & present[:, 1:]
+    if rule == "us-tandem":
+        low, high = US_TANDEM_M
+        apart = (gaps <= low * (1.0 + REL_TOL)) | (gaps > high * (1.0 + REL_TOL))
+    else:
+        apart = gaps > group_spacing_m * (1.0 + REL_TOL)
+    starts[:, 1:] = apart & present[:, 1:]
     in_vehicle = np.cumsum(starts, axis=1) - 1  # each axle's group index within its vehicle
     n_groups = in_vehicle[np.arange(len(n)), n - 1] + 1
     first_group = np.concatenate(([0], np.cumsum(n_groups)[:-1]))  # each vehicle's first group, in the group table

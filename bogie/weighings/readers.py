@@ -47,6 +47,7 @@ from bogie.weighings._records import (
     YEAR_RANGE,
     _check_calendar,
     _file_bytes,
+    _gather,
     _head,
     _Lines,
     _Reasons,
@@ -54,6 +55,7 @@ from bogie.weighings._records import (
     _split,
     _timestamps,
 )
+from bogie.weighings._tmg import ALIKE, POUND, TMG_LAYOUTS, parse_tmg, split_dummies
 from bogie.weighings.formats import FORMATS, LAYOUTS, FixedWidthLayout
 from bogie.weighings.resolution import (
     WEIGHT_STEPS_KG,
@@ -106,6 +108,7 @@ class ReadResult:
     skipped: Counter = field(default_factory=Counter)
     bad_lines: dict[str, list[int]] = field(default_factory=dict)
     resolution: Resolution | None = None
+    counted: dict[str, int] = field(default_factory=dict)
 
     @property
     def weight_step_kg(self) -> float | None:
@@ -116,7 +119,7 @@ class ReadResult:
     def format_step_kg(self) -> float | None:
         """The step of the format's weight field [kg]: 1 for MON, 100 for CASTOR, BeDIT and DITIS (kg/100), None
         for CSV (decimal numbers)."""
-        return None if self.format == "csv" else LAYOUTS[self.format].axle_field("axle_load").scale
+        return _unit_kg(self.format)
 
     @property
     def n_read(self) -> int:
@@ -143,35 +146,13 @@ class ReadResult:
         return self.resolution.describe()
 
     def summary(self) -> str:
-        """One line: records read and skipped, each reason with its first line numbers."""
+        """One line: records read and skipped, each reason with its first line numbers; what else was counted."""
         text = f"{self.n_read} records read, {self.n_skipped} skipped"
-        return text + (f" ({self.reasons()})" if self.skipped else "")
+        text += f" ({self.reasons()})" if self.skipped else ""
+        return text + "".join(f"; {n} {what}" for what, n in self.counted.items())
 
 
 # ---- fixed width ---------------------------------------------------------------------------------------------------
-#: a space's byte minus '0''s, wrapped around in uint8 (what :func:`_gather` sees for a space)
-_SPACE_MINUS_ZERO = np.uint8(256 + 32 - 48)
-
-
-def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: int) -> tuple[np.ndarray, np.ndarray]:
-    """The unsigned integer ``line[offset:offset + width]`` of each line in ``rows`` and whether it is one:
-    leading spaces, then ASCII digits only (no sign, no inner or trailing space, not all blank).
-
-    One character column at a time (a gather of one byte per record), so that memory is a few arrays of the
-    number of records, whatever the width."""
-    pos = lines.start[rows] + offset
-    value = np.zeros(len(rows), np.int64)
-    seen = np.zeros(len(rows), bool)
-    ok = np.ones(len(rows), bool)
-    for j in range(width):
-        digit = lines.buf[pos + j] - np.uint8(48)  # wraps around below '0': a digit is < 10
-        is_digit = digit < 10
-        ok &= is_digit | ((digit == _SPACE_MINUS_ZERO) & ~seen)  # a space only before the first digit
-        seen |= is_digit
-        value = value * 10 + np.where(is_digit, digit, 0)
-    return value, ok & seen
-
-
 def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     """Every record of ``lines`` in ``layout``: the columns (values of bad records undefined) and the reasons."""
     reasons = _Reasons(len(lines))
@@ -292,7 +273,8 @@ def _stray_bytes(lines: _Lines) -> np.ndarray:
 def _resolution(parsed: dict, ok: np.ndarray, set_kg: float | None) -> Resolution:
     """The weight resolution of the axle loads of the ``ok`` records (:mod:`bogie.weighings.resolution`), or the
     caller's ``set_kg``."""
-    counts = ResidueCounts(parsed["load_step"] or 1.0)
+    base = parsed.get("weight_base", "kg")
+    counts = ResidueCounts(parsed["load_step"] or 1.0, POUND if base == "lb" else 1.0, base)
     counts.add(parsed["loads"][ok])
     return detect_resolution(counts, set_kg)
 
@@ -320,6 +302,11 @@ def _check_vehicles(parsed: dict, set_kg: float | None = None) -> Resolution:
         load_half = max(step or 0.0, parsed["load_step"]) / 2
         gross_half = max(step or 0.0, parsed["gross_step"]) / 2
         slack = GROSS_TOLERANCE * total + gross_half + col["n_axles"] * load_half
+        # a gross weight 2.2 times the axles' sum: the gross in pounds and the axles in kilograms (or a file of
+        # the other edition); said as such, not as any other mismatch
+        pounds = np.abs(gross - total / POUND) <= GROSS_TOLERANCE * total / POUND + gross_half
+        reasons.flag(pounds & (np.abs(gross - total) > slack), "gross weight 2.2 times the sum of the axle loads: "
+                     "pounds where kilograms are expected?")  # fmt: skip
         reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
     reasons.flag(_shorter_than_wheelbase(parsed), "length shorter than the wheelbase")
     return resolution
@@ -348,6 +335,29 @@ def _shorter_than_wheelbase(parsed: dict) -> np.ndarray:
     return (length > 0) & (length < wheelbase * (1.0 - REL_TOL))
 
 
+def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFrame:
+    """The columns a repeat shares with the record it repeats: time, lane, direction, speed, axle loads and spacings
+    (and the station of a TMG file)."""
+    col = parsed["columns"]
+    extra = parsed.get("extra", {})
+    return pd.DataFrame({
+        "t": stamps[rows].view(np.int64), "lane": col["lane"][rows], "dir": col["direction"][rows],
+        "speed": col["speed"][rows],
+        **({"station": extra["station"][rows]} if "station" in extra else {}),
+        **{f"w{i}": parsed["loads"][rows, i] for i in range(parsed["loads"].shape[1])},
+        **{f"s{i}": parsed["spacings"][rows, i] for i in range(parsed["spacings"].shape[1])},
+    })  # fmt: skip
+
+
+def _alike(parsed: dict, stamps: np.ndarray) -> int:
+    """How many good records are alike an earlier one (:func:`_repeat_key`): counted for a file of hourly time
+    stamps, where two alike trucks in one hour are two vehicles."""
+    good = np.flatnonzero(parsed["reasons"].ok)
+    if len(good) < 2:
+        return 0
+    return int(_repeat_key(parsed, stamps, good).duplicated(keep="first").sum())
+
+
 def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
     """A good record equal to an earlier good one in time, lane, direction, speed, axle loads and spacings is bad:
     a WIM system does not weigh two vehicles in one lane at one instant (a record repeated by a copy or a retry)."""
@@ -360,13 +370,7 @@ def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
     good = good[same_time]
     if len(good) < 2:
         return
-    col = parsed["columns"]
-    key = pd.DataFrame({
-        "t": stamps[good].view(np.int64), "lane": col["lane"][good], "dir": col["direction"][good],
-        "speed": col["speed"][good],
-        **{f"w{i}": parsed["loads"][good, i] for i in range(parsed["loads"].shape[1])},
-        **{f"s{i}": parsed["spacings"][good, i] for i in range(parsed["spacings"].shape[1])},
-    })  # fmt: skip
+    key = _repeat_key(parsed, stamps, good)
     repeat = np.zeros(len(reasons.code), bool)
     repeat[good[key.duplicated(keep="first").to_numpy()]] = True
     reasons.flag(repeat, DUPLICATE)
@@ -393,6 +397,16 @@ def _parse(data: bytes, fmt: str, path: str, resolution_kg: float | None = None)
             return {}
         parsed = _parse_csv(data, lines, path)
         stamps = parsed["stamps"]
+    elif fmt in TMG_LAYOUTS:
+        lines = _split(data)
+        if not len(lines):
+            return {}
+        keep, dummies = split_dummies(lines, TMG_LAYOUTS[fmt])
+        lines = lines.take(keep)
+        parsed = parse_tmg(lines, TMG_LAYOUTS[fmt])
+        parsed["line"] = lines.line
+        parsed["counted"] = dummies
+        stamps = None
     else:
         lines = _split(data)
         if not len(lines):
@@ -403,7 +417,12 @@ def _parse(data: bytes, fmt: str, path: str, resolution_kg: float | None = None)
     parsed["resolution"] = _check_vehicles(parsed, resolution_kg)
     if stamps is None:
         stamps = _timestamps(parsed["reasons"].ok, *parsed["stamp"])
-    _flag_repeats(parsed, stamps)
+    if fmt in TMG_LAYOUTS:  # time stamps to the hour: alike trucks of one hour are vehicles, counted, not dropped
+        alike = _alike(parsed, stamps)
+        if alike:
+            parsed["counted"][ALIKE] = alike
+    else:
+        _flag_repeats(parsed, stamps)
     parsed["stamps"] = stamps
     return parsed
 
@@ -423,6 +442,8 @@ def _frame(parsed: dict) -> pd.DataFrame:
     spacings = np.pad(parsed["spacings"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, : width - 1]
     extra = {f"axle_load_{i + 1}": loads[:, i] for i in range(width)}
     extra.update({f"spacing_{i + 1}": spacings[:, i] for i in range(width - 1)})
+    for name, values in parsed.get("extra", {}).items():  # TMG: station, vehicle_class
+        extra[name] = values[ok]
     if parsed["widths"] is not None:
         widths = np.pad(parsed["widths"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
         extra.update({f"axle_width_{i + 1}": widths[:, i] for i in range(width)})
@@ -441,7 +462,9 @@ def _fits(head: bytes, fmt: str, path: str) -> tuple[int, int]:
     if not parsed:
         return 0, 0
     ok = parsed["reasons"].ok
-    return int(ok.sum()), len(ok)
+    # a TMG file's dummy hour records fit their edition: they are its records too, though not vehicles
+    dummies = sum(n for what, n in parsed.get("counted", {}).items() if what.startswith("dummy"))
+    return int(ok.sum()) + dummies, len(ok) + dummies
 
 
 def _sniff(data: bytes, expected: str) -> str:
@@ -491,7 +514,16 @@ def detect_format(lines: list[str], path: str = "") -> str:
 
 def _unit_kg(fmt: str) -> float | None:
     """The weight unit of format ``fmt`` [kg]: its axle load field's scale; None for CSV (decimal numbers)."""
+    if fmt in TMG_LAYOUTS:
+        return TMG_LAYOUTS[fmt].weight_unit_kg
     return None if fmt == "csv" else LAYOUTS[fmt].axle_field("axle_load").scale
+
+
+def _format_name(fmt: str) -> str:
+    """How a message names the format's records: 'CSV layout', 'MON records', 'TMG 2001 records'."""
+    if fmt == "csv":
+        return "CSV layout"
+    return f"{(TMG_LAYOUTS[fmt] if fmt in TMG_LAYOUTS else LAYOUTS[fmt]).name} records"
 
 
 def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | None = None) -> ReadResult:
@@ -533,7 +565,7 @@ def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | N
         if not head.strip():
             raise ValueError(f"{path}: no records: format auto found an empty file")
         fmt = _detect(head, str(path))
-    name = "CSV layout" if fmt == "csv" else f"{LAYOUTS[fmt].name} records"
+    name = _format_name(fmt)
     resolution_kg = check_resolution_kg(resolution_kg, _unit_kg(fmt))
     try:
         parsed = _parse(data, fmt, str(path), resolution_kg)
@@ -541,9 +573,11 @@ def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | N
         raise ValueError(f"{exc}{_sniff(data, fmt)}") from None
     if not parsed or not len(parsed["reasons"].code):
         found = "a header and no record" if parsed or _head(data, 1).strip() else "an empty file"
+        if parsed.get("counted"):
+            found = "dummy hour records only (" + "; ".join(f"{n} {w}" for w, n in parsed["counted"].items()) + ")"
         raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
     skipped, bad_lines = parsed["reasons"].counted(parsed["line"])
-    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["resolution"])
+    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["resolution"], parsed.get("counted", {}))
     total = result.n_read + result.n_skipped
     if result.n_skipped > MAX_BAD_FRACTION * total:
         first = _head(data, 1).decode("utf-8", errors="replace").rstrip()

@@ -71,22 +71,30 @@ def check_resolution_kg(value: float | None, unit_kg: float | None, name: str = 
 class ResidueCounts:
     """How many axle loads lie on, one unit below and one unit above a multiple of each candidate step.
 
-    ``unit_kg`` is the format's weight unit (None for loads that are not whole kilograms). :meth:`add` takes the
-    loads of one chunk; the counts of chunks add up."""
+    ``unit_kg`` is the format's weight unit (None for loads that are not whole kilograms); ``base_kg`` and
+    ``base`` the unit the steps are counted in (1 kg, ``kg``; TMG 2013's pound, 0.45359237 kg, ``lb``).
+    :meth:`add` takes the loads of one chunk [kg]; the counts of chunks add up."""
 
     unit_kg: float | None
+    base_kg: float = 1.0
+    base: str = "kg"
     n: int = 0
     whole: bool = True
     on: dict[int, int] = field(default_factory=dict)
     below: dict[int, int] = field(default_factory=dict)
     above: dict[int, int] = field(default_factory=dict)
 
+    @property
+    def unit(self) -> int:
+        """The format's unit in the base unit (1 kg, 100 kg, 1 lb) [base]."""
+        return int(round((self.unit_kg or self.base_kg) / self.base_kg))
+
     def steps(self) -> list[int]:
-        """The candidate steps [kg]: the multiples of the unit among :data:`WEIGHT_STEPS_KG`."""
+        """The candidate steps [base]: the multiples of the unit among :data:`WEIGHT_STEPS_KG` (in pounds for a
+        file in pounds)."""
         if self.unit_kg is None:
             return []
-        unit = int(round(self.unit_kg))
-        return [s for s in WEIGHT_STEPS_KG if s >= unit and s % unit == 0]
+        return [s for s in WEIGHT_STEPS_KG if s >= self.unit and s % self.unit == 0]
 
     def add(self, loads_kg: np.ndarray) -> None:
         """Count the loads of one chunk [kg] (NaN: no axle, ignored)."""
@@ -97,13 +105,16 @@ class ResidueCounts:
         self.n += len(values)
         if self.unit_kg is None or not self.whole:
             return
-        if not (np.round(values) == values).all():  # not whole kilograms: no resolution (a CSV file of decimals)
+        base = values / self.base_kg
+        whole = np.round(base)
+        # a load in pounds comes back from kilograms within a rounding of the conversion: 1e-6 lb is far below it
+        if (np.abs(base - whole) > 1e-6).any():  # not whole units: no resolution (a CSV file of decimals)
             self.whole = False
             return
-        kg = np.round(values).astype(np.int64)
-        unit = int(round(self.unit_kg))
+        units = whole.astype(np.int64)
+        unit = self.unit
         for s in self.steps():
-            r = kg % s
+            r = units % s
             self.on[s] = self.on.get(s, 0) + int((r == 0).sum())
             self.below[s] = self.below.get(s, 0) + int((r == s - unit).sum()) if s > unit else 0
             self.above[s] = self.above.get(s, 0) + int((r == unit).sum()) if s > 2 * unit else 0
@@ -138,17 +149,26 @@ class Resolution:
     below: int = 0
     above: int = 0
     chance_log10: float = 0.0
+    base: str = "kg"
+    base_kg: float = 1.0
+
+    def _amount(self, kg: float) -> str:
+        """A weight in the file's base unit: '100 kg', or '100 lb (45.359 kg)'."""
+        if self.base == "kg":
+            return f"{kg:g} kg"
+        return f"{kg / self.base_kg:.6g} {self.base} ({kg:.5g} kg)"
 
     def describe(self) -> str:
         """The resolution in words: the step, where it came from and how sure the detection is."""
         if self.source == "set":
-            found = f"{self.detected_kg:g} kg" if self.detected_kg is not None else "none"
-            return f"weight resolution {self.step_kg:g} kg (set; detected from the file: {found})"
+            found = self._amount(self.detected_kg) if self.detected_kg is not None else "none"
+            return f"weight resolution {self._amount(self.step_kg)} (set; detected from the file: {found})"
         if self.step_kg is None:
             return "weight resolution: none detected (axle loads not whole kilograms)"
-        unit = f"{self.unit_kg:g} kg"
+        unit = f"{self.unit_kg / self.base_kg:g} {self.base}"
+        step = self._amount(self.step_kg)
         if self.source == "format":
-            return f"weight resolution {self.step_kg:g} kg (the format's unit; no coarser step fits the loads)"
+            return f"weight resolution {step} (the format's unit; no coarser step fits the loads)"
         n = max(self.n_loads, 1)
         parts = [f"{100 * self.on / n:.1f} % on one"]
         if self.below:
@@ -157,8 +177,8 @@ class Resolution:
             parts.append(f"{100 * self.above / n:.1f} % {unit} above")
         near = self.on + self.below + self.above
         return (
-            f"weight resolution {self.step_kg:g} kg (detected: {near:,} of {self.n_loads:,} axle loads within {unit} "
-            f"of a multiple of {self.step_kg:g} kg: {', '.join(parts)}; loads of {unit} resolution would do so by "
+            f"weight resolution {step} (detected: {near:,} of {self.n_loads:,} axle loads within {unit} "
+            f"of a multiple of {step}: {', '.join(parts)}; loads of {unit} resolution would do so by "
             f"chance with probability below 1e{math.floor(self.chance_log10):d})"
         )
 
@@ -168,7 +188,7 @@ class Resolution:
         return {
             "step_kg": self.step_kg, "source": self.source, "detected_kg": self.detected_kg, "unit_kg": self.unit_kg,
             "n_loads": self.n_loads, "on": self.on, "below": self.below, "above": self.above,
-            "chance_log10": round(self.chance_log10, 1),
+            "chance_log10": round(self.chance_log10, 1), "base": self.base,
         }  # fmt: skip
 
 
@@ -178,13 +198,14 @@ def detect_resolution(counts: ResidueCounts, set_kg: float | None = None) -> Res
     if set_kg is None:
         return detected
     return Resolution(float(set_kg), "set", detected.step_kg, counts.unit_kg, counts.n, detected.on, detected.below,
-                      detected.above, detected.chance_log10)  # fmt: skip
+                      detected.above, detected.chance_log10, counts.base, counts.base_kg)  # fmt: skip
 
 
 def _detect(counts: ResidueCounts) -> Resolution:
+    base = (counts.base, counts.base_kg)
     if counts.unit_kg is None or not counts.whole or not counts.n:
-        return Resolution(None, "detected", None, counts.unit_kg, counts.n)
-    unit = int(round(counts.unit_kg))
+        return Resolution(None, "detected", None, counts.unit_kg, counts.n, 0, 0, 0, 0.0, *base)
+    unit = counts.unit
     n = counts.n
     for s in reversed(counts.steps()):
         if s == unit:
@@ -197,6 +218,8 @@ def _detect(counts: ResidueCounts) -> Resolution:
             bound = _chance_log10(share, p, n)
             if share >= ON_GRID_SHARE and bound <= math.log10(MAX_CHANCE):  # numerics-ok: a constant's log
                 tolerant = len(tests) == 2 and share > on / n
-                return Resolution(float(s), "detected", float(s), counts.unit_kg, n, on,
-                                  below if tolerant else 0, above if tolerant else 0, bound)  # fmt: skip
-    return Resolution(float(unit), "format", float(unit), counts.unit_kg, n, n)
+                step = s * counts.base_kg
+                return Resolution(step, "detected", step, counts.unit_kg, n, on, below if tolerant else 0,
+                                  above if tolerant else 0, bound, *base)  # fmt: skip
+    step = unit * counts.base_kg
+    return Resolution(step, "format", step, counts.unit_kg, n, n, 0, 0, 0.0, *base)

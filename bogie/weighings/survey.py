@@ -15,10 +15,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups
+from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups, grouping_rule
 from bogie.weighings.readers import ReadResult, read_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
-from bogie.weighings.wear import EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
+from bogie.weighings.wear import DAMAGE_EXPONENTS, EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
 
 __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
 
@@ -49,6 +49,12 @@ class ObservedSurvey:
     road
         :func:`bogie.weighings.wear.wear_statistics` of the tandems and tri-axles, one row each: the extra pavement
         wear their unequal sharing causes and the overloaded axles hidden in legal groups.
+    settings
+        What the survey was computed with: the file, its format, the resolution's source, the filters, the
+        grouping rule, the legal loads and the damage exponents (``to_dict()["settings"]``).
+    stations
+        For a file of more than one station (a state-wide TMG file): per station, its vehicles and the statistics
+        of its tandems and tri-axles (``{station: {"vehicles": n, "groups": {size: {...}}}}``); empty otherwise.
     """
 
     groups: pd.DataFrame
@@ -56,6 +62,8 @@ class ObservedSurvey:
     read: ReadResult
     positions: dict[str, dict[str, int]]
     road: pd.DataFrame
+    settings: dict[str, Any] | None = None
+    stations: dict[str, dict[str, Any]] | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
@@ -72,6 +80,7 @@ class ObservedSurvey:
         road = wear_dict(self.road, ["group"]) if len(self.road) else {}
         empty = {"n_groups": 0, **dict.fromkeys(STATISTICS_COLUMNS[1:]), "load_share_quantiles": {}}
         return {
+            "settings": self.settings or {},
             "records": {
                 "read": self.read.n_read,
                 "skipped": self.read.n_skipped,
@@ -81,6 +90,7 @@ class ObservedSurvey:
             "positions": self.positions,
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
             "road": {size: road.get(size, {"n_groups": 0}) for size in SURVEYED},
+            **({"stations": self.stations} if self.stations else {}),
         }
 
 
@@ -94,6 +104,7 @@ def observed_survey(
     legal_group_kg: dict[str, float] | None = None,
     legal_axle_kg: float = EU_LEGAL_AXLE_KG,
     resolution_kg: float | None = None,
+    grouping: str = "spacing",
 ) -> ObservedSurvey:
     """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
 
@@ -115,6 +126,9 @@ def observed_survey(
     resolution_kg
         The file's weight resolution [kg]; None: detected from its loads
         (:func:`bogie.weighings.readers.read_weighings`).
+    grouping
+        ``spacing`` (axles at most ``group_spacing_m`` apart) or ``us-tandem`` (23 CFR 658.5's 40-96 in band;
+        :func:`bogie.weighings.groups.axle_groups`).
 
     Raises
     ------
@@ -122,7 +136,7 @@ def observed_survey(
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
     read = read_weighings(path, fmt, resolution_kg)
-    every = axle_groups(read.vehicles, group_spacing_m)
+    every = axle_groups(read.vehicles, group_spacing_m, grouping)
     axles = every["n_axles"].to_numpy()
     size = np.select([axles == k for k in SIZE_LABELS], list(SIZE_LABELS.values()), "other")
     positions = {
@@ -135,4 +149,37 @@ def observed_survey(
     statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
     legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
     road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
-    return ObservedSurvey(groups, statistics, read, positions, road)
+    settings = {
+        "file": str(path), "format": read.format, "format_asked": fmt,
+        "resolution": read.describe_resolution(),
+        "filters": {"min_group_load_t": min_group_load_t, "position": position,
+                    "speed_kmh": None if speed_kmh is None else [float(v) for v in speed_kmh]},
+        "grouping": grouping_rule(grouping, group_spacing_m),
+        "legal_loads_kg": {
+            **{size: float(legal[size]) for size in SURVEYED if size in legal}, "axle": float(legal_axle_kg),
+            "source": "Directive 96/53/EC Annex I (trailer tandem 1.3-1.8 m apart 18 t, trailer tri-axle 1.3-1.4 m "
+            "24 t, single non-driving axle 10 t), one limit per size whatever the group's position and spacing"
+            if legal_group_kg is None and legal_axle_kg == EU_LEGAL_AXLE_KG else "given by the caller",
+        },
+        "damage_exponents": dict(DAMAGE_EXPONENTS),
+    }  # fmt: skip
+    return ObservedSurvey(groups, statistics, read, positions, road, settings, _stations(read, groups))
+
+
+def _stations(read: ReadResult, groups: pd.DataFrame) -> dict[str, dict[str, Any]]:
+    """Per station of a file of more than one (a TMG file's ``station`` column): its vehicles and the statistics of
+    its kept tandems and tri-axles; empty for a file of one station or none."""
+    vehicles = read.vehicles
+    if "station" not in vehicles.columns or vehicles["station"].nunique() < 2:
+        return {}
+    station_of = pd.Series(vehicles["station"].to_numpy(), index=vehicles["line"].to_numpy())
+    at = station_of.reindex(groups["line"].to_numpy()).to_numpy()
+    out: dict[str, dict[str, Any]] = {}
+    for station, n in vehicles["station"].value_counts(sort=False).sort_index().items():
+        mine = groups[(at == station) & groups["group"].isin(SURVEYED).to_numpy()]
+        stats = statistics_dict(survey_statistics(mine, by="group")) if len(mine) else {}
+        out[str(station)] = {
+            "vehicles": int(n),
+            "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
+        }
+    return out

@@ -19,6 +19,7 @@ from pathlib import Path
 import numpy as np
 import pandas as pd
 
+from bogie.weighings._tmg import TMG_LAYOUTS, TMG_MAX_AXLES, TMG_VEHICLE_CLASSES, TmgLayout
 from bogie.weighings.formats import FORMATS, LAYOUTS, Field, FixedWidthLayout
 from bogie.weighings.groups import GROUP_SPACING_M
 from bogie.weighings.readers import CSV_MAX_AXLES, YEAR_RANGE
@@ -422,6 +423,84 @@ def _csv_lines(vehicles: pd.DataFrame) -> list[str]:
 
 
 # ---- the file ------------------------------------------------------------------------------------------------------
+# ---- the US truck weight record ------------------------------------------------------------------------------------
+def _tmg_field(fmt: str, name: str, values: np.ndarray, unit: float, width: int, unit_name: str) -> np.ndarray:
+    """SI ``values`` as the integers of a TMG field of ``width`` digits in ``unit`` (SI per unit), range-checked."""
+    q = _round_half_away(values / unit)
+    top = 10**width - 1  # numerics-ok: integers
+    for bad, why in ((np.isnan(q), "is not given (NaN)"), ((q < 0) | (q > top), "does not fit its field")):
+        where = np.flatnonzero(bad)
+        if len(where):
+            raise ValueError(f"{fmt}: {name} = {_val(values[where[0]])} in {_rows(where)} {why} (0-{top} "
+                             f"{unit_name}, {width} digits)")  # fmt: skip
+    return q.astype(np.int64)
+
+
+def _stations(vehicles: pd.DataFrame, fmt: str) -> list[tuple[int, str]]:
+    """The ``station`` column ('SS-XXXXXX': the state's 2-digit FIPS code and a station ID of 1-6 letters and
+    digits, as the reader writes it) as (state, ID)."""
+    _require(vehicles, fmt, "station")
+    out = []
+    for j, value in enumerate(vehicles["station"].tolist()):
+        text = value if isinstance(value, str) else ""
+        state, dash, ident = text.partition("-")
+        if not (dash and len(state) == 2 and state.isdigit() and 1 <= len(ident) <= 6 and ident.isascii()
+                and ident.isalnum()):  # fmt: skip
+            raise ValueError(f"{fmt}: station = {value!r} in row {j} is not 'SS-XXXXXX' (the state's 2-digit FIPS "
+                             "code, a dash, a station ID of 1-6 letters and digits)")  # fmt: skip
+        out.append((int(state), ident))
+    return out
+
+
+def _tmg_lines(vehicles: pd.DataFrame, fmt: str) -> list[str]:
+    """The W records of the table in TMG edition ``fmt`` (the reference's layout; ``_tmg.TMG_LAYOUTS``)."""
+    layout: TmgLayout = TMG_LAYOUTS[fmt]
+    stamps = _timestamps(vehicles, fmt).floor("h")  # the beginning of the hour the vehicle passed in
+    years = stamps.year.to_numpy()
+    low, high = YEAR_RANGE if layout.year_digits == 2 else (1000, 9999)
+    bad = np.flatnonzero((years < low) | (years > high))
+    if len(bad):
+        raise ValueError(f"{fmt}: timestamp year {years[bad[0]]} in {_rows(bad)} outside {low}-{high}")
+    n = _axle_counts(vehicles, fmt, TMG_MAX_AXLES)
+    lane = _coded(vehicles, fmt, "lane", "0-9: 0 lanes combined, 1 the outside lane", lambda v: (v >= 0) & (v <= 9))
+    direction = _coded(vehicles, fmt, "direction", "1-8, the guide's compass codes", lambda v: (v >= 1) & (v <= 8))
+    lo, hi = TMG_VEHICLE_CLASSES
+    cls = _coded(vehicles, fmt, "vehicle_class", f"{lo}-{hi}", lambda v: (v >= lo) & (v <= hi))
+    stations = _stations(vehicles, fmt)
+    unit_name = "lb" if layout.weight_base == "lb" else "x 100 kg"
+    spacing_name = "0.1 ft" if layout.weight_base == "lb" else "0.1 m"
+    loads = _axle_values(vehicles, fmt, "axle_load", n, n)
+    spacings = _axle_values(vehicles, fmt, "spacing", n, n - 1)
+    w = np.zeros(loads.shape, np.int64)
+    s = np.zeros(spacings.shape, np.int64)
+    for i in range(loads.shape[1]):
+        rows = np.flatnonzero(n > i)
+        w[rows, i] = _tmg_field(fmt, f"axle_load_{i + 1}", loads[rows, i], layout.weight_unit_kg,
+                                layout.weight_width, unit_name)  # fmt: skip
+    for i in range(spacings.shape[1]):
+        rows = np.flatnonzero(n - 1 > i)
+        s[rows, i] = _tmg_field(fmt, f"spacing_{i + 1}", spacings[rows, i], layout.spacing_unit_m,
+                                layout.spacing_width, spacing_name)  # fmt: skip
+    written_sum = (w * (np.arange(w.shape[1])[None, :] < n[:, None])).sum(axis=1).astype(float) * layout.weight_unit_kg
+    gross = _optional(vehicles, "gross_weight", np.nan)
+    gross = np.where(np.isnan(gross), written_sum, gross)
+    g = _tmg_field(fmt, "gross_weight", gross, layout.weight_unit_kg, layout.gross_weight[1], unit_name)
+    out = []
+    yw = layout.year_digits
+    for j in range(len(vehicles)):
+        state, ident = stations[j]
+        stamp = stamps[j]
+        year = stamp.year % 100 if yw == 2 else stamp.year
+        text = (f"W{state:02d}{ident:>6}{direction[j]}{lane[j]}{year:0{yw}d}{stamp.month:02d}{stamp.day:02d}"
+                f"{stamp.hour:02d}{cls[j]:2d}   {g[j]:{layout.gross_weight[1]}d}{n[j]:2d}")  # fmt: skip
+        for i in range(n[j]):
+            text += f"{w[j, i]:{layout.weight_width}d}"
+            if i < n[j] - 1:
+                text += f"{s[j, i]:{layout.spacing_width}d}"
+        out.append(text)
+    return out
+
+
 def _write_atomically(path: Path, data: bytes) -> None:
     """``data`` to ``path`` through a temporary file in the same folder and ``os.replace``; no file left on error."""
     temporary = path.with_name(f".{path.name}.{os.getpid()}.{secrets.token_hex(4)}.tmp")
@@ -467,7 +546,11 @@ def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
         The file to write, replaced if it exists. A name ending in ``.gz`` is written gzip-compressed, with
         modification time 0 and no file name in the gzip header (byte-reproducible).
     fmt
-        ``csv``, ``mon``, ``castor``, ``bedit`` or ``ditis`` (layouts in ``docs/weighings.md``).
+        ``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``, ``tmg2001`` or ``tmg2013`` (layouts in
+        ``docs/weighings.md``). The TMG editions need ``station`` ('SS-XXXXXX': state FIPS code and station ID),
+        ``vehicle_class`` (1-15), ``lane`` (0-9) and ``direction`` (1-8, the guide's compass codes); the time is
+        written as the beginning of its hour, no speed or length, the open field blank, numbers right-justified
+        with leading blanks, the record ending with the last axle's weight.
 
     Returns
     -------
@@ -503,6 +586,9 @@ def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
     if fmt == "csv":
         lines = _csv_lines(vehicles)
         count = len(lines) - 1
+    elif fmt in TMG_LAYOUTS:
+        lines = _tmg_lines(vehicles, fmt)
+        count = len(lines)
     else:
         _check_contiguous(LAYOUTS[fmt])
         lines = _fixed_lines(vehicles, fmt)

@@ -50,10 +50,12 @@ BACKENDS: tuple[str, ...] = ("loky", "dask")
 #: the formats and group positions of bogie.weighings (``auto`` and formats.FORMATS, groups.POSITIONS), written out
 #: here so that every stage's code (all of them import this schema) does not depend on the readers; a test keeps them
 #: equal. ``auto``: the one layout the file's first lines fit (bogie.weighings.readers.detect_format)
-OBSERVED_FORMATS: tuple[str, ...] = ("auto", "csv", "mon", "castor", "bedit", "ditis")
+OBSERVED_FORMATS: tuple[str, ...] = ("auto", "csv", "mon", "castor", "bedit", "ditis", "tmg2001", "tmg2013")
 OBSERVED_POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
-#: the formats the survey stage can write the fleet's WIM readings in (bogie.weighings.writers.write_weighings)
-EXPORT_FORMATS: tuple[str, ...] = OBSERVED_FORMATS[1:]
+#: the formats the survey stage can write the fleet's WIM readings in (bogie.weighings.writers.write_weighings):
+#: not the TMG editions, whose records need a station, an FHWA vehicle class and a compass direction the simulated
+#: fleet does not have
+EXPORT_FORMATS: tuple[str, ...] = OBSERVED_FORMATS[1:6]
 #: the directory, relative to the project root, an observed survey's file must be in: dvc.yaml tracks it as a
 #: dependency of the observed stage, so that a changed file reruns the stage (docs/observed.md)
 OBSERVED_DIR = "observed"
