@@ -17,6 +17,7 @@ BENCHMARKS = (
     "bench.bench_calibrate",
     "bench.bench_distance",
     "bench.bench_readers",
+    "bench.bench_weighings",
     "bench.profile_protocol",
     "bench.profile_stage",
 )

@@ -157,7 +157,8 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
 
     try:
         survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position,
-                                 resolution_kg=args.resolution_kg, grouping=args.grouping)  # fmt: skip
+                                 resolution_kg=args.resolution_kg, grouping=args.grouping,
+                                 keep_groups=False)  # fmt: skip
     except OSError as exc:
         print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
         return 2
@@ -173,7 +174,7 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     )  # fmt: skip
     print(f"groups in the file by position: {counts} (steer: the first group; drive: the second; trailer: the rest)")
     print(
-        f"{len(survey.groups)} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
+        f"{survey.n_kept} axle groups kept: group load >= {args.min_group_load_t:g} t, position "
         f"{args.position}; grouping {survey.settings['grouping']}"
     )
     for station, entry in (survey.stations or {}).items():

@@ -125,6 +125,8 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         resolution_kg=observed.resolution_kg,
     )
     stats = survey.to_dict()
+    # the file as params.yaml names it, relative to the project: the outputs must not depend on where the project is
+    stats["settings"]["file"] = observed.path
     stats["records"]["skipped_by_reason"] = dict(sorted(survey.read.skipped.items()))
     header = {
         "path": observed.path, "format": survey.read.format, "format_asked": observed.format,

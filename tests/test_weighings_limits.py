@@ -105,7 +105,7 @@ def test_the_uncompressed_size_is_the_files_or_the_gzip_trailers(tmp_path):
     packed.write_bytes(gzip.compress(b"1" * 123_456))
     assert _records.uncompressed_size(plain) == 1234
     assert _records.uncompressed_size(packed) == 123_456
-    assert _records.survey_memory(packed) == 123_456 * _records.MEMORY_PER_BYTE
+    assert _records.survey_memory(packed) == _records.SURVEY_BASE_MEMORY + int(123_456 * _records.MEMORY_PER_BYTE)
 
 
 def test_validate_refuses_a_survey_that_would_not_fit_the_memory_budget(tmp_path, monkeypatch, capsys):
@@ -118,11 +118,12 @@ def test_validate_refuses_a_survey_that_would_not_fit_the_memory_budget(tmp_path
     raw["observed"].update(path="observed/site.csv", format="csv")
     (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw))
     size = (tmp_path / "observed" / "site.csv").stat().st_size
-    monkeypatch.setattr(settings, "MEMORY_BUDGET", size * _records.MEMORY_PER_BYTE - 1)
+    need = _records.SURVEY_BASE_MEMORY + int(size * _records.MEMORY_PER_BYTE)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", need - 1)
     args = ["--params", str(tmp_path / "params.yaml"), "--out", str(tmp_path / "config.json")]
     assert validate.main(args) == 2
     err = capsys.readouterr().err
     assert "observed.path" in err and "more than the memory budget" in err and "split the survey" in err, err
     assert not (tmp_path / "config.json").exists()
-    monkeypatch.setattr(settings, "MEMORY_BUDGET", size * _records.MEMORY_PER_BYTE)
+    monkeypatch.setattr(settings, "MEMORY_BUDGET", need)
     assert validate.main(args) == 0

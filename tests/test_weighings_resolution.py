@@ -8,6 +8,7 @@ i.e. N KL >= 13.8155 nats.
 
 from __future__ import annotations
 
+import json
 import math
 from pathlib import Path
 
@@ -151,6 +152,8 @@ def test_the_observed_stage_reports_the_resolution_and_applies_the_one_set(tmp_p
     assert config.observed.resolution_kg == 200.0
     _, stats = observed_table(path, config.observed)
     assert stats["records"]["weight_step_kg"] == 200.0 and stats["records"]["resolution"]["detected_kg"] == 100.0
+    # the stage's figures do not depend on where the project is: no absolute path in them
+    assert str(tmp_path) not in json.dumps(stats)
     _, stats = observed_table(path, load_config(Path(__file__).parents[1] / "params.yaml").observed)
     assert stats["records"]["weight_step_kg"] == 100.0 and stats["records"]["resolution"]["source"] == "detected"
     params.write_text(raw.replace("  resolution_kg: null ", "  resolution_kg: -5   "))

@@ -12,10 +12,10 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-from scipy.stats import binomtest  # numerics-ok: for its Wilson interval, scalar arithmetic (wilson_interval)
 
 from bogie import numerics
 from bogie.fleet.constants import GROUP_AXLES
+from bogie.intervals import wilson_interval  # noqa: F401 (re-exported: one definition for the design table)
 
 __all__ = ["DESIGN_BINS", "DESIGN_COLUMNS", "DESIGN_CONFIDENCE", "DESIGN_GRID", "design_table", "wilson_interval"]
 
@@ -32,28 +32,6 @@ DESIGN_COLUMNS: tuple[str, ...] = tuple(DESIGN_BINS)
 DESIGN_GRID: tuple[str, str] = ("bush_stiffness", "equaliser_arm")
 #: confidence level of the design guidance's intervals [-]
 DESIGN_CONFIDENCE = 0.95
-
-
-def wilson_interval(
-    k: np.ndarray, n: np.ndarray, confidence: float = DESIGN_CONFIDENCE
-) -> tuple[np.ndarray, np.ndarray]:
-    """Wilson score interval of each proportion ``k / n``; NaN where ``n`` is 0.
-
-    The interval is :meth:`scipy.stats.binomtest(k, n).proportion_ci(method="wilson")
-    <scipy.stats._result_classes.BinomTestResult.proportion_ci>` (no continuity correction).
-
-    References
-    ----------
-    E. B. Wilson, "Probable inference, the law of succession, and statistical inference", Journal of the American
-    Statistical Association 22 (1927), 209-212.
-    """
-    k, n = np.asarray(k), np.asarray(n)
-    low, high = np.full(k.shape, np.nan), np.full(k.shape, np.nan)
-    for i in np.flatnonzero(n > 0):
-        # numerics-ok: the Wilson interval is scalar arithmetic on floats and scipy.special.ndtri (no numpy ufunc)
-        ci = binomtest(int(round(float(k.flat[i]))), int(n.flat[i])).proportion_ci(confidence, method="wilson")
-        low.flat[i], high.flat[i] = ci.low, ci.high
-    return low, high
 
 
 def _nice_log_edges(x: np.ndarray) -> np.ndarray:

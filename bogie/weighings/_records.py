@@ -5,12 +5,12 @@ is skipped, a file's bytes as lines, and the calendar checks. Private: the publi
 from __future__ import annotations
 
 import os
-import zlib
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
+from numba import njit
 
 from bogie._files import regular_file
 from bogie.weighings.formats import KMH
@@ -104,12 +104,16 @@ _BOM = b"\xef\xbb\xbf"
 #: written at a limit is at it, not past it. A convention of this project (no published source), named as one
 REL_TOL = 1e-9
 
-#: peak memory of reading a survey and computing its statistics and road figures, per byte of its records
-#: (uncompressed) [bytes/byte]: measured 1.34 GB for a MON file of 1,000,000 records, 91.3 MB (``bogie weighings
-#: --json``, 6 December 2026), 14.7; rounded up
-MEMORY_PER_BYTE = 16
-#: the largest survey file read, uncompressed [bytes]: 1 GiB, about 11 million MON records, 16 GiB of memory at
-#: :data:`MEMORY_PER_BYTE` (the pipeline's memory budget, pipeline.resources.MEMORY_BUDGET); split a larger one
+#: memory of reading a survey and computing its statistics and road figures, streamed (issue 41 Must 4), whatever
+#: the file's length [bytes]: the libraries, a chunk's work and the figures' arrays; measured 562 MB peak for a MON
+#: file of 1,000,000 records (91.3 MB; ``bogie weighings --json``, 6 December 2026), rounded up
+SURVEY_BASE_MEMORY = 640 * 2**20
+#: memory that grows with the survey, per byte of its records (uncompressed) [bytes/byte]: each good record's hash
+#: (repeats) and each surveyed group's loads, kept for the exact quantiles; measured (1,104 - 562) MB over
+#: (912 - 91) MB of MON records, 0.66 (``bench/bench_readers.py``'s survey part has the figures); rounded up
+MEMORY_PER_BYTE = 0.7
+#: the largest survey file read, uncompressed [bytes]: 1 GiB, about 11 million MON records, so that a survey needs
+#: at most about 1.4 GiB (:func:`survey_memory`); split a larger one
 MAX_FILE_BYTES = 2**30
 
 
@@ -132,46 +136,8 @@ def uncompressed_size(path: str | Path) -> int:
 
 def survey_memory(path: str | Path) -> int:
     """The peak memory of reading the survey file ``path`` and computing its statistics [bytes] (an estimate:
-    :func:`uncompressed_size` times :data:`MEMORY_PER_BYTE`)."""
-    return uncompressed_size(path) * MEMORY_PER_BYTE
-
-
-def _gunzip(data: bytes, path: Path, cap: int) -> bytes:
-    """Every member of a gzip file, decompressed to at most ``cap`` bytes (a gzip bomb is refused, not expanded)."""
-    out, total = [], 0
-    while data:
-        engine = zlib.decompressobj(wbits=31)
-        part = engine.decompress(data, cap - total + 1)
-        total += len(part)
-        if total > cap or engine.unconsumed_tail:
-            raise ValueError(f"{path}: decompresses to more than {cap / 2**30:g} GiB (bogie.weighings._records."
-                             "MAX_FILE_BYTES): split the survey into smaller files")  # fmt: skip
-        if not engine.eof:
-            raise ValueError(f"{path}: starts as a gzip file but does not decompress: the compressed data end early")
-        out.append(part)
-        data = engine.unused_data.lstrip(b"\0")
-        if data and data[:2] != _GZIP_MAGIC:
-            break  # trailing bytes after the last member, as gzip itself ignores them
-    return b"".join(out)
-
-
-def _file_bytes(path: Path, cap: int | None = None) -> bytes:
-    """The file's bytes: gunzipped if it starts with gzip's magic number, without a UTF-8 byte order mark. A FIFO,
-    a device or a folder is refused, and so is a file of more than ``cap`` bytes (:data:`MAX_FILE_BYTES`),
-    compressed or not."""
-    cap = MAX_FILE_BYTES if cap is None else cap
-    size = _regular(path).st_size
-    if size > cap:
-        raise ValueError(f"{path}: {size / 2**30:.2f} GiB is more than "
-                         f"{cap / 2**30:g} GiB (bogie.weighings._records.MAX_FILE_BYTES): split the survey into "
-                         "smaller files")  # fmt: skip
-    data = path.read_bytes()
-    if data[:2] == _GZIP_MAGIC:
-        try:
-            data = _gunzip(data, path, cap)
-        except zlib.error as exc:
-            raise ValueError(f"{path}: starts as a gzip file but does not decompress: {exc}") from None
-    return data[3:] if data[:3] == _BOM else data
+    :data:`SURVEY_BASE_MEMORY` plus :func:`uncompressed_size` times :data:`MEMORY_PER_BYTE`)."""
+    return SURVEY_BASE_MEMORY + int(uncompressed_size(path) * MEMORY_PER_BYTE)
 
 
 @dataclass
@@ -227,27 +193,35 @@ def _head(data: bytes, n: int) -> bytes:
     return b"\n".join(lines) + b"\n"
 
 
-#: a space's byte minus '0''s, wrapped around in uint8 (what :func:`_gather` sees for a space)
-_SPACE_MINUS_ZERO = np.uint8(256 + 32 - 48)
-
-
 def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: int) -> tuple[np.ndarray, np.ndarray]:
     """The unsigned integer ``line[offset:offset + width]`` of each line in ``rows`` and whether it is one:
     leading spaces, then ASCII digits only (no sign, no inner or trailing space, not all blank).
 
-    One character column at a time (a gather of one byte per record), so that memory is a few arrays of the
-    number of records, whatever the width."""
-    pos = lines.start[rows] + offset
+    A compiled loop over the rows (:func:`_gather_kernel`; the array version, one gather a character column, took
+    a tenth of a second a million records a field)."""
+    pos = (lines.start[rows] + offset).astype(np.int64)
     value = np.zeros(len(rows), np.int64)
-    seen = np.zeros(len(rows), bool)
-    ok = np.ones(len(rows), bool)
-    for j in range(width):
-        digit = lines.buf[pos + j] - np.uint8(48)  # wraps around below '0': a digit is < 10
-        is_digit = digit < 10
-        ok &= is_digit | ((digit == _SPACE_MINUS_ZERO) & ~seen)  # a space only before the first digit
-        seen |= is_digit
-        value = value * 10 + np.where(is_digit, digit, 0)
-    return value, ok & seen
+    ok = np.zeros(len(rows), bool)
+    _gather_kernel(lines.buf, pos, width, value, ok)
+    return value, ok
+
+
+@njit(cache=True)
+def _gather_kernel(buf, pos, width, value, ok):  # pragma: no cover - compiled
+    for r in range(pos.shape[0]):
+        v = 0
+        seen = False
+        good = True
+        p = pos[r]
+        for j in range(width):
+            c = buf[p + j]
+            if 48 <= c <= 57:
+                v = v * 10 + (c - 48)
+                seen = True
+            elif c != 32 or seen:  # a space only before the first digit
+                good = False
+        value[r] = v
+        ok[r] = good and seen
 
 
 def _days_in_month(year: np.ndarray, month: np.ndarray) -> np.ndarray:

@@ -16,7 +16,9 @@ from collections.abc import Sequence
 
 import numpy as np
 import pandas as pd
+import pyarrow as pa
 
+from bogie.weighings._groups_core import split_groups
 from bogie.weighings._records import REL_TOL
 
 __all__ = [
@@ -95,61 +97,37 @@ def axle_groups(
     columns = list(GROUP_TABLE_COLUMNS)
     if not len(vehicles):
         return pd.DataFrame(columns=columns)
-    # every vehicle at once (a year of a WIM site is millions of vehicles): the axles as a (vehicles, axles) table
+    # every vehicle at once (a year of a WIM site is millions of vehicles), in one compiled pass over the axles
     n = vehicles["n_axles"].to_numpy(dtype=np.int64)
     width = int(n.max())
     loads = vehicles[[f"axle_load_{i + 1}" for i in range(width)]].to_numpy(dtype=float)
     gaps = vehicles[[f"spacing_{i + 1}" for i in range(width - 1)]].to_numpy(dtype=float).reshape(len(n), width - 1)
-    axle = np.arange(width)[None, :]
-    present = axle < n[:, None]
-    # a new group starts at the front axle and after every spacing wider than group_spacing_m
-    starts = np.zeros((len(n), width), bool)
-    starts[:, 0] = True
-    # a spacing equal to the limit (read from the file as an integer times its unit) is within the group
+    # a spacing equal to a limit (read from the file as an integer times its unit) is within the group
     if rule == "us-tandem":
-        low, high = US_TANDEM_M
-        apart = (gaps <= low * (1.0 + REL_TOL)) | (gaps > high * (1.0 + REL_TOL))
+        low, high = US_TANDEM_M[0] * (1.0 + REL_TOL), US_TANDEM_M[1] * (1.0 + REL_TOL)
     else:
-        apart = gaps > group_spacing_m * (1.0 + REL_TOL)
-    starts[:, 1:] = apart & present[:, 1:]
-    in_vehicle = np.cumsum(starts, axis=1) - 1  # each axle's group index within its vehicle
-    n_groups = in_vehicle[np.arange(len(n)), n - 1] + 1
-    first_group = np.concatenate(([0], np.cumsum(n_groups)[:-1]))  # each vehicle's first group, in the group table
-    group_of = (first_group[:, None] + in_vehicle)[present]  # row-major: vehicle by vehicle, front axle first
-    axle_of = np.broadcast_to(axle, present.shape)[present]
-    total = int(n_groups.sum())
-    size = np.bincount(group_of, minlength=total)
-    # the loads summed in axle order, front first, as a per-group loop would
-    group_load = np.bincount(group_of, weights=loads[present], minlength=total)
-    first_axle = np.zeros(total, np.int64)
-    first_axle[group_of[starts[present]]] = axle_of[starts[present]]
-    vehicle_of = np.repeat(np.arange(len(n)), n_groups)
-    index = np.arange(total) - first_group[vehicle_of]
+        low, high = -np.inf, group_spacing_m * (1.0 + REL_TOL)
+    vehicle_of, index, first_axle, size, group_load, axle_loads, spacings, n_groups = split_groups(
+        n, np.ascontiguousarray(loads), np.ascontiguousarray(gaps), low, high
+    )
     out = pd.DataFrame({
         "line": vehicles["line"].to_numpy()[vehicle_of], "timestamp": vehicles["timestamp"].to_numpy()[vehicle_of],
         "speed": vehicles["speed"].to_numpy()[vehicle_of], "lane": vehicles["lane"].to_numpy()[vehicle_of],
         "vehicle_groups": n_groups[vehicle_of], "group_index": index + 1, "first_axle": first_axle + 1, "n_axles": size,
-        "group": np.select([size == k for k in SIZES], list(SIZES.values()), "other"),
-        "position": np.where(index == 0, "steer", np.where(index == 1, "drive", "trailer")),
+        "group": _labels(np.minimum(size, 4), [SIZES.get(k, "other") for k in range(5)]),
+        "position": _labels(np.minimum(index, 2), ("steer", "drive", "trailer")),
         "group_load": group_load,
-    })  # fmt: skip
-    # the group's own axles and spacings, front first; NaN past them, and for a group of more than three axles
-    narrow = size <= _GROUP_COLUMNS
-    j = axle_of - first_axle[group_of]  # the axle's place in its group
-    for i in range(_GROUP_COLUMNS):
-        column = np.full(total, np.nan)
-        pick = (j == i) & narrow[group_of]
-        column[group_of[pick]] = loads[present][pick]
-        out[f"axle_load_{i + 1}"] = column
-    gap_of = np.full((len(n), width), np.nan)
-    gap_of[:, : width - 1] = gaps  # the spacing behind each axle (to the next one)
-    behind = gap_of[present]
-    for i in range(_GROUP_COLUMNS - 1):
-        column = np.full(total, np.nan)
-        pick = (j == i) & (j < size[group_of] - 1) & narrow[group_of]
-        column[group_of[pick]] = behind[pick]
-        out[f"spacing_{i + 1}"] = column
+        **{f"axle_load_{i + 1}": axle_loads[:, i] for i in range(_GROUP_COLUMNS)},
+        **{f"spacing_{i + 1}": spacings[:, i] for i in range(_GROUP_COLUMNS - 1)},
+    }, copy=False)  # fmt: skip
     return out[columns]
+
+
+def _labels(codes: np.ndarray, labels: Sequence[str]) -> pd.Series:
+    """``labels[codes]`` as a string column, built by Arrow from the codes (a million Python strings take pandas
+    half a second; this, a few milliseconds)."""
+    array = pa.DictionaryArray.from_arrays(pa.array(codes.astype(np.int32)), pa.array(list(labels)))
+    return pd.Series(pd.array(array.cast(pa.large_string()), dtype="str"))
 
 
 def filter_groups(
@@ -177,7 +155,7 @@ def filter_groups(
         raise ValueError(f"position = {position!r} unknown; allowed: {', '.join(POSITIONS)}")
     keep = groups["group_load"].to_numpy() >= 1000.0 * min_group_load_t
     if position != "all":
-        keep &= groups["position"].to_numpy() == position
+        keep &= (groups["position"] == position).to_numpy(dtype=bool)
     if speed_kmh is not None:
         low, high = speed_kmh
         _check("speed_kmh lowest", low, 0.0, 160.0, "km/h")

@@ -19,12 +19,14 @@ are those of any editor that counts ``\\n``. A file whose first two bytes are gz
 from __future__ import annotations
 
 from collections import Counter
+from collections.abc import Callable
 from dataclasses import dataclass, field
 from pathlib import Path
 
 import numpy as np
 import pandas as pd
 
+from bogie.weighings import _records
 from bogie.weighings._csv import _parse_csv
 from bogie.weighings._records import (
     _FIELD_BYTE,
@@ -32,6 +34,7 @@ from bogie.weighings._records import (
     CSV_LANE_RANGE,
     CSV_MAX_AXLES,
     DUPLICATE,
+    EXAMPLES,
     GROSS_TOLERANCE,
     MAX_AXLES,
     MAX_BAD_FRACTION,
@@ -46,7 +49,6 @@ from bogie.weighings._records import (
     TWO_DIGIT_PIVOT,
     YEAR_RANGE,
     _check_calendar,
-    _file_bytes,
     _gather,
     _head,
     _Lines,
@@ -55,6 +57,7 @@ from bogie.weighings._records import (
     _split,
     _timestamps,
 )
+from bogie.weighings._stream import CHUNK_BYTES, SeenSet, blocks, key_hashes
 from bogie.weighings._tmg import ALIKE, POUND, TMG_LAYOUTS, parse_tmg, split_dummies
 from bogie.weighings.formats import FORMATS, LAYOUTS, FixedWidthLayout
 from bogie.weighings.resolution import (
@@ -109,6 +112,7 @@ class ReadResult:
     bad_lines: dict[str, list[int]] = field(default_factory=dict)
     resolution: Resolution | None = None
     counted: dict[str, int] = field(default_factory=dict)
+    n_vehicles: int | None = None
 
     @property
     def weight_step_kg(self) -> float | None:
@@ -123,8 +127,8 @@ class ReadResult:
 
     @property
     def n_read(self) -> int:
-        """Good records [-]."""
-        return len(self.vehicles)
+        """Good records [-] (``n_vehicles`` when the vehicles were streamed, not kept)."""
+        return len(self.vehicles) if self.n_vehicles is None else self.n_vehicles
 
     @property
     def n_skipped(self) -> int:
@@ -270,17 +274,18 @@ def _stray_bytes(lines: _Lines) -> np.ndarray:
 
 
 # ---- checks every format shares ------------------------------------------------------------------------------------
-def _resolution(parsed: dict, ok: np.ndarray, set_kg: float | None) -> Resolution:
-    """The weight resolution of the axle loads of the ``ok`` records (:mod:`bogie.weighings.resolution`), or the
-    caller's ``set_kg``."""
+def _residues(parsed: dict, ok: np.ndarray) -> ResidueCounts:
+    """The residue counts of the axle loads of the ``ok`` records (:mod:`bogie.weighings.resolution`)."""
     base = parsed.get("weight_base", "kg")
     counts = ResidueCounts(parsed["load_step"] or 1.0, POUND if base == "lb" else 1.0, base)
     counts.add(parsed["loads"][ok])
-    return detect_resolution(counts, set_kg)
+    return counts
 
 
-def _check_vehicles(parsed: dict, set_kg: float | None = None) -> Resolution:
-    """The plausibility checks, in their order, on every record not bad yet; returns the weight resolution."""
+def _check_vehicles(parsed: dict, gross_kg: float | None = None) -> tuple[ResidueCounts, float | None]:
+    """The plausibility checks, in their order, on every record not bad yet. Returns the residue counts of the loads
+    that passed the checks before the gross weight's, and the weight step the gross-weight check allowed for:
+    ``gross_kg``, or (None) the one these counts support."""
     reasons: _Reasons = parsed["reasons"]
     col = parsed["columns"]
     loads, spacings = parsed["loads"], parsed["spacings"]
@@ -293,8 +298,8 @@ def _check_vehicles(parsed: dict, set_kg: float | None = None) -> Resolution:
     lo, hi = SPEED_RANGE
     speed = col["speed"]
     reasons.flag(_outside(speed, lo, hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
-    resolution = _resolution(parsed, reasons.ok, set_kg)
-    step = resolution.step_kg
+    counts = _residues(parsed, reasons.ok)
+    step = detect_resolution(counts).step_kg if gross_kg is None else gross_kg
     total = np.nansum(loads, axis=1)
     gross = col["gross_weight"]
     if not np.isnan(gross).all():
@@ -309,7 +314,7 @@ def _check_vehicles(parsed: dict, set_kg: float | None = None) -> Resolution:
                      "pounds where kilograms are expected?")  # fmt: skip
         reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
     reasons.flag(_shorter_than_wheelbase(parsed), "length shorter than the wheelbase")
-    return resolution
+    return counts, step
 
 
 def _outside(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
@@ -349,30 +354,47 @@ def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFr
     })  # fmt: skip
 
 
-def _alike(parsed: dict, stamps: np.ndarray) -> int:
-    """How many good records are alike an earlier one (:func:`_repeat_key`): counted for a file of hourly time
-    stamps, where two alike trucks in one hour are two vehicles."""
+def _hashes(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> np.ndarray:
+    """The 64-bit hashes of the repeat keys (:func:`_repeat_key`) of ``rows``, for the records of earlier chunks."""
+    col = parsed["columns"]
+    extra = parsed.get("extra", {})
+    columns = [stamps[rows].view(np.int64), col["lane"][rows], col["direction"][rows], col["speed"][rows]]
+    if "station" in extra:
+        columns.append(extra["station"][rows])
+    return key_hashes(columns, parsed["loads"][rows], parsed["spacings"][rows], col["n_axles"][rows])
+
+
+def _alike(parsed: dict, stamps: np.ndarray, seen: SeenSet | None) -> int:
+    """How many good records are alike an earlier one (:func:`_repeat_key`; of an earlier chunk, by
+    :func:`_hashes`): counted for a file of hourly time stamps, where two alike trucks in one hour are two
+    vehicles."""
     good = np.flatnonzero(parsed["reasons"].ok)
-    if len(good) < 2:
-        return 0
-    return int(_repeat_key(parsed, stamps, good).duplicated(keep="first").sum())
+    alike = np.zeros(len(good), bool)
+    if len(good) >= 2:
+        alike = _repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()
+    if seen is not None and len(good):
+        hashes = _hashes(parsed, stamps, good)
+        alike = alike | seen.contains(hashes)
+        seen.add(hashes)
+    return int(alike.sum())
 
 
-def _flag_repeats(parsed: dict, stamps: np.ndarray) -> None:
+def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenSet | None = None) -> None:
     """A good record equal to an earlier good one in time, lane, direction, speed, axle loads and spacings is bad:
     a WIM system does not weigh two vehicles in one lane at one instant (a record repeated by a copy or a retry)."""
     reasons: _Reasons = parsed["reasons"]
-    good = np.flatnonzero(reasons.ok)
-    if len(good) < 2:
-        return
-    # only records that share their time with another can repeat one: compare the rest of the key for those only
-    same_time = pd.Series(stamps[good].view(np.int64)).duplicated(keep=False).to_numpy()
-    good = good[same_time]
-    if len(good) < 2:
-        return
-    key = _repeat_key(parsed, stamps, good)
+    everyone = np.flatnonzero(reasons.ok)
     repeat = np.zeros(len(reasons.code), bool)
-    repeat[good[key.duplicated(keep="first").to_numpy()]] = True
+    # only records that share their time with another can repeat one: compare the rest of the key for those only
+    if len(everyone) >= 2:
+        same_time = pd.Series(stamps[everyone].view(np.int64)).duplicated(keep=False).to_numpy()
+        good = everyone[same_time]
+        if len(good) >= 2:
+            repeat[good[_repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()]] = True
+    if seen is not None and len(everyone):  # a repeat of a record of an earlier chunk, by its hash
+        hashes = _hashes(parsed, stamps, everyone)
+        repeat[everyone[seen.contains(hashes)]] = True
+        seen.add(hashes[~repeat[everyone]])
     reasons.flag(repeat, DUPLICATE)
 
 
@@ -388,8 +410,10 @@ def _utf8(data: bytes) -> bytes:
     return data
 
 
-def _parse(data: bytes, fmt: str, path: str, resolution_kg: float | None = None) -> dict:
-    """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's."""
+def _parse(data: bytes, fmt: str, path: str, gross_kg: float | None = None, seen: SeenSet | None = None) -> dict:
+    """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's.
+    ``gross_kg``: the weight step the gross-weight check allows for (None: the one these records support);
+    ``seen``: the hashes of the good records of earlier chunks (None: no earlier chunk)."""
     if fmt == "csv":
         data = _utf8(data)
         lines = _split(data)
@@ -414,15 +438,15 @@ def _parse(data: bytes, fmt: str, path: str, resolution_kg: float | None = None)
         parsed = _parse_fixed(lines, LAYOUTS[fmt])
         parsed["line"] = lines.line
         stamps = None
-    parsed["resolution"] = _check_vehicles(parsed, resolution_kg)
+    parsed["counts"], parsed["gross_kg"] = _check_vehicles(parsed, gross_kg)
     if stamps is None:
         stamps = _timestamps(parsed["reasons"].ok, *parsed["stamp"])
     if fmt in TMG_LAYOUTS:  # time stamps to the hour: alike trucks of one hour are vehicles, counted, not dropped
-        alike = _alike(parsed, stamps)
+        alike = _alike(parsed, stamps, seen)
         if alike:
             parsed["counted"][ALIKE] = alike
     else:
-        _flag_repeats(parsed, stamps)
+        _flag_repeats(parsed, stamps, seen)
     parsed["stamps"] = stamps
     return parsed
 
@@ -432,11 +456,11 @@ def _frame(parsed: dict) -> pd.DataFrame:
     n = parsed["columns"]["n_axles"][ok]
     width = int(n.max()) if len(n) else 2
     col = parsed["columns"]
-    frame = pd.DataFrame({
+    base = {
         "line": parsed["line"][ok], "head": col["head"][ok], "timestamp": parsed["stamps"][ok],
         **{k: col[k][ok] for k in ("speed", "gross_weight", "length", "n_axles", "n_groups", "lane", "direction",
                                    "transverse_position")},
-    })  # fmt: skip
+    }  # fmt: skip
     pad = max(0, width - parsed["loads"].shape[1])
     loads = np.pad(parsed["loads"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
     spacings = np.pad(parsed["spacings"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, : width - 1]
@@ -447,7 +471,8 @@ def _frame(parsed: dict) -> pd.DataFrame:
     if parsed["widths"] is not None:
         widths = np.pad(parsed["widths"][ok], ((0, 0), (0, pad)), constant_values=np.nan)[:, :width]
         extra.update({f"axle_width_{i + 1}": widths[:, i] for i in range(width)})
-    frame = pd.concat([frame, pd.DataFrame(extra)], axis=1)
+    # copy=False: the columns are fresh arrays; pandas would otherwise copy them into blocks (0.7 s a million rows)
+    frame = pd.DataFrame({**base, **extra}, copy=False)
     frame["timestamp"] = frame["timestamp"].astype("datetime64[us]")
     frame["n_axles"] = frame["n_axles"].astype(np.int64)
     frame["line"] = frame["line"].astype(np.int64)
@@ -526,7 +551,9 @@ def _format_name(fmt: str) -> str:
     return f"{(TMG_LAYOUTS[fmt] if fmt in TMG_LAYOUTS else LAYOUTS[fmt]).name} records"
 
 
-def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | None = None) -> ReadResult:
+def read_weighings(
+    path: str | Path, fmt: str = "auto", resolution_kg: float | None = None, chunk_bytes: int = CHUNK_BYTES
+) -> ReadResult:
     """Read a file of weighings (one vehicle a record) in format ``fmt``.
 
     Parameters
@@ -541,6 +568,8 @@ def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | N
     resolution_kg
         The file's weight resolution [kg], in (0, 1000] and a whole multiple of the format's weight unit; None
         (default): detected from the loads (:mod:`bogie.weighings.resolution`), and reported either way.
+    chunk_bytes
+        Bytes of records parsed at a time (:func:`stream_weighings`); the result does not depend on it.
 
     Returns
     -------
@@ -555,34 +584,128 @@ def read_weighings(path: str | Path, fmt: str = "auto", resolution_kg: float | N
     OSError
         If the file cannot be read.
     """
+    frames: list[pd.DataFrame] = []
+
+    def start() -> None:
+        frames.clear()
+
+    result = stream_weighings(path, fmt, resolution_kg, start, frames.append, chunk_bytes)
+    result.vehicles = _concat(frames)
+    return result
+
+
+def _concat(frames: list[pd.DataFrame]) -> pd.DataFrame:
+    """The chunks' vehicle tables as one, the axle columns of the widest (NaN where a chunk had fewer)."""
+    if len(frames) == 1:
+        return frames[0]
+    frame = pd.concat(frames, ignore_index=True)
+    axles = sorted((c for c in frame.columns if c.startswith(("axle_load_", "spacing_", "axle_width_"))),
+                   key=lambda c: (c.rsplit("_", 1)[0], int(c.rsplit("_", 1)[1])))  # fmt: skip
+    order = [c for c in frame.columns if not c.startswith(("axle_load_", "spacing_", "axle_width_"))]
+    tail = [c for c in order if c in ("station", "vehicle_class")]
+    head = [c for c in order if c not in tail]
+    width = [c for c in axles if c.startswith("axle_load_")] + [c for c in axles if c.startswith("spacing_")]
+    width += [c for c in axles if c.startswith("axle_width_")]
+    return frame[head + width + tail]
+
+
+def stream_weighings(
+    path: str | Path,
+    fmt: str,
+    resolution_kg: float | None,
+    start: Callable[[], None],
+    consume: Callable[[pd.DataFrame], None],
+    chunk_bytes: int = CHUNK_BYTES,
+) -> ReadResult:
+    """Read a file of weighings chunk by chunk (:mod:`bogie.weighings._stream`): ``consume`` gets each chunk's
+    vehicle table (the good records, as :func:`read_weighings`' rows, in file order), and the result is
+    :func:`read_weighings`' without its vehicles (``n_vehicles`` counts them).
+
+    The gross-weight check allows for the file's weight resolution, which is known only at the end: the first
+    chunk's is used, and if the whole file's differs, the file is read again with it (``start`` is called before
+    every pass, so that the consumer begins afresh). The records are then those of a whole-file read, and so are
+    the repeats (of an earlier chunk, by a 64-bit hash of their key). Memory: a few times ``chunk_bytes``, and the
+    hashes of the good records (16 bytes a record), whatever the file's length.
+    """
     if fmt != "auto" and fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
     check_resolution_kg(resolution_kg, None)  # its type and range before the file is read; its unit once known
     path = Path(path)
-    data = _file_bytes(path)
+    first_block = next(blocks(path, _records.MAX_FILE_BYTES, chunk_bytes))[0]
     if fmt == "auto":
-        head = _head(data, SNIFF_LINES)
+        head = _head(first_block, SNIFF_LINES)
         if not head.strip():
             raise ValueError(f"{path}: no records: format auto found an empty file")
         fmt = _detect(head, str(path))
     name = _format_name(fmt)
     resolution_kg = check_resolution_kg(resolution_kg, _unit_kg(fmt))
-    try:
-        parsed = _parse(data, fmt, str(path), resolution_kg)
-    except ValueError as exc:  # a CSV header that is not the layout's
-        raise ValueError(f"{exc}{_sniff(data, fmt)}") from None
-    if not parsed or not len(parsed["reasons"].code):
-        found = "a header and no record" if parsed or _head(data, 1).strip() else "an empty file"
-        if parsed.get("counted"):
-            found = "dummy hour records only (" + "; ".join(f"{n} {w}" for w, n in parsed["counted"].items()) + ")"
-        raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
-    skipped, bad_lines = parsed["reasons"].counted(parsed["line"])
-    result = ReadResult(_frame(parsed), fmt, skipped, bad_lines, parsed["resolution"], parsed.get("counted", {}))
+    gross_kg = resolution_kg
+    while True:
+        start()
+        tally = _pass(path, fmt, gross_kg, consume, chunk_bytes, first_block)
+        if tally["records"] == 0:
+            found = "a header and no record" if tally["header"] or _head(first_block, 1).strip() else "an empty file"
+            if tally["counted"]:
+                found = "dummy hour records only (" + "; ".join(f"{n} {w}" for w, n in tally["counted"].items()) + ")"
+            raise ValueError(f"{path}: no records: expected {name} (format {fmt}), found {found}")
+        resolution = detect_resolution(tally["counts"], resolution_kg)
+        if resolution_kg is not None or resolution.step_kg == tally["gross_kg"]:
+            break
+        gross_kg = resolution.step_kg  # the first chunk's step was not the file's: read again with the file's
+    result = ReadResult(pd.DataFrame(), fmt, tally["skipped"], tally["bad_lines"], resolution, tally["counted"],
+                        tally["good"])  # fmt: skip
     total = result.n_read + result.n_skipped
     if result.n_skipped > MAX_BAD_FRACTION * total:
-        first = _head(data, 1).decode("utf-8", errors="replace").rstrip()
+        first = _head(first_block, 1).decode("utf-8", errors="replace").rstrip()
         raise ValueError(
             f"{path}: not read as {name} (format {fmt}): {result.n_skipped} of {total} records bad "
-            f"({result.reasons()}); first line {_shown(first)}" + _sniff(data, fmt)
+            f"({result.reasons()}); first line {_shown(first)}" + _sniff(first_block, fmt)
         )
     return result
+
+
+def _pass(path: Path, fmt: str, gross_kg: float | None, consume, chunk_bytes: int, first_block: bytes) -> dict:
+    """One pass over the file's chunks: each parsed, checked and its vehicles consumed; the tallies of the pass."""
+    seen = SeenSet()
+    skipped: Counter = Counter()
+    bad_lines: dict[str, list[int]] = {}
+    counted: Counter = Counter()
+    counts: ResidueCounts | None = None
+    header = b""
+    tally = {"records": 0, "good": 0, "header": False}
+    for k, (block, lines_before) in enumerate(blocks(path, _records.MAX_FILE_BYTES, chunk_bytes)):
+        data, offset = block, lines_before
+        if fmt == "csv":
+            if k == 0:
+                end = block.find(b"\n")
+                header = block[: end + 1] if end >= 0 else block + b"\n"
+            else:
+                data, offset = header + block, lines_before - 1  # the header is line 1 of the chunk
+        try:
+            parsed = _parse(data, fmt, str(path), gross_kg, seen)
+        except ValueError as exc:  # a CSV header that is not the layout's
+            raise ValueError(f"{exc}{_sniff(first_block, fmt)}") from None
+        if not parsed:
+            continue
+        tally["header"] = True
+        if gross_kg is None:
+            gross_kg = parsed["gross_kg"]  # the first chunk's resolution, for the chunks after it
+        tally["gross_kg"] = gross_kg if k else parsed["gross_kg"]
+        parsed["line"] = parsed["line"] + offset
+        reasons: _Reasons = parsed["reasons"]
+        tally["records"] += len(reasons.code)
+        tally["good"] += int(reasons.ok.sum())
+        chunk_skipped, chunk_lines = reasons.counted(parsed["line"])
+        skipped.update(chunk_skipped)
+        for reason, lines in chunk_lines.items():
+            bad_lines[reason] = (bad_lines.get(reason, []) + lines)[:EXAMPLES]
+        counted.update(parsed.get("counted", {}))
+        if counts is None:
+            counts = parsed["counts"]
+        else:
+            counts.merge(parsed["counts"])
+        if reasons.ok.any():
+            consume(_frame(parsed))
+    tally.update(skipped=skipped, bad_lines=bad_lines, counted=dict(counted), counts=counts or ResidueCounts(None))
+    tally.setdefault("gross_kg", gross_kg)
+    return tally

@@ -34,6 +34,7 @@ __all__ = [
 #: the weight steps a file's resolution is detected among [kg] (MON files are seen at 10 kg and at 100 kg; CASTOR,
 #: BeDIT, DITIS and TMG 2001 write kg/100)
 WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
+assert all(WEIGHT_STEPS_KG[-1] % s == 0 for s in WEIGHT_STEPS_KG)  # ResidueCounts.add's one histogram
 #: the least share of the axle loads on (or near) a multiple of a step for the step to be supported [-]: a real
 #: file's odd loads (a WIM system's correction, a hand-edited record) are tolerated up to 1 in 100. A convention of
 #: this project (no published source), named as one
@@ -96,6 +97,14 @@ class ResidueCounts:
             return []
         return [s for s in WEIGHT_STEPS_KG if s >= self.unit and s % self.unit == 0]
 
+    def merge(self, other: ResidueCounts) -> None:
+        """Add the counts of another chunk of the same file."""
+        self.n += other.n
+        self.whole = self.whole and other.whole
+        for mine, theirs in ((self.on, other.on), (self.below, other.below), (self.above, other.above)):
+            for s, k in theirs.items():
+                mine[s] = mine.get(s, 0) + k
+
     def add(self, loads_kg: np.ndarray) -> None:
         """Count the loads of one chunk [kg] (NaN: no axle, ignored)."""
         values = np.asarray(loads_kg, dtype=float)
@@ -111,13 +120,16 @@ class ResidueCounts:
         if (np.abs(base - whole) > 1e-6).any():  # not whole units: no resolution (a CSV file of decimals)
             self.whole = False
             return
-        units = whole.astype(np.int64)
+        # every candidate step divides the largest: one histogram of the residues modulo it gives every count
+        top = WEIGHT_STEPS_KG[-1]
+        histogram = np.bincount(whole.astype(np.int64) % top, minlength=top)
+        residue = np.arange(top)
         unit = self.unit
         for s in self.steps():
-            r = units % s
-            self.on[s] = self.on.get(s, 0) + int((r == 0).sum())
-            self.below[s] = self.below.get(s, 0) + int((r == s - unit).sum()) if s > unit else 0
-            self.above[s] = self.above.get(s, 0) + int((r == unit).sum()) if s > 2 * unit else 0
+            r = residue % s
+            self.on[s] = self.on.get(s, 0) + int(histogram[r == 0].sum())
+            self.below[s] = self.below.get(s, 0) + int(histogram[r == s - unit].sum()) if s > unit else 0
+            self.above[s] = self.above.get(s, 0) + int(histogram[r == unit].sum()) if s > 2 * unit else 0
 
 
 def _chance_log10(share: float, p: float, n: int) -> float:

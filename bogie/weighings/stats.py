@@ -23,8 +23,8 @@ from numpy.typing import ArrayLike, NDArray
 from bogie.weighings._records import REL_TOL
 
 __all__ = [
-    "PAIR_TOLERANCE", "QUANTILES", "SHARE_TOLERANCE", "STATISTICS_COLUMNS", "at_resolution", "axle_columns",
-    "group_inequality", "statistics_dict", "survey_statistics",
+    "PAIR_TOLERANCE", "QUANTILES", "SHARE_TOLERANCE", "STATISTICS_BLOCK", "STATISTICS_COLUMNS", "at_resolution",
+    "axle_columns", "group_inequality", "statistics_dict", "survey_statistics",
 ]  # fmt: skip
 
 #: VSB 11 road-friendly suspension: no axle more than 5 % from any other, (max - min) / max <= 0.05 [-]
@@ -148,6 +148,8 @@ def survey_statistics(
         raise ValueError(
             f"groups has columns {list(groups.columns)}: needs n_axles and axle_load_1, axle_load_2, ... (wide)"
         )
+    if len(groups) > STATISTICS_BLOCK:
+        return _blockwise_statistics(groups, keys, width, unit_per_kg, quantiles)
     ineq = group_inequality(groups[axle_columns(width)].to_numpy(dtype=float), groups["n_axles"].to_numpy())
     frame = groups[keys].assign(
         spread_kg=ineq["spread"] / unit_per_kg, spread_pct=ineq["spread_pct"],
@@ -167,6 +169,50 @@ def survey_statistics(
         for level in q.columns:
             table[f"{share}_p{round(100 * level):02d}"] = q[level]
     return table.reset_index()
+
+
+#: groups above which :func:`survey_statistics` works cell by cell and block by block (a year of a WIM site holds
+#: millions of groups: the table's way took 1.5 GB for 9 million)
+STATISTICS_BLOCK = 1 << 20
+
+
+def _blockwise_statistics(
+    groups: pd.DataFrame, keys: list[str], width: int, unit_per_kg: float, quantiles: Sequence[float]
+) -> pd.DataFrame:
+    """:func:`survey_statistics` of a large table in bounded memory: per cell, the inequality of each block of
+    :data:`STATISTICS_BLOCK` groups, counted and summed; the spreads in percent and the load shares kept, one value
+    a group, for the median and the quantiles (pandas' linear interpolation, NaN skipped, as the table's way).
+    Counts, shares and quantiles are the table's way's to the bit; the mean spread, a sum of block sums, to about
+    1e-12 relative (``tests/test_weighings_stream.py``)."""
+    columns = [groups[c].to_numpy() for c in axle_columns(width)]  # as stored (float32 where exact), no copy
+    n_all = groups["n_axles"].to_numpy()
+    rows = []
+    for cell, index in groups.groupby(keys, observed=True, sort=True).indices.items():
+        cell = cell if isinstance(cell, tuple) else (cell,)
+        m = len(index)
+        spread_pct = np.empty(m)
+        shares = np.empty((m, width))
+        spread_sum, outside, over = 0.0, 0, 0
+        for start in range(0, m, STATISTICS_BLOCK):
+            rows_b = index[start : start + STATISTICS_BLOCK]
+            loads = np.column_stack([c[rows_b] for c in columns]).astype(float)
+            ineq = group_inequality(loads, n_all[rows_b].astype(np.int64))
+            spread_sum += float((ineq["spread"] / unit_per_kg).sum())
+            outside += int(ineq["outside_5pct"].sum())
+            over += int(ineq["over_10pct"].sum())
+            spread_pct[start : start + len(rows_b)] = ineq["spread_pct"]
+            shares[start : start + len(rows_b)] = ineq["load_share"]
+        row = {
+            **dict(zip(keys, cell)), "n_groups": m, "mean_spread_kg": spread_sum / m,
+            "median_spread_pct": pd.Series(spread_pct).median(), "share_outside_5pct": outside / m,
+            "share_over_10pct": over / m,
+        }  # fmt: skip
+        for i in range(width):
+            q = pd.Series(shares[:, i]).quantile(list(quantiles))
+            for level, value in q.items():
+                row[f"load_share_{i + 1}_p{round(100 * level):02d}"] = value
+        rows.append(row)
+    return pd.DataFrame(rows)
 
 
 def statistics_dict(stats: pd.DataFrame, by: str = "group", digits: int = 4) -> dict[str, dict]:

@@ -7,6 +7,7 @@ fleet.
 
 from __future__ import annotations
 
+from collections import Counter
 from collections.abc import Sequence
 from dataclasses import dataclass
 from pathlib import Path
@@ -15,8 +16,17 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.weighings.groups import GROUP_SPACING_M, POSITIONS, SIZES, axle_groups, filter_groups, grouping_rule
-from bogie.weighings.readers import ReadResult, read_weighings
+from bogie.weighings._stream import CHUNK_BYTES
+from bogie.weighings.groups import (
+    GROUP_SPACING_M,
+    GROUP_TABLE_COLUMNS,
+    POSITIONS,
+    SIZES,
+    axle_groups,
+    filter_groups,
+    grouping_rule,
+)
+from bogie.weighings.readers import ReadResult, stream_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
 from bogie.weighings.wear import DAMAGE_EXPONENTS, EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
 
@@ -64,6 +74,7 @@ class ObservedSurvey:
     road: pd.DataFrame
     settings: dict[str, Any] | None = None
     stations: dict[str, dict[str, Any]] | None = None
+    n_kept: int | None = None
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
@@ -105,6 +116,8 @@ def observed_survey(
     legal_axle_kg: float = EU_LEGAL_AXLE_KG,
     resolution_kg: float | None = None,
     grouping: str = "spacing",
+    chunk_bytes: int = CHUNK_BYTES,
+    keep_groups: bool = True,
 ) -> ObservedSurvey:
     """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
 
@@ -129,23 +142,22 @@ def observed_survey(
     grouping
         ``spacing`` (axles at most ``group_spacing_m`` apart) or ``us-tandem`` (23 CFR 658.5's 40-96 in band;
         :func:`bogie.weighings.groups.axle_groups`).
+    chunk_bytes
+        Bytes of records read at a time (:func:`bogie.weighings.readers.stream_weighings`): the file is streamed,
+        and the statistics do not depend on it.
+    keep_groups
+        True (default): ``groups`` holds every kept group with all its columns. False: only the tandems' and
+        tri-axles' labels, axles and loads, what the statistics need (``n_kept`` still counts every kept group),
+        so that memory follows the surveyed groups, not the whole group table (``bogie weighings``).
 
     Raises
     ------
     ValueError
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
-    read = read_weighings(path, fmt, resolution_kg)
-    every = axle_groups(read.vehicles, group_spacing_m, grouping)
-    axles = every["n_axles"].to_numpy()
-    size = np.select([axles == k for k in SIZE_LABELS], list(SIZE_LABELS.values()), "other")
-    positions = {
-        where: {label: int(((every["position"] == where) & (size == label)).sum()) for label in (*SIZE_LABELS.values(),
-                "other")}
-        for where in POSITIONS[1:]
-    }  # fmt: skip
-    groups = filter_groups(every, min_group_load_t, position, speed_kmh)
-    surveyed = groups[groups["group"].isin(SURVEYED)]
+    tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups)
+    read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes)
+    groups, surveyed = tally.groups(), tally.surveyed()
     statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
     legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
     road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
@@ -163,23 +175,99 @@ def observed_survey(
         },
         "damage_exponents": dict(DAMAGE_EXPONENTS),
     }  # fmt: skip
-    return ObservedSurvey(groups, statistics, read, positions, road, settings, _stations(read, groups))
+    stations = tally.stations(surveyed)
+    return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
 
 
-def _stations(read: ReadResult, groups: pd.DataFrame) -> dict[str, dict[str, Any]]:
-    """Per station of a file of more than one (a TMG file's ``station`` column): its vehicles and the statistics of
-    its kept tandems and tri-axles; empty for a file of one station or none."""
-    vehicles = read.vehicles
-    if "station" not in vehicles.columns or vehicles["station"].nunique() < 2:
-        return {}
-    station_of = pd.Series(vehicles["station"].to_numpy(), index=vehicles["line"].to_numpy())
-    at = station_of.reindex(groups["line"].to_numpy()).to_numpy()
-    out: dict[str, dict[str, Any]] = {}
-    for station, n in vehicles["station"].value_counts(sort=False).sort_index().items():
-        mine = groups[(at == station) & groups["group"].isin(SURVEYED).to_numpy()]
-        stats = statistics_dict(survey_statistics(mine, by="group")) if len(mine) else {}
-        out[str(station)] = {
-            "vehicles": int(n),
-            "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
-        }
-    return out
+class _Tally:
+    """What :func:`observed_survey` keeps of each chunk of vehicles: the position counts, the kept groups (or, with
+    ``keep_groups`` False, only the surveyed sizes' group label, axles and loads, and station), and the stations."""
+
+    def __init__(self, min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups) -> None:
+        self.filters = (min_group_load_t, position, speed_kmh)
+        self.grouping = (group_spacing_m, grouping)
+        self.keep_groups = keep_groups
+        self.start()
+
+    def start(self) -> None:
+        """Begin afresh (the reader reads the file again when its resolution was not the first chunk's)."""
+        self.positions = {where: dict.fromkeys((*SIZE_LABELS.values(), "other"), 0) for where in POSITIONS[1:]}
+        self.kept: list[pd.DataFrame] = []
+        self.n_kept = 0
+        self.station_names: dict[str, int] = {}
+        self.vehicles_at: Counter = Counter()
+
+    def consume(self, vehicles: pd.DataFrame) -> None:
+        """Group, count and filter one chunk's vehicles; keep what the statistics need."""
+        every = axle_groups(vehicles, *self.grouping)
+        axles = every["n_axles"].to_numpy()
+        sizes = {label: axles == k for k, label in SIZE_LABELS.items()}
+        sizes["other"] = ~np.isin(axles, list(SIZE_LABELS))
+        for where in POSITIONS[1:]:
+            at = (every["position"] == where).to_numpy(dtype=bool)
+            for label, mask in sizes.items():
+                self.positions[where][label] += int((at & mask).sum())
+        groups = filter_groups(every, *self.filters)
+        self.n_kept += len(groups)
+        if "station" in vehicles.columns:
+            names = vehicles["station"].to_numpy()
+            self.vehicles_at.update(names.tolist())
+            codes = np.array([self.station_names.setdefault(x, len(self.station_names)) for x in names], np.int32)
+            line_code = pd.Series(codes, index=vehicles["line"].to_numpy())
+            groups = groups.assign(station_code=line_code.reindex(groups["line"].to_numpy()).to_numpy())
+        if not self.keep_groups:
+            groups = _compact(groups)
+        self.kept.append(groups.reset_index(drop=True))
+
+    def _all(self) -> pd.DataFrame:
+        if not self.kept:
+            return pd.DataFrame(columns=list(GROUP_TABLE_COLUMNS))
+        if len(self.kept) > 1:
+            self.kept = [pd.concat(self.kept, ignore_index=True)]
+        return self.kept[0]
+
+    def groups(self) -> pd.DataFrame:
+        """The kept groups (every size; or only the surveyed sizes' compact columns), without the station codes."""
+        return self._all().drop(columns=["station_code"], errors="ignore")
+
+    def surveyed(self) -> pd.DataFrame:
+        """The kept tandems and tri-axles (with their station codes, if any)."""
+        frame = self._all()
+        return frame[frame["group"].isin(SURVEYED).to_numpy(dtype=bool)]
+
+    def stations(self, surveyed: pd.DataFrame) -> dict[str, dict[str, Any]]:
+        """Per station of a file of more than one (a TMG file's ``station`` column): its vehicles and the statistics
+        of its kept tandems and tri-axles; empty for a file of one station or none."""
+        if len(self.station_names) < 2:
+            return {}
+        out: dict[str, dict[str, Any]] = {}
+        code = surveyed["station_code"].to_numpy()
+        for name in sorted(self.station_names):
+            mine = surveyed[code == self.station_names[name]]
+            stats = statistics_dict(survey_statistics(mine, by="group")) if len(mine) else {}
+            out[str(name)] = {
+                "vehicles": int(self.vehicles_at[name]),
+                "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
+            }
+        return out
+
+
+#: the columns of a surveyed group kept when the groups are not (``keep_groups=False``): what the statistics need
+_COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")
+
+
+def _compact(groups: pd.DataFrame) -> pd.DataFrame:
+    """The tandems and tri-axles of ``groups`` in the fewest bytes that hold them exactly: the label as a category,
+    the axles as int8, each load as float32 where every value of the chunk is one exactly (whole kilograms are;
+    loads converted from pounds are not, and stay float64): 17 bytes a tri-axle instead of about 200."""
+    surveyed = groups.loc[groups["group"].isin(SURVEYED).to_numpy(dtype=bool), [c for c in _COMPACT if c in groups]]
+    out = {"group": pd.Categorical(surveyed["group"].to_numpy(), categories=list(SURVEYED)),
+           "n_axles": surveyed["n_axles"].to_numpy().astype(np.int8)}  # fmt: skip
+    for c in ("axle_load_1", "axle_load_2", "axle_load_3"):
+        values = surveyed[c].to_numpy(dtype=float)
+        narrow = values.astype(np.float32)
+        same = (narrow.astype(float) == values) | np.isnan(values)
+        out[c] = narrow if same.all() else values
+    if "station_code" in surveyed:
+        out["station_code"] = surveyed["station_code"].to_numpy()
+    return pd.DataFrame(out, copy=False)

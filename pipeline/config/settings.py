@@ -30,7 +30,7 @@ from pydantic import ValidationError
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
-from bogie.weighings._records import MEMORY_PER_BYTE, survey_memory, uncompressed_size
+from bogie.weighings._records import MEMORY_PER_BYTE, SURVEY_BASE_MEMORY, survey_memory, uncompressed_size
 from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
@@ -316,8 +316,9 @@ def _survey_file(name: str, root: str | Path) -> Path:
     if need > MEMORY_BUDGET:
         raise ConfigError(
             "observed.path",
-            f"{given}: its {uncompressed_size(target) / 2**30:.2f} GiB of records need about {need / 2**30:.0f} GiB "
-            f"to read and summarise ({MEMORY_PER_BYTE} bytes a byte, bogie.weighings._records.MEMORY_PER_BYTE), "
+            f"{given}: its {uncompressed_size(target) / 2**30:.2f} GiB of records need about {need / 2**30:.2f} GiB "
+            f"to read and summarise ({SURVEY_BASE_MEMORY / 2**20:.0f} MiB and {MEMORY_PER_BYTE} bytes a byte, "
+            "bogie.weighings._records.SURVEY_BASE_MEMORY and MEMORY_PER_BYTE), "
             f"more than the memory budget of {MEMORY_BUDGET / 2**30:g} GiB (pipeline.resources.MEMORY_BUDGET): "
             "split the survey, or give a part of it",
         )
