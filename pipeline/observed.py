@@ -46,7 +46,7 @@ from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
-from pipeline.schema import checksummed_content
+from pipeline.schema import ChecksummedWriter, checksummed_content
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
 
 __all__ = [
@@ -89,7 +89,29 @@ def _table(frame: pd.DataFrame, schema: pa.Schema) -> pa.Table:
 
 
 # ---- the observed side -------------------------------------------------------------------------------------------
-def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.DataFrame, dict[str, Any] | None]:
+class _GroupsFile:
+    """``groups.parquet`` filled chunk by chunk as the survey streams (:func:`bogie.weighings.survey.observed_survey`'s
+    ``sink``): each chunk's kept groups with their inequality, one row group, so that the stage never holds the
+    whole group table (issue 41 Must 4)."""
+
+    def start(self) -> None:
+        self.file = ChecksummedWriter(GROUPS_SCHEMA)
+
+    def write(self, groups: pd.DataFrame) -> None:
+        if len(groups):
+            self.file.write(_table(with_inequality(groups), GROUPS_SCHEMA))
+
+
+def _sha256(path: Path) -> str:
+    """The file's SHA-256, read a megabyte at a time."""
+    digest = hashlib.sha256()
+    with open(path, "rb") as fh:
+        for block in iter(lambda: fh.read(1 << 20), b""):
+            digest.update(block)
+    return digest.hexdigest()
+
+
+def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.DataFrame | bytes, dict[str, Any] | None]:
     """The observed groups that pass the filters and their statistics (``bogie weighings --json``'s shape).
 
     Parameters
@@ -101,8 +123,9 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
 
     Returns
     -------
-    groups : pandas.DataFrame
-        The columns of :data:`GROUPS_SCHEMA`; no row for no survey.
+    groups : pandas.DataFrame or bytes
+        No survey: an empty table of the columns of :data:`GROUPS_SCHEMA`. A survey: the checksummed Parquet file
+        of its groups (those columns), written chunk by chunk as the file streams.
     statistics : dict or None
         ``{"path", "format" (the one read), "format_asked" (``auto`` or that one), "sha256", "records": {"read",
         "skipped", "weight_step_kg", "resolution", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or
@@ -116,6 +139,7 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
     if path is None:
         empty = pd.DataFrame({f.name: pd.Series(dtype=f.type.to_pandas_dtype()) for f in GROUPS_SCHEMA})
         return empty, None
+    groups = _GroupsFile()
     survey = observed_survey(
         path,
         observed.format,
@@ -123,6 +147,8 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         observed.group_spacing,
         observed.position,
         resolution_kg=observed.resolution_kg,
+        keep_groups=False,
+        sink=groups,
     )
     stats = survey.to_dict()
     # the file as params.yaml names it, relative to the project: the outputs must not depend on where the project is
@@ -130,9 +156,9 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
     stats["records"]["skipped_by_reason"] = dict(sorted(survey.read.skipped.items()))
     header = {
         "path": observed.path, "format": survey.read.format, "format_asked": observed.format,
-        "sha256": hashlib.sha256(path.read_bytes()).hexdigest(),
+        "sha256": _sha256(path),
     }  # fmt: skip
-    return with_inequality(survey.groups), {**header, **stats}
+    return groups.file.content(), {**header, **stats, "n_kept": survey.n_kept}
 
 
 def wim_model(wim: WimProtocol) -> dict[str, Any]:
@@ -195,7 +221,7 @@ def observed_metrics(
 
 # ---- the stage ---------------------------------------------------------------------------------------------------
 def write_outputs(
-    groups: pd.DataFrame,
+    groups: pd.DataFrame | bytes,
     readings: pd.DataFrame,
     metrics: Mapping[str, Any],
     out_dir: str | Path,
@@ -207,7 +233,8 @@ def write_outputs(
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
-        (tmp_dir / "groups.parquet").write_bytes(checksummed_content(_table(groups, GROUPS_SCHEMA)))
+        content = groups if isinstance(groups, bytes) else checksummed_content(_table(groups, GROUPS_SCHEMA))
+        (tmp_dir / "groups.parquet").write_bytes(content)
         (tmp_dir / "simulated.parquet").write_bytes(checksummed_content(_table(readings, SIMULATED_SCHEMA)))
 
 
@@ -235,6 +262,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     except (ConfigError, RunsError, OSError, ValueError, yaml.YAMLError) as exc:
         print(f"observed: {exc}", file=sys.stderr)
         return 2
+    n_kept = observed_stats.pop("n_kept") if observed_stats is not None else 0
     step = observed_stats["records"]["weight_step_kg"] if observed_stats is not None else None
     readings, counts = simulated_readings(runs, observed.min_group_load, observed.position, step)
     metrics = observed_metrics(observed, observed_stats, simulated_statistics(readings, counts), config.protocol.wim)
@@ -243,7 +271,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     except OSError as exc:
         print(io_error("observed", exc), file=sys.stderr)
         return 2
-    given = f"{len(groups)} observed groups from {observed.path}" if path else "no observed survey given"
+    given = f"{n_kept} observed groups from {observed.path}" if path else "no observed survey given"
     print(f"observed: {given}, {len(readings)} simulated readings kept; wrote {args.out} and {args.metrics}")
     return 0
 

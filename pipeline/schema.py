@@ -38,6 +38,7 @@ from pipeline.atomic import atomic_file
 
 __all__ = [
     "CATEGORICAL",
+    "ChecksummedWriter",
     "CATEGORIES",
     "RESULT_COLUMNS",
     "RUNS_SCHEMA",
@@ -62,6 +63,7 @@ __all__ = [
     "table_from_rows",
     "write_file",
     "write_runs_file",
+    "sealed",
 ]
 
 
@@ -207,7 +209,32 @@ def checksummed_content(table: pa.Table) -> bytes:
     table = table.replace_schema_metadata({**(table.schema.metadata or {}), CHECKSUM_KEY: _UNSEALED})
     sink = pa.BufferOutputStream()
     pq.write_table(table, sink, write_page_checksum=True)
-    content = sink.getvalue().to_pybytes()
+    return sealed(sink.getvalue().to_pybytes())
+
+
+class ChecksummedWriter:
+    """A Parquet file written a table at a time (one row group each), in memory, with the checksums of a part file
+    (:func:`checksummed_content`) once :meth:`content` closes it: a stage's output that a streamed input fills."""
+
+    def __init__(self, schema: pa.Schema) -> None:
+        self.sink = pa.BufferOutputStream()
+        schema = schema.with_metadata({**(schema.metadata or {}), CHECKSUM_KEY: _UNSEALED})
+        self.schema = schema
+        self.writer = pq.ParquetWriter(self.sink, schema, write_page_checksum=True)
+        self.rows = 0
+
+    def write(self, table: pa.Table) -> None:
+        self.writer.write_table(table.replace_schema_metadata(self.schema.metadata))
+        self.rows += table.num_rows
+
+    def content(self) -> bytes:
+        """The whole file, sealed; the writer is closed."""
+        self.writer.close()
+        return sealed(self.sink.getvalue().to_pybytes())
+
+
+def sealed(content: bytes) -> bytes:
+    """``content``, a Parquet file written with the checksum's placeholder in its metadata, with the checksum."""
     at = _checksum_offset(content, _UNSEALED)
     if at is None:  # a pyarrow that encodes the footer otherwise: no file without its checksum
         raise RuntimeError(f"pyarrow {pa.__version__} did not write {CHECKSUM_KEY.decode()} where it is looked for")

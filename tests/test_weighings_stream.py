@@ -143,3 +143,29 @@ def test_the_statistics_of_a_large_table_block_by_block_are_the_tables(monkeypat
             assert blocked[column].to_numpy() == pytest.approx(table[column].to_numpy(), rel=1e-12)
         else:  # counts, shares, median and quantiles to the bit (NaN where a size has no third axle)
             np.testing.assert_array_equal(blocked[column].to_numpy(), table[column].to_numpy(), err_msg=column)
+
+
+def test_a_sink_gets_every_kept_group_once_and_afresh_on_a_second_pass(tmp_path):
+    class Sink:
+        def __init__(self):
+            self.starts, self.parts = 0, []
+
+        def start(self):
+            self.starts += 1
+            self.parts = []
+
+        def write(self, groups):
+            self.parts.append(groups)
+
+    vehicles = fleet(400)
+    later = vehicles.index >= 200  # the second half at 10 kg: the first chunk's resolution is not the file's
+    vehicles.loc[later, "axle_load_1"] += 10.0
+    vehicles.loc[later, "gross_weight"] += 10.0
+    path = tmp_path / "site.mon"
+    write_weighings(vehicles, path, "mon")
+    whole = observed_survey(path, "mon", min_group_load_t=10, chunk_bytes=WHOLE)
+    sink = Sink()
+    streamed = observed_survey(path, "mon", min_group_load_t=10, chunk_bytes=4_096, keep_groups=False, sink=sink)
+    assert sink.starts == 2 and len(sink.parts) > 1  # read again with the file's resolution
+    assert pd.concat(sink.parts, ignore_index=True).equals(whole.groups)
+    assert streamed.to_dict() == whole.to_dict()

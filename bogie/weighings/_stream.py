@@ -97,14 +97,19 @@ def blocks(path: str | Path, cap: int, chunk_bytes: int = CHUNK_BYTES) -> Iterat
             piece = piece[3:] if piece[:3] == _BOM else piece  # a mark split across pieces is not expected: 3 bytes
             first = False
         carry += piece
-        if len(carry) < chunk_bytes:
-            continue
-        cut = carry.rfind(b"\n")
-        if cut < 0:
-            continue
-        block, carry = carry[: cut + 1], carry[cut + 1 :]
-        yield block, lines_before
-        lines_before += block.count(b"\n")
+        pos = 0
+        while len(carry) - pos >= chunk_bytes:
+            # the last line end within the next chunk_bytes, or the first after them (a longer line)
+            cut = carry.rfind(b"\n", pos, pos + chunk_bytes)
+            if cut < 0:
+                cut = carry.find(b"\n", pos + chunk_bytes)
+            if cut < 0:
+                break
+            block = carry[pos : cut + 1]
+            yield block, lines_before
+            lines_before += block.count(b"\n")
+            pos = cut + 1
+        carry = carry[pos:]
     if carry or first:
         yield carry, lines_before
 

@@ -118,6 +118,7 @@ def observed_survey(
     grouping: str = "spacing",
     chunk_bytes: int = CHUNK_BYTES,
     keep_groups: bool = True,
+    sink: Any = None,
 ) -> ObservedSurvey:
     """Read ``path`` in format ``fmt``, group the axles, filter the groups and compute the survey statistics.
 
@@ -149,13 +150,17 @@ def observed_survey(
         True (default): ``groups`` holds every kept group with all its columns. False: only the tandems' and
         tri-axles' labels, axles and loads, what the statistics need (``n_kept`` still counts every kept group),
         so that memory follows the surveyed groups, not the whole group table (``bogie weighings``).
+    sink
+        None, or an object with ``start()`` and ``write(groups)``: given each chunk's kept groups (every size, all
+        columns) as they are made, after a ``start()`` before every pass over the file (the pipeline's observed
+        stage writes its groups file so).
 
     Raises
     ------
     ValueError
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
-    tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups)
+    tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
     read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes)
     groups, surveyed = tally.groups(), tally.surveyed()
     statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
@@ -183,14 +188,21 @@ class _Tally:
     """What :func:`observed_survey` keeps of each chunk of vehicles: the position counts, the kept groups (or, with
     ``keep_groups`` False, only the surveyed sizes' group label, axles and loads, and station), and the stations."""
 
-    def __init__(self, min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups) -> None:
+    def __init__(self, min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink) -> None:
         self.filters = (min_group_load_t, position, speed_kmh)
         self.grouping = (group_spacing_m, grouping)
         self.keep_groups = keep_groups
-        self.start()
+        self.sink = sink
+        self._reset()
 
     def start(self) -> None:
-        """Begin afresh (the reader reads the file again when its resolution was not the first chunk's)."""
+        """Begin afresh, before every pass over the file (the reader reads it again when its resolution was not the
+        first chunk's)."""
+        self._reset()
+        if self.sink is not None:
+            self.sink.start()
+
+    def _reset(self) -> None:
         self.positions = {where: dict.fromkeys((*SIZE_LABELS.values(), "other"), 0) for where in POSITIONS[1:]}
         self.kept: list[pd.DataFrame] = []
         self.n_kept = 0
@@ -209,6 +221,8 @@ class _Tally:
                 self.positions[where][label] += int((at & mask).sum())
         groups = filter_groups(every, *self.filters)
         self.n_kept += len(groups)
+        if self.sink is not None:
+            self.sink.write(groups)
         if "station" in vehicles.columns:
             names = vehicles["station"].to_numpy()
             self.vehicles_at.update(names.tolist())
