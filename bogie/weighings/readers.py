@@ -55,6 +55,7 @@ from bogie.weighings._records import (
     _Reasons,
     _shown,
     _split,
+    _stray_bytes,
     _timestamps,
 )
 from bogie.weighings._stream import CHUNK_BYTES, SeenSet, blocks, key_hashes
@@ -164,7 +165,7 @@ def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
     axles = _axle_fields(lines, layout, reasons, raw["n_axles"])
     # any other byte but a digit or a space, in a field or in the padding past the last axle: a form feed, a tab,
     # a Unicode line separator, binary data
-    reasons.flag(_stray_bytes(lines), NON_NUMERIC)
+    reasons.flag(_stray_bytes(lines, _FIELD_BYTE), NON_NUMERIC)
     stamp = _checked_stamp(layout, reasons, raw)
     return {"reasons": reasons, **_scaled(layout, raw, axles), "stamp": stamp}
 
@@ -257,20 +258,6 @@ def _scaled(layout: FixedWidthLayout, raw: dict[str, np.ndarray], axles: dict[st
         "length_units": (raw["length"], scale["length"]),
         "spacing_units": (axles["spacing"], layout.axle_field("spacing").scale),
     }  # fmt: skip
-
-
-def _stray_bytes(lines: _Lines) -> np.ndarray:
-    """Whether each record ``[start, end)`` holds a byte that is neither an ASCII digit nor a space."""
-    m = len(lines)
-    if not m:
-        return np.zeros(0, bool)
-    stray = _FIELD_BYTE[lines.buf]
-    np.logical_not(stray, out=stray)
-    bounds = np.empty(2 * m, np.int64)
-    bounds[0::2], bounds[1::2] = lines.start, lines.end
-    if bounds[-1] == len(lines.buf):  # reduceat's indices must be inside the array: the last segment runs to its end
-        bounds = bounds[:-1]
-    return np.logical_or.reduceat(stray, bounds)[0::2]
 
 
 # ---- checks every format shares ------------------------------------------------------------------------------------

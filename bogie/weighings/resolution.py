@@ -25,6 +25,7 @@ import math
 from dataclasses import dataclass, field
 
 import numpy as np
+from numba import njit
 
 __all__ = [
     "MAX_CHANCE", "MAX_RESOLUTION_KG", "ON_GRID_SHARE", "TOLERANT_FROM", "WEIGHT_STEPS_KG", "Resolution",
@@ -107,22 +108,21 @@ class ResidueCounts:
 
     def add(self, loads_kg: np.ndarray) -> None:
         """Count the loads of one chunk [kg] (NaN: no axle, ignored)."""
-        values = np.asarray(loads_kg, dtype=float)
-        values = values[~np.isnan(values)]
-        if not len(values):
+        values = np.ascontiguousarray(loads_kg, dtype=float).ravel()
+        top = WEIGHT_STEPS_KG[-1]
+        histogram = np.zeros(top, np.int64)
+        # one compiled pass: the loads counted, whether all are whole units (a load in pounds comes back from
+        # kilograms within a rounding of the conversion: 1e-6 lb is far below it), the residues modulo the largest
+        # step (every candidate divides it: one histogram gives every count)
+        n, whole = _residue_histogram(values, self.base_kg, histogram)
+        if not n:
             return
-        self.n += len(values)
+        self.n += n
         if self.unit_kg is None or not self.whole:
             return
-        base = values / self.base_kg
-        whole = np.round(base)
-        # a load in pounds comes back from kilograms within a rounding of the conversion: 1e-6 lb is far below it
-        if (np.abs(base - whole) > 1e-6).any():  # not whole units: no resolution (a CSV file of decimals)
+        if not whole:  # not whole units: no resolution (a CSV file of decimals)
             self.whole = False
             return
-        # every candidate step divides the largest: one histogram of the residues modulo it gives every count
-        top = WEIGHT_STEPS_KG[-1]
-        histogram = np.bincount(whole.astype(np.int64) % top, minlength=top)
         residue = np.arange(top)
         unit = self.unit
         for s in self.steps():
@@ -235,3 +235,24 @@ def _detect(counts: ResidueCounts) -> Resolution:
                                   above if tolerant else 0, bound, *base)  # fmt: skip
     step = unit * counts.base_kg
     return Resolution(step, "format", step, counts.unit_kg, n, n, 0, 0, 0.0, *base)
+
+
+@njit(cache=True)
+def _residue_histogram(values, base_kg, histogram):  # pragma: no cover - compiled
+    """(loads that are not NaN, whether every one is a whole number of ``base_kg``); ``histogram`` counts their
+    residues modulo its length (when whole)."""
+    n = 0
+    whole = True
+    top = histogram.shape[0]
+    for v in values:
+        if v != v:
+            continue
+        n += 1
+        if whole:
+            b = v / base_kg
+            w = math.floor(b + 0.5)
+            if abs(b - w) > 1e-6:
+                whole = False
+            else:
+                histogram[int(w) % top] += 1
+    return n, whole

@@ -215,8 +215,11 @@ class _Tally:
         axles = every["n_axles"].to_numpy()
         sizes = {label: axles == k for k, label in SIZE_LABELS.items()}
         sizes["other"] = ~np.isin(axles, list(SIZE_LABELS))
-        for where in POSITIONS[1:]:
-            at = (every["position"] == where).to_numpy(dtype=bool)
+        # the positions by the group's index, as axle_groups labels them (1 steer, 2 drive, 3 and on trailer): an
+        # integer comparison, not three over a million strings
+        index = np.minimum(every["group_index"].to_numpy(), 3)
+        for k, where in enumerate(POSITIONS[1:], start=1):
+            at = index == k
             for label, mask in sizes.items():
                 self.positions[where][label] += int((at & mask).sum())
         groups = filter_groups(every, *self.filters)
@@ -266,6 +269,8 @@ class _Tally:
         return out
 
 
+assert SURVEYED == (SIZES[2], SIZES[3])  # _compact's codes: the axles less two
+
 #: the columns of a surveyed group kept when the groups are not (``keep_groups=False``): what the statistics need
 _COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")
 
@@ -274,9 +279,11 @@ def _compact(groups: pd.DataFrame) -> pd.DataFrame:
     """The tandems and tri-axles of ``groups`` in the fewest bytes that hold them exactly: the label as a category,
     the axles as int8, each load as float32 where every value of the chunk is one exactly (whole kilograms are;
     loads converted from pounds are not, and stay float64): 17 bytes a tri-axle instead of about 200."""
-    surveyed = groups.loc[groups["group"].isin(SURVEYED).to_numpy(dtype=bool), [c for c in _COMPACT if c in groups]]
-    out = {"group": pd.Categorical(surveyed["group"].to_numpy(), categories=list(SURVEYED)),
-           "n_axles": surveyed["n_axles"].to_numpy().astype(np.int8)}  # fmt: skip
+    axles = groups["n_axles"].to_numpy()
+    # the surveyed sizes by their axles, as axle_groups labels them (SIZES: 2 tandem, 3 triaxle)
+    surveyed = groups.loc[(axles == 2) | (axles == 3), [c for c in _COMPACT if c in groups]]
+    n = surveyed["n_axles"].to_numpy().astype(np.int8)
+    out = {"group": pd.Categorical.from_codes(n - 2, categories=list(SURVEYED)), "n_axles": n}
     for c in ("axle_load_1", "axle_load_2", "axle_load_3"):
         values = surveyed[c].to_numpy(dtype=float)
         narrow = values.astype(np.float32)

@@ -33,6 +33,7 @@ from collections.abc import Mapping, Sequence
 
 import numpy as np
 import pandas as pd
+from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
@@ -296,32 +297,36 @@ def _overload_figures(hidden: int, group_over: int, judged: int, confidence: flo
     }  # fmt: skip
 
 
+@njit(cache=True)
+def _wear_moments(loads, n, exponents, standard_axle, moments):  # pragma: no cover - compiled
+    """Add the groups' damage D and equal-shared damage E for each exponent (as :func:`group_wear`: x = W / W_s,
+    D = sum x^k, E = n mean(x)^k, libm's pow) to ``moments[k] = (count, mean D, mean E, M2 D, M2 E, C DE)``,
+    one group at a time by Welford's update (no cancellation, no arrays of the cell)."""
+    for g in range(loads.shape[0]):
+        m = n[g]
+        total = 0.0
+        for i in range(m):
+            total += loads[g, i] / standard_axle
+        mean_x = total / m
+        for j in range(exponents.shape[0]):
+            k = exponents[j]
+            d = 0.0
+            for i in range(m):
+                d += math.pow(loads[g, i] / standard_axle, k)
+            e = m * math.pow(mean_x, k)
+            c = moments[j, 0] + 1.0
+            dd = d - moments[j, 1]
+            de = e - moments[j, 2]
+            moments[j, 0] = c
+            moments[j, 1] += dd / c
+            moments[j, 2] += de / c
+            moments[j, 3] += dd * (d - moments[j, 1])
+            moments[j, 4] += de * (e - moments[j, 2])
+            moments[j, 5] += dd * (e - moments[j, 2])
+
+
 #: groups of a large cell taken at a time (:func:`_large_cell`): the memory of a block's arrays, whatever the cell
 WEAR_BLOCK = 1 << 18
-
-
-class _Moments:
-    """Count, means and centred second moments of (D, E), merged block by block (Chan, Golub and LeVeque 1983): the
-    moments of the whole without holding it, and without the cancellation of raw sums of squares."""
-
-    def __init__(self) -> None:
-        self.n = 0
-        self.mean = np.zeros(2)
-        self.m2 = np.zeros((2, 2))
-
-    def add(self, d: NDArray, e: NDArray) -> None:
-        x = np.stack([d, e])
-        nb = x.shape[1]
-        if not nb:
-            return
-        mean_b = x.mean(axis=1)
-        centred = x - mean_b[:, None]
-        m2_b = np.array([[float((centred[i] * centred[j]).sum()) for j in range(2)] for i in range(2)])
-        total = self.n + nb
-        delta = mean_b - self.mean
-        self.m2 = self.m2 + m2_b + np.outer(delta, delta) * (self.n * nb / total)
-        self.mean = self.mean + delta * (nb / total)
-        self.n = total
 
 
 def _large_cell(index: NDArray, cell_arrays, exponents: Mapping[str, float], legal_axle: float,
@@ -330,14 +335,15 @@ def _large_cell(index: NDArray, cell_arrays, exponents: Mapping[str, float], leg
     the extra wear R = sum D / sum E - 1 and 1000 mean(D - E), with the delta method's normal intervals
     (docs/pavement.md, "Intervals": R's linearisation is (1 / (m mean E)) sum (D_i - (R + 1) E_i), so its standard
     error is sd(D - (R + 1) E) / (sqrt(m) mean E), Cochran, Sampling Techniques, 3rd ed. 1977, section 6.3, the
-    ratio estimator; the mean's is sd(D - E) / sqrt(m)), and the hidden overloads."""
-    moments = {name: _Moments() for name in exponents}
+    ratio estimator; the mean's is sd(D - E) / sqrt(m)), and the hidden overloads. The moments are Welford's, one
+    group at a time in a compiled loop (:func:`_wear_moments`)."""
+    names = list(exponents)
+    ks = np.array([float(exponents[name]) for name in names])
+    moments = np.zeros((len(names), 6))
     hidden = group_over = judged = 0
     for start in range(0, len(index), WEAR_BLOCK):
         loads, n, legal = cell_arrays(index[start : start + WEAR_BLOCK])
-        for name, k in exponents.items():
-            wear = group_wear(loads, n, float(k), STANDARD_AXLE_KG)
-            moments[name].add(wear["damage"], wear["damage_equal"])
+        _wear_moments(np.ascontiguousarray(loads), n, ks, STANDARD_AXLE_KG, moments)
         known = np.isfinite(legal)
         over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
         hidden += int(over["hidden"].sum())
@@ -345,9 +351,10 @@ def _large_cell(index: NDArray, cell_arrays, exponents: Mapping[str, float], leg
         judged += int(known.sum())
     z = statistics.NormalDist().inv_cdf(0.5 + confidence / 2.0)
     out: dict[str, float] = {}
-    for name, mom in moments.items():
-        m = mom.n
-        (mean_d, mean_e), ((vdd, vde), (_, vee)) = mom.mean, mom.m2 / (m - 1)
+    for j, name in enumerate(names):
+        count, mean_d, mean_e, m2_d, m2_e, c_de = moments[j]
+        m = int(count)
+        vdd, vee, vde = m2_d / (m - 1), m2_e / (m - 1), c_de / (m - 1)
         ratio = mean_d / mean_e
         se_ratio = math.sqrt(max(vdd - 2 * ratio * vde + ratio * ratio * vee, 0.0)) / (math.sqrt(m) * mean_e)
         mean = 1000.0 * (mean_d - mean_e)
