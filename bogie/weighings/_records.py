@@ -105,15 +105,15 @@ _BOM = b"\xef\xbb\xbf"
 REL_TOL = 1e-9
 
 #: memory of reading a survey and computing its statistics and road figures, streamed (issue 41 Must 4), whatever
-#: the file's length [bytes]: the libraries, a chunk's work and the figures' arrays; measured 562 MB peak for a MON
-#: file of 1,000,000 records (91.3 MB; ``bogie weighings --json``, 6 December 2026), rounded up
-SURVEY_BASE_MEMORY = 640 * 2**20
+#: the file's length [bytes]: the libraries, a chunk's work and the figures' arrays; measured 732 MiB peak for a MON
+#: file of 1,000,000 records (91 MB; ``bench/bench_weighings.py``, 6 December 2026), less its growth, rounded up
+SURVEY_BASE_MEMORY = 768 * 2**20
 #: memory that grows with the survey, per byte of its records (uncompressed) [bytes/byte]: each good record's hash
-#: (repeats) and each surveyed group's loads, kept for the exact quantiles; measured (1,104 - 562) MB over
-#: (912 - 91) MB of MON records, 0.66 (``bench/bench_readers.py``'s survey part has the figures); rounded up
+#: (repeats) and each surveyed group's loads, kept for the exact quantiles; measured 0.47 (the bench: 1,104 - 732
+#: MiB over 913 - 91 MB of MON records) and 0.66 by hand earlier the same day; 0.7 bounds both
 MEMORY_PER_BYTE = 0.7
 #: the largest survey file read, uncompressed [bytes]: 1 GiB, about 11 million MON records, so that a survey needs
-#: at most about 1.4 GiB (:func:`survey_memory`); split a larger one
+#: at most about 1.45 GiB (:func:`survey_memory`); split a larger one
 MAX_FILE_BYTES = 2**30
 
 
