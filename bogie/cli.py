@@ -128,9 +128,13 @@ def _weighings_table(survey) -> str:
             values = " ".join(f"{num(q.get(k), fmt='.3f'):>6}" for k in ("p05", "p25", "p50", "p75", "p95"))
             lines.append(f"{size:<8} {axle.removeprefix('axle_'):>4} {values}")
     road = survey.to_dict()["road"]
+    legal = survey.to_dict()["settings"].get("legal_loads_kg", {})
+    limits = (
+        f"axles over {legal.get('axle', 10_000.0) / 1000:g} t in groups within their legal load (tandem "
+        f"{legal.get('tandem', 18_000.0) / 1000:g} t, tri-axle {legal.get('triaxle', 24_000.0) / 1000:g} t)"
+    )
     lines += ["", "what unequal sharing costs the road (docs/pavement.md): extra pavement wear over the same groups "
-              "shared equally (k = 4, the fourth power; k = 12, cemented layers), and axles over 10 t in groups within "
-              "their legal load (96/53/EC: tandem 18 t, tri-axle 24 t):",
+              f"shared equally (k = 4, the fourth power; k = 12, cemented layers), and {limits}:",
               f"{'group':<8} {'n':>5} {'extra wear k=4':>15} {'k=12':>7} {'per 1000 groups k=4':>20} "
               f"{'over legal group':>17} {'hidden overload':>16}",
               f"{'':<8} {'':>5} {'[%]':>15} {'[%]':>7} {'[80 kN axles]':>20} {'[%]':>17} {'[%]':>16}"]  # fmt: skip
@@ -144,10 +148,19 @@ def _weighings_table(survey) -> str:
             f"{num(e['extra_wear_cemented'], 100, '.1f'):>7} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>20} "
             f"{num(e.get('share_group_over'), 100):>17} {num(e['share_hidden_overload'], 100):>16}"
         )
-    legal = survey.to_dict()["settings"].get("legal_loads_kg", {})
     if legal:
         lines.append(f"legal loads: {legal.get('source', '')}")
     return "\n".join(lines)
+
+
+def _legal_groups(args: argparse.Namespace) -> dict[str, float] | None:
+    """The legal group loads given on the command line, the directive's for a size not given; None if none was."""
+    from bogie.weighings.wear import EU_LEGAL_GROUP_KG
+
+    given = {"tandem": args.legal_tandem_kg, "triaxle": args.legal_triaxle_kg}
+    if all(v is None for v in given.values()):
+        return None
+    return {size: float(EU_LEGAL_GROUP_KG[size] if v is None else v) for size, v in given.items()}
 
 
 def _cmd_weighings(args: argparse.Namespace) -> int:
@@ -157,6 +170,7 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
 
     try:
         survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position,
+                                 legal_group_kg=_legal_groups(args), legal_axle_kg=args.legal_axle_kg,
                                  resolution_kg=args.resolution_kg, grouping=args.grouping,
                                  keep_groups=False)  # fmt: skip
     except OSError as exc:
@@ -284,6 +298,17 @@ def build_parser() -> argparse.ArgumentParser:
         "--grouping", choices=("spacing", "us-tandem"), default="spacing",
         help="how axles form groups: spacing (default: at most --group-spacing-m apart) or us-tandem (23 CFR 658.5: "
         "consecutive axles more than 40 in and at most 96 in apart)",
+    )  # fmt: skip
+    for size, what in (("tandem", "a tandem group's"), ("triaxle", "a tri-axle group's")):
+        weigh.add_argument(
+            f"--legal-{size}-kg", type=_range(f"--legal-{size}-kg", 1000.0, 100_000.0, "kg"), default=None,
+            help=f"{what} legal load for the overload figures [kg] (default: Directive 96/53/EC's trailer limit, "
+            f"{'18,000' if size == 'tandem' else '24,000'} kg)",
+        )  # fmt: skip
+    weigh.add_argument(
+        "--legal-axle-kg", type=_range("--legal-axle-kg", 1000.0, 50_000.0, "kg"), default=10_000.0,
+        help="a single axle's legal load for the hidden overloads [kg] (default: Directive 96/53/EC's 10,000 kg); "
+        "a US file: 23 CFR 658.17's 20,000 lb is 9,071.847 kg",
     )  # fmt: skip
     weigh.add_argument(
         "--resolution-kg", type=_range("--resolution-kg", 0.0, 1000.0, "kg"), default=None,

@@ -178,3 +178,20 @@ def test_a_state_wide_file_is_tabulated_by_station(tmp_path):
     # tandems 6.8/7.0 t: spread 200 kg; 7.5/7.5: 0 -> mean 100 kg at 06-000101
     assert out["stations"]["06-000101"]["groups"]["tandem"]["mean_spread_kg"] == 100.0
     assert out["settings"]["grouping"].startswith("us-tandem: consecutive axles more than 40 in")
+
+
+def test_bogie_weighings_takes_the_legal_loads_of_the_files_country(tmp_path, capsys):
+    import json
+
+    from bogie.cli import main
+
+    path = write(tmp_path, "site.dat", [A_2001, B_2001])
+    # 23 CFR 658.17: 34,000 lb a tandem, 20,000 lb an axle (0.45359237 kg a pound)
+    assert main(["weighings", str(path), "--json", "--legal-tandem-kg", "15422.14058", "--legal-axle-kg",
+                 "9071.8474"]) == 0  # fmt: skip
+    legal = json.loads(capsys.readouterr().out)["settings"]["legal_loads_kg"]
+    assert legal == {"tandem": 15422.14058, "triaxle": 24000.0, "axle": 9071.8474, "source": "given by the caller"}
+    with pytest.raises(SystemExit) as stop:
+        main(["weighings", str(path), "--legal-axle-kg", "10"])
+    assert stop.value.code == 2
+    assert "--legal-axle-kg 10 outside the allowed range [1000, 50000] kg" in capsys.readouterr().err
