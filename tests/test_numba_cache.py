@@ -237,3 +237,25 @@ def test_a_fresh_process_compiles_nothing_and_writes_nothing_once_the_cache_is_w
     assert second == "nothing", f"compiled again in a new process: {second}"
     after = _cache_files(tmp_path / "cache")
     assert after == before, f"cache entries written again: {sorted(set(after.items()) - set(before.items()))[:5]}"
+
+
+def test_a_pruner_does_not_mark_a_directory_used_before_it_removes_it(tmp_path, monkeypatch):
+    """Creating the lock file of an unclaimed directory set its modification time to now: a second pruner listing
+    at that moment ranked it as just used and removed an older, kept directory instead (11 removals of 10 in
+    test_two_pruners_at_once... under CI's load). Each directory must be renamed away with its time untouched."""
+    from bogie import numba_cache
+
+    root = tmp_path / "bogie-numba"
+    entries = fake_entries(root, 4)
+    before = {entry: entry.stat().st_mtime_ns for entry in entries}
+    seen = []
+    rename = os.rename
+
+    def spy(src, dst):
+        seen.append((Path(src), Path(src).stat().st_mtime_ns))
+        return rename(src, dst)
+
+    monkeypatch.setattr(numba_cache.os, "rename", spy)
+    removed = numba_cache.prune(root, keep=1)
+    assert len(removed) == 3 and len(seen) == 3
+    assert all(mtime == before[path] for path, mtime in seen), seen
