@@ -168,7 +168,11 @@ def survey_statistics(
         q = grouped[share].quantile(list(quantiles)).unstack()
         for level in q.columns:
             table[f"{share}_p{round(100 * level):02d}"] = q[level]
-    return table.reset_index()
+    table = table.reset_index()
+    for key in keys:  # a categorical label (axle_groups') tabulates as its strings, as the blockwise way gives them
+        if isinstance(table[key].dtype, pd.CategoricalDtype):
+            table[key] = table[key].astype(str)
+    return table
 
 
 #: groups above which :func:`survey_statistics` works cell by cell and block by block (a year of a WIM site holds
