@@ -10,7 +10,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bogie.weighings._stream import SeenSet, blocks, key_hashes
+from bogie.weighings._stream import SeenStore, blocks, key_hashes
 from bogie.weighings.readers import read_weighings
 from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
@@ -103,15 +103,45 @@ def test_the_hashes_do_not_depend_on_the_chunks_widest_vehicle():
     assert wide[0] == narrow[0] and wide[0] != wide[1]
 
 
-def test_the_seen_set_finds_what_was_added_and_grows():
-    seen = SeenSet()
-    values = np.arange(1, 200_001, dtype=np.uint64) * np.uint64(0x9E3779B97F4A7C15)
-    seen.add(values[:100_000])
-    found = seen.contains(values)
-    assert found[:100_000].all() and not found[100_000:].any()
-    assert seen.count == 100_000 and len(seen.table) >= 200_000
-    seen.add(np.zeros(1, np.uint64))  # 0 is stored as 1
-    assert seen.contains(np.array([0, 1], np.uint64)).all()
+DAY = np.timedelta64(1, "D")
+
+
+def test_the_seen_store_finds_what_was_added_on_disk_or_in_memory():
+    values = np.arange(1, 20_001, dtype=np.uint64) * np.uint64(0x9E3779B97F4A7C15)
+    stamps = np.repeat(np.datetime64("2026-03-14T01:00") + np.arange(10) * DAY, 2_000)  # ten days of 2,000
+    seen = SeenStore(in_memory=3_000)
+    first = np.arange(20_000) % 2 == 0  # every other record of every day
+    seen.add(stamps[first], values[first])
+    # the ten days hold 10,000 hashes: at most 3,000 in memory (and the day in hand), the rest on disk
+    assert seen.count == 10_000 and seen.held <= 3_000 + 1_000 and len(seen.on_disk) >= 6
+    on_disk = sorted(seen._dir.iterdir())
+    assert len(on_disk) == len(seen.on_disk)
+    found = seen.contains(stamps, values)
+    np.testing.assert_array_equal(found, first)
+    # a hash known on another day is not a repeat: a repeat has its record's time
+    assert not seen.contains(stamps[:1] + DAY * 20, values[:1]).any()
+    seen.add(stamps, values)  # those already in stay once
+    assert seen.count == 20_000 and seen.contains(stamps, values).all()
+    where = seen._dir
+    seen.close()
+    assert not where.exists()
+
+
+def test_a_repeat_far_back_in_the_file_is_found_when_its_day_is_on_disk(tmp_path, monkeypatch):
+    from bogie.weighings import _stream
+
+    vehicles = fleet(3_000)
+    vehicles["timestamp"] = pd.Timestamp("2026-03-14") + pd.to_timedelta(np.arange(3_000) * 600, "s")  # 21 days
+    path = tmp_path / "site.mon"
+    write_weighings(vehicles, path, "mon")
+    lines = path.read_bytes().splitlines(keepends=True)
+    path.write_bytes(b"".join(lines) + lines[5] + lines[1_500])  # two repeats at the end, of days 0 and 10
+    whole = read_weighings(path, "mon", chunk_bytes=WHOLE)
+    monkeypatch.setattr(_stream, "SEEN_IN_MEMORY", 300)  # a day or two in memory
+    monkeypatch.setattr(SeenStore.__init__, "__defaults__", (300,))
+    streamed = read_weighings(path, "mon", chunk_bytes=8_192)
+    assert sum(n for reason, n in whole.skipped.items() if reason.startswith("repeat")) == 2
+    same(whole, streamed)
 
 
 def test_the_survey_of_a_streamed_file_is_the_survey_of_the_whole(tmp_path):

@@ -6,7 +6,8 @@ as it goes, and what a whole-file read decides across records kept across the ch
   kept to put before every later block.
 - **Repeats.** A record equal to an earlier good one (time, lane, direction, speed, axle loads and spacings) may be in
   an earlier chunk: each good record's key is hashed (:func:`key_hashes`, 64 bits, independent of the chunk's axle
-  width) into a compiled open-addressing set (:class:`SeenSet`, 11-23 bytes a record, at most 70 % full). Within a
+  width) into a store by the day of the record's time stamp (:class:`SeenStore`: a repeat has its record's time, so
+  its day; a file in time order keeps a day or two in memory, the days beyond wait on disk). Within a
   chunk, records are compared exactly, as a whole-file read does; across chunks, by their hashes: two different
   records share a 64-bit hash with probability about 2^-64 a pair, so that in 10^7 records the chance that any
   good record is taken for a repeat is about n^2 / 2^65 = 3e-6 (named as such in ``docs/weighings.md``).
@@ -14,6 +15,9 @@ as it goes, and what a whole-file read decides across records kept across the ch
 
 from __future__ import annotations
 
+import shutil
+import tempfile
+import weakref
 import zlib
 from collections.abc import Iterator
 from pathlib import Path
@@ -24,7 +28,7 @@ from numba import njit
 
 from bogie.weighings._records import _BOM, _GZIP_MAGIC, _regular
 
-__all__ = ["CHUNK_BYTES", "SeenSet", "blocks", "key_hashes"]
+__all__ = ["CHUNK_BYTES", "SeenStore", "blocks", "key_hashes"]
 
 #: bytes of records parsed at a time [bytes]: 16 MiB, about 180,000 MON records; the parse's working memory is a
 #: few times this, whatever the file's length
@@ -33,7 +37,7 @@ CHUNK_BYTES = 16 << 20
 _READ_BYTES = 4 << 20
 
 
-def _raw_blocks(path: Path, cap: int) -> Iterator[bytes]:
+def _raw_blocks(path: Path, cap: int | None) -> Iterator[bytes]:
     """The file's bytes in pieces, gunzipped (every member; a bomb refused past ``cap`` bytes) if it starts with
     gzip's magic number."""
     with open(path, "rb") as fh:
@@ -42,7 +46,7 @@ def _raw_blocks(path: Path, cap: int) -> Iterator[bytes]:
             data = start + fh.read(CHUNK_BYTES)
             total = len(data)
             while data:
-                if total > cap:
+                if cap is not None and total > cap:
                     raise ValueError(f"{path}: more than {cap / 2**30:g} GiB (bogie.weighings._records.MAX_FILE_BYTES"
                                      "): split the survey into smaller files")  # fmt: skip
                 yield data
@@ -59,7 +63,7 @@ def _raw_blocks(path: Path, cap: int) -> Iterator[bytes]:
                 raise ValueError(f"{path}: starts as a gzip file but does not decompress: {exc}") from None
             pending = engine.unconsumed_tail
             total += len(out)
-            if total > cap:
+            if cap is not None and total > cap:
                 raise ValueError(f"{path}: decompresses to more than {cap / 2**30:g} GiB (bogie.weighings._records."
                                  "MAX_FILE_BYTES): split the survey into smaller files")  # fmt: skip
             if out:
@@ -81,12 +85,12 @@ def _raw_blocks(path: Path, cap: int) -> Iterator[bytes]:
                 pending = more
 
 
-def blocks(path: str | Path, cap: int, chunk_bytes: int = CHUNK_BYTES) -> Iterator[tuple[bytes, int]]:
+def blocks(path: str | Path, cap: int | None, chunk_bytes: int = CHUNK_BYTES) -> Iterator[tuple[bytes, int]]:
     """(block, lines before it): the file's bytes in blocks of about ``chunk_bytes`` ending at a line end (the last
-    at the file's end), the byte order mark dropped; refused past ``cap`` bytes (compressed or not)."""
+    at the file's end), the byte order mark dropped; refused past ``cap`` bytes (compressed or not; None: any)."""
     path = Path(path)
     size = _regular(path).st_size
-    if size > cap:
+    if cap is not None and size > cap:
         raise ValueError(f"{path}: {size / 2**30:.2f} GiB is more than {cap / 2**30:g} GiB (bogie.weighings._records."
                          "MAX_FILE_BYTES): split the survey into smaller files")  # fmt: skip
     carry = b""
@@ -150,54 +154,96 @@ def _fold(words, loads, spacings, n):  # pragma: no cover - compiled
     return out
 
 
-@njit(cache=True)
-def _probe(table, hashes, insert, found):  # pragma: no cover - compiled
-    """Look each hash up in the open-addressing ``table`` (0: empty; a hash of 0 stored as 1) and, where ``insert``,
-    add it; ``found[i]``: the hash was there before. Returns the number added."""
-    mask = np.uint64(table.shape[0] - 1)
-    one = np.uint64(1)
-    added = 0
-    for i in range(hashes.shape[0]):
-        h = hashes[i]
-        if h == 0:
-            h = one
-        j = (h ^ (h >> np.uint64(29))) & mask
-        while True:
-            t = table[np.int64(j)]
-            if t == 0:
-                if insert[i]:
-                    table[np.int64(j)] = h
-                    added += 1
-                break
-            if t == h:
-                found[i] = True
-                break
-            j = (j + one) & mask
-    return added
+#: repeat hashes held in memory at most [-]: 2^22, 32 MiB; the days beyond wait on disk (:class:`SeenStore`)
+SEEN_IN_MEMORY = 1 << 22
 
 
-class SeenSet:
-    """The hashes of the good records read so far: at most 70 % full (linear probing's few probes a lookup),
-    doubled and rehashed when it would be more: 11-23 bytes a record."""
+class SeenStore:
+    """The hashes of the good records read so far, by the day of their time stamp: a repeat has its record's time,
+    so it can only be in its own day's bucket. Each day is a sorted array of distinct hashes; when the days in
+    memory hold more than ``in_memory`` hashes, those least recently used are written to a temporary directory and
+    read back when a record of their day comes again. A file in time order (as WIM systems write them) keeps a day or
+    two in memory whatever its length; a file in random order is as right but reads its days back often. Memory: at
+    most ``in_memory`` hashes and the day in hand (8 bytes a hash); disk: 8 bytes a good record, removed by
+    :meth:`close` (or when the store is collected)."""
 
-    def __init__(self) -> None:
-        self.table = np.zeros(1 << 16, np.uint64)
+    def __init__(self, in_memory: int = SEEN_IN_MEMORY) -> None:
+        self.in_memory = in_memory
+        self.days: dict[int, np.ndarray] = {}  # in the order of their last use, oldest first
+        self.on_disk: set[int] = set()
+        self.held = 0
         self.count = 0
+        self._dir: Path | None = None
+        self._cleanup: weakref.finalize | None = None
 
-    def contains(self, hashes: np.ndarray) -> np.ndarray:
-        """Whether each hash is in the set."""
+    def _path(self, day: int) -> Path:
+        if self._dir is None:
+            self._dir = Path(tempfile.mkdtemp(prefix="bogie-seen-"))
+            self._cleanup = weakref.finalize(self, shutil.rmtree, self._dir, True)
+        return self._dir / f"{day}.npy"
+
+    def _day(self, day: int) -> np.ndarray:
+        """The day's hashes, now the most recently used (read back from disk if they were written there)."""
+        if day in self.days:
+            hashes = self.days.pop(day)
+        elif day in self.on_disk:
+            path = self._path(day)
+            hashes = np.load(path)
+            path.unlink()
+            self.on_disk.discard(day)
+            self.held += len(hashes)
+        else:
+            hashes = np.zeros(0, np.uint64)
+        self.days[day] = hashes
+        return hashes
+
+    def _evict(self, keep: int) -> None:
+        """Write the least recently used days to disk until at most ``in_memory`` hashes are held (``keep`` stays)."""
+        for day in list(self.days):
+            if self.held <= self.in_memory:
+                break
+            if day == keep:
+                continue
+            hashes = self.days.pop(day)
+            np.save(self._path(day), hashes)
+            self.on_disk.add(day)
+            self.held -= len(hashes)
+
+    def _by_day(self, stamps: np.ndarray) -> Iterator[tuple[int, np.ndarray]]:
+        days = np.asarray(stamps, "datetime64[D]").view(np.int64)
+        if not len(days):
+            return
+        if days.min() == days.max():
+            yield int(days[0]), np.arange(len(days))
+            return
+        order = np.argsort(days, kind="stable")
+        bounds = np.flatnonzero(np.diff(days[order])) + 1
+        for rows in np.split(order, bounds):
+            yield int(days[rows[0]]), rows
+
+    def contains(self, stamps: np.ndarray, hashes: np.ndarray) -> np.ndarray:
+        """Whether each hash (of a record of time stamp ``stamps``, numpy datetime64) is in the store."""
         found = np.zeros(len(hashes), bool)
-        _probe(self.table, hashes, np.zeros(len(hashes), bool), found)
+        for day, rows in self._by_day(stamps):
+            known = self._day(day)
+            if len(known):
+                at = np.minimum(np.searchsorted(known, hashes[rows]), len(known) - 1)
+                found[rows] = known[at] == hashes[rows]
+            self._evict(day)
         return found
 
-    def add(self, hashes: np.ndarray) -> None:
-        """Add the hashes (those already in stay once)."""
-        while 10 * (self.count + len(hashes)) > 7 * len(self.table):
-            old = self.table[self.table != 0]
-            self.table = np.zeros(2 * len(self.table), np.uint64)
-            _probe(self.table, old, np.ones(len(old), bool), np.zeros(len(old), bool))
-        self.count += _probe(self.table, hashes, np.ones(len(hashes), bool), np.zeros(len(hashes), bool))
+    def add(self, stamps: np.ndarray, hashes: np.ndarray) -> None:
+        """Add the hashes of records of time stamps ``stamps`` (datetime64; those already in stay once)."""
+        for day, rows in self._by_day(stamps):
+            known = self._day(day)
+            merged = np.union1d(known, hashes[rows])
+            self.days[day] = merged
+            self.held += len(merged) - len(known)
+            self.count += len(merged) - len(known)
+            self._evict(day)
 
-    @property
-    def nbytes(self) -> int:
-        return int(self.table.nbytes)
+    def close(self) -> None:
+        """Remove the days written to disk."""
+        if self._cleanup is not None:
+            self._cleanup()
+        self.days, self.on_disk, self.held = {}, set(), 0

@@ -58,7 +58,7 @@ from bogie.weighings._records import (
     _stray_bytes,
     _timestamps,
 )
-from bogie.weighings._stream import CHUNK_BYTES, SeenSet, blocks, key_hashes
+from bogie.weighings._stream import CHUNK_BYTES, SeenStore, blocks, key_hashes
 from bogie.weighings._tmg import ALIKE, POUND, TMG_LAYOUTS, parse_tmg, split_dummies
 from bogie.weighings.formats import FORMATS, LAYOUTS, FixedWidthLayout
 from bogie.weighings.resolution import (
@@ -351,7 +351,7 @@ def _hashes(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> np.ndarray:
     return key_hashes(columns, parsed["loads"][rows], parsed["spacings"][rows], col["n_axles"][rows])
 
 
-def _alike(parsed: dict, stamps: np.ndarray, seen: SeenSet | None) -> int:
+def _alike(parsed: dict, stamps: np.ndarray, seen: SeenStore | None) -> int:
     """How many good records are alike an earlier one (:func:`_repeat_key`; of an earlier chunk, by
     :func:`_hashes`): counted for a file of hourly time stamps, where two alike trucks in one hour are two
     vehicles."""
@@ -361,12 +361,13 @@ def _alike(parsed: dict, stamps: np.ndarray, seen: SeenSet | None) -> int:
         alike = _repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()
     if seen is not None and len(good):
         hashes = _hashes(parsed, stamps, good)
-        alike = alike | seen.contains(hashes)
-        seen.add(hashes)
+        times = stamps[good]
+        alike = alike | seen.contains(times, hashes)
+        seen.add(times, hashes)
     return int(alike.sum())
 
 
-def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenSet | None = None) -> None:
+def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenStore | None = None) -> None:
     """A good record equal to an earlier good one in time, lane, direction, speed, axle loads and spacings is bad:
     a WIM system does not weigh two vehicles in one lane at one instant (a record repeated by a copy or a retry)."""
     reasons: _Reasons = parsed["reasons"]
@@ -380,8 +381,10 @@ def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenSet | None = None)
             repeat[good[_repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()]] = True
     if seen is not None and len(everyone):  # a repeat of a record of an earlier chunk, by its hash
         hashes = _hashes(parsed, stamps, everyone)
-        repeat[everyone[seen.contains(hashes)]] = True
-        seen.add(hashes[~repeat[everyone]])
+        times = stamps[everyone]
+        repeat[everyone[seen.contains(times, hashes)]] = True
+        fresh = ~repeat[everyone]
+        seen.add(times[fresh], hashes[fresh])
     reasons.flag(repeat, DUPLICATE)
 
 
@@ -397,7 +400,7 @@ def _utf8(data: bytes) -> bytes:
     return data
 
 
-def _parse(data: bytes, fmt: str, path: str, gross_kg: float | None = None, seen: SeenSet | None = None) -> dict:
+def _parse(data: bytes, fmt: str, path: str, gross_kg: float | None = None, seen: SeenStore | None = None) -> dict:
     """Parse every record of ``data`` in ``fmt`` and check it; a ValueError for a CSV header not the layout's.
     ``gross_kg``: the weight step the gross-weight check allows for (None: the one these records support);
     ``seen``: the hashes of the good records of earlier chunks (None: no earlier chunk)."""
@@ -576,7 +579,8 @@ def read_weighings(
     def start() -> None:
         frames.clear()
 
-    result = stream_weighings(path, fmt, resolution_kg, start, frames.append, chunk_bytes)
+    # the whole table is held: a file past MAX_FILE_BYTES is refused (stream it with stream_weighings)
+    result = stream_weighings(path, fmt, resolution_kg, start, frames.append, chunk_bytes, _records.MAX_FILE_BYTES)
     result.vehicles = _concat(frames)
     return result
 
@@ -603,6 +607,7 @@ def stream_weighings(
     start: Callable[[], None],
     consume: Callable[[pd.DataFrame], None],
     chunk_bytes: int = CHUNK_BYTES,
+    max_bytes: int | None = None,
 ) -> ReadResult:
     """Read a file of weighings chunk by chunk (:mod:`bogie.weighings._stream`): ``consume`` gets each chunk's
     vehicle table (the good records, as :func:`read_weighings`' rows, in file order), and the result is
@@ -611,14 +616,16 @@ def stream_weighings(
     The gross-weight check allows for the file's weight resolution, which is known only at the end: the first
     chunk's is used, and if the whole file's differs, the file is read again with it (``start`` is called before
     every pass, so that the consumer begins afresh). The records are then those of a whole-file read, and so are
-    the repeats (of an earlier chunk, by a 64-bit hash of their key). Memory: a few times ``chunk_bytes``, and the
-    hashes of the good records (16 bytes a record), whatever the file's length.
+    the repeats (of an earlier chunk, by a 64-bit hash of their key). Memory: a few times ``chunk_bytes`` and at most
+    :data:`bogie.weighings._stream.SEEN_IN_MEMORY` hashes of the good records (the rest on disk), whatever the file's
+    length; ``max_bytes``: refuse a file of more bytes (None: any length; :func:`read_weighings`, which holds the
+    whole table, refuses one past :data:`bogie.weighings._records.MAX_FILE_BYTES`).
     """
     if fmt != "auto" and fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: auto, {', '.join(FORMATS)}")
     check_resolution_kg(resolution_kg, None)  # its type and range before the file is read; its unit once known
     path = Path(path)
-    first_block = next(blocks(path, _records.MAX_FILE_BYTES, chunk_bytes))[0]
+    first_block = next(blocks(path, max_bytes, chunk_bytes))[0]
     if fmt == "auto":
         head = _head(first_block, SNIFF_LINES)
         if not head.strip():
@@ -629,7 +636,7 @@ def stream_weighings(
     gross_kg = resolution_kg
     while True:
         start()
-        tally = _pass(path, fmt, gross_kg, consume, chunk_bytes, first_block)
+        tally = _pass(path, fmt, gross_kg, consume, chunk_bytes, first_block, max_bytes)
         if tally["records"] == 0:
             found = "a header and no record" if tally["header"] or _head(first_block, 1).strip() else "an empty file"
             if tally["counted"]:
@@ -651,16 +658,18 @@ def stream_weighings(
     return result
 
 
-def _pass(path: Path, fmt: str, gross_kg: float | None, consume, chunk_bytes: int, first_block: bytes) -> dict:
+def _pass(
+    path: Path, fmt: str, gross_kg: float | None, consume, chunk_bytes: int, first_block: bytes, max_bytes: int | None
+) -> dict:
     """One pass over the file's chunks: each parsed, checked and its vehicles consumed; the tallies of the pass."""
-    seen = SeenSet()
+    seen = SeenStore()
     skipped: Counter = Counter()
     bad_lines: dict[str, list[int]] = {}
     counted: Counter = Counter()
     counts: ResidueCounts | None = None
     header = b""
     tally = {"records": 0, "good": 0, "header": False}
-    for k, (block, lines_before) in enumerate(blocks(path, _records.MAX_FILE_BYTES, chunk_bytes)):
+    for k, (block, lines_before) in enumerate(blocks(path, max_bytes, chunk_bytes)):
         data, offset = block, lines_before
         if fmt == "csv":
             if k == 0:
@@ -693,6 +702,7 @@ def _pass(path: Path, fmt: str, gross_kg: float | None, consume, chunk_bytes: in
             counts.merge(parsed["counts"])
         if reasons.ok.any():
             consume(_frame(parsed))
+    seen.close()  # on an exception, when the store is collected
     tally.update(skipped=skipped, bad_lines=bad_lines, counted=dict(counted), counts=counts or ResidueCounts(None))
     tally.setdefault("gross_kg", gross_kg)
     return tally
