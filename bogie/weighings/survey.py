@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie.weighings._spill import SPILLED, GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
 from bogie.weighings.groups import (
     GROUP_SPACING_M,
@@ -47,7 +48,8 @@ class ObservedSurvey:
     Attributes
     ----------
     groups
-        One row per group (:func:`bogie.weighings.groups.axle_groups`), every size, after the filters.
+        One row per group (:func:`bogie.weighings.groups.axle_groups`), every size, after the filters (empty for a
+        survey streamed with ``keep_groups=False``).
     statistics
         :func:`bogie.weighings.stats.survey_statistics` of the tandems and tri-axles, one row each.
     read
@@ -147,9 +149,11 @@ def observed_survey(
         Bytes of records read at a time (:func:`bogie.weighings.readers.stream_weighings`): the file is streamed,
         and the statistics do not depend on it.
     keep_groups
-        True (default): ``groups`` holds every kept group with all its columns. False: only the tandems' and
-        tri-axles' labels, axles and loads, what the statistics need (``n_kept`` still counts every kept group),
-        so that memory follows the surveyed groups, not the whole group table (``bogie weighings``).
+        True (default): ``groups`` holds every kept group with all its columns, in memory. False: ``groups`` is
+        empty (``n_kept`` still counts every kept group); the tandems and tri-axles are written to a temporary
+        directory as they are made (:class:`bogie.weighings._spill.GroupSpill`, 29 bytes a group, removed at the
+        end) and the statistics, road figures and stations computed from there, the same figures, so that memory
+        does not depend on the file's length (``bogie weighings``, the pipeline's observed stage).
     sink
         None, or an object with ``start()`` and ``write(groups)``: given each chunk's kept groups (every size, all
         columns) as they are made, after a ``start()`` before every pass over the file (the pipeline's observed
@@ -161,11 +165,22 @@ def observed_survey(
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
     tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
-    read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes)
-    groups, surveyed = tally.groups(), tally.surveyed()
-    statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
     legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
-    road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
+    try:
+        read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes)
+        if keep_groups:
+            groups, surveyed = tally.groups(), tally.surveyed()
+            statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
+            road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
+            stations = tally.stations(surveyed)
+        else:  # from the groups spilled to disk, in bounded memory
+            groups = pd.DataFrame(columns=list(_COMPACT[:-1]))
+            spill = tally.spill
+            statistics = spilled_statistics(spill) if spill.count else pd.DataFrame(columns=["group"])
+            road = spilled_wear(spill, legal, legal_axle_kg) if spill.count else pd.DataFrame(columns=["group"])
+            stations = tally.spilled_stations()
+    finally:
+        tally.close()
     settings = {
         "file": str(path), "format": read.format, "format_asked": fmt,
         "resolution": read.describe_resolution(),
@@ -180,13 +195,13 @@ def observed_survey(
         },
         "damage_exponents": dict(DAMAGE_EXPONENTS),
     }  # fmt: skip
-    stations = tally.stations(surveyed)
     return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
 
 
 class _Tally:
     """What :func:`observed_survey` keeps of each chunk of vehicles: the position counts, the kept groups (or, with
-    ``keep_groups`` False, only the surveyed sizes' group label, axles and loads, and station), and the stations."""
+    ``keep_groups`` False, the surveyed sizes' axles, loads and station written to a spill on disk), and the
+    stations."""
 
     def __init__(self, min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink) -> None:
         self.filters = (min_group_load_t, position, speed_kmh)
@@ -202,7 +217,15 @@ class _Tally:
         if self.sink is not None:
             self.sink.start()
 
+    def close(self) -> None:
+        """Remove the spilled groups, if any."""
+        if getattr(self, "spill", None) is not None:
+            self.spill.close()
+            self.spill = None
+
     def _reset(self) -> None:
+        self.close()
+        self.spill = None if self.keep_groups else GroupSpill()
         self.positions = {where: dict.fromkeys((*SIZE_LABELS.values(), "other"), 0) for where in POSITIONS[1:]}
         self.kept: list[pd.DataFrame] = []
         self.n_kept = 0
@@ -232,9 +255,10 @@ class _Tally:
             codes = np.array([self.station_names.setdefault(x, len(self.station_names)) for x in names], np.int32)
             line_code = pd.Series(codes, index=vehicles["line"].to_numpy())
             groups = groups.assign(station_code=line_code.reindex(groups["line"].to_numpy()).to_numpy())
-        if not self.keep_groups:
-            groups = _compact(groups)
-        self.kept.append(groups.reset_index(drop=True))
+        if self.keep_groups:
+            self.kept.append(groups.reset_index(drop=True))
+        else:
+            _spill(self.spill, groups)
 
     def _all(self) -> pd.DataFrame:
         if not self.kept:
@@ -268,27 +292,32 @@ class _Tally:
             }
         return out
 
+    def spilled_stations(self) -> dict[str, dict[str, Any]]:
+        """:meth:`stations` from the spilled groups."""
+        if len(self.station_names) < 2:
+            return {}
+        table = spilled_statistics(self.spill, by_station=True) if self.spill.count else pd.DataFrame()
+        out: dict[str, dict[str, Any]] = {}
+        for name in sorted(self.station_names):
+            mine = table[table["station_code"] == self.station_names[name]] if len(table) else table
+            stats = statistics_dict(mine.drop(columns="station_code")) if len(mine) else {}
+            out[str(name)] = {
+                "vehicles": int(self.vehicles_at[name]),
+                "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
+            }
+        return out
 
-assert SURVEYED == (SIZES[2], SIZES[3])  # _compact's codes: the axles less two
 
-#: the columns of a surveyed group kept when the groups are not (``keep_groups=False``): what the statistics need
+assert SURVEYED == (SIZES[2], SIZES[3]) == SPILLED  # the spill's codes: the axles less two
+
+#: the columns of a surveyed group the spill keeps when the groups are not (``keep_groups=False``)
 _COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")
 
 
-def _compact(groups: pd.DataFrame) -> pd.DataFrame:
-    """The tandems and tri-axles of ``groups`` in the fewest bytes that hold them exactly: the label as a category,
-    the axles as int8, each load as float32 where every value of the chunk is one exactly (whole kilograms are;
-    loads converted from pounds are not, and stay float64): 17 bytes a tri-axle instead of about 200."""
+def _spill(spill: GroupSpill, groups: pd.DataFrame) -> None:
+    """Write the tandems and tri-axles of a chunk's kept ``groups`` to the spill: axles, station code, three loads."""
     axles = groups["n_axles"].to_numpy()
-    # the surveyed sizes by their axles, as axle_groups labels them (SIZES: 2 tandem, 3 triaxle)
-    surveyed = groups.loc[(axles == 2) | (axles == 3), [c for c in _COMPACT if c in groups]]
-    n = surveyed["n_axles"].to_numpy().astype(np.int8)
-    out = {"group": pd.Categorical.from_codes(n - 2, categories=list(SURVEYED)), "n_axles": n}
-    for c in ("axle_load_1", "axle_load_2", "axle_load_3"):
-        values = surveyed[c].to_numpy(dtype=float)
-        narrow = values.astype(np.float32)
-        same = (narrow.astype(float) == values) | np.isnan(values)
-        out[c] = narrow if same.all() else values
-    if "station_code" in surveyed:
-        out["station_code"] = surveyed["station_code"].to_numpy()
-    return pd.DataFrame(out, copy=False)
+    surveyed = (axles == 2) | (axles == 3)
+    loads = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in _COMPACT[2:5]])
+    station = groups["station_code"].to_numpy()[surveyed] if "station_code" in groups else None
+    spill.append(axles[surveyed], station, loads)

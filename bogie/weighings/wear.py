@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Mapping, Sequence
+from collections.abc import Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -227,7 +227,6 @@ def wear_statistics(
         loads = np.nan_to_num(np.column_stack([c[rows] for c in columns]).astype(float), nan=0.0) / unit_per_kg
         return loads, n_all[rows].astype(np.int64), legal_all[rows]
 
-    alpha = (1.0 - confidence) / 2.0
     root = np.random.SeedSequence(seed)
     rows = []
     cells = groups.groupby(keys, observed=True, sort=True).indices
@@ -238,52 +237,59 @@ def wear_statistics(
         row: dict = dict(zip(keys, cell))
         row["n_groups"] = len(index)
         row["n_failed"] = int(len(rows_all) - len(index))
-        m = len(index)
-        if resamples and m > bootstrap_max_groups:
-            row.update(_large_cell(index, cell_arrays, exponents, legal_axle, confidence))
-            rows.append(row)
-            continue
-        loads, n, legal = cell_arrays(index)
-        rng = np.random.default_rng(stream)
-        cell_wear = {}
-        for name, k in exponents.items():
-            wear = (
-                group_wear(loads, n, float(k), STANDARD_AXLE_KG)
-                if m
-                else {"damage": np.zeros(0), "damage_equal": np.zeros(0)}
-            )
-            cell_wear[name] = (wear["damage"], wear["damage_equal"])
-        boot = {name: ([], []) for name in exponents} if resamples and m else None
-        if boot is not None:
-            # drawn in blocks of rows (each row one resample), at most BOOTSTRAP_BLOCK indices at a time: the same
-            # draws as one (resamples, m) call, in the same order, so the same bits, in bounded memory
-            rows_per_block = max(1, BOOTSTRAP_BLOCK // m)
-            for start in range(0, resamples, rows_per_block):
-                draws = rng.integers(0, m, (min(rows_per_block, resamples - start), m))
-                for name in exponents:
-                    d, e = cell_wear[name]
-                    boot[name][0].append(d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0)
-                    boot[name][1].append(1000.0 * (d - e)[draws].mean(axis=1))
-        for name in exponents:
-            d, e = cell_wear[name]
-            share = d.sum() / e.sum() - 1.0 if m and e.sum() > 0 else math.nan
-            per_1000 = 1000.0 * float(np.mean(d - e)) if m else math.nan
-            row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
-            if boot is not None:
-                shares, extra = np.concatenate(boot[name][0]), np.concatenate(boot[name][1])
-                row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = np.quantile(shares, [alpha, 1 - alpha])
-                row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = np.quantile(
-                    extra, [alpha, 1 - alpha]
-                )
-            else:
-                for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
-                    row[f"{col}_low"] = row[f"{col}_high"] = math.nan
-        known = np.isfinite(legal)
-        over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
-        row.update(_overload_figures(int(over["hidden"].sum()), int(over["group_over"].sum()), int(known.sum()),
-                                     confidence))  # fmt: skip
+        if resamples and len(index) > bootstrap_max_groups:
+            blocks = (cell_arrays(index[start : start + WEAR_BLOCK]) for start in range(0, len(index), WEAR_BLOCK))
+            row.update(_large_cell(blocks, exponents, legal_axle, confidence))
+        else:
+            row.update(_small_cell(*cell_arrays(index), stream, exponents, legal_axle, resamples, confidence))
         rows.append(row)
     return pd.DataFrame(rows)
+
+
+def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.SeedSequence,
+                exponents: Mapping[str, float], legal_axle: float, resamples: int,
+                confidence: float) -> dict[str, float]:  # fmt: skip
+    """The figures of a cell of :data:`BOOTSTRAP_MAX_GROUPS` groups or fewer (or of any size without resamples):
+    the extra wear with its percentile bootstrap intervals (drawn from ``stream``), and the hidden overloads."""
+    m = len(n)
+    alpha = (1.0 - confidence) / 2.0
+    row: dict = {}
+    rng = np.random.default_rng(stream)
+    cell_wear = {}
+    for name, k in exponents.items():
+        none = {"damage": np.zeros(0), "damage_equal": np.zeros(0)}
+        wear = group_wear(loads, n, float(k), STANDARD_AXLE_KG) if m else none
+        cell_wear[name] = (wear["damage"], wear["damage_equal"])
+    boot = {name: ([], []) for name in exponents} if resamples and m else None
+    if boot is not None:
+        # drawn in blocks of rows (each row one resample), at most BOOTSTRAP_BLOCK indices at a time: the same
+        # draws as one (resamples, m) call, in the same order, so the same bits, in bounded memory
+        rows_per_block = max(1, BOOTSTRAP_BLOCK // m)
+        for start in range(0, resamples, rows_per_block):
+            draws = rng.integers(0, m, (min(rows_per_block, resamples - start), m))
+            for name in exponents:
+                d, e = cell_wear[name]
+                boot[name][0].append(d[draws].sum(axis=1) / e[draws].sum(axis=1) - 1.0)
+                boot[name][1].append(1000.0 * (d - e)[draws].mean(axis=1))
+    for name in exponents:
+        d, e = cell_wear[name]
+        share = d.sum() / e.sum() - 1.0 if m and e.sum() > 0 else math.nan
+        per_1000 = 1000.0 * float(np.mean(d - e)) if m else math.nan
+        row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
+        if boot is not None:
+            shares, extra = np.concatenate(boot[name][0]), np.concatenate(boot[name][1])
+            row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = np.quantile(shares, [alpha, 1 - alpha])
+            row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = np.quantile(
+                extra, [alpha, 1 - alpha]
+            )
+        else:
+            for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
+                row[f"{col}_low"] = row[f"{col}_high"] = math.nan
+    known = np.isfinite(legal)
+    over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
+    row.update(_overload_figures(int(over["hidden"].sum()), int(over["group_over"].sum()), int(known.sum()),
+                                 confidence))  # fmt: skip
+    return row
 
 
 def _overload_figures(hidden: int, group_over: int, judged: int, confidence: float) -> dict[str, float]:
@@ -329,9 +335,10 @@ def _wear_moments(loads, n, exponents, standard_axle, moments):  # pragma: no co
 WEAR_BLOCK = 1 << 18
 
 
-def _large_cell(index: NDArray, cell_arrays, exponents: Mapping[str, float], legal_axle: float,
-                confidence: float) -> dict[str, float]:  # fmt: skip
-    """The figures of a cell of more than :data:`BOOTSTRAP_MAX_GROUPS` groups, block by block in bounded memory:
+def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: Mapping[str, float],
+                legal_axle: float, confidence: float) -> dict[str, float]:  # fmt: skip
+    """The figures of a cell of more than :data:`BOOTSTRAP_MAX_GROUPS` groups, from its ``blocks`` of (loads [kg],
+    axles, legal group load [kg]) in order, in bounded memory:
     the extra wear R = sum D / sum E - 1 and 1000 mean(D - E), with the delta method's normal intervals
     (docs/pavement.md, "Intervals": R's linearisation is (1 / (m mean E)) sum (D_i - (R + 1) E_i), so its standard
     error is sd(D - (R + 1) E) / (sqrt(m) mean E), Cochran, Sampling Techniques, 3rd ed. 1977, section 6.3, the
@@ -341,8 +348,7 @@ def _large_cell(index: NDArray, cell_arrays, exponents: Mapping[str, float], leg
     ks = np.array([float(exponents[name]) for name in names])
     moments = np.zeros((len(names), 6))
     hidden = group_over = judged = 0
-    for start in range(0, len(index), WEAR_BLOCK):
-        loads, n, legal = cell_arrays(index[start : start + WEAR_BLOCK])
+    for loads, n, legal in blocks:
         _wear_moments(np.ascontiguousarray(loads), n, ks, STANDARD_AXLE_KG, moments)
         known = np.isfinite(legal)
         over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)

@@ -1,0 +1,295 @@
+"""The surveyed groups of a streamed survey on disk, and their statistics from there in bounded memory (issue 41
+Must 4: memory independent of the file's length).
+
+- **The spill.** :class:`GroupSpill` appends each chunk's kept tandems and tri-axles (the size as a code, the
+  station's code, the three loads, NaN past a tandem's two) to files in a temporary directory, 29 bytes a group, and
+  reads them back in blocks of :data:`SPILL_BLOCK` groups, in file order.
+- **The statistics.** :func:`spilled_statistics` is :func:`bogie.weighings.stats.survey_statistics` of the spilled
+  groups per cell (a size, or a station's size), from passes over the spill: counts and sums in the first; each
+  median and quantile from exact order statistics, found by refining a histogram of the values around the rank
+  wanted (:func:`_order_statistics`) until the value is known, then interpolated as pandas and numpy do
+  (:func:`_quantile`). Counts, shares, medians and quantiles are the table's to the bit; the mean spread, a sum of
+  block sums, to about 1e-12 relative (``tests/test_weighings_spill.py``).
+"""
+
+from __future__ import annotations
+
+import math
+import shutil
+import tempfile
+import weakref
+from collections.abc import Iterator, Mapping, Sequence
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+from numba import njit
+
+from bogie.weighings.stats import QUANTILES, group_inequality
+from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _large_cell, _small_cell
+
+__all__ = ["SPILL_BLOCK", "GroupSpill", "spilled_statistics", "spilled_wear"]
+
+#: groups read back from the spill at a time [-]: 2^18, about 60 MB of working arrays a block
+SPILL_BLOCK = 1 << 18
+#: the most histogram bins of all ranks sought at once [-]: 2^21 (48 MiB of counts, least and greatest values)
+_BINS_TOTAL = 1 << 21
+#: the sizes spilled, by their code (the axles less two)
+SPILLED = ("tandem", "triaxle")
+_COLUMNS = {"size": np.int8, "station": np.int32, "loads": np.float64}
+
+
+class GroupSpill:
+    """The surveyed groups written to a temporary directory as they are made, read back in blocks; the directory is
+    removed by :meth:`close` (or when the spill is collected)."""
+
+    def __init__(self) -> None:
+        self.dir = Path(tempfile.mkdtemp(prefix="bogie-groups-"))
+        self._cleanup = weakref.finalize(self, shutil.rmtree, self.dir, True)
+        self._files = {name: open(self.dir / name, "wb") for name in _COLUMNS}  # noqa: SIM115 - closed in close()
+        self.count = 0
+        self.stations = 0
+
+    def append(self, n_axles: np.ndarray, station: np.ndarray | None, loads: np.ndarray) -> None:
+        """Add groups of 2 or 3 axles: their axles, station codes (None: no station) and loads, shape (m, 3), in
+        file order."""
+        m = len(n_axles)
+        station = np.zeros(m, np.int32) if station is None else np.asarray(station, np.int32)
+        if m:
+            self.stations = max(self.stations, int(station.max()) + 1)
+        (np.asarray(n_axles) - 2).astype(np.int8).tofile(self._files["size"])
+        station.tofile(self._files["station"])
+        np.ascontiguousarray(loads, np.float64).tofile(self._files["loads"])
+        self.count += m
+
+    def blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(size code, station code, loads (m, 3)) of :data:`SPILL_BLOCK` groups at a time, in file order."""
+        for fh in self._files.values():
+            fh.flush()
+        handles = {name: open(self.dir / name, "rb") for name in _COLUMNS}  # noqa: SIM115 - closed below
+        try:
+            for _start in range(0, self.count, SPILL_BLOCK):
+                size = np.fromfile(handles["size"], np.int8, SPILL_BLOCK)
+                station = np.fromfile(handles["station"], np.int32, len(size))
+                loads = np.fromfile(handles["loads"], np.float64, 3 * len(size)).reshape(-1, 3)
+                yield size, station, loads
+        finally:
+            for fh in handles.values():
+                fh.close()
+
+    def close(self) -> None:
+        for fh in self._files.values():
+            fh.close()
+        self._cleanup()
+
+
+def _values(loads: np.ndarray, size: np.ndarray) -> tuple[dict, np.ndarray]:
+    """The inequality of a block and its values whose order statistics are sought: the spread [%] and the three
+    load shares (NaN past a group's axles), shape (m, 4)."""
+    ineq = group_inequality(loads, size.astype(np.int64) + 2)
+    return ineq, np.column_stack([ineq["spread_pct"], ineq["load_share"]])
+
+
+def spilled_statistics(
+    spill: GroupSpill, by_station: bool = False, quantiles: Sequence[float] = QUANTILES
+) -> pd.DataFrame:
+    """:func:`bogie.weighings.stats.survey_statistics` of the spilled groups by ``group`` (and ``station_code``
+    first, if ``by_station``): the same columns, one row per cell that has groups, sorted."""
+    n_cells = 2 * max(spill.stations, 1) if by_station else 2
+    count = np.zeros(n_cells, np.int64)
+    spread_sum = np.zeros(n_cells)
+    outside = np.zeros(n_cells, np.int64)
+    over = np.zeros(n_cells, np.int64)
+    valid = np.zeros((n_cells, 4), np.int64)
+    low = np.full((n_cells, 4), np.inf)
+    high = np.full((n_cells, 4), -np.inf)
+    for size, station, loads in spill.blocks():
+        cell = _cells(size, station, by_station)
+        ineq, values = _values(loads, size)
+        count += np.bincount(cell, minlength=n_cells)
+        spread_sum += np.bincount(cell, weights=ineq["spread"], minlength=n_cells)
+        outside += np.bincount(cell, weights=ineq["outside_5pct"], minlength=n_cells).astype(np.int64)
+        over += np.bincount(cell, weights=ineq["over_10pct"], minlength=n_cells).astype(np.int64)
+        _ranges(cell, values, valid, low, high)
+    # the ranks each value needs: the median's of the spread, the quantiles' of each share (numpy's 'linear')
+    wanted: dict[tuple[int, int], set[int]] = {}
+    for c, q in zip(*np.nonzero(valid)):
+        n = int(valid[c, q])
+        if q == 0:
+            ranks = {(n - 1) // 2, n // 2}
+        else:
+            ranks = set()
+            for p in quantiles:
+                j = _virtual_index(n, p)
+                ranks |= {n - 1} if j >= n - 1 else {math.floor(j), math.floor(j) + 1}
+        wanted[(int(c), int(q))] = ranks
+    found = _order_statistics(spill, by_station, n_cells, wanted, valid, low, high)
+    rows = []
+    for c in np.flatnonzero(count):
+        row = {**({"station_code": int(c // 2)} if by_station else {}), "group": SPILLED[c % 2]}
+        n_spread = int(valid[c, 0])
+        middle = (found[(c, 0, (n_spread - 1) // 2)] + found[(c, 0, n_spread // 2)]) / 2.0 if n_spread else math.nan
+        row.update(n_groups=int(count[c]), mean_spread_kg=spread_sum[c] / count[c], median_spread_pct=middle,
+                   share_outside_5pct=outside[c] / count[c], share_over_10pct=over[c] / count[c])  # fmt: skip
+        for i in range(3):
+            n = int(valid[c, i + 1])
+            for p in quantiles:
+                value = _quantile(n, p, lambda r, c=c, i=i: found[(c, i + 1, r)]) if n else math.nan
+                row[f"load_share_{i + 1}_p{round(100 * p):02d}"] = value
+        rows.append(row)
+    return pd.DataFrame(rows)
+
+
+def _cells(size: np.ndarray, station: np.ndarray, by_station: bool) -> np.ndarray:
+    return (2 * station.astype(np.int64) + size) if by_station else size.astype(np.int64)
+
+
+def _virtual_index(n: int, p: float) -> float:
+    """numpy's 'linear' virtual index of quantile ``p`` of ``n`` values (``numpy.quantile``, which pandas'
+    ``Series.quantile`` calls)."""
+    return (n - 1) * p
+
+
+def _quantile(n: int, p: float, value) -> float:
+    """Quantile ``p`` of ``n`` values whose order statistic of rank r is ``value(r)``: numpy's 'linear' method,
+    its arithmetic (``numpy.lib._function_base_impl._lerp``), as pandas' ``Series.quantile`` calls it."""
+    h = _virtual_index(n, p)
+    if h >= n - 1:
+        return value(n - 1)
+    j = math.floor(h)
+    a, b = value(j), value(j + 1)
+    t = h - j
+    diff = b - a
+    return b - diff * (1 - t) if t >= 0.5 else a + diff * t
+
+
+@njit(cache=True)
+def _ranges(cell, values, valid, low, high):  # pragma: no cover - compiled
+    """Count each cell's non-NaN values of each quantity and their least and greatest."""
+    for g in range(values.shape[0]):
+        c = cell[g]
+        for q in range(values.shape[1]):
+            v = values[g, q]
+            if v == v:
+                valid[c, q] += 1
+                if v < low[c, q]:
+                    low[c, q] = v
+                if v > high[c, q]:
+                    high[c, q] = v
+
+
+@njit(cache=True)
+def _histogram(cell, values, first, last, t_lo, t_hi, below, hist, bin_low, bin_high):  # pragma: no cover
+    """For each value and each rank sought of its cell and quantity (targets first[c, q] .. last[c, q] - 1): count it
+    below the target's interval, or in its bin of the interval, keeping each bin's least and greatest value."""
+    bins = hist.shape[1]
+    for g in range(values.shape[0]):
+        c = cell[g]
+        for q in range(values.shape[1]):
+            v = values[g, q]
+            if v != v:
+                continue
+            for t in range(first[c, q], last[c, q]):
+                if v < t_lo[t]:
+                    below[t] += 1
+                elif v <= t_hi[t]:
+                    b = int((v - t_lo[t]) / (t_hi[t] - t_lo[t]) * bins)
+                    if b >= bins:
+                        b = bins - 1
+                    hist[t, b] += 1
+                    if v < bin_low[t, b]:
+                        bin_low[t, b] = v
+                    if v > bin_high[t, b]:
+                        bin_high[t, b] = v
+
+
+def _order_statistics(spill, by_station, n_cells, wanted, valid, low, high) -> dict[tuple[int, int, int], float]:
+    """The value of each rank sought, {(cell, quantity, rank): value}, exactly: each rank's interval starts as the
+    values' range and is narrowed, pass by pass, to the bin of a histogram that holds the rank, its ends the bin's
+    own least and greatest values; the value is known when the rank is a bin's first or last, or the bin holds one
+    value. The binning is monotone in the value, so the values within a bin's ends are that bin's, and each pass
+    narrows the interval strictly: it ends."""
+    found: dict[tuple[int, int, int], float] = {}
+    active: list[list] = []  # [cell, quantity, rank, lo, hi]
+    for (c, q), ranks in wanted.items():
+        n = int(valid[c, q])
+        for r in sorted(ranks):
+            if r == 0 or low[c, q] == high[c, q]:
+                found[(c, q, r)] = float(low[c, q])
+            elif r == n - 1:
+                found[(c, q, r)] = float(high[c, q])
+            else:
+                active.append([c, q, r, float(low[c, q]), float(high[c, q])])
+    while active:
+        active.sort(key=lambda a: (a[0], a[1]))
+        k = len(active)
+        bins = max(16, min(4096, _BINS_TOTAL // k))
+        first = np.zeros((n_cells, 4), np.int64)
+        last = np.zeros((n_cells, 4), np.int64)
+        for t, (c, q, *_rest) in enumerate(active):
+            if last[c, q] == 0:
+                first[c, q] = t
+            last[c, q] = t + 1
+        t_lo = np.array([a[3] for a in active])
+        t_hi = np.array([a[4] for a in active])
+        below = np.zeros(k, np.int64)
+        hist = np.zeros((k, bins), np.int64)
+        bin_low = np.full((k, bins), np.inf)
+        bin_high = np.full((k, bins), -np.inf)
+        for size, station, loads in spill.blocks():
+            _, values = _values(loads, size)
+            _histogram(_cells(size, station, by_station), values, first, last, t_lo, t_hi, below, hist, bin_low,
+                       bin_high)  # fmt: skip
+        still = []
+        for t, (c, q, r, _lo, _hi) in enumerate(active):
+            cum = np.cumsum(hist[t])
+            b = int(np.searchsorted(cum, r - below[t], side="right"))
+            before = int(cum[b - 1]) if b else 0
+            at = r - below[t] - before  # the rank within bin b
+            if at == 0 or bin_low[t, b] == bin_high[t, b]:
+                found[(c, q, r)] = float(bin_low[t, b])
+            elif at == hist[t, b] - 1:
+                found[(c, q, r)] = float(bin_high[t, b])
+            else:
+                still.append([c, q, r, float(bin_low[t, b]), float(bin_high[t, b])])
+        active = still
+    return found
+
+
+def spilled_wear(
+    spill: GroupSpill,
+    legal_group: Mapping[str, float],
+    legal_axle: float,
+    exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
+    resamples: int = 1000,
+    confidence: float = 0.95,
+    seed: int = 0,
+    bootstrap_max_groups: int = BOOTSTRAP_MAX_GROUPS,
+) -> pd.DataFrame:
+    """:func:`bogie.weighings.wear.wear_statistics` of the spilled groups by ``group``, the same figures to the bit:
+    a size of at most ``bootstrap_max_groups`` groups gathered and bootstrapped, a larger one's moments summed block
+    by block in file order, the order of the table's way."""
+    count = np.zeros(2, np.int64)
+    for size, _station, _loads in spill.blocks():
+        count += np.bincount(size, minlength=2)
+    present = [c for c in range(2) if count[c]]
+    rows = []
+    for c, stream in zip(present, np.random.SeedSequence(seed).spawn(len(present))):
+        legal = float(legal_group.get(SPILLED[c], math.nan))
+
+        def blocks(c=c, legal=legal) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+            for size, _station, loads in spill.blocks():
+                mine = size == c
+                if mine.any():
+                    m = int(mine.sum())
+                    yield np.nan_to_num(loads[mine], nan=0.0), np.full(m, c + 2, np.int64), np.full(m, legal)
+
+        row: dict = {"group": SPILLED[c], "n_groups": int(count[c]), "n_failed": 0}
+        if resamples and count[c] > bootstrap_max_groups:
+            row.update(_large_cell(blocks(), exponents, legal_axle, confidence))
+        else:
+            parts = list(zip(*blocks()))
+            loads, n, legal_of = (np.concatenate(p) for p in parts)
+            row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence))
+        rows.append(row)
+    return pd.DataFrame(rows)
