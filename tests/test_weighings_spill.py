@@ -100,3 +100,15 @@ def test_the_interpolation_is_pandas_to_the_bit():
         p = float(rng.choice([rng.random(), 0.05, 0.25, 0.5, 0.75, 0.95, 0.0, 1.0]))
         ordered = np.sort(x)
         assert _spill._quantile(len(x), p, lambda r, o=ordered: float(o[r])) == pd.Series(x).quantile(p)
+
+
+def test_values_outside_the_quantities_bounds_are_still_found(monkeypatch):
+    # a negative load (no reader passes one) puts a share above 3 and a spread above 300 %: outside the first
+    # histograms' bounds, so those ranks start from the values' range
+    table = groups(400, seed=5, step=1.0)
+    table.loc[table.index[:150], "axle_load_1"] = -4000.0
+    monkeypatch.setattr(_spill, "_BINS_TOTAL", 64)
+    spill = spilled(table)
+    got = spilled_statistics(spill)
+    spill.close()
+    same_statistics(got, survey_statistics(table.drop(columns="station_code"), by="group"))

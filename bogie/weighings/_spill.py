@@ -49,6 +49,7 @@ class GroupSpill:
         self._files = {name: open(self.dir / name, "wb") for name in _COLUMNS}  # noqa: SIM115 - closed in close()
         self.count = 0
         self.stations = 0
+        self.sizes = np.zeros(2, np.int64)  # the tandems and tri-axles spilled
 
     def append(self, n_axles: np.ndarray, station: np.ndarray | None, loads: np.ndarray) -> None:
         """Add groups of 2 or 3 axles: their axles, station codes (None: no station) and loads, shape (m, 3), in
@@ -61,6 +62,7 @@ class GroupSpill:
         station.tofile(self._files["station"])
         np.ascontiguousarray(loads, np.float64).tofile(self._files["loads"])
         self.count += m
+        self.sizes += np.bincount(np.asarray(n_axles, np.int64) - 2, minlength=2)[:2]
 
     def blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, loads (m, 3)) of :data:`SPILL_BLOCK` groups at a time, in file order."""
@@ -103,6 +105,8 @@ def spilled_statistics(
     valid = np.zeros((n_cells, 4), np.int64)
     low = np.full((n_cells, 4), np.inf)
     high = np.full((n_cells, 4), -np.inf)
+    # the first histograms in the same pass, over each quantity's bounds: a spread is at most n x 100 %, a share n
+    first = _Level([(c, q, 0.0, _BOUNDS[q]) for c in range(n_cells) for q in range(4)], n_cells)
     for size, station, loads in spill.blocks():
         cell = _cells(size, station, by_station)
         ineq, values = _values(loads, size)
@@ -111,6 +115,7 @@ def spilled_statistics(
         outside += np.bincount(cell, weights=ineq["outside_5pct"], minlength=n_cells).astype(np.int64)
         over += np.bincount(cell, weights=ineq["over_10pct"], minlength=n_cells).astype(np.int64)
         _ranges(cell, values, valid, low, high)
+        first.add(cell, values)
     # the ranks each value needs: the median's of the spread, the quantiles' of each share (numpy's 'linear')
     wanted: dict[tuple[int, int], set[int]] = {}
     for c, q in zip(*np.nonzero(valid)):
@@ -123,7 +128,7 @@ def spilled_statistics(
                 j = _virtual_index(n, p)
                 ranks |= {n - 1} if j >= n - 1 else {math.floor(j), math.floor(j) + 1}
         wanted[(int(c), int(q))] = ranks
-    found = _order_statistics(spill, by_station, n_cells, wanted, valid, low, high)
+    found = _order_statistics(spill, by_station, n_cells, wanted, valid, low, high, first)
     rows = []
     for c in np.flatnonzero(count):
         row = {**({"station_code": int(c // 2)} if by_station else {}), "group": SPILLED[c % 2]}
@@ -179,80 +184,120 @@ def _ranges(cell, values, valid, low, high):  # pragma: no cover - compiled
 
 
 @njit(cache=True)
-def _histogram(cell, values, first, last, t_lo, t_hi, below, hist, bin_low, bin_high):  # pragma: no cover
-    """For each value and each rank sought of its cell and quantity (targets first[c, q] .. last[c, q] - 1): count it
-    below the target's interval, or in its bin of the interval, keeping each bin's least and greatest value."""
+def _histogram(cell, values, first, last, s_lo, s_hi, marks, hist, bin_low, bin_high):  # pragma: no cover
+    """For each value: among its cell's and quantity's intervals (slots first[c, q] .. last[c, q] - 1, disjoint,
+    sorted by their least value), mark the first slot above it (every slot from there on has it below), and count
+    it in its bin of the slot that holds it, keeping each bin's least and greatest value."""
     bins = hist.shape[1]
     for g in range(values.shape[0]):
         c = cell[g]
         for q in range(values.shape[1]):
             v = values[g, q]
-            if v != v:
+            a = first[c, q]
+            b = last[c, q]
+            if v != v or a == b:
                 continue
-            for t in range(first[c, q], last[c, q]):
-                if v < t_lo[t]:
-                    below[t] += 1
-                elif v <= t_hi[t]:
-                    b = int((v - t_lo[t]) / (t_hi[t] - t_lo[t]) * bins)
-                    if b >= bins:
-                        b = bins - 1
-                    hist[t, b] += 1
-                    if v < bin_low[t, b]:
-                        bin_low[t, b] = v
-                    if v > bin_high[t, b]:
-                        bin_high[t, b] = v
+            lo, hi = a, b  # the first slot whose least value is above v
+            while lo < hi:
+                mid = (lo + hi) >> 1
+                if s_lo[mid] <= v:
+                    lo = mid + 1
+                else:
+                    hi = mid
+            if lo < b:
+                marks[lo] += 1
+            k = lo - 1
+            if k >= a and v <= s_hi[k]:
+                j = int((v - s_lo[k]) / (s_hi[k] - s_lo[k]) * bins)
+                if j >= bins:
+                    j = bins - 1
+                hist[k, j] += 1
+                if v < bin_low[k, j]:
+                    bin_low[k, j] = v
+                if v > bin_high[k, j]:
+                    bin_high[k, j] = v
 
 
-def _order_statistics(spill, by_station, n_cells, wanted, valid, low, high) -> dict[tuple[int, int, int], float]:
-    """The value of each rank sought, {(cell, quantity, rank): value}, exactly: each rank's interval starts as the
-    values' range and is narrowed, pass by pass, to the bin of a histogram that holds the rank, its ends the bin's
-    own least and greatest values; the value is known when the rank is a bin's first or last, or the bin holds one
-    value. The binning is monotone in the value, so the values within a bin's ends are that bin's, and each pass
-    narrows the interval strictly: it ends."""
+#: the bounds of the quantities whose order statistics are sought: the spread [%] of n <= 3 axles is at most
+#: n x 100 % of their mean, a share n W / sum W at most n
+_BOUNDS = (300.0, 3.0, 3.0, 3.0)
+
+
+class _Level:
+    """One pass's histograms: a slot for each distinct interval of a cell and quantity (disjoint, sorted by their
+    least value), :func:`_histogram`'s arrays, and the narrowing of the ranks sought from them."""
+
+    def __init__(self, slots: list[tuple[int, int, float, float]], n_cells: int) -> None:
+        self.slots = sorted(set(slots))
+        self.index = {key: k for k, key in enumerate(self.slots)}
+        k = len(self.slots)
+        bins = max(16, min(1 << 18, _BINS_TOTAL // max(k, 1)))
+        self.first = np.zeros((n_cells, 4), np.int64)
+        self.last = np.zeros((n_cells, 4), np.int64)
+        for j, (c, q, _lo, _hi) in enumerate(self.slots):
+            if self.last[c, q] == 0:
+                self.first[c, q] = j
+            self.last[c, q] = j + 1
+        self.lo = np.array([key[2] for key in self.slots])
+        self.hi = np.array([key[3] for key in self.slots])
+        self.marks = np.zeros(k, np.int64)
+        self.hist = np.zeros((k, bins), np.int64)
+        self.bin_low = np.full((k, bins), np.inf)
+        self.bin_high = np.full((k, bins), -np.inf)
+
+    def add(self, cell: np.ndarray, values: np.ndarray) -> None:
+        _histogram(cell, values, self.first, self.last, self.lo, self.hi, self.marks, self.hist, self.bin_low,
+                   self.bin_high)  # fmt: skip
+
+    def narrow(self, active: list, found: dict) -> list:
+        """Each rank's value if its bin tells it (into ``found``); the others with their bin's ends."""
+        below = np.zeros(len(self.slots), np.int64)  # the values below each slot: its own and earlier slots' marks
+        for j, (c, q, _lo, _hi) in enumerate(self.slots):
+            below[j] = self.marks[j] + (below[j - 1] if j > self.first[c, q] else 0)
+        still = []
+        for c, q, r, lo, hi in active:
+            j = self.index[(c, q, lo, hi)]
+            cum = np.cumsum(self.hist[j])
+            b = int(np.searchsorted(cum, r - below[j], side="right"))
+            at = r - below[j] - (int(cum[b - 1]) if b else 0)  # the rank within bin b
+            if at == 0 or self.bin_low[j, b] == self.bin_high[j, b]:
+                found[(c, q, r)] = float(self.bin_low[j, b])
+            elif at == self.hist[j, b] - 1:
+                found[(c, q, r)] = float(self.bin_high[j, b])
+            else:
+                still.append((c, q, r, float(self.bin_low[j, b]), float(self.bin_high[j, b])))
+        return still
+
+
+def _order_statistics(spill, by_station, n_cells, wanted, valid, low, high, level) -> dict[tuple[int, int, int], float]:
+    """The value of each rank sought, {(cell, quantity, rank): value}, exactly: each rank's interval starts as its
+    quantity's bounds (``level``, the histograms of the first pass; the values' range if some value is outside
+    them) and is narrowed, pass by pass, to the bin of a histogram that holds the rank, its ends the bin's own least
+    and greatest values; the value is known when the rank is a bin's first or last, or the bin holds one value. The
+    binning is monotone in the value, so the values within a bin's ends are that bin's and each pass narrows an
+    interval strictly: it ends. The ranks of one cell and quantity narrow in step, so their intervals are the same
+    or disjoint: each distinct one is a slot with one histogram, the ranks in it share it."""
     found: dict[tuple[int, int, int], float] = {}
-    active: list[list] = []  # [cell, quantity, rank, lo, hi]
+    active: list[tuple[int, int, int, float, float]] = []  # cell, quantity, rank, lo, hi
+    later: list[tuple[int, int, int, float, float]] = []  # those whose values stray outside the bounds
     for (c, q), ranks in wanted.items():
         n = int(valid[c, q])
+        inside = low[c, q] >= 0.0 and high[c, q] <= _BOUNDS[q]
         for r in sorted(ranks):
             if r == 0 or low[c, q] == high[c, q]:
                 found[(c, q, r)] = float(low[c, q])
             elif r == n - 1:
                 found[(c, q, r)] = float(high[c, q])
+            elif inside:
+                active.append((c, q, r, 0.0, _BOUNDS[q]))
             else:
-                active.append([c, q, r, float(low[c, q]), float(high[c, q])])
+                later.append((c, q, r, float(low[c, q]), float(high[c, q])))
+    active = level.narrow(active, found) + later
     while active:
-        active.sort(key=lambda a: (a[0], a[1]))
-        k = len(active)
-        bins = max(16, min(4096, _BINS_TOTAL // k))
-        first = np.zeros((n_cells, 4), np.int64)
-        last = np.zeros((n_cells, 4), np.int64)
-        for t, (c, q, *_rest) in enumerate(active):
-            if last[c, q] == 0:
-                first[c, q] = t
-            last[c, q] = t + 1
-        t_lo = np.array([a[3] for a in active])
-        t_hi = np.array([a[4] for a in active])
-        below = np.zeros(k, np.int64)
-        hist = np.zeros((k, bins), np.int64)
-        bin_low = np.full((k, bins), np.inf)
-        bin_high = np.full((k, bins), -np.inf)
+        level = _Level([(c, q, lo, hi) for c, q, _r, lo, hi in active], n_cells)
         for size, station, loads in spill.blocks():
-            _, values = _values(loads, size)
-            _histogram(_cells(size, station, by_station), values, first, last, t_lo, t_hi, below, hist, bin_low,
-                       bin_high)  # fmt: skip
-        still = []
-        for t, (c, q, r, _lo, _hi) in enumerate(active):
-            cum = np.cumsum(hist[t])
-            b = int(np.searchsorted(cum, r - below[t], side="right"))
-            before = int(cum[b - 1]) if b else 0
-            at = r - below[t] - before  # the rank within bin b
-            if at == 0 or bin_low[t, b] == bin_high[t, b]:
-                found[(c, q, r)] = float(bin_low[t, b])
-            elif at == hist[t, b] - 1:
-                found[(c, q, r)] = float(bin_high[t, b])
-            else:
-                still.append([c, q, r, float(bin_low[t, b]), float(bin_high[t, b])])
-        active = still
+            level.add(_cells(size, station, by_station), _values(loads, size)[1])
+        active = level.narrow(active, found)
     return found
 
 
@@ -269,9 +314,7 @@ def spilled_wear(
     """:func:`bogie.weighings.wear.wear_statistics` of the spilled groups by ``group``, the same figures to the bit:
     a size of at most ``bootstrap_max_groups`` groups gathered and bootstrapped, a larger one's moments summed block
     by block in file order, the order of the table's way."""
-    count = np.zeros(2, np.int64)
-    for size, _station, _loads in spill.blocks():
-        count += np.bincount(size, minlength=2)
+    count = spill.sizes
     present = [c for c in range(2) if count[c]]
     rows = []
     for c, stream in zip(present, np.random.SeedSequence(seed).spawn(len(present))):
