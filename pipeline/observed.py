@@ -24,7 +24,10 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import shutil
 import sys
+import tempfile
+import weakref
 from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
@@ -50,8 +53,8 @@ from pipeline.schema import ChecksummedWriter, checksummed_content
 from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
 
 __all__ = [
-    "COLUMN_TYPES", "GROUPS_SCHEMA", "SIMULATED_POSITIONS", "SIMULATED_SCHEMA", "arrow_schema", "observed_metrics",
-    "observed_table", "main", "simulated_readings", "simulated_statistics", "wim_model",
+    "COLUMN_TYPES", "GROUPS_SCHEMA", "SIMULATED_POSITIONS", "SIMULATED_SCHEMA", "GroupsFile", "arrow_schema",
+    "observed_metrics", "observed_table", "main", "simulated_readings", "simulated_statistics", "wim_model",
 ]  # fmt: skip
 
 #: the Arrow type and unit of each column the two tables hold, by name; a numbered column (``axle_load_1..3``) by
@@ -89,13 +92,19 @@ def _table(frame: pd.DataFrame, schema: pa.Schema) -> pa.Table:
 
 
 # ---- the observed side -------------------------------------------------------------------------------------------
-class _GroupsFile:
+class GroupsFile:
     """``groups.parquet`` filled chunk by chunk as the survey streams (:func:`bogie.weighings.survey.observed_survey`'s
-    ``sink``): each chunk's kept groups with their inequality, one row group, so that the stage never holds the
-    whole group table (issue 41 Must 4)."""
+    ``sink``): each chunk's kept groups with their inequality, one row group, written to a temporary directory, so
+    that the stage never holds the whole group table (issue 41 Must 4); :func:`write_outputs` moves the sealed file
+    into place. The directory is removed when the object is collected."""
+
+    def __init__(self) -> None:
+        self.dir = Path(tempfile.mkdtemp(prefix="bogie-observed-"))
+        self._cleanup = weakref.finalize(self, shutil.rmtree, self.dir, True)
+        self.path = self.dir / "groups.parquet"
 
     def start(self) -> None:
-        self.file = ChecksummedWriter(GROUPS_SCHEMA)
+        self.file = ChecksummedWriter(GROUPS_SCHEMA, self.path)
 
     def write(self, groups: pd.DataFrame) -> None:
         if len(groups):
@@ -111,7 +120,9 @@ def _sha256(path: Path) -> str:
     return digest.hexdigest()
 
 
-def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.DataFrame | bytes, dict[str, Any] | None]:
+def observed_table(
+    path: Path | None, observed: ObservedConfig
+) -> tuple[pd.DataFrame | GroupsFile, dict[str, Any] | None]:
     """The observed groups that pass the filters and their statistics (``bogie weighings --json``'s shape).
 
     Parameters
@@ -123,9 +134,9 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
 
     Returns
     -------
-    groups : pandas.DataFrame or bytes
+    groups : pandas.DataFrame or GroupsFile
         No survey: an empty table of the columns of :data:`GROUPS_SCHEMA`. A survey: the checksummed Parquet file
-        of its groups (those columns), written chunk by chunk as the file streams.
+        of its groups (those columns), written to a temporary directory chunk by chunk as the file streams.
     statistics : dict or None
         ``{"path", "format" (the one read), "format_asked" (``auto`` or that one), "sha256", "records": {"read",
         "skipped", "weight_step_kg", "resolution", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or
@@ -139,7 +150,7 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
     if path is None:
         empty = pd.DataFrame({f.name: pd.Series(dtype=f.type.to_pandas_dtype()) for f in GROUPS_SCHEMA})
         return empty, None
-    groups = _GroupsFile()
+    groups = GroupsFile()
     survey = observed_survey(
         path,
         observed.format,
@@ -158,7 +169,8 @@ def observed_table(path: Path | None, observed: ObservedConfig) -> tuple[pd.Data
         "path": observed.path, "format": survey.read.format, "format_asked": observed.format,
         "sha256": _sha256(path),
     }  # fmt: skip
-    return groups.file.content(), {**header, **stats, "n_kept": survey.n_kept}
+    groups.file.close()
+    return groups, {**header, **stats, "n_kept": survey.n_kept}
 
 
 def wim_model(wim: WimProtocol) -> dict[str, Any]:
@@ -221,7 +233,7 @@ def observed_metrics(
 
 # ---- the stage ---------------------------------------------------------------------------------------------------
 def write_outputs(
-    groups: pd.DataFrame | bytes,
+    groups: pd.DataFrame | GroupsFile,
     readings: pd.DataFrame,
     metrics: Mapping[str, Any],
     out_dir: str | Path,
@@ -233,8 +245,10 @@ def write_outputs(
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
-        content = groups if isinstance(groups, bytes) else checksummed_content(_table(groups, GROUPS_SCHEMA))
-        (tmp_dir / "groups.parquet").write_bytes(content)
+        if isinstance(groups, GroupsFile):
+            shutil.move(groups.path, tmp_dir / "groups.parquet")
+        else:
+            (tmp_dir / "groups.parquet").write_bytes(checksummed_content(_table(groups, GROUPS_SCHEMA)))
         (tmp_dir / "simulated.parquet").write_bytes(checksummed_content(_table(readings, SIMULATED_SCHEMA)))
 
 
@@ -255,7 +269,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         config = load_config(args.params)
         observed = config.observed
         # the project root is where params.yaml is: observed.path is relative to it
-        path = observed_file(observed, Path(args.params).resolve().parent)
+        path = observed_file(observed, Path(args.params).resolve().parent, held=False)
         runs = read_runs(args.runs, SURVEY_STUDY, READING_RUN_COLUMNS)
         check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
         groups, observed_stats = observed_table(path, observed)

@@ -12,6 +12,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import os
 import struct
 from collections.abc import Mapping, Sequence
 from pathlib import Path
@@ -213,24 +214,43 @@ def checksummed_content(table: pa.Table) -> bytes:
 
 
 class ChecksummedWriter:
-    """A Parquet file written a table at a time (one row group each), in memory, with the checksums of a part file
-    (:func:`checksummed_content`) once :meth:`content` closes it: a stage's output that a streamed input fills."""
+    """A Parquet file written to ``path`` a table at a time (one row group each), with the checksums of a part file
+    (:func:`checksummed_content`, the same bytes) once :meth:`close` seals it in place: a stage's output that a
+    streamed input fills, never held in memory whole."""
 
-    def __init__(self, schema: pa.Schema) -> None:
-        self.sink = pa.BufferOutputStream()
+    def __init__(self, schema: pa.Schema, path: str | Path) -> None:
+        self.path = Path(path)
         schema = schema.with_metadata({**(schema.metadata or {}), CHECKSUM_KEY: _UNSEALED})
         self.schema = schema
-        self.writer = pq.ParquetWriter(self.sink, schema, write_page_checksum=True)
+        self.writer = pq.ParquetWriter(str(self.path), schema, write_page_checksum=True)
         self.rows = 0
 
     def write(self, table: pa.Table) -> None:
         self.writer.write_table(table.replace_schema_metadata(self.schema.metadata))
         self.rows += table.num_rows
 
-    def content(self) -> bytes:
-        """The whole file, sealed; the writer is closed."""
+    def close(self) -> Path:
+        """Close the file and seal it: its digest (the file hashed with the placeholder, as it is) written over the
+        placeholder. Returns its path."""
         self.writer.close()
-        return sealed(self.sink.getvalue().to_pybytes())
+        with open(self.path, "r+b") as fh:
+            size = fh.seek(0, os.SEEK_END)
+            fh.seek(size - 8)
+            (length,) = struct.unpack("<I", fh.read(4))
+            start = size - 8 - length
+            fh.seek(start)
+            at = _checksum_offset(fh.read(length + 8), _UNSEALED)
+            if at is None:  # a pyarrow that encodes the footer otherwise: no file without its checksum
+                raise RuntimeError(
+                    f"pyarrow {pa.__version__} did not write {CHECKSUM_KEY.decode()} where it is looked for"
+                )
+            fh.seek(0)
+            digest = hashlib.sha256()
+            for block in iter(lambda: fh.read(1 << 20), b""):
+                digest.update(block)
+            fh.seek(start + at)
+            fh.write(digest.hexdigest().encode())
+        return self.path
 
 
 def sealed(content: bytes) -> bytes:

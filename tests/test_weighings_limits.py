@@ -123,7 +123,30 @@ def test_validate_refuses_a_survey_that_would_not_fit_the_memory_budget(tmp_path
     args = ["--params", str(tmp_path / "params.yaml"), "--out", str(tmp_path / "config.json")]
     assert validate.main(args) == 2
     err = capsys.readouterr().err
-    assert "observed.path" in err and "more than the memory budget" in err and "split the survey" in err, err
+    assert "observed.path" in err and "memory budget" in err and "split the survey" in err, err
     assert not (tmp_path / "config.json").exists()
     monkeypatch.setattr(settings, "MEMORY_BUDGET", need)
     assert validate.main(args) == 0
+
+
+def test_a_survey_past_the_cap_is_refused_only_when_calibrate_holds_its_groups(tmp_path, monkeypatch, capsys):
+    from pipeline import validate
+
+    (tmp_path / "observed").mkdir()
+    shutil.copy(DATA / "site.csv", tmp_path / "observed" / "site.csv")
+    monkeypatch.setattr(_records, "MAX_FILE_BYTES", 100)  # the file is larger
+    from pipeline.config import settings
+
+    monkeypatch.setattr(settings, "MAX_FILE_BYTES", 100)
+    raw = yaml.safe_load((ROOT / "params.yaml").read_text())
+    raw["observed"].update(path="observed/site.csv", format="csv")
+    args = ["--params", str(tmp_path / "params.yaml"), "--out", str(tmp_path / "config.json")]
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw))
+    assert raw["calibrate"] is not None  # the project's params calibrate to the survey
+    assert validate.main(args) == 2
+    err = capsys.readouterr().err
+    assert "calibrate stage" in err and "calibrate: null" in err, err
+    assert not (tmp_path / "config.json").exists()
+    raw["calibrate"] = None  # the observed stage streams any length: nothing holds the groups
+    (tmp_path / "params.yaml").write_text(yaml.safe_dump(raw))
+    assert validate.main(args) == 0, capsys.readouterr().err

@@ -104,16 +104,17 @@ _BOM = b"\xef\xbb\xbf"
 #: written at a limit is at it, not past it. A convention of this project (no published source), named as one
 REL_TOL = 1e-9
 
-#: memory of reading a survey and computing its statistics and road figures, streamed (issue 41 Must 4), whatever
-#: the file's length [bytes]: the libraries, a chunk's work and the figures' arrays; measured 732 MiB peak for a MON
-#: file of 1,000,000 records (91 MB; ``bench/bench_weighings.py``, 6 December 2026), less its growth, rounded up
+#: memory of reading a survey with its groups held in memory (``observed_survey(keep_groups=True)``, the calibrate
+#: stage's), before its growth [bytes]: the libraries and a chunk's work, 731 MiB peak for any length when the
+#: groups are spilled to disk instead (``bench/bench_weighings.py``, 6 December 2026), rounded up
 SURVEY_BASE_MEMORY = 768 * 2**20
-#: memory that grows with the survey, per byte of its records (uncompressed) [bytes/byte]: each good record's hash
-#: (repeats) and each surveyed group's loads, kept for the exact quantiles; measured 0.47 (the bench: 1,104 - 732
-#: MiB over 913 - 91 MB of MON records) and 0.66 by hand earlier the same day; 0.7 bounds both
-MEMORY_PER_BYTE = 0.7
-#: the largest survey file read, uncompressed [bytes]: 1 GiB, about 11 million MON records, so that a survey needs
-#: at most about 1.45 GiB (:func:`survey_memory`); split a larger one
+#: memory that grows with such a survey, per byte of its records (uncompressed) [bytes/byte]: every kept group with
+#: all its columns; measured 2.9 (996 MiB peak for 1,000,000 MON records, 91 MB, 6 December 2026: one file, one
+#: format, an estimate for the others), rounded up
+MEMORY_PER_BYTE = 3.0
+#: the largest survey file whose groups are held in memory, uncompressed [bytes]: 1 GiB, about 11 million MON
+#: records (:func:`survey_memory`: about 3.8 GiB); a streamed survey (``bogie weighings``, the observed stage) reads
+#: any length
 MAX_FILE_BYTES = 2**30
 
 
@@ -135,7 +136,7 @@ def uncompressed_size(path: str | Path) -> int:
 
 
 def survey_memory(path: str | Path) -> int:
-    """The peak memory of reading the survey file ``path`` and computing its statistics [bytes] (an estimate:
+    """The peak memory of reading the survey file ``path`` with its groups held in memory [bytes] (an estimate:
     :data:`SURVEY_BASE_MEMORY` plus :func:`uncompressed_size` times :data:`MEMORY_PER_BYTE`)."""
     return SURVEY_BASE_MEMORY + int(uncompressed_size(path) * MEMORY_PER_BYTE)
 

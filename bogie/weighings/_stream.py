@@ -236,7 +236,14 @@ class SeenStore:
         """Add the hashes of records of time stamps ``stamps`` (datetime64; those already in stay once)."""
         for day, rows in self._by_day(stamps):
             known = self._day(day)
-            merged = np.union1d(known, hashes[rows])
+            new = np.unique(hashes[rows])
+            if len(known):  # those not in yet, put in place: a copy of the day, not a sort of it
+                at = np.searchsorted(known, new)
+                fresh = known[np.minimum(at, len(known) - 1)] != new
+                new, at = new[fresh], at[fresh]
+                merged = np.insert(known, at, new)
+            else:
+                merged = new
             self.days[day] = merged
             self.held += len(merged) - len(known)
             self.count += len(merged) - len(known)

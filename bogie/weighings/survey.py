@@ -16,6 +16,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie.weighings import _records
 from bogie.weighings._spill import SPILLED, GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
 from bogie.weighings.groups import (
@@ -167,7 +168,9 @@ def observed_survey(
     tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
     legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
     try:
-        read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes)
+        # the groups held in memory: a file past MAX_FILE_BYTES refused; spilled to disk: any length
+        cap = _records.MAX_FILE_BYTES if keep_groups else None
+        read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap)
         if keep_groups:
             groups, surveyed = tally.groups(), tally.surveyed()
             statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])

@@ -30,7 +30,13 @@ from pydantic import ValidationError
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
-from bogie.weighings._records import MEMORY_PER_BYTE, SURVEY_BASE_MEMORY, survey_memory, uncompressed_size
+from bogie.weighings._records import (
+    MAX_FILE_BYTES,
+    MEMORY_PER_BYTE,
+    SURVEY_BASE_MEMORY,
+    survey_memory,
+    uncompressed_size,
+)
 from pipeline.config import si
 from pipeline.config.distributions import ROAD_CLASSES
 from pipeline.config.errors import RULE_ERROR, ConfigError, error_lines, shown
@@ -241,7 +247,7 @@ def check_params(path: str | Path = "params.yaml", note: Callable[[str], None] |
         config = parse_config(raw, note)
     except ConfigError as exc:
         raise _with_observed_file(exc, raw, root) from None
-    observed_file(config.observed, root)
+    observed_file(config.observed, root, held=config.calibrate is not None)
     return config
 
 
@@ -261,7 +267,7 @@ def _with_observed_file(exc: ConfigError, raw: Mapping[str, Any], root: Path) ->
     return exc
 
 
-def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
+def observed_file(observed: ObservedConfig, root: str | Path, held: bool = True) -> Path | None:
     """The file of the observed survey under the project root ``root`` (the directory of params.yaml), symlinks
     followed.
 
@@ -274,16 +280,21 @@ def observed_file(observed: ObservedConfig, root: str | Path) -> Path | None:
     Returns None when no survey is given (``observed.path: null``); else the resolved file, so the stage opens the
     file that was checked.
 
+    ``held``: whether a stage will hold the survey's groups in memory (calibrate does; the observed stage streams
+    the file, spilling its groups to disk, in memory independent of its length): such a file must be at most
+    :data:`bogie.weighings._records.MAX_FILE_BYTES` of records and its estimated memory
+    (:func:`bogie.weighings._records.survey_memory`) within the budget.
+
     Raises
     ------
     ConfigError
         Naming ``observed.path``, its value and where it was looked for, if it is not a file, or where it points if
         that is outside ``observed/``.
     """
-    return None if observed.path is None else _survey_file(observed.path, root)
+    return None if observed.path is None else _survey_file(observed.path, root, held)
 
 
-def _survey_file(name: str, root: str | Path) -> Path:
+def _survey_file(name: str, root: str | Path, held: bool = True) -> Path:
     """:func:`observed_file` of the path ``name`` (``observed.path``, checked by the schema)."""
     path = Path(root) / name
     given = f"observed.path = {name!r}"
@@ -312,14 +323,18 @@ def _survey_file(name: str, root: str | Path) -> Path:
             f"{given}: is not a file (looked for {path}); put the survey's records there or set observed.path: null "
             "(docs/observed.md)",
         )
+    if not held:
+        return target
+    records = uncompressed_size(target)
     need = survey_memory(target)
-    if need > MEMORY_BUDGET:
+    if records > MAX_FILE_BYTES or need > MEMORY_BUDGET:
         raise ConfigError(
             "observed.path",
-            f"{given}: its {uncompressed_size(target) / 2**30:.2f} GiB of records need about {need / 2**30:.2f} GiB "
-            f"to read and summarise ({SURVEY_BASE_MEMORY / 2**20:.0f} MiB and {MEMORY_PER_BYTE} bytes a byte, "
-            "bogie.weighings._records.SURVEY_BASE_MEMORY and MEMORY_PER_BYTE), "
-            f"more than the memory budget of {MEMORY_BUDGET / 2**30:g} GiB (pipeline.resources.MEMORY_BUDGET): "
-            "split the survey, or give a part of it",
+            f"{given}: its {records / 2**30:.2f} GiB of records are more than the calibrate stage, which holds the "
+            f"survey's groups in memory, reads ({MAX_FILE_BYTES / 2**30:g} GiB, bogie.weighings._records."
+            f"MAX_FILE_BYTES; about {need / 2**30:.2f} GiB of memory at {SURVEY_BASE_MEMORY / 2**20:.0f} MiB and "
+            f"{MEMORY_PER_BYTE} bytes a byte, SURVEY_BASE_MEMORY and MEMORY_PER_BYTE, against the memory budget of "
+            f"{MEMORY_BUDGET / 2**30:g} GiB, pipeline.resources.MEMORY_BUDGET): split the survey, give a part of it, "
+            "or set calibrate: null (the observed stage and bogie weighings stream a file of any length)",
         )
     return target

@@ -9,6 +9,7 @@ import copy
 import hashlib
 import json
 import shutil
+import tempfile
 from pathlib import Path
 
 import numpy as np
@@ -26,7 +27,7 @@ from pipeline.config import load_params, parse_config
 from pipeline.config.schema import OBSERVED_FORMATS, OBSERVED_POSITIONS
 from pipeline.observed import GROUPS_SCHEMA, SIMULATED_SCHEMA, main, simulated_readings, simulated_statistics
 from pipeline.sample import sample_studies
-from pipeline.schema import runs_frame, write_runs_file
+from pipeline.schema import runs_frame, verified_table, write_runs_file
 
 ROOT = Path(__file__).resolve().parents[2]
 SITE = ROOT / "tests" / "data" / "weighings" / "site.csv"
@@ -159,11 +160,16 @@ def test_without_a_path_the_stage_writes_the_simulated_side_and_an_empty_groups_
     assert [p.name for p in (root / "metrics").iterdir()] == ["observed.json"]
 
 
-def test_with_a_path_the_observed_statistics_are_those_of_bogie_weighings(tmp_path):
+def test_with_a_path_the_observed_statistics_are_those_of_bogie_weighings(tmp_path, monkeypatch):
     root = project(tmp_path, path="observed/site.csv")
     (root / "observed").mkdir()
     shutil.copy(SITE, root / "observed" / "site.csv")
+    scratch = tmp_path / "scratch"  # where the spilled groups and the groups file are written as the file streams
+    scratch.mkdir()
+    monkeypatch.setattr(tempfile, "tempdir", str(scratch))
     assert main(args(root)) == 0
+    assert not list(scratch.iterdir())  # nothing left behind
+    verified_table((root / "data" / "observed" / "groups.parquet").read_bytes(), "groups.parquet", "rerun")
     obs = metrics(root)["observed"]
     assert metrics(root)["reason"] is None
     assert (obs["path"], obs["format"]) == ("observed/site.csv", "csv")
