@@ -3,7 +3,8 @@ Must 4: memory independent of the file's length).
 
 - **The spill.** :class:`GroupSpill` appends each chunk's kept tandems and tri-axles (the size as a code, the
   station's code, the three loads, NaN past a tandem's two) to files in a temporary directory, 29 bytes a group, and
-  reads them back in blocks of :data:`SPILL_BLOCK` groups, in file order.
+  reads them back in blocks of :data:`SPILL_BLOCK` groups, in file order; the values whose order statistics are
+  sought (the spread and the shares, 32 bytes a group) are written beside them by the first pass.
 - **The statistics.** :func:`spilled_statistics` is :func:`bogie.weighings.stats.survey_statistics` of the spilled
   groups per cell (a size, or a station's size), from passes over the spill: counts and sums in the first; each
   median and quantile from exact order statistics, found by refining a histogram of the values around the rank
@@ -79,6 +80,16 @@ class GroupSpill:
             for fh in handles.values():
                 fh.close()
 
+    def value_blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """(size code, station code, values (m, 4): :func:`_values`' spread and shares) of :data:`SPILL_BLOCK`
+        groups at a time, in file order, as :func:`spilled_statistics`' first pass wrote them."""
+        with open(self.dir / "size", "rb") as sizes, open(self.dir / "station", "rb") as stations, \
+                open(self.dir / "values", "rb") as values:  # fmt: skip
+            for _start in range(0, self.count, SPILL_BLOCK):
+                size = np.fromfile(sizes, np.int8, SPILL_BLOCK)
+                station = np.fromfile(stations, np.int32, len(size))
+                yield size, station, np.fromfile(values, np.float64, 4 * len(size)).reshape(-1, 4)
+
     def close(self) -> None:
         for fh in self._files.values():
             fh.close()
@@ -107,15 +118,17 @@ def spilled_statistics(
     high = np.full((n_cells, 4), -np.inf)
     # the first histograms in the same pass, over each quantity's bounds: a spread is at most n x 100 %, a share n
     first = _Level([(c, q, 0.0, _BOUNDS[q]) for c in range(n_cells) for q in range(4)], n_cells)
-    for size, station, loads in spill.blocks():
-        cell = _cells(size, station, by_station)
-        ineq, values = _values(loads, size)
-        count += np.bincount(cell, minlength=n_cells)
-        spread_sum += np.bincount(cell, weights=ineq["spread"], minlength=n_cells)
-        outside += np.bincount(cell, weights=ineq["outside_5pct"], minlength=n_cells).astype(np.int64)
-        over += np.bincount(cell, weights=ineq["over_10pct"], minlength=n_cells).astype(np.int64)
-        _ranges(cell, values, valid, low, high)
-        first.add(cell, values)
+    with open(spill.dir / "values", "wb") as kept:  # for the narrowing passes, computed once
+        for size, station, loads in spill.blocks():
+            cell = _cells(size, station, by_station)
+            ineq, values = _values(loads, size)
+            values.tofile(kept)
+            count += np.bincount(cell, minlength=n_cells)
+            spread_sum += np.bincount(cell, weights=ineq["spread"], minlength=n_cells)
+            outside += np.bincount(cell, weights=ineq["outside_5pct"], minlength=n_cells).astype(np.int64)
+            over += np.bincount(cell, weights=ineq["over_10pct"], minlength=n_cells).astype(np.int64)
+            _ranges(cell, values, valid, low, high)
+            first.add(cell, values)
     # the ranks each value needs: the median's of the spread, the quantiles' of each share (numpy's 'linear')
     wanted: dict[tuple[int, int], set[int]] = {}
     for c, q in zip(*np.nonzero(valid)):
@@ -295,8 +308,8 @@ def _order_statistics(spill, by_station, n_cells, wanted, valid, low, high, leve
     active = level.narrow(active, found) + later
     while active:
         level = _Level([(c, q, lo, hi) for c, q, _r, lo, hi in active], n_cells)
-        for size, station, loads in spill.blocks():
-            level.add(_cells(size, station, by_station), _values(loads, size)[1])
+        for size, station, values in spill.value_blocks():
+            level.add(_cells(size, station, by_station), values)
         active = level.narrow(active, found)
     return found
 
