@@ -27,7 +27,7 @@ import pandas as pd
 from numba import njit
 
 from bogie.weighings.stats import QUANTILES, group_inequality
-from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _large_cell, _small_cell
+from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _LargeCell, _small_cell
 
 __all__ = ["SPILL_BLOCK", "GroupSpill", "spilled_statistics", "spilled_wear"]
 
@@ -329,23 +329,27 @@ def spilled_wear(
     by block in file order, the order of the table's way."""
     count = spill.sizes
     present = [c for c in range(2) if count[c]]
+    legal = {c: float(legal_group.get(SPILLED[c], math.nan)) for c in present}
+    large = {c: _LargeCell(exponents, legal_axle, confidence) for c in present
+             if resamples and count[c] > bootstrap_max_groups}  # fmt: skip
+    small: dict[int, list] = {c: [] for c in present if c not in large}
+    for size, _station, loads in spill.blocks():  # one pass: each size's groups in file order
+        for c in present:
+            mine = size == c
+            m = int(mine.sum())
+            if m:
+                part = (np.nan_to_num(loads[mine], nan=0.0), np.full(m, c + 2, np.int64), np.full(m, legal[c]))
+                if c in large:
+                    large[c].add(*part)
+                else:
+                    small[c].append(part)
     rows = []
     for c, stream in zip(present, np.random.SeedSequence(seed).spawn(len(present))):
-        legal = float(legal_group.get(SPILLED[c], math.nan))
-
-        def blocks(c=c, legal=legal) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
-            for size, _station, loads in spill.blocks():
-                mine = size == c
-                if mine.any():
-                    m = int(mine.sum())
-                    yield np.nan_to_num(loads[mine], nan=0.0), np.full(m, c + 2, np.int64), np.full(m, legal)
-
         row: dict = {"group": SPILLED[c], "n_groups": int(count[c]), "n_failed": 0}
-        if resamples and count[c] > bootstrap_max_groups:
-            row.update(_large_cell(blocks(), exponents, legal_axle, confidence))
+        if c in large:
+            row.update(large[c].figures())
         else:
-            parts = list(zip(*blocks()))
-            loads, n, legal_of = (np.concatenate(p) for p in parts)
+            loads, n, legal_of = (np.concatenate(p) for p in zip(*small[c]))
             row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence))
         rows.append(row)
     return pd.DataFrame(rows)

@@ -344,34 +344,50 @@ def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: M
     error is sd(D - (R + 1) E) / (sqrt(m) mean E), Cochran, Sampling Techniques, 3rd ed. 1977, section 6.3, the
     ratio estimator; the mean's is sd(D - E) / sqrt(m)), and the hidden overloads. The moments are Welford's, one
     group at a time in a compiled loop (:func:`_wear_moments`)."""
-    names = list(exponents)
-    ks = np.array([float(exponents[name]) for name in names])
-    moments = np.zeros((len(names), 6))
-    hidden = group_over = judged = 0
+    cell = _LargeCell(exponents, legal_axle, confidence)
     for loads, n, legal in blocks:
-        _wear_moments(np.ascontiguousarray(loads), n, ks, STANDARD_AXLE_KG, moments)
+        cell.add(loads, n, legal)
+    return cell.figures()
+
+
+class _LargeCell:
+    """:func:`_large_cell`'s sums, a block at a time (:meth:`add`), and its figures (:meth:`figures`)."""
+
+    def __init__(self, exponents: Mapping[str, float], legal_axle: float, confidence: float) -> None:
+        self.names = list(exponents)
+        self.ks = np.array([float(exponents[name]) for name in self.names])
+        self.moments = np.zeros((len(self.names), 6))
+        self.hidden = self.group_over = self.judged = 0
+        self.legal_axle, self.confidence = legal_axle, confidence
+
+    def add(self, loads: NDArray, n: NDArray, legal: NDArray) -> None:
+        """Add the groups of a block, in order: loads [kg], axles, legal group load [kg]."""
+        _wear_moments(np.ascontiguousarray(loads), n, self.ks, STANDARD_AXLE_KG, self.moments)
         known = np.isfinite(legal)
-        over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
-        hidden += int(over["hidden"].sum())
-        group_over += int(over["group_over"].sum())
-        judged += int(known.sum())
-    z = statistics.NormalDist().inv_cdf(0.5 + confidence / 2.0)
-    out: dict[str, float] = {}
-    for j, name in enumerate(names):
-        count, mean_d, mean_e, m2_d, m2_e, c_de = moments[j]
-        m = int(count)
-        vdd, vee, vde = m2_d / (m - 1), m2_e / (m - 1), c_de / (m - 1)
-        ratio = mean_d / mean_e
-        se_ratio = math.sqrt(max(vdd - 2 * ratio * vde + ratio * ratio * vee, 0.0)) / (math.sqrt(m) * mean_e)
-        mean = 1000.0 * (mean_d - mean_e)
-        se_mean = 1000.0 * math.sqrt(max(vdd - 2 * vde + vee, 0.0)) / math.sqrt(m)
-        share = ratio - 1.0
-        out[f"extra_wear_{name}"], out[f"extra_sa_per_1000_{name}"] = share, mean  # the small cells' key order
-        out[f"extra_wear_{name}_low"], out[f"extra_wear_{name}_high"] = share - z * se_ratio, share + z * se_ratio
-        out[f"extra_sa_per_1000_{name}_low"] = mean - z * se_mean
-        out[f"extra_sa_per_1000_{name}_high"] = mean + z * se_mean
-    out.update(_overload_figures(hidden, group_over, judged, confidence))
-    return out
+        over = hidden_overloads(loads[known], n[known], legal[known], self.legal_axle)
+        self.hidden += int(over["hidden"].sum())
+        self.group_over += int(over["group_over"].sum())
+        self.judged += int(known.sum())
+
+    def figures(self) -> dict[str, float]:
+        z = statistics.NormalDist().inv_cdf(0.5 + self.confidence / 2.0)
+        out: dict[str, float] = {}
+        for j, name in enumerate(self.names):
+            count, mean_d, mean_e, m2_d, m2_e, c_de = self.moments[j]
+            m = int(count)
+            vdd, vee, vde = m2_d / (m - 1), m2_e / (m - 1), c_de / (m - 1)
+            ratio = mean_d / mean_e
+            se_ratio = math.sqrt(max(vdd - 2 * ratio * vde + ratio * ratio * vee, 0.0)) / (math.sqrt(m) * mean_e)
+            mean = 1000.0 * (mean_d - mean_e)
+            se_mean = 1000.0 * math.sqrt(max(vdd - 2 * vde + vee, 0.0)) / math.sqrt(m)
+            share = ratio - 1.0
+            out[f"extra_wear_{name}"], out[f"extra_sa_per_1000_{name}"] = share, mean  # the small cells' key order
+            out[f"extra_wear_{name}_low"] = share - z * se_ratio
+            out[f"extra_wear_{name}_high"] = share + z * se_ratio
+            out[f"extra_sa_per_1000_{name}_low"] = mean - z * se_mean
+            out[f"extra_sa_per_1000_{name}_high"] = mean + z * se_mean
+        out.update(_overload_figures(self.hidden, self.group_over, self.judged, self.confidence))
+        return out
 
 
 def wear_dict(table: pd.DataFrame, by: Sequence[str], digits: int = 4) -> dict:
