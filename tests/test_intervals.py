@@ -16,3 +16,16 @@ def test_the_wilson_interval_is_scipys_to_the_bit():
             assert (lo, hi) == (ci.low, ci.high), (k, n, confidence)
     low, high = wilson_interval(np.array([0]), np.array([0]))
     assert np.isnan(low[0]) and np.isnan(high[0])
+
+
+def test_the_tabled_normal_quantiles_are_scipys_and_any_other_level_asks_scipy():
+    from scipy.special import ndtri
+
+    from bogie import intervals
+
+    for confidence, z in intervals._Z.items():
+        assert z == ndtri(0.5 + 0.5 * confidence), confidence
+    assert intervals._z(0.8) == ndtri(0.9)
+    low, high = wilson_interval(np.array([3]), np.array([40]), 0.8)
+    ci = binomtest(3, 40).proportion_ci(0.8, method="wilson")
+    assert (low[0], high[0]) == (ci.low, ci.high)
