@@ -327,15 +327,22 @@ def _shorter_than_wheelbase(parsed: dict) -> np.ndarray:
     return (length > 0) & (length < wheelbase * (1.0 - REL_TOL))
 
 
-def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFrame:
-    """The columns a repeat shares with the record it repeats: time, lane, direction, speed, axle loads and spacings
-    (and the station of a TMG file)."""
+def _key_columns(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> dict[str, np.ndarray]:
+    """The record columns a repeat shares with the record it repeats, but its axles: time, lane, direction, speed
+    (and the station of a TMG file). The one definition of the key, with the axle loads and spacings
+    (:func:`_repeat_key` exactly, :func:`_hashes` by hash)."""
     col = parsed["columns"]
     extra = parsed.get("extra", {})
-    return pd.DataFrame({
+    return {
         "t": stamps[rows].view(np.int64), "lane": col["lane"][rows], "dir": col["direction"][rows],
-        "speed": col["speed"][rows],
-        **({"station": extra["station"][rows]} if "station" in extra else {}),
+        "speed": col["speed"][rows], **({"station": extra["station"][rows]} if "station" in extra else {}),
+    }  # fmt: skip
+
+
+def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFrame:
+    """The key of ``rows`` as a table, to compare exactly: :func:`_key_columns`, the axle loads and spacings."""
+    return pd.DataFrame({
+        **_key_columns(parsed, stamps, rows),
         **{f"w{i}": parsed["loads"][rows, i] for i in range(parsed["loads"].shape[1])},
         **{f"s{i}": parsed["spacings"][rows, i] for i in range(parsed["spacings"].shape[1])},
     })  # fmt: skip
@@ -343,12 +350,8 @@ def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFr
 
 def _hashes(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> np.ndarray:
     """The 64-bit hashes of the repeat keys (:func:`_repeat_key`) of ``rows``, for the records of earlier chunks."""
-    col = parsed["columns"]
-    extra = parsed.get("extra", {})
-    columns = [stamps[rows].view(np.int64), col["lane"][rows], col["direction"][rows], col["speed"][rows]]
-    if "station" in extra:
-        columns.append(extra["station"][rows])
-    return key_hashes(columns, parsed["loads"][rows], parsed["spacings"][rows], col["n_axles"][rows])
+    columns = list(_key_columns(parsed, stamps, rows).values())
+    return key_hashes(columns, parsed["loads"][rows], parsed["spacings"][rows], parsed["columns"]["n_axles"][rows])
 
 
 def _alike(parsed: dict, stamps: np.ndarray, seen: SeenStore | None) -> int:
