@@ -1,0 +1,33 @@
+"""tools/house.py measures what issue 42 asks about: a hand-made tree with one of each thing, counted by hand."""
+
+import sys
+from pathlib import Path
+
+ROOT = Path(__file__).resolve().parents[1]
+sys.path.insert(0, str(ROOT / "tools"))
+
+import house  # noqa: E402
+
+
+def test_a_hand_made_tree_is_measured_as_counted_by_hand(tmp_path):
+    bogie, sub, pipeline = tmp_path / "bogie", tmp_path / "bogie" / "sub", tmp_path / "pipeline"
+    for folder in (bogie, sub, pipeline):
+        folder.mkdir()
+        (folder / "__init__.py").write_text("")
+    # a circle a <-> b (b's import lazy, inside a function), a private name of b imported by a (same package)
+    (bogie / "a.py").write_text("from bogie.b import _helper\n")
+    body = "".join(f"    x{i} = {i}\n" for i in range(60))  # def line + 60 = 61 lines
+    (bogie / "b.py").write_text(f"def _helper():\n    from bogie import a\n\n\ndef long():\n{body}")
+    (bogie / "_kernel.py").write_text("def run():\n    pass\n")
+    # across packages: a private module's public name, and a private name by a relative import
+    (sub / "c.py").write_text("from bogie._kernel import run\nfrom ..b import _helper\n")
+    (pipeline / "d.py").write_text("x = 1\n" * 501)
+    m = house.measure(tmp_path)
+    # a.py 1 line; b.py 4 (_helper and two blank) + 61 (long); _kernel.py 2
+    assert m["lines_per_package"] == {"bogie": 1 + 65 + 2, "bogie.sub": 2, "pipeline": 501}
+    assert m["modules_over_500"] == [(501, "pipeline/d.py")]
+    assert m["functions_over_60"] == [(61, "bogie.b.long")]
+    assert m["private_imports"] == 2  # _helper twice; run is public
+    assert m["private_imports_across_packages"] == [("bogie.sub.c", "bogie._kernel.run"),
+                                                    ("bogie.sub.c", "bogie.b._helper")]  # fmt: skip
+    assert m["circles"] == [["bogie.a", "bogie.b"]]
