@@ -38,7 +38,8 @@ from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
 from bogie import phases
 from bogie.newmark import MODEL_NONLINEAR, IntegrationResult, consistent_acceleration, integrate
-from bogie.params import Bogie, tandem_trrl, triaxle_stage1
+from bogie.params import Bogie
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
 
 SPEED, DURATION, DT = 15.0, 20.0, 1e-3  # [m/s], [s], [s]

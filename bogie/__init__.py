@@ -43,7 +43,8 @@ from bogie.numerics import fix_compile_target as _fix_compile_target  # noqa: E4
 
 _fix_compile_target()
 
-from bogie.params import INHIBITORS, Bogie, preset, tandem_trrl, triaxle_stage1  # noqa: E402
+from bogie.params import INHIBITORS, Bogie  # noqa: E402
+from bogie.presets import preset, tandem_trrl, triaxle_stage1  # noqa: E402
 
 __all__ = ["INHIBITORS", "Bogie", "preset", "tandem_trrl", "triaxle_stage1"]
 __version__ = "0.1.0"

@@ -17,13 +17,14 @@ from __future__ import annotations
 
 import dataclasses
 import math
+import warnings
 from dataclasses import dataclass, field
 from typing import Any
 
 import numpy as np
 
 # the range table lives in bogie.ranges (shared with the air-sprung bogie); re-exported here, where callers look
-from bogie.ranges import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, _check_scalar, _check_vector
+from bogie.ranges import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, check_scalar, check_vector
 from bogie.ranges import FieldRange as FieldRange
 
 GRAVITY = 9.81  # [m/s^2]
@@ -213,12 +214,12 @@ class Bogie(AxleGroup):
         for name, (low, high, unit, inc) in AXLE_RANGES.items():
             if name in _AXLE_RULES and isinstance(getattr(self, name), tuple) and not getattr(self, name):
                 continue  # empty: the field's rule gives the values (a property), whatever the axle count
-            object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))
+            object.__setattr__(self, name, check_vector(name, getattr(self, name), n, "axle", low, high, unit, inc))
         for name, (low, high, unit, inc) in EQUALISER_RANGES.items():
-            vec = _check_vector(name, getattr(self, name), n - 1, "equaliser", low, high, unit, inc)
+            vec = check_vector(name, getattr(self, name), n - 1, "equaliser", low, high, unit, inc)
             object.__setattr__(self, name, vec)
         for name, (low, high, unit, inc) in SCALAR_RANGES.items():
-            object.__setattr__(self, name, _check_scalar(name, getattr(self, name), low, high, unit, inc))
+            object.__setattr__(self, name, check_scalar(name, getattr(self, name), low, high, unit, inc))
         self._check_chain()
         if self.payload_cg_x >= self.axle_x[-1] + self.spring_rear_half_length[-1]:
             raise ValueError(
@@ -235,7 +236,7 @@ class Bogie(AxleGroup):
             # the rule's rods must lie in the field's range too (a very short spring half would make a stub rod)
             low, high, unit, inc = AXLE_RANGES["radius_rod_length"]
             for i, length in enumerate(self.radius_rod_lengths):
-                _check_scalar(f"radius_rod_length[{i}] (from the bracket ahead)", length, low, high, unit, inc)
+                check_scalar(f"radius_rod_length[{i}] (from the bracket ahead)", length, low, high, unit, inc)
         for i, length in enumerate(self.radius_rod_lengths):
             if self.axle_x[i] - length <= 0.0:
                 raise ValueError(
@@ -400,7 +401,18 @@ def equaliser_arm_changes(bogie: Any, front: float, rear: float | None = None) -
     }
 
 
-# the presets (bogie.presets) are re-exported here, so ``from bogie.params import preset`` keeps working; imported
-# last because bogie.presets builds on Bogie (``import bogie`` imports this module first, so importing bogie.presets
-# directly runs in this same order)
-from bogie.presets import *  # noqa: E402, F403
+def __getattr__(name: str) -> Any:
+    """The presets' names (``tandem_trrl``, ``preset``, ``PRESETS``, ...), moved to :mod:`bogie.presets` (issue 42:
+    bogie.presets builds on Bogie, so re-exporting them here made a circle of imports): found here for one release,
+    with a DeprecationWarning naming where they are now."""
+    from bogie import presets  # a deprecation shim: runs only when a moved name is asked for
+
+    if name in presets.__all__:
+        warnings.warn(
+            f"bogie.params.{name} moved to bogie.presets.{name}: import it from there (bogie.params finds it for one "
+            "release more)",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        return getattr(presets, name)
+    raise AttributeError(f"module 'bogie.params' has no attribute {name!r}")

@@ -13,7 +13,7 @@ import pytest
 from bogie import air, nonlinear, static
 from bogie.air import dynamics as air_dynamics
 from bogie.air import static as air_static
-from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.results import DynamicResult
 from bogie.road import RampedStep
 

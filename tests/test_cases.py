@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bogie import cases, linear
-from bogie.params import tandem_trrl
+from bogie.presets import tandem_trrl
 from bogie.road import RampedStep
 
 #: Table 1's number of steps and time step

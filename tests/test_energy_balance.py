@@ -17,7 +17,8 @@ import numpy as np
 import pytest
 
 from bogie import nonlinear as nl
-from bogie.params import GRAVITY, tandem_trrl, triaxle_stage1
+from bogie.params import GRAVITY
+from bogie.presets import tandem_trrl, triaxle_stage1
 
 PRESETS = [tandem_trrl, triaxle_stage1]
 

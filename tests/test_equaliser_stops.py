@@ -15,9 +15,8 @@ from bogie.params import (
     PRESET_EQUALISER_STOP,
     PRESET_EQUALISER_STOP_STIFFNESS,
     SCALAR_RANGES,
-    tandem_trrl,
-    triaxle_stage1,
 )
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep
 
 TWO_DEGREES = math.radians(2.0)

@@ -18,7 +18,7 @@ import pytest
 
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
-from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.presets import tandem_trrl, triaxle_stage1
 
 #: the largest difference allowed, relative to the scale of each compared quantity
 RELATIVE = 1e-12

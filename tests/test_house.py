@@ -22,9 +22,12 @@ def test_a_hand_made_tree_is_measured_as_counted_by_hand(tmp_path):
     # across packages: a private module's public name, and a private name by a relative import
     (sub / "c.py").write_text("from bogie._kernel import run\nfrom ..b import _helper\n")
     (pipeline / "d.py").write_text("x = 1\n" * 501)
+    # a deprecation shim's lazy import (a module __getattr__) is no edge: e <- f only, no circle
+    (pipeline / "e.py").write_text("def __getattr__(name):\n    from pipeline import f\n")
+    (pipeline / "f.py").write_text("from pipeline import e\n")
     m = house.measure(tmp_path)
     # a.py 1 line; b.py 4 (_helper and two blank) + 61 (long); _kernel.py 2
-    assert m["lines_per_package"] == {"bogie": 1 + 65 + 2, "bogie.sub": 2, "pipeline": 501}
+    assert m["lines_per_package"] == {"bogie": 1 + 65 + 2, "bogie.sub": 2, "pipeline": 501 + 2 + 1}
     assert m["modules_over_500"] == [(501, "pipeline/d.py")]
     assert m["functions_over_60"] == [(61, "bogie.b.long")]
     assert m["private_imports"] == 2  # _helper twice; run is public

@@ -30,7 +30,7 @@ from _fingerprint import describe, fingerprint
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
 from bogie.newmark import MODEL_LINEAR, MODEL_NONLINEAR, consistent_acceleration, integrate
-from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
 
 DATA = Path(__file__).parent / "data" / "kernel_identity.npz"

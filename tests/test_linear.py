@@ -4,7 +4,7 @@ import numpy as np
 import pytest
 
 from bogie import linear, static
-from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import Flat
 
 

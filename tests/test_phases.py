@@ -7,7 +7,7 @@ import pytest
 
 from bogie import nonlinear as nl
 from bogie import phases as ph
-from bogie.params import tandem_trrl, triaxle_stage1
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile, Sinusoid
 from bogie.road.wim import sensor_reading
 

@@ -13,7 +13,8 @@ import pytest
 
 from bogie import linear, metrics, static
 from bogie import nonlinear as nl
-from bogie.params import INHIBITORS, NO_STOP, Bogie, tandem_trrl, triaxle_stage1
+from bogie.params import INHIBITORS, NO_STOP, Bogie
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep
 
 MAKERS = [tandem_trrl, triaxle_stage1]

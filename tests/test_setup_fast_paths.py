@@ -6,7 +6,8 @@ import numpy as np
 import pytest
 
 from bogie import nonlinear as nl
-from bogie.params import Bogie, equaliser_arm_changes, preset, preset_fields, with_equaliser_arms
+from bogie.params import Bogie, equaliser_arm_changes, with_equaliser_arms
+from bogie.presets import preset, preset_fields
 
 
 @pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])

@@ -7,7 +7,8 @@ import pytest
 
 from bogie import _nonlinear_core as core
 from bogie import nonlinear as nl
-from bogie.params import INHIBITORS, tandem_trrl, triaxle_stage1
+from bogie.params import INHIBITORS
+from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep, axle_heights
 
 BAND = 2000.0  # [N]

@@ -154,9 +154,10 @@ def _to_stderr(text: str) -> None:
 
 def main(argv: list[str] | None = None) -> int:
     """Run the stage from the command line."""
-    from pipeline import report  # the package's docstring is the command's description
-
-    parser = argparse.ArgumentParser(prog="python -m pipeline.report", description=report.__doc__.splitlines()[0])
+    # the package's docstring is the command's description: the package is loaded before any module of it, so it is
+    # read from there, not imported back (no circle of imports)
+    package = sys.modules[__name__.rpartition(".")[0]]
+    parser = argparse.ArgumentParser(prog="python -m pipeline.report", description=package.__doc__.splitlines()[0])
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")

@@ -32,6 +32,7 @@ __all__ = [
     "plot_series",
     "run_counts",
     "summary_numbers",
+    "worse_without",
 ]
 
 
@@ -294,3 +295,18 @@ def parameter_panels(fleet: pd.DataFrame, raw: Mapping[str, Any], config: Config
         }
     )
     return panels
+
+
+def worse_without(numbers: Mapping[str, Any]) -> dict[str, list[str]]:
+    """Per protocol, the ablation variants (an inhibitor, or "all") whose removal made the fleet mean maximum deviation
+    worse with the whole paired interval of the change on that side (``reduction_high`` below zero), in the ranking's
+    order with "all" last; protocols with none are left out."""
+    out = {}
+    for protocol, abl in numbers["ablation"].items():
+        order = [*numbers["ranking"], "all"]
+        worse = [
+            v for v in order if v in abl and abl[v].get("reduction_high") is not None and abl[v]["reduction_high"] < 0.0
+        ]
+        if worse:
+            out[protocol] = worse
+    return out

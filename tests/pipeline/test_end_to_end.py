@@ -19,7 +19,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from bogie.params import GRAVITY, INHIBITORS, preset
+from bogie.params import GRAVITY, INHIBITORS
+from bogie.presets import preset
 from pipeline.config import load_params
 from pipeline.schema import RUN_COLUMNS
 

@@ -117,7 +117,7 @@ def test_summary_table_formats_indices_and_ablation_without_units():
 
 
 def test_worse_without_lists_the_removals_whose_whole_interval_is_worse():
-    from pipeline.report.pages.front import worse_without
+    from pipeline.report.tables import worse_without
 
     def entry(high):
         return {"reduction": high - 0.001, "reduction_low": high - 0.002, "reduction_high": high}

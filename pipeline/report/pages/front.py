@@ -15,8 +15,9 @@ from bogie.fleet.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import A4, LEFT, RIGHT, first_fit, page_header, table_axes, text_block
+from pipeline.report.pages.sensitivity import ablation_bars
 from pipeline.report.style import GROUP_LABEL, factor_label
-from pipeline.report.tables import run_counts
+from pipeline.report.tables import run_counts, worse_without
 
 __all__ = [
     "SUBTITLE",
@@ -28,7 +29,6 @@ __all__ = [
     "title",
     "title_facts",
     "title_page",
-    "worse_without",
 ]
 
 TITLE = "Why mechanically equalised trailer bogies do not share load equally"
@@ -156,27 +156,11 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
     return list(SUMMARY_HEADER), rows
 
 
-def worse_without(numbers: Mapping[str, Any]) -> dict[str, list[str]]:
-    """Per protocol, the ablation variants (an inhibitor, or "all") whose removal made the fleet mean maximum deviation
-    worse with the whole paired interval of the change on that side (``reduction_high`` below zero), in the ranking's
-    order with "all" last; protocols with none are left out."""
-    out = {}
-    for protocol, abl in numbers["ablation"].items():
-        order = [*numbers["ranking"], "all"]
-        worse = [
-            v for v in order if v in abl and abl[v].get("reduction_high") is not None and abl[v]["reduction_high"] < 0.0
-        ]
-        if worse:
-            out[protocol] = worse
-    return out
-
-
 def findings_page(
     findings: Sequence[str], ablation: pd.DataFrame, caption: Sequence[str], action: Sequence[str]
 ) -> Figure:
     """Page 2: three findings in words, one figure (the ablation's fleet mean maximum deviation by protocol) with its
     caption, then what to do; in the largest type of :data:`SUMMARY_SIZES` that ends above the footer."""
-    from pipeline.report.pages.sensitivity import ablation_bars
 
     def draw(size: float) -> tuple[Figure, float]:
         fig = Figure(figsize=A4)

@@ -13,8 +13,8 @@ import numpy as np
 from matplotlib.figure import Figure
 
 from bogie import cases, fe, metrics
-from bogie.params import triaxle_stage1
 from bogie.plotting import case_history, figure2
+from bogie.presets import triaxle_stage1
 from bogie.results import DynamicResult
 from bogie.static import nondimensional_loads
 from pipeline.report import text

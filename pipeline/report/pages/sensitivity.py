@@ -12,6 +12,7 @@ from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, text_block
 from pipeline.report.style import MEASURE_LABEL, PROTOCOL_LABEL, factor_label
+from pipeline.report.tables import worse_without
 
 __all__ = ["ablation_bars", "page", "sensitivity_page"]
 
@@ -135,8 +136,6 @@ def page(ctx: Context) -> list[Page]:
     """Page 3: Sobol' indices (data/sensitivity/sobol_indices.csv) and the ablation (ablation.csv, group all)."""
     tables = ctx.inputs.sensitivity
     abl = tables["ablation.csv"]
-    from pipeline.report.pages.front import worse_without
-
     caption = text.render("sensitivity.j2", numbers=ctx.numbers, worse=worse_without(ctx.numbers))
     measure = ctx.inputs.sensitivity_metrics["sobol"]["measure"]
     fig = sensitivity_page(tables["sobol_indices.csv"], abl[abl["group"] == "all"], measure, caption)
