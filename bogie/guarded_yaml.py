@@ -26,7 +26,7 @@ from typing import IO, Any
 
 import yaml
 
-from bogie._files import regular_file
+from bogie.files import regular_file
 
 #: YAML's merge key ``<<``, which may legitimately appear more than once
 _MERGE_TAG = "tag:yaml.org,2002:merge"

@@ -26,7 +26,16 @@ from bogie.newmark import _STATUS_TEXT, consistent_acceleration
 from bogie.params import Bogie
 from bogie.results import Profile
 
-__all__ = ["MeanReading", "Phase", "PhaseOutcome", "PhasesRun", "RoadTable", "SensorReading", "run"]
+__all__ = ["MeanReading", "Phase", "PhaseOutcome", "PhasesRun", "RoadTable", "SensorReading", "kernel_cached", "run"]
+
+
+def kernel_cached() -> bool:
+    """Whether numba's cache holds this version of the weighings' kernel (``run_phases``) for this clone
+    (:func:`bogie.numba_cache.is_cached`): what a stage asks before it starts workers that would each compile it."""
+    from bogie.numba_cache import is_cached
+
+    return is_cached(pc.__file__, function="run_phases")
+
 
 #: Newton iterations per step and the residual tolerance are those of :func:`bogie.nonlinear.simulate`
 MAX_ITER = 25

@@ -2,7 +2,7 @@
 
 The one table of ranges (:data:`SCALAR_RANGES`, :data:`AXLE_RANGES`, :data:`EQUALISER_RANGES` of
 :class:`FieldRange`) that the steel bogie validates against, that the pipeline's configuration reads its ranges from
-and whose checks (:func:`_check_scalar`, :func:`_check_vector`) the air-sprung bogie shares: each raises
+and whose checks (:func:`check_scalar`, :func:`check_vector`) the air-sprung bogie shares: each raises
 ``ValueError`` naming the field, its value, the allowed range and the unit. :mod:`bogie.params` re-exports the
 table, so ``from bogie.params import SCALAR_RANGES`` keeps working.
 """
@@ -92,7 +92,9 @@ def _show(value: Any) -> str:
     return repr(value.item()) if isinstance(value, np.generic) else repr(value)
 
 
-def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
+def check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
+    """``value`` as a float if it is a real number (not a bool or a text) in ``low < value <= high`` (``low <=`` if
+    ``low_inclusive``), finite; else a ValueError naming ``name``, the value, the allowed range and ``unit``."""
     if type(value) is float:
         # the usual case, without the array round trip below (float(np.asarray(v)) is v itself): a bogie is
         # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel
@@ -114,9 +116,11 @@ def _check_scalar(name: str, value: Any, low: float, high: float, unit: str, low
     return v
 
 
-def _check_vector(
+def check_vector(
     name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
 ) -> tuple[float, ...]:
+    """``value`` as a tuple of ``length`` floats, one per ``what`` (axle, equaliser), each :func:`check_scalar`'s
+    (named ``name[k]``); else a ValueError naming ``name``, what was given and what is wanted."""
     if type(value) is tuple and all(type(v) is float for v in value):
         pass  # a tuple of floats (what validation stores): one dimension, no numpy round trip needed
     elif isinstance(value, str | bytes) or np.ndim(value) == 0:
@@ -126,4 +130,4 @@ def _check_vector(
         raise ValueError(
             f"{name} has {len(values)} values but the bogie has {length} {what}s: give one per {what} in {unit}"
         )
-    return tuple(_check_scalar(f"{name}[{k}]", v, low, high, unit, low_inclusive) for k, v in enumerate(values))
+    return tuple(check_scalar(f"{name}[{k}]", v, low, high, unit, low_inclusive) for k, v in enumerate(values))

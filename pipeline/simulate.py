@@ -339,10 +339,9 @@ def compile_kernels(
     suspension, study's protocols; at most :data:`WARM_SAMPLES`) of ``samples`` here, which compiles and caches
     every kernel they use, and says how long that took; the workers then load the cache. Returns the seconds spent
     (0 when the cache was there)."""
-    from bogie import _phases_core
-    from bogie.numba_cache import is_cached
+    from bogie.phases import kernel_cached
 
-    if is_cached(_phases_core.__file__, function="run_phases"):
+    if kernel_cached():
         return 0.0
     log(
         "simulate: compiling the numba kernels for this version of the code, once (a few minutes on 2 cores; "

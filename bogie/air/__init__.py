@@ -23,7 +23,7 @@ from numpy.typing import ArrayLike, NDArray
 from bogie import numerics
 from bogie.params import GRAVITY, AxleGroup
 from bogie.presets import tandem_trrl, triaxle_stage1
-from bogie.ranges import FieldRange, _check_scalar, _check_vector
+from bogie.ranges import FieldRange, check_scalar, check_vector
 
 GAS_CONSTANT_AIR = 287.05
 #: the standard atmosphere [Pa]
@@ -124,11 +124,11 @@ class AirBogie(AxleGroup):
         if isinstance(self.tyre_wear, tuple) and not self.tyre_wear:
             object.__setattr__(self, "tyre_wear", (0.0,) * n)
         for name, r in AIR_AXLE_RANGES.items():
-            object.__setattr__(self, name, _check_vector(name, getattr(self, name), n, "axle", *r))
+            object.__setattr__(self, name, check_vector(name, getattr(self, name), n, "axle", *r))
         if any(b <= a for a, b in zip(self.axle_x, self.axle_x[1:])):
             raise ValueError(f"axle_x = {self.axle_x!r} must increase front to rear (m)")
         for name, r in AIR_SCALAR_RANGES.items():
-            object.__setattr__(self, name, _check_scalar(name, getattr(self, name), *r))
+            object.__setattr__(self, name, check_scalar(name, getattr(self, name), *r))
         p0 = self.design_gauge_pressure
         if p0 >= self.supply_pressure:
             raise ValueError(

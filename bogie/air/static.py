@@ -15,7 +15,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bogie import air
 from bogie.params import GRAVITY
-from bogie.ranges import _check_scalar
+from bogie.ranges import check_scalar
 
 
 @dataclass(frozen=True)
@@ -94,7 +94,7 @@ def equilibrium(
     RuntimeError
         If the solve does not converge.
     """
-    _check_scalar("load_factor", load_factor, 0.0, 2.0, "-", False)
+    check_scalar("load_factor", load_factor, 0.0, 2.0, "-", False)
     n = bogie.n_axles
     if bogie.pipe_conductance == 0.0 and (gas_mass is None or np.ndim(gas_mass) == 0):
         raise ValueError(

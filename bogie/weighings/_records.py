@@ -12,7 +12,7 @@ from pathlib import Path
 import numpy as np
 from numba import njit
 
-from bogie._files import regular_file
+from bogie.files import regular_file
 from bogie.weighings.formats import KMH
 
 #: plausible axle load [kg]: from the unsprung mass of a light axle to 50 kips (22.7 t), above which Elkins and
@@ -119,7 +119,7 @@ MAX_FILE_BYTES = 2**30
 
 
 def _regular(path: Path) -> os.stat_result:
-    """``path``'s status if it is a regular file (:func:`bogie._files.regular_file`), refused before it is opened."""
+    """``path``'s status if it is a regular file (:func:`bogie.files.regular_file`), refused before it is opened."""
     return regular_file(path, "give a file of WIM or weighbridge records")
 
 

@@ -38,6 +38,8 @@ from bogie.weighings._records import (
     GROSS_TOLERANCE,
     MAX_AXLES,
     MAX_BAD_FRACTION,
+    MAX_FILE_BYTES,
+    MEMORY_PER_BYTE,
     NO_AXLES,
     NON_NUMERIC,
     REL_TOL,
@@ -45,6 +47,7 @@ from bogie.weighings._records import (
     SNIFF_LINES,
     SPACING_RANGE,
     SPEED_RANGE,
+    SURVEY_BASE_MEMORY,
     TOO_SHORT,
     TWO_DIGIT_PIVOT,
     YEAR_RANGE,
@@ -57,6 +60,8 @@ from bogie.weighings._records import (
     _split,
     _stray_bytes,
     _timestamps,
+    survey_memory,
+    uncompressed_size,
 )
 from bogie.weighings._stream import CHUNK_BYTES, SeenStore, blocks, key_hashes
 from bogie.weighings._tmg import ALIKE, POUND, TMG_LAYOUTS, parse_tmg, split_dummies
@@ -72,6 +77,8 @@ from bogie.weighings.resolution import (
 __all__ = [
     "AXLE_LOAD_RANGE", "CSV_LANE_RANGE", "CSV_MAX_AXLES", "MAX_AXLES", "MAX_BAD_FRACTION", "SNIFF_LINES",
     "SPACING_RANGE", "SPEED_RANGE", "WEIGHT_STEPS_KG", "YEAR_RANGE", "ReadResult", "detect_format", "read_weighings",
+    "stream_weighings", "MAX_FILE_BYTES", "MEMORY_PER_BYTE", "SURVEY_BASE_MEMORY", "survey_memory",
+    "uncompressed_size",
 ]  # fmt: skip
 
 

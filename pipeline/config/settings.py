@@ -30,7 +30,7 @@ from pydantic import ValidationError
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
-from bogie.weighings._records import (
+from bogie.weighings.readers import (
     MAX_FILE_BYTES,
     MEMORY_PER_BYTE,
     SURVEY_BASE_MEMORY,
