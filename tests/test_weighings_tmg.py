@@ -180,6 +180,13 @@ def test_a_state_wide_file_is_tabulated_by_station(tmp_path):
     assert out["settings"]["grouping"].startswith("us-tandem: consecutive axles more than 40 in")
 
 
+def test_a_state_wide_file_streamed_with_its_groups_spilled_is_tabulated_by_station_alike(tmp_path):
+    path = write(tmp_path, "state.dat", [A_2001, A_2001, DUMMY_2001, B_2001])
+    whole = observed_survey(path, "auto", grouping="us-tandem").to_dict()
+    spilled = observed_survey(path, "auto", grouping="us-tandem", keep_groups=False).to_dict()
+    assert spilled["stations"] == whole["stations"] and spilled == whole
+
+
 def test_bogie_weighings_takes_the_legal_loads_of_the_files_country(tmp_path, capsys):
     import json
 

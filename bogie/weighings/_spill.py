@@ -37,7 +37,7 @@ SPILL_BLOCK = 1 << 18
 _BINS_TOTAL = 1 << 21
 #: the sizes spilled, by their code (the axles less two)
 SPILLED = ("tandem", "triaxle")
-_COLUMNS = {"size": np.int8, "station": np.int32, "loads": np.float64}
+_COLUMNS = ("size", "station", "loads")  # int8, int32, three float64 a group
 
 
 class GroupSpill:
@@ -67,28 +67,23 @@ class GroupSpill:
 
     def blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, loads (m, 3)) of :data:`SPILL_BLOCK` groups at a time, in file order."""
-        for fh in self._files.values():
-            fh.flush()
-        handles = {name: open(self.dir / name, "rb") for name in _COLUMNS}  # noqa: SIM115 - closed below
-        try:
-            for _start in range(0, self.count, SPILL_BLOCK):
-                size = np.fromfile(handles["size"], np.int8, SPILL_BLOCK)
-                station = np.fromfile(handles["station"], np.int32, len(size))
-                loads = np.fromfile(handles["loads"], np.float64, 3 * len(size)).reshape(-1, 3)
-                yield size, station, loads
-        finally:
-            for fh in handles.values():
-                fh.close()
+        return self._read("loads", 3)
 
     def value_blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, values (m, 4): :func:`_values`' spread and shares) of :data:`SPILL_BLOCK`
         groups at a time, in file order, as :func:`spilled_statistics`' first pass wrote them."""
+        return self._read("values", 4)
+
+    def _read(self, name: str, width: int) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
+        """The sizes, stations and the float64 file ``name`` of ``width`` columns, a block at a time."""
+        for fh in self._files.values():
+            fh.flush()
         with open(self.dir / "size", "rb") as sizes, open(self.dir / "station", "rb") as stations, \
-                open(self.dir / "values", "rb") as values:  # fmt: skip
+                open(self.dir / name, "rb") as floats:  # fmt: skip
             for _start in range(0, self.count, SPILL_BLOCK):
                 size = np.fromfile(sizes, np.int8, SPILL_BLOCK)
                 station = np.fromfile(stations, np.int32, len(size))
-                yield size, station, np.fromfile(values, np.float64, 4 * len(size)).reshape(-1, 4)
+                yield size, station, np.fromfile(floats, np.float64, width * len(size)).reshape(-1, width)
 
     def close(self) -> None:
         for fh in self._files.values():

@@ -221,33 +221,36 @@ class SeenStore:
         for rows in np.split(order, bounds):
             yield int(days[rows[0]]), rows
 
+    @staticmethod
+    def _known(known: np.ndarray, hashes: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+        """Whether each hash is in the sorted ``known``, and where it would go."""
+        at = np.searchsorted(known, hashes)
+        if not len(known):
+            return np.zeros(len(hashes), bool), at
+        return known[np.minimum(at, len(known) - 1)] == hashes, at
+
     def contains(self, stamps: np.ndarray, hashes: np.ndarray) -> np.ndarray:
         """Whether each hash (of a record of time stamp ``stamps``, numpy datetime64) is in the store."""
         found = np.zeros(len(hashes), bool)
         for day, rows in self._by_day(stamps):
-            known = self._day(day)
-            if len(known):
-                at = np.minimum(np.searchsorted(known, hashes[rows]), len(known) - 1)
-                found[rows] = known[at] == hashes[rows]
+            found[rows] = self._known(self._day(day), hashes[rows])[0]
             self._evict(day)
         return found
 
-    def add(self, stamps: np.ndarray, hashes: np.ndarray) -> None:
-        """Add the hashes of records of time stamps ``stamps`` (datetime64; those already in stay once)."""
+    def add(self, stamps: np.ndarray, hashes: np.ndarray) -> np.ndarray:
+        """Add the hashes of records of time stamps ``stamps`` (datetime64; those already in stay once), and return
+        whether each was in the store before this call (:meth:`contains`, in the same pass over the days)."""
+        found = np.zeros(len(hashes), bool)
         for day, rows in self._by_day(stamps):
             known = self._day(day)
-            new = np.unique(hashes[rows])
-            if len(known):  # those not in yet, put in place: a copy of the day, not a sort of it
-                at = np.searchsorted(known, new)
-                fresh = known[np.minimum(at, len(known) - 1)] != new
-                new, at = new[fresh], at[fresh]
-                merged = np.insert(known, at, new)
-            else:
-                merged = new
+            found[rows] = self._known(known, hashes[rows])[0]
+            new = np.unique(hashes[rows][~found[rows]])  # not yet in: put in place, a copy of the day, not a sort
+            merged = np.insert(known, self._known(known, new)[1], new) if len(known) else new
             self.days[day] = merged
             self.held += len(merged) - len(known)
             self.count += len(merged) - len(known)
             self._evict(day)
+        return found
 
     def close(self) -> None:
         """Remove the days written to disk."""

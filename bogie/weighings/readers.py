@@ -371,9 +371,7 @@ def _alike(parsed: dict, stamps: np.ndarray, seen: SeenStore | None) -> int:
         alike = _repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()
     if seen is not None and len(good):
         hashes = _hashes(parsed, stamps, good)
-        times = stamps[good]
-        alike = alike | seen.contains(times, hashes)
-        seen.add(times, hashes)
+        alike = alike | seen.add(stamps[good], hashes)
     return int(alike.sum())
 
 
@@ -391,10 +389,9 @@ def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenStore | None = Non
             repeat[good[_repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()]] = True
     if seen is not None and len(everyone):  # a repeat of a record of an earlier chunk, by its hash
         hashes = _hashes(parsed, stamps, everyone)
-        times = stamps[everyone]
-        repeat[everyone[seen.contains(times, hashes)]] = True
-        fresh = ~repeat[everyone]
-        seen.add(times[fresh], hashes[fresh])
+        # a repeat within the chunk has the hash of the record it repeats, added here too: adding every hash adds
+        # the same set as adding the first of each only
+        repeat[everyone[seen.add(stamps[everyone], hashes)]] = True
     reasons.flag(repeat, DUPLICATE)
 
 

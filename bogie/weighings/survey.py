@@ -29,7 +29,7 @@ from bogie.weighings.groups import (
     grouping_rule,
 )
 from bogie.weighings.readers import ReadResult, stream_weighings
-from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics
+from bogie.weighings.stats import STATISTICS_COLUMNS, axle_columns, statistics_dict, survey_statistics
 from bogie.weighings.wear import DAMAGE_EXPONENTS, EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
 
 __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
@@ -282,28 +282,32 @@ class _Tally:
     def stations(self, surveyed: pd.DataFrame) -> dict[str, dict[str, Any]]:
         """Per station of a file of more than one (a TMG file's ``station`` column): its vehicles and the statistics
         of its kept tandems and tri-axles; empty for a file of one station or none."""
-        if len(self.station_names) < 2:
-            return {}
-        out: dict[str, dict[str, Any]] = {}
-        code = surveyed["station_code"].to_numpy()
-        for name in sorted(self.station_names):
-            mine = surveyed[code == self.station_names[name]]
-            stats = statistics_dict(survey_statistics(mine, by="group")) if len(mine) else {}
-            out[str(name)] = {
-                "vehicles": int(self.vehicles_at[name]),
-                "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
-            }
-        return out
+        code = surveyed["station_code"].to_numpy() if len(self.station_names) > 1 else None
+
+        def statistics_of(c: int) -> pd.DataFrame | None:
+            mine = surveyed[code == c]
+            return survey_statistics(mine, by="group") if len(mine) else None
+
+        return self._per_station(statistics_of)
 
     def spilled_stations(self) -> dict[str, dict[str, Any]]:
         """:meth:`stations` from the spilled groups."""
+        table = None
+        if len(self.station_names) > 1 and self.spill.count:
+            table = spilled_statistics(self.spill, by_station=True)
+        return self._per_station(
+            lambda c: table[table["station_code"] == c].drop(columns="station_code") if table is not None else table
+        )
+
+    def _per_station(self, statistics_of) -> dict[str, dict[str, Any]]:
+        """``{station: {"vehicles", "groups": {size: statistics}}}`` from ``statistics_of(station code)`` (a
+        :func:`survey_statistics` table, or None for none); empty for a file of fewer than two stations."""
         if len(self.station_names) < 2:
             return {}
-        table = spilled_statistics(self.spill, by_station=True) if self.spill.count else pd.DataFrame()
         out: dict[str, dict[str, Any]] = {}
         for name in sorted(self.station_names):
-            mine = table[table["station_code"] == self.station_names[name]] if len(table) else table
-            stats = statistics_dict(mine.drop(columns="station_code")) if len(mine) else {}
+            table = statistics_of(self.station_names[name])
+            stats = statistics_dict(table) if table is not None and len(table) else {}
             out[str(name)] = {
                 "vehicles": int(self.vehicles_at[name]),
                 "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
@@ -321,6 +325,6 @@ def _spill(spill: GroupSpill, groups: pd.DataFrame) -> None:
     """Write the tandems and tri-axles of a chunk's kept ``groups`` to the spill: axles, station code, three loads."""
     axles = groups["n_axles"].to_numpy()
     surveyed = (axles == 2) | (axles == 3)
-    loads = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in _COMPACT[2:5]])
+    loads = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in axle_columns(3)])
     station = groups["station_code"].to_numpy()[surveyed] if "station_code" in groups else None
     spill.append(axles[surveyed], station, loads)
