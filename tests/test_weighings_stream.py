@@ -11,7 +11,7 @@ import pandas as pd
 import pytest
 
 from bogie.weighings._stream import SeenStore, blocks, key_hashes
-from bogie.weighings.readers import read_weighings
+from bogie.weighings.readers import read_weighings, stream_weighings
 from bogie.weighings.survey import observed_survey
 from bogie.weighings.writers import write_weighings
 
@@ -199,3 +199,20 @@ def test_a_sink_gets_every_kept_group_once_and_afresh_on_a_second_pass(tmp_path)
     assert sink.starts == 2 and len(sink.parts) > 1  # read again with the file's resolution
     assert pd.concat(sink.parts, ignore_index=True).equals(whole.groups)
     assert streamed.to_dict() == whole.to_dict()
+
+
+def test_a_consumers_error_stops_the_read_and_reaches_the_caller(tmp_path):
+    """The chunks are consumed on a second thread while the next is parsed: an error of the consumer is the
+    caller's, raised as it was, and no chunk after the failing one is consumed; the chunks come in file order."""
+    path = tmp_path / "site.mon"
+    write_weighings(fleet(400), path, "mon")
+    firsts: list[int] = []
+
+    def consume(vehicles: pd.DataFrame) -> None:
+        firsts.append(int(vehicles["line"].iloc[0]))
+        if len(firsts) == 3:
+            raise RuntimeError("the consumer's own failure")
+
+    with pytest.raises(RuntimeError, match="the consumer's own failure"):
+        stream_weighings(path, "mon", None, lambda: None, consume, chunk_bytes=4_096)
+    assert len(firsts) == 3 and firsts == sorted(firsts) and firsts[0] == 1

@@ -13,7 +13,7 @@ from numba import njit
 GROUP_COLUMNS = 3
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def split_groups(n, loads, gaps, low, high):  # pragma: no cover - compiled
     """Groups of each vehicle: a new group starts after a spacing above ``high`` or at most ``low`` [m] (NaN: no
     new group). Returns (vehicle, index in vehicle, first axle (0-based), axles, group load, loads (groups, 3),

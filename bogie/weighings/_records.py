@@ -173,7 +173,7 @@ def _split(data: bytes) -> _Lines:
     return _Lines(buf, starts[:count], ends[:count], lines[:count])
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _split_kernel(buf, blank, starts, ends, lines):  # pragma: no cover - compiled
     """Each non-blank line's [start, end) (its line end and a trailing carriage return not included) and 1-based
     number; returns how many. A line is blank when every byte is in ``blank``."""
@@ -208,7 +208,7 @@ def _stray_bytes(lines: _Lines, allowed: np.ndarray) -> np.ndarray:
     return out
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _stray_kernel(buf, starts, ends, allowed, out):  # pragma: no cover - compiled
     for i in range(starts.shape[0]):
         for p in range(starts[i], ends[i]):
@@ -243,7 +243,7 @@ def _gather(lines: _Lines, rows: np.ndarray, offset: np.ndarray | int, width: in
     return value, ok
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _gather_kernel(buf, pos, width, value, ok):  # pragma: no cover - compiled
     for r in range(pos.shape[0]):
         v = 0

@@ -176,7 +176,7 @@ def _quantile(n: int, p: float, value) -> float:
     return b - diff * (1 - t) if t >= 0.5 else a + diff * t
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _ranges(cell, values, valid, low, high):  # pragma: no cover - compiled
     """Count each cell's non-NaN values of each quantity and their least and greatest."""
     for g in range(values.shape[0]):
@@ -191,7 +191,7 @@ def _ranges(cell, values, valid, low, high):  # pragma: no cover - compiled
                     high[c, q] = v
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _histogram(cell, values, first, last, s_lo, s_hi, marks, hist, bin_low, bin_high):  # pragma: no cover
     """For each value: among its cell's and quantity's intervals (slots first[c, q] .. last[c, q] - 1, disjoint,
     sorted by their least value), mark the first slot above it (every slot from there on has it below), and count

@@ -135,7 +135,7 @@ def key_hashes(columns: list[np.ndarray], loads: np.ndarray, spacings: np.ndarra
                  np.ascontiguousarray(spacings, np.float64).view(np.uint64), np.asarray(n, np.int64))  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _fold(words, loads, spacings, n):  # pragma: no cover - compiled
     prime = np.uint64(0x100000001B3)
     out = np.empty(words.shape[0], np.uint64)

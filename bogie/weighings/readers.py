@@ -20,6 +20,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Callable
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -668,48 +669,59 @@ def stream_weighings(
 def _pass(
     path: Path, fmt: str, gross_kg: float | None, consume, chunk_bytes: int, first_block: bytes, max_bytes: int | None
 ) -> dict:
-    """One pass over the file's chunks: each parsed, checked and its vehicles consumed; the tallies of the pass."""
+    """One pass over the file's chunks: each parsed and checked, and its vehicles consumed on a second thread while
+    the next chunk is parsed (one chunk at a time, in file order: the consumer sees what a single thread would give
+    it); the tallies of the pass."""
     seen = SeenStore()
-    skipped: Counter = Counter()
-    bad_lines: dict[str, list[int]] = {}
-    counted: Counter = Counter()
-    counts: ResidueCounts | None = None
+    tally = {"records": 0, "good": 0, "header": False, "skipped": Counter(), "bad_lines": {}, "counted": Counter(),
+             "counts": None}  # fmt: skip
     header = b""
-    tally = {"records": 0, "good": 0, "header": False}
-    for k, (block, lines_before) in enumerate(blocks(path, max_bytes, chunk_bytes)):
-        data, offset = block, lines_before
-        if fmt == "csv":
-            if k == 0:
-                end = block.find(b"\n")
-                header = block[: end + 1] if end >= 0 else block + b"\n"
-            else:
-                data, offset = header + block, lines_before - 1  # the header is line 1 of the chunk
-        try:
-            parsed = _parse(data, fmt, str(path), gross_kg, seen)
-        except ValueError as exc:  # a CSV header that is not the layout's
-            raise ValueError(f"{exc}{_sniff(first_block, fmt)}") from None
-        if not parsed:
-            continue
-        tally["header"] = True
-        if gross_kg is None:
-            gross_kg = parsed["gross_kg"]  # the first chunk's resolution, for the chunks after it
-        tally["gross_kg"] = gross_kg if k else parsed["gross_kg"]
-        parsed["line"] = parsed["line"] + offset
-        reasons: _Reasons = parsed["reasons"]
-        tally["records"] += len(reasons.code)
-        tally["good"] += int(reasons.ok.sum())
-        chunk_skipped, chunk_lines = reasons.counted(parsed["line"])
-        skipped.update(chunk_skipped)
-        for reason, lines in chunk_lines.items():
-            bad_lines[reason] = (bad_lines.get(reason, []) + lines)[:EXAMPLES]
-        counted.update(parsed.get("counted", {}))
-        if counts is None:
-            counts = parsed["counts"]
-        else:
-            counts.merge(parsed["counts"])
-        if reasons.ok.any():
-            consume(_frame(parsed))
+    behind = None  # the chunk being consumed
+    with ThreadPoolExecutor(1) as pool:
+        for k, (block, lines_before) in enumerate(blocks(path, max_bytes, chunk_bytes)):
+            data, offset = block, lines_before
+            if fmt == "csv":
+                if k == 0:
+                    end = block.find(b"\n")
+                    header = block[: end + 1] if end >= 0 else block + b"\n"
+                else:
+                    data, offset = header + block, lines_before - 1  # the header is line 1 of the chunk
+            try:
+                parsed = _parse(data, fmt, str(path), gross_kg, seen)
+            except ValueError as exc:  # a CSV header that is not the layout's
+                raise ValueError(f"{exc}{_sniff(first_block, fmt)}") from None
+            if not parsed:
+                continue
+            if gross_kg is None:
+                gross_kg = parsed["gross_kg"]  # the first chunk's resolution, for the chunks after it
+            tally["gross_kg"] = gross_kg if k else parsed["gross_kg"]
+            parsed["line"] = parsed["line"] + offset
+            if _count(tally, parsed):
+                if behind is not None:
+                    behind.result()
+                behind = pool.submit(consume, _frame(parsed))
+        if behind is not None:
+            behind.result()
     seen.close()  # on an exception, when the store is collected
-    tally.update(skipped=skipped, bad_lines=bad_lines, counted=dict(counted), counts=counts or ResidueCounts(None))
+    tally.update(counted=dict(tally["counted"]), counts=tally["counts"] or ResidueCounts(None))
     tally.setdefault("gross_kg", gross_kg)
     return tally
+
+
+def _count(tally: dict, parsed: dict) -> bool:
+    """Add a parsed chunk's records, skips (with their first lines), dummy records and weight residues to the pass's
+    ``tally``; whether the chunk has a good record."""
+    tally["header"] = True
+    reasons: _Reasons = parsed["reasons"]
+    tally["records"] += len(reasons.code)
+    tally["good"] += int(reasons.ok.sum())
+    chunk_skipped, chunk_lines = reasons.counted(parsed["line"])
+    tally["skipped"].update(chunk_skipped)
+    for reason, lines in chunk_lines.items():
+        tally["bad_lines"][reason] = (tally["bad_lines"].get(reason, []) + lines)[:EXAMPLES]
+    tally["counted"].update(parsed.get("counted", {}))
+    if tally["counts"] is None:
+        tally["counts"] = parsed["counts"]
+    else:
+        tally["counts"].merge(parsed["counts"])
+    return bool(reasons.ok.any())

@@ -237,7 +237,7 @@ def _detect(counts: ResidueCounts) -> Resolution:
     return Resolution(step, "format", step, counts.unit_kg, n, n, 0, 0, 0.0, *base)
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _residue_histogram(values, base_kg, histogram):  # pragma: no cover - compiled
     """(loads that are not NaN, whether every one is a whole number of ``base_kg``); ``histogram`` counts their
     residues modulo its length (when whole)."""

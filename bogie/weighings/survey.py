@@ -9,6 +9,7 @@ from __future__ import annotations
 
 from collections import Counter
 from collections.abc import Sequence
+from concurrent.futures import ThreadPoolExecutor
 from dataclasses import dataclass
 from pathlib import Path
 from typing import Any
@@ -179,8 +180,13 @@ def observed_survey(
         else:  # from the groups spilled to disk, in bounded memory
             groups = pd.DataFrame(columns=list(_COMPACT[:-1]))
             spill = tally.spill
-            statistics = spilled_statistics(spill) if spill.count else pd.DataFrame(columns=["group"])
-            road = spilled_wear(spill, legal, legal_axle_kg) if spill.count else pd.DataFrame(columns=["group"])
+            if spill.count:  # two independent reads of the spill: the wear on a second thread (compiled, no GIL)
+                with ThreadPoolExecutor(1) as pool:
+                    wear = pool.submit(spilled_wear, spill, legal, legal_axle_kg)
+                    statistics = spilled_statistics(spill)
+                    road = wear.result()
+            else:
+                statistics, road = pd.DataFrame(columns=["group"]), pd.DataFrame(columns=["group"])
             stations = tally.spilled_stations()
     finally:
         tally.close()

@@ -303,7 +303,7 @@ def _overload_figures(hidden: int, group_over: int, judged: int, confidence: flo
     }  # fmt: skip
 
 
-@njit(cache=True)
+@njit(cache=True, nogil=True)
 def _wear_moments(loads, n, exponents, standard_axle, moments):  # pragma: no cover - compiled
     """Add the groups' damage D and equal-shared damage E for each exponent (as :func:`group_wear`: x = W / W_s,
     D = sum x^k, E = n mean(x)^k, libm's pow) to ``moments[k] = (count, mean D, mean E, M2 D, M2 E, C DE)``,
