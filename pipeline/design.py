@@ -51,19 +51,11 @@ DESIGN_KEYS: tuple[str, ...] = (
 
 # ---- params.yaml -> the library ---------------------------------------------------------------------------------
 def settings(config: Config) -> DesignSettings:
-    """params.yaml's ``design:`` (validated, SI) as the library's settings; the section must not be null."""
-    spec = config.design
-    if spec is None:
+    """params.yaml's ``design:``, the library's settings as the configuration holds them; the section must not be
+    null."""
+    if config.design is None:
         raise DesignError("design is null in params.yaml: there is no design study to set up")
-    return DesignSettings(
-        grid=dict(spec.grid),
-        groups=tuple(spec.groups),
-        n_conditions=spec.n_conditions,
-        tilt_step_deg=spec.tilt_step_deg,
-        n_space_filling=spec.n_space_filling,
-        target_share=spec.target_share,
-        confidence_level=spec.confidence_level,
-    )
+    return config.design
 
 
 def experiment(config: Config) -> DesignExperiment:

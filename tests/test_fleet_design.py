@@ -172,8 +172,8 @@ def test_the_experiment_runs_every_design_over_the_same_conditions_and_tilts():
         ({"n_conditions": 1}, r"n_conditions = 1: must be a whole number >= 2 \[-\]"),
         ({"n_space_filling": 1.5}, r"n_space_filling = 1.5: must be a whole number >= 0 \[-\]"),
         ({"tilt_step_deg": 0.0}, r"tilt_step_deg = 0.0: must be a finite number > 0 \[degree\]"),
-        ({"target_share": 1.5}, r"target_share = 1.5: must lie in \(0, 1\) \[-\]"),
-        ({"confidence_level": 0.0}, r"confidence_level = 0.0: must lie in \(0, 1\) \[-\]"),
+        ({"target_share": 1.5}, r"target_share = 1.5: must be a finite number in \(0, 1\) \[-\]"),
+        ({"confidence_level": 0.0}, r"confidence_level = 0.0: must be a finite number in \(0, 1\) \[-\]"),
     ],
 )
 def test_bad_settings_are_refused_naming_the_argument_value_range_and_unit(changes, message):

@@ -52,6 +52,7 @@ from bogie.fleet.distributions import Distribution
 from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, Fleet, design_seed, road_seed, sensor_seed, study_frame
 from bogie.fleet.weighing import CHUNK_ROWS, weigh_fleet
+from bogie.settings import FrozenMap, check_settings, setting
 
 __all__ = [
     "CONDITION_DIMENSIONS", "FACTORS", "FACTOR_UNITS", "FLEET_SLOT", "HELD", "DesignError", "DesignExperiment",
@@ -97,26 +98,13 @@ def _levels(factor: Any, levels: Any) -> tuple[float, ...]:
 
 @dataclass(frozen=True)
 class DesignSettings:
-    """The controlled experiment's settings (``docs/design.md``), checked when made.
+    """The controlled experiment's settings (``docs/design.md``), checked when made; each number setting's unit,
+    range and doc are declared with it (:mod:`bogie.settings`).
 
-    Attributes
-    ----------
-    grid
-        Design factor (:data:`FACTORS`) -> its levels [SI: N m/rad, m, m, -, N]: the representative designs are
-        every combination, the other factors at today's typical values (the fleet distributions' medians). The
-        order of the factors and levels is the order of the designs.
-    groups
-        The axle groups whose designs are studied (``tandem``, ``triaxle``); each also runs its air-sprung group.
-    n_conditions
-        Operating conditions (tilt, tyre wear, payload, approach road) every design runs over [-], at least 2.
-    tilt_step_deg
-        Step of the chassis-tilt grid, outward from level to the tilt distribution's bounds [degree], > 0.
-    n_space_filling
-        Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions [-].
-    target_share
-        The share of bogies within 5 % a design must keep [-], in (0, 1).
-    confidence_level
-        Of the shares' Wilson intervals [-], in (0, 1).
+    ``grid`` maps a design factor (:data:`FACTORS`) to its levels [SI: N m/rad, m, m, -, N]: the representative
+    designs are every combination, the other factors at today's typical values (the fleet distributions' medians);
+    the order of the factors and levels is the order of the designs. ``groups`` are the axle groups whose designs
+    are studied (``tandem``, ``triaxle``); each also runs its air-sprung group.
 
     Raises
     ------
@@ -126,11 +114,25 @@ class DesignSettings:
 
     grid: Mapping[str, Sequence[float]]
     groups: tuple[str, ...] = tuple(GROUP_AXLES)
-    n_conditions: int = 20
-    tilt_step_deg: float = 0.5
-    n_space_filling: int = 6
-    target_share: float = 0.95
-    confidence_level: float = 0.95
+    n_conditions: int = setting(
+        20, unit="-", low=2, whole=True,
+        doc="Operating conditions (tilt, tyre wear, payload, approach road) every design runs over.",
+    )  # fmt: skip
+    tilt_step_deg: float = setting(
+        0.5, unit="degree", low=0.0, low_open=True,
+        doc="Step of the chassis-tilt grid, outward from level over the tilt distribution's bounds.",
+    )  # fmt: skip
+    n_space_filling: int = setting(
+        6, unit="-", low=0, whole=True,
+        doc="Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions.",
+    )  # fmt: skip
+    target_share: float = setting(
+        0.95, unit="-", low=0.0, high=1.0, low_open=True, high_open=True,
+        doc="The share of bogies within 5 % a design must keep.",
+    )  # fmt: skip
+    confidence_level: float = setting(
+        0.95, unit="-", low=0.0, high=1.0, low_open=True, high_open=True, doc="Of the shares' Wilson intervals."
+    )
 
     def __post_init__(self) -> None:
         groups = (self.groups,) if isinstance(self.groups, str) else tuple(self.groups)
@@ -141,16 +143,8 @@ class DesignSettings:
         object.__setattr__(self, "groups", groups)
         if not isinstance(self.grid, Mapping) or not self.grid:
             raise DesignError(f"grid = {self.grid!r}: must map one or more of {', '.join(FACTORS)} to their levels")
-        object.__setattr__(self, "grid", {f: _levels(f, v) for f, v in self.grid.items()})
-        _whole("n_conditions", self.n_conditions, 2)
-        _whole("n_space_filling", self.n_space_filling, 0)
-        step = self.tilt_step_deg
-        if isinstance(step, bool) or not isinstance(step, (int, float)) or not (math.isfinite(step) and step > 0.0):
-            raise DesignError(f"tilt_step_deg = {step!r}: must be a finite number > 0 [degree]")
-        for name in ("target_share", "confidence_level"):
-            value = getattr(self, name)
-            if isinstance(value, bool) or not isinstance(value, (int, float)) or not 0.0 < value < 1.0:
-                raise DesignError(f"{name} = {value!r}: must lie in (0, 1) [-]")
+        object.__setattr__(self, "grid", FrozenMap({f: _levels(f, v) for f, v in self.grid.items()}))
+        check_settings(self, DesignError)
 
 
 @dataclass(frozen=True)

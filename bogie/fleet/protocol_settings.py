@@ -7,96 +7,79 @@ simulation.
 
 from __future__ import annotations
 
-import math
+import dataclasses
 from dataclasses import dataclass
 from typing import Any
 
 from bogie.road import wim
+from bogie.settings import check_settings, setting
 
 __all__ = ["StaticProtocol", "WimProtocol"]
 
 
-def _positive(spec: Any, name: str, unit: str, alternative: str = "", zero: bool = False) -> None:
-    """Refuse a setting of ``spec`` that is not a finite number > 0 (>= 0 if ``zero``), naming it and its unit."""
-    value = getattr(spec, name)
-    number = not isinstance(value, bool) and isinstance(value, (int, float))
-    if not (number and math.isfinite(value) and (value >= 0.0 if zero else value > 0.0)):
-        allowed = "a finite number >= 0" if zero else "a finite number > 0"
-        extra = f" ({alternative})" if alternative and not zero else ""
-        raise ValueError(f"{type(spec).__name__}.{name} = {value!r}: must be {allowed}{extra} [{unit}]")
+def _positive(unit: str, doc: str, default: Any = dataclasses.MISSING, zero: bool = False) -> Any:
+    """A setting that is a finite number > 0 (>= 0 if ``zero``) in ``unit``."""
+    return setting(default, unit=unit, doc=doc, low=0.0, low_open=not zero)
 
 
 @dataclass(frozen=True)
 class StaticProtocol:
-    """Static weighbridge: load [s], crawl over an approach [m] at walking pace [m/s], settle [s]; time step [s].
+    """Static weighbridge: load, crawl over an approach at walking pace, settle; the time step."""
 
-    ``step_tolerance`` [m]: the local error allowed per adaptive step on the approach (the load ramp and the settle
-    take a share of it, :func:`static_phases`); None: fixed steps of ``dt``, which is also the first adaptive step.
-    """
-
-    load_time: float
-    approach_length: float
-    crawl_speed: float
-    settle_time: float
-    dt: float
-    step_tolerance: float | None = None
+    load_time: float = _positive("s", "Time the payload takes to come on, the bogie at rest.")
+    approach_length: float = _positive("m", "Length of the approach the bogie crawls over onto the weighbridge.")
+    crawl_speed: float = _positive("m/s", "Speed of the crawl, walking pace.")
+    settle_time: float = _positive("s", "Time the bogie settles at rest on the weighbridge before it is read.")
+    dt: float = _positive("s", "Time step (and the first adaptive step).")
+    step_tolerance: float | None = _positive(
+        "m", "Local error allowed per adaptive step on the approach (the load ramp and the settle take a share of it, "
+        ":func:`static_phases`); None: fixed steps of ``dt``.", None,
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
-        for name, unit in (("load_time", "s"), ("approach_length", "m"), ("crawl_speed", "m/s"),
-                           ("settle_time", "s"), ("dt", "s")):  # fmt: skip
-            _positive(self, name, unit)
-        if self.step_tolerance is not None:
-            _positive(self, "step_tolerance", "m", "or None for fixed steps of dt")
+        check_settings(self, ValueError, "StaticProtocol.")
 
 
 @dataclass(frozen=True)
 class WimProtocol:
-    """Weigh-in-motion pass: road speed [m/s] over an approach [m]; time step [s]; the site and the sensor.
+    """Weigh-in-motion pass: the road speed over an approach, the time step; the site and the sensor.
 
-    Attributes
-    ----------
-    site_length_before, site_length_after
-        Length of the smooth WIM site ahead of and past the sensor [m] (both 0: the sensor lies in the sampled road).
-    site_iri
-        International Roughness Index of the site's pavement [m/km] (the IRI's own unit, ASTM E1926; not SI m/m).
-    sensor_length
-        The sensor's weighing length along the road [m] (0: a point sensor).
-    contact_length
-        The tyres' contact patch length [m].
-    sensor
-        The sensor type (:data:`bogie.road.wim.SENSORS`; ``none``: no error): the sizes of its error's two parts,
-        :data:`bogie.road.wim.SENSOR_ERRORS`. A reading is the force averaged over the sensor times
-        ``(1 + s_v z_v) (1 + s_a z_i)`` (:func:`bogie.road.wim.sensor_factors`).
-    sensor_vehicle_error, sensor_axle_error
-        ``s_v``, the sd of the error common to a pass's axles, and ``s_a``, of each axle's own [-] (fractions); None:
-        the sensor type's.
+    ``sensor`` is the sensor type (:data:`bogie.road.wim.SENSORS`; ``none``: no error), which gives the sizes of its
+    error's two parts (:data:`bogie.road.wim.SENSOR_ERRORS`) unless they are set. A reading is the force averaged
+    over the sensor times ``(1 + s_v z_v) (1 + s_a z_i)`` (:func:`bogie.road.wim.sensor_factors`).
     """
 
-    speed: float
-    approach_length: float
-    dt: float
-    site_length_before: float = 0.0
-    site_length_after: float = 0.0
-    site_iri: float = 1.3
-    sensor_length: float = 0.0
-    contact_length: float = 0.0
-    sensor: str = "none"
-    sensor_vehicle_error: float | None = None
-    sensor_axle_error: float | None = None
+    speed: float = _positive("m/s", "Road speed over the approach and the site.")
+    approach_length: float = _positive("m", "Length of the sampled road before the site.")
+    dt: float = _positive("s", "Time step.")
+    site_length_before: float = _positive(
+        "m", "Length of the smooth WIM site ahead of the sensor (this and the length after both 0: the sensor lies "
+        "in the sampled road).", 0.0, zero=True,
+    )  # fmt: skip
+    site_length_after: float = _positive("m", "Length of the smooth WIM site past the sensor.", 0.0, zero=True)
+    site_iri: float = _positive(
+        "m/km", "International Roughness Index of the site's pavement (the IRI's own unit, ASTM E1926; not SI m/m).",
+        1.3,
+    )  # fmt: skip
+    sensor_length: float = _positive("m", "The sensor's weighing length along the road (0: a point sensor).", 0.0,
+                                     zero=True)  # fmt: skip
+    contact_length: float = _positive("m", "The tyres' contact patch length.", 0.0, zero=True)
+    sensor: str = setting(
+        "none", unit="-", choices=tuple(wim.SENSORS),
+        doc="The sensor type; the sizes of its error's two parts are bogie.road.wim.SENSOR_ERRORS (docs/wim-site.md).",
+    )  # fmt: skip
+    sensor_vehicle_error: float | None = setting(
+        None, unit="-", low=0.0, high=0.5, high_open=True,
+        doc="``s_v``, the sd of the sensor's error common to a pass's axles (a fraction: 0.02 is 2 %); None: the "
+        "sensor type's.",
+    )  # fmt: skip
+    sensor_axle_error: float | None = setting(
+        None, unit="-", low=0.0, high=0.5, high_open=True,
+        doc="``s_a``, the sd of each axle reading's own sensor error (a fraction); None: the sensor type's.",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
-        for name, unit in (("speed", "m/s"), ("approach_length", "m"), ("dt", "s")):
-            _positive(self, name, unit)
-        for name in ("site_length_before", "site_length_after", "sensor_length", "contact_length"):
-            _positive(self, name, "m", "or 0", zero=True)
-        _positive(self, "site_iri", "m/km")
-        if self.sensor not in wim.SENSORS:
-            raise ValueError(f"sensor = {self.sensor!r}: must be one of {', '.join(wim.SENSORS)}")
-        for name in ("sensor_vehicle_error", "sensor_axle_error"):
-            value = getattr(self, name)
-            number = not isinstance(value, bool) and isinstance(value, (int, float))
-            if value is not None and not (number and 0.0 <= value < 0.5):
-                raise ValueError(f"{name} = {value!r}: must be None or a number in [0, 0.5) [-] (0.02 is 2 %)")
+        check_settings(self, ValueError, "WimProtocol.")
 
     @property
     def vehicle_error_sd(self) -> float:

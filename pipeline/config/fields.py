@@ -8,17 +8,20 @@ holds as :class:`~pipeline.config.si.FrozenMap`.
 
 from __future__ import annotations
 
+import dataclasses
 from collections.abc import Callable
 from pathlib import Path
-from typing import Any, ClassVar
+from typing import Any, ClassVar, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, create_model, field_validator, model_validator
 
 from bogie.bogie_file import BogieFileError, base_bogie, is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
 from bogie.presets import PRESETS
+from bogie.settings import Setting, declared
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error
+from pipeline.config.si import UNITS
 
 
 def number(unit: str, si: str | None = None, **bounds: float) -> Any:
@@ -152,3 +155,90 @@ GroupLoads = _group_map(
     lambda: number("t", si="N", gt=0.0, le=200.0),
     "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
 )
+
+
+#: a project bound stricter than the library's: (the bound's name ``ge``/``gt``/``le``/``lt``, its value in the key's
+#: unit, the reason), given to :func:`library_model` by key
+Bound = tuple[str, float, str]
+
+
+def library_model(
+    name: str,
+    library: type,
+    doc: str,
+    units: dict[str, str] | None = None,
+    bounds: dict[str, list[Bound]] | None = None,
+    names: dict[str, str] | None = None,
+    custom: dict[str, tuple[str, Any, Any]] | None = None,
+    base: type[Strict] = Strict,
+) -> type[Strict]:
+    """The params.yaml section of the library settings class ``library``, built from its declarations
+    (:func:`bogie.settings.declared`): one key per declared field, in its order, its name the field's with the
+    suffix of its unit (:mod:`pipeline.config.si`), its type, range, unit and doc the declaration's.
+
+    Only what the YAML adds is given here: ``units``, a field's unit in the YAML where it is not the library's
+    (``sensor_axle_error``: ``%`` where the library takes a fraction), and ``bounds``, the project's stricter
+    bounds by key, each with its reason (a bound that is not stricter than the library's is refused when the model
+    is made); ``names``, what a name field's value is, in the messages (``sensor``: ``sensor type``). A key of a
+    setting that may be None may be left out (None). ``custom``: a field whose value is more than a number or a
+    name (a mapping, a list of names), by the library's field name: (its key, annotation, pydantic field). Every
+    field of ``library`` is a key, declared or custom. The model's ``library_class`` is ``library``, so that the
+    configuration holds the library's object."""
+    units, bounds, names, custom = units or {}, bounds or {}, names or {}, custom or {}
+    settings = declared(library)
+    fields: dict[str, Any] = {}
+    for attr in (f.name for f in dataclasses.fields(library)):
+        if attr in custom:
+            key, annotation, field = custom[attr]
+            fields[key] = (annotation, field)
+            continue
+        if attr not in settings:
+            raise TypeError(f"{name}: {library.__name__}.{attr} is neither declared (bogie.settings) nor custom")
+        spec = settings[attr]
+        unit = units.get(attr, spec.unit)
+        suffix, factor, _si = UNITS.get(unit, ("", 1.0, unit))
+        key = attr + suffix
+        default = {"default": None} if spec.optional else {}
+        if spec.choices is not None:
+            annotation: Any = Literal[spec.choices]
+            field = Field(json_schema_extra={"what": names.get(attr, attr)}, description=spec.doc, **default)
+        else:
+            annotation = int if spec.whole else float
+            limits = _library_limits(spec, factor)
+            for which, value, _reason in bounds.get(key, ()):
+                _stricter(name, key, limits, which, value)
+            field = Field(description=spec.doc, json_schema_extra={"unit": unit}, **limits, **default)
+        if spec.optional:
+            annotation = annotation | None
+        fields[key] = (annotation, field)
+    unknown = set(bounds) - set(fields)
+    if unknown:
+        raise TypeError(f"{name}: bounds for keys {sorted(unknown)} that {library.__name__} does not declare")
+    model = create_model(name, __base__=base, __doc__=doc, **fields)
+    model.library_class = library
+    return model
+
+
+def _library_limits(spec: Setting, factor: float) -> dict[str, float]:
+    """A declaration's bounds as pydantic's constraints, in the YAML's unit (the library's over ``factor``)."""
+    limits = {}
+    if spec.low is not None:
+        limits["gt" if spec.low_open else "ge"] = spec.low if factor == 1.0 else spec.low / factor
+    if spec.high is not None:
+        limits["lt" if spec.high_open else "le"] = spec.high if factor == 1.0 else spec.high / factor
+    return limits
+
+
+def _stricter(model: str, key: str, limits: dict[str, float], which: str, value: float) -> None:
+    """Put the project bound ``which`` = ``value`` into ``limits``, refusing one that allows what the library's
+    refuses."""
+    low = which in ("ge", "gt")
+    current = [(k, v) for k, v in limits.items() if (k in ("ge", "gt")) == low]
+    for k, v in current:
+        looser = value < v or (value == v and k == "gt" and which == "ge") if low else \
+            value > v or (value == v and k == "lt" and which == "le")  # fmt: skip
+        if looser:
+            raise TypeError(f"{model}.{key}: the project bound {which} {value:g} is not stricter than the library's "
+                            f"{k} {v:g}")  # fmt: skip
+        del limits[k]
+    limits[which] = value

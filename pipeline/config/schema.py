@@ -13,7 +13,7 @@ for the error messages.
 from __future__ import annotations
 
 from pathlib import PurePosixPath
-from typing import Annotated, Any, ClassVar, Literal
+from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, ValidatorFunctionWrapHandler, model_validator
 
@@ -25,9 +25,9 @@ from bogie.fleet.constants import (
     SITE_IRI_RANGE,
     SURVEY_PROTOCOLS,
 )
+from bogie.fleet.design import DesignSettings
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
-from bogie.road.wim import SENSORS
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.fields import (
@@ -37,6 +37,7 @@ from pipeline.config.fields import (
     SuspensionMix,
     distinct,
     integer,
+    library_model,
     named,
     number,
     power_of_two,
@@ -87,49 +88,48 @@ class Fleet(Strict):
     """Legal load of a single axle, both sides together (a load: N in the config)."""
 
 
-class Static(Strict):
-    """``protocol.static:`` the static weighbridge (see :class:`pipeline.config.StaticProtocol`)."""
-
-    library_class: ClassVar[type] = StaticProtocol
-
-    load_time_s: float = number("s", gt=0.0, le=600.0)
-    approach_length_m: float = number("m", gt=0.0, le=1000.0)
-    # walking pace or a little faster; more is not a static weighing
-    # a crawl slower than 0.1 m/s is no longer a drive onto a weighbridge (and a slower one is millions of steps)
-    crawl_speed_m_s: float = number("m/s", ge=0.1, le=5.0)
-    # the reading is the mean over the last READ_TIME of the settle: a shorter settle has nothing to read
-    settle_time_s: float = number("s", ge=READ_TIME, le=600.0)
-    dt_s: float = number("s", gt=0.0, le=0.01)
-    # null: fixed steps of dt_s; 1e-4 m per step is already a tenth of a millimetre, far coarser than a reading needs
-    step_tolerance_m: float | None = Field(default=None, gt=0.0, le=1e-4, json_schema_extra={"unit": "m"})
-
-
-class Wim(Strict):
-    """``protocol.wim:`` the weigh-in-motion pass (see :class:`pipeline.config.WimProtocol`)."""
-
-    library_class: ClassVar[type] = WimProtocol
-
-    # 50 m/s = 180 km/h: above it the value was most likely given in km/h
-    # 1 m/s: the slowest a low-speed WIM site weighs at (they run at 5-15 km/h); slower is a static weighing
-    speed_m_s: float = number("m/s", ge=1.0, le=50.0)
-    approach_length_m: float = number("m", gt=0.0, le=10_000.0)
-    dt_s: float = number("s", gt=0.0, le=0.01)
-    # the site: COST 323 sets its requirements over 50 m before and 25 m after the sensor; 0 and 0 is no site
-    site_length_before_m: float = number("m", ge=0.0, le=1000.0)
-    site_length_after_m: float = number("m", ge=0.0, le=1000.0)
-    # 0.3 m/km is a very smooth new pavement; above 6 m/km no site class applies (COST 323 class III ends at 4)
-    site_iri_m_km: float = number("m/km", ge=0.3, le=6.0)
-    # 0 is a point sensor; 5 m is about the longest weighing length (a culvert or a long platform)
-    sensor_length_m: float = number("m", ge=0.0, le=5.0)
-    # a truck tyre's contact patch is 0.15-0.30 m long; 0 with sensor_length_m 0 is the instantaneous force
-    contact_length_m: float = number("m", ge=0.0, le=1.0)
-    sensor: Literal[SENSORS] = named("sensor type")  # type: ignore[valid-type]
-    """The sensor type; the sizes of its error's two parts are bogie.road.wim.SENSOR_ERRORS (docs/wim-site.md)."""
-    # below 50 %: an error that large is no weighing (the calibration's sensor_error_pct stops at 30)
-    sensor_vehicle_error_pct: float | None = Field(ge=0.0, lt=50.0, json_schema_extra={"unit": "%"})
-    """The sd of the sensor's error common to a pass's axles; null: the sensor type's."""
-    sensor_axle_error_pct: float | None = Field(ge=0.0, lt=50.0, json_schema_extra={"unit": "%"})
-    """The sd of each axle reading's own sensor error; null: the sensor type's."""
+# ``protocol.static`` and ``protocol.wim``: the library's settings classes, each key, type, range, unit and doc
+# declared there once (bogie.settings); here only the YAML's units and the project's stricter bounds, with why
+Static = library_model(
+    "Static", StaticProtocol, "``protocol.static:`` the static weighbridge (see :class:`bogie.fleet.StaticProtocol`).",
+    bounds={
+        "load_time_s": [("le", 600.0, "a sanity cap: ten minutes")],
+        "approach_length_m": [("le", 1000.0, "a sanity cap: a kilometre")],
+        "crawl_speed_m_s": [
+            ("ge", 0.1, "a crawl slower than 0.1 m/s is no longer a drive onto a weighbridge (and millions of steps)"),
+            ("le", 5.0, "walking pace or a little faster; more is not a static weighing"),
+        ],
+        "settle_time_s": [
+            ("ge", READ_TIME, "the reading is the mean over the last READ_TIME of the settle: a shorter one has "
+             "nothing to read"),
+            ("le", 600.0, "a sanity cap: ten minutes"),
+        ],
+        "dt_s": [("le", 0.01, "a sanity cap: 10 ms, a tenth of the axle hop period")],
+        "step_tolerance_m": [("le", 1e-4, "1e-4 m per step is already a tenth of a millimetre, far coarser than a "
+                              "reading needs")],
+    },
+)  # fmt: skip
+Wim = library_model(
+    "Wim", WimProtocol, "``protocol.wim:`` the weigh-in-motion pass (see :class:`bogie.fleet.WimProtocol`).",
+    units={"sensor_vehicle_error": "%", "sensor_axle_error": "%"},
+    names={"sensor": "sensor type"},
+    bounds={
+        "speed_m_s": [
+            ("ge", 1.0, "the slowest a low-speed WIM site weighs at (they run at 5-15 km/h); slower is static"),
+            ("le", 50.0, "180 km/h: above it the value was most likely given in km/h"),
+        ],
+        "approach_length_m": [("le", 10_000.0, "a sanity cap: ten kilometres")],
+        "dt_s": [("le", 0.01, "a sanity cap: 10 ms, a tenth of the axle hop period")],
+        "site_length_before_m": [("le", 1000.0, "COST 323 sets its requirements over 50 m before the sensor")],
+        "site_length_after_m": [("le", 1000.0, "and 25 m after it")],
+        "site_iri_m_km": [
+            ("ge", 0.3, "a very smooth new pavement"),
+            ("le", 6.0, "above 6 m/km no site class applies (COST 323 class III ends at 4)"),
+        ],
+        "sensor_length_m": [("le", 5.0, "about the longest weighing length (a culvert or a long platform)")],
+        "contact_length_m": [("le", 1.0, "a truck tyre's contact patch is 0.15-0.30 m long")],
+    },
+)  # fmt: skip
 
 
 Protocol = Literal[PROTOCOLS]  # type: ignore[valid-type]
@@ -326,32 +326,37 @@ def _si_grid(grid: dict[str, list[float]]) -> FrozenMap:
     return FrozenMap({QUANTITIES[k].name: tuple(QUANTITIES[k].to_si(float(x)) for x in v) for k, v in grid.items()})
 
 
-class Design(Strict):
-    """``design:`` the controlled experiment over the design factors."""
-
-    groups: Annotated[list[Literal[tuple(GROUP_AXLES)]], distinct("axle group")] = named("axle group", min_length=1)  # type: ignore[valid-type]
-    """The axle groups whose designs are studied."""
-    n_conditions: int = integer(2, 100_000)
-    """Operating conditions (tilt, tyre wear, payload, approach road) every design runs over."""
-    tilt_step_deg: float = number("degree", gt=0.0, le=2.0)
-    """Step of the chassis-tilt grid, outward from level over the tilt distribution's bounds."""
-    grid: Annotated[dict[str, list[float]], ToConfig(_si_grid, "SI, by SI name")] = Field(
-        min_length=1,
-        json_schema_extra={
-            "expected": "a mapping naming at least one design factor, each with its levels: "
-            + ", ".join(DESIGN_FACTORS),
-            "entry": "a list of one or more levels, numbers in the unit of the factor's name",
-        },
-    )
-    """A design factor (a key of ``distributions:``) -> its levels, in the unit of its key; in the config by its SI
-    name, in SI. The representative designs are every combination, the other factors at today's typical values (the
-    fleet distributions' medians)."""
-    n_space_filling: int = integer(0, 10_000)
-    """Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions."""
-    target_share: float = number("-", gt=0.0, lt=1.0)
-    """The share of bogies within 5 % the guidance asks for."""
-    confidence_level: float = number("-", gt=0.0, lt=1.0)
-    """Confidence level of the intervals."""
+# ``design:``: the library's DesignSettings, its number settings declared there (bogie.settings)
+Design = library_model(
+    "Design", DesignSettings, "``design:`` the controlled experiment over the design factors.",
+    bounds={
+        "n_conditions": [("le", 100_000, "a sanity cap: 10^5 conditions a design")],
+        "tilt_step_deg": [("le", 2.0, "a sanity cap: 2 degree")],
+        "n_space_filling": [("le", 10_000, "a sanity cap: 10^4 designs a group")],
+    },
+    custom={
+        "groups": (
+            "groups",
+            Annotated[list[Literal[tuple(GROUP_AXLES)]], distinct("axle group")],  # type: ignore[valid-type]
+            named("axle group", min_length=1, description="The axle groups whose designs are studied."),
+        ),
+        "grid": (
+            "grid",
+            Annotated[dict[str, list[float]], ToConfig(_si_grid, "SI, by SI name")],
+            Field(
+                min_length=1,
+                json_schema_extra={
+                    "expected": "a mapping naming at least one design factor, each with its levels: "
+                    + ", ".join(DESIGN_FACTORS),
+                    "entry": "a list of one or more levels, numbers in the unit of the factor's name",
+                },
+                description="A design factor (a key of ``distributions:``) -> its levels, in the unit of its key; in "
+                "the config by its SI name, in SI. The representative designs are every combination, the other "
+                "factors at today's typical values (the fleet distributions' medians).",
+            ),
+        ),
+    },
+)  # fmt: skip
 
 
 def _si_distributions(section: Any) -> FrozenMap:

@@ -29,37 +29,16 @@ its keys, converted, are then that class's own field names.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable, Iterable, Iterator, Mapping
+from collections.abc import Callable
 from typing import Any
 
 from pydantic import BaseModel
 from pydantic.fields import FieldInfo
 
 from bogie.params import GRAVITY
+from bogie.settings import FrozenMap
 
 __all__ = ["FrozenMap", "ToConfig", "attribute", "config_class", "to_config"]
-
-
-class FrozenMap(Mapping):
-    """A read-only, hashable, picklable mapping (the dict-valued fields of the frozen config)."""
-
-    def __init__(self, items: Mapping | Iterable[tuple[Any, Any]] = ()) -> None:
-        self._data = dict(items)
-
-    def __getitem__(self, key: Any) -> Any:
-        return self._data[key]
-
-    def __iter__(self) -> Iterator:
-        return iter(self._data)
-
-    def __len__(self) -> int:
-        return len(self._data)
-
-    def __hash__(self) -> int:
-        return hash(tuple(self._data.items()))
-
-    def __repr__(self) -> str:
-        return f"FrozenMap({self._data!r})"
 
 
 @dataclasses.dataclass(frozen=True)

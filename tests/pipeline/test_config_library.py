@@ -1,0 +1,166 @@
+"""A params.yaml section that is a library settings class is built from the library's declarations (issue 42 Must 1):
+every field of the class is a key and every key a field, the key's unit is the field's (or the YAML's stated one),
+the schema allows nothing the library refuses, and a project bound looser than the library's cannot be written."""
+
+from __future__ import annotations
+
+import dataclasses
+import math
+from typing import Any
+
+import numpy as np
+import pytest
+from pydantic import BaseModel
+
+from bogie.fleet import DesignSettings, StaticProtocol, WimProtocol
+from bogie.settings import FrozenMap, Setting, check_settings, declared, setting
+from pipeline.config import load_params, parse_config, schema
+from pipeline.config.errors import _bounds
+from pipeline.config.fields import library_model
+from pipeline.config.si import UNITS, attribute
+
+
+def library_models() -> list[type[BaseModel]]:
+    """Every model of the schema, reached from ``Params``, that names a library class."""
+    found, todo, seen = [], [schema.Params], set()
+    while todo:
+        model = todo.pop()
+        if model in seen:
+            continue
+        seen.add(model)
+        if getattr(model, "library_class", None) is not None:
+            found.append(model)
+        for info in model.model_fields.values():
+            for arg in (info.annotation, *getattr(info.annotation, "__args__", ())):
+                if isinstance(arg, type) and issubclass(arg, BaseModel):
+                    todo.append(arg)
+    return found
+
+
+def test_the_sections_that_are_library_classes_are_found():
+    assert {m.library_class for m in library_models()} >= {StaticProtocol, WimProtocol, DesignSettings}
+
+
+@pytest.mark.parametrize("model", library_models(), ids=lambda m: m.__name__)
+def test_every_field_of_the_library_class_is_a_key_and_every_key_a_field(model):
+    keys = {attribute(key, info)[0]: key for key, info in model.model_fields.items()}
+    fields = [f.name for f in dataclasses.fields(model.library_class)]
+    assert sorted(keys) == sorted(fields)
+    for name, spec in declared(model.library_class).items():
+        info = model.model_fields[keys[name]]
+        unit = (info.json_schema_extra or {}).get("unit", "-")
+        si = UNITS[unit][2] if unit in UNITS else unit
+        assert si == spec.unit or (spec.choices is not None), (name, unit, spec.unit)
+        assert info.description == spec.doc
+        assert (not info.is_required()) == spec.optional, name
+
+
+def _schema_limits(info, factor: float) -> tuple[float, bool, float, bool]:
+    """The schema field's range in the library's unit: (low, low open, high, high open)."""
+    bounds = _bounds(info)
+    low = bounds.get("ge", bounds.get("gt", -math.inf)) * factor
+    high = bounds.get("le", bounds.get("lt", math.inf)) * factor
+    return low, "gt" in bounds, high, "lt" in bounds
+
+
+@pytest.mark.parametrize("model", library_models(), ids=lambda m: m.__name__)
+def test_the_schema_allows_nothing_the_library_refuses(model):
+    keys = {attribute(key, info)[0]: key for key, info in model.model_fields.items()}
+    for name, spec in declared(model.library_class).items():
+        if spec.choices is not None:
+            continue
+        info = model.model_fields[keys[name]]
+        unit = (info.json_schema_extra or {}).get("unit", "-")
+        factor = UNITS[unit][1] if unit in UNITS else 1.0
+        low, low_open, high, high_open = _schema_limits(info, factor)
+        # each end of the schema's range (or a step inside an open one) is the library's too
+        for end, is_open, inward in ((low, low_open, 1.0), (high, high_open, -1.0)):
+            if math.isinf(end):
+                assert (spec.low if inward > 0 else spec.high) is None, (
+                    name,
+                    "the library bounds what the YAML does not",
+                )
+                continue
+            value = end if not is_open else end + inward * max(abs(end), 1.0) * 1e-9
+            value = int(math.ceil(value) if inward > 0 else math.floor(value)) if spec.whole else value
+            assert spec.contains(value), (model.__name__, name, value, spec.allowed())
+
+
+def test_a_project_bound_looser_than_the_librarys_is_refused_when_the_model_is_made():
+    with pytest.raises(TypeError, match=r"Wim.dt_s: the project bound ge -1 is not stricter than the library's gt 0"):
+        library_model("Wim", WimProtocol, "doc", bounds={"dt_s": [("ge", -1.0, "a looser bound")]})
+    with pytest.raises(TypeError, match=r"the project bound lt 60 is not stricter than the library's lt 50"):
+        library_model("Wim", WimProtocol, "doc", units={"sensor_axle_error": "%"},
+                      bounds={"sensor_axle_error_pct": [("lt", 60.0, "a looser bound")]})  # fmt: skip
+    with pytest.raises(TypeError, match=r"the project bound ge 0 is not stricter than the library's gt 0"):
+        library_model("Wim", WimProtocol, "doc", bounds={"speed_m_s": [("ge", 0.0, "the end itself")]})
+
+
+def test_a_bound_for_a_key_the_library_does_not_declare_is_refused():
+    with pytest.raises(TypeError, match=r"bounds for keys \['speed_km_h'\]"):
+        library_model("Wim", WimProtocol, "doc", bounds={"speed_km_h": [("le", 180.0, "a key of another unit")]})
+
+
+def test_a_library_field_that_is_neither_declared_nor_custom_is_refused():
+    with pytest.raises(TypeError, match=r"DesignSettings.grid is neither declared \(bogie.settings\) nor custom"):
+        library_model("Design", DesignSettings, "doc")
+
+
+def test_a_converted_section_is_the_librarys_object_in_si(raw):
+    raw["protocol"]["wim"]["sensor_axle_error_pct"] = 2.5
+    raw["design"]["grid"] = {"contact_roll_radius_mm": [0, 50]}
+    config = parse_config(raw)
+    assert type(config.protocol.wim) is WimProtocol and config.protocol.wim.sensor_axle_error == 0.025
+    assert type(config.design) is DesignSettings
+    assert dict(config.design.grid) == {"contact_roll_radius": (0.0, 0.05)}
+
+
+@pytest.fixture
+def raw():
+    return load_params("params.yaml")
+
+
+# ---- the declarations themselves ---------------------------------------------------------------------------------
+@pytest.mark.parametrize(
+    ("spec", "good", "bad"),
+    [
+        (Setting("-", "a count", low=2, whole=True), [2, np.int64(7)], [1, 2.0, True, None, "3"]),
+        (
+            Setting("s", "a time", low=0.0, low_open=True),
+            [1e-300, 1, np.float32(0.5)],
+            [0.0, -1.0, math.nan, math.inf, False],
+        ),  # fmt: skip
+        (Setting("-", "a share", 0.0, 1.0, True, True), [0.5], [0.0, 1.0]),
+        (Setting("-", "a fraction", 0.0, 0.5, high_open=True, optional=True), [0.0, None, 0.499], [0.5, -0.0001]),
+        (Setting("-", "a name", choices=("a", "b")), ["a"], ["c", None, 1]),
+    ],
+)
+def test_a_setting_holds_its_range_at_the_ends(spec: Setting, good: list[Any], bad: list[Any]):
+    assert all(spec.contains(v) for v in good), good
+    assert not any(spec.contains(v) for v in bad), [v for v in bad if spec.contains(v)]
+
+
+def test_a_setting_out_of_range_is_named_with_what_is_allowed_and_its_unit():
+    @dataclasses.dataclass(frozen=True)
+    class Demo:
+        step: float = setting(0.5, unit="degree", doc="A step.", low=0.0, low_open=True, high=2.0)
+        count: int = setting(3, unit="-", doc="A count.", low=2, whole=True)
+        spare: float | None = setting(None, unit="m", doc="A length; None: none.", low=0.0)
+
+        def __post_init__(self):
+            check_settings(self, KeyError, "Demo.")
+
+    assert Demo(step=2.0, count=2, spare=0.0).step == 2.0
+    with pytest.raises(KeyError, match=r"Demo.step = 2.5: must be a finite number in \(0, 2\] \[degree\]"):
+        Demo(step=2.5)
+    with pytest.raises(KeyError, match=r"Demo.count = 2.0: must be a whole number >= 2 \[-\]"):
+        Demo(count=2.0)
+    with pytest.raises(KeyError, match=r"Demo.spare = -1: must be a finite number >= 0, or None \[m\]"):
+        Demo(spare=-1)
+
+
+def test_a_frozen_map_is_a_read_only_hashable_mapping():
+    grid = FrozenMap({"a": (1.0, 2.0)})
+    assert grid == {"a": (1.0, 2.0)} and hash(grid) == hash(FrozenMap({"a": (1.0, 2.0)}))
+    with pytest.raises(TypeError):
+        grid["b"] = (3.0,)  # type: ignore[index]
