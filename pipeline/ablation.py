@@ -17,7 +17,8 @@ from scipy import stats
 from bogie.fleet.sampling import VARIANTS
 from bogie.fleet.survey import inequality_columns
 from bogie.params import INHIBITORS
-from pipeline.survey import RunsError, rounded
+from bogie.rounding import json_number
+from pipeline.survey import RunsError
 
 __all__ = [
     "ABLATION_STATISTICS",
@@ -229,7 +230,7 @@ def ablation_metrics(effects: pd.DataFrame) -> dict[str, Any]:
     for protocol in fleet.index.unique("protocol"):
         entry: dict[str, Any] = {}
         base = fleet.loc[(protocol, "baseline")]
-        entry["baseline"] = {s: rounded(base.loc[s, "value"], 4) for s in ABLATION_STATISTICS}
+        entry["baseline"] = {s: json_number(base.loc[s, "value"], 4) for s in ABLATION_STATISTICS}
         entry["baseline"]["n_bogies"] = int(base["n_pairs"].iloc[0])
         for variant in VARIANTS[1:]:
             dev, out5 = (
@@ -237,10 +238,11 @@ def ablation_metrics(effects: pd.DataFrame) -> dict[str, Any]:
                 fleet.loc[(protocol, variant, "share_outside_5pct")],
             )
             entry[variant] = {
-                "mean_max_deviation": rounded(dev["value"], 4), "reduction": rounded(dev["reduction"], 4),
-                "reduction_low": rounded(dev["reduction_low"], 4), "reduction_high": rounded(dev["reduction_high"], 4),
-                "relative_reduction": rounded(dev["relative_reduction"], 3),
-                "share_outside_5pct": rounded(out5["value"], 4), "n_failed": int(dev["n_failed"]),
+                "mean_max_deviation": json_number(dev["value"], 4), "reduction": json_number(dev["reduction"], 4),
+                "reduction_low": json_number(dev["reduction_low"], 4),
+                "reduction_high": json_number(dev["reduction_high"], 4),
+                "relative_reduction": json_number(dev["relative_reduction"], 3),
+                "share_outside_5pct": json_number(out5["value"], 4), "n_failed": int(dev["n_failed"]),
                 "n_airborne": int(dev["n_airborne"]),
             }  # fmt: skip
         singles = {v: entry[v]["reduction"] for v in INHIBITOR_NAMES if entry[v]["reduction"] is not None}

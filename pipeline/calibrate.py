@@ -36,6 +36,7 @@ from bogie.fleet.calibration import CalibrationError, CalibrationSettings, Mappe
 from bogie.fleet.calibration_checks import calibrate_survey
 from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.rounding import json_number
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, observed_file
@@ -193,10 +194,10 @@ def fleet_study_overrides(values: Mapping[str, float], config: Config) -> dict[s
         if keys is None:
             not_settable.append(quantity)
             continue
-        v = round(float(value), 4) + 0.0
+        v = json_number(value, 4)
         if quantity == "air_share":  # one air share for every group, as the calibration fits it
             for group in config.fleet.suspension_mix:
-                settings[f"{keys[0]}.{group}.steel"] = round(1.0 - v, 4) + 0.0
+                settings[f"{keys[0]}.{group}.steel"] = json_number(1.0 - v, 4)
                 settings[f"{keys[0]}.{group}.air"] = v
         else:
             settings[keys[0]] = v

@@ -28,13 +28,13 @@ import yaml
 from bogie.fleet.design import DesignExperiment, DesignSettings, design_experiment, experiment_runs, typical_design
 from bogie.fleet.design_analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
 from bogie.fleet.sampling import COLUMNS
+from bogie.rounding import json_number
 from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import fleet_model
 from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
-from pipeline.survey import rounded
 
 __all__ = [
     "DESIGN_KEYS", "analysed", "design_entry", "experiment", "main", "metrics", "run", "settings", "skipped_metrics",
@@ -69,14 +69,14 @@ def design_entry(row: Mapping[str, Any]) -> dict[str, Any]:
     """One entry of ``design.json``'s ``designs``: exactly the keys of :data:`DESIGN_KEYS` (SI, tilts in degrees)."""
     return {
         "group": row["group"],
-        "bush_stiffness": rounded(row["bush_stiffness"], 4),
-        "equaliser_arm": rounded(row["equaliser_arm"], 6),
-        "contact_roll_radius": rounded(row["contact_roll_radius"], 6),
-        "friction_coefficient": rounded(row["friction_coefficient"], 4),
-        "spring_friction_band": rounded(row["spring_friction_band"], 2),
-        "tilt_tolerance_nose_up_deg": rounded(row["tilt_tolerance_nose_up_deg"], 2),
-        "tilt_tolerance_nose_down_deg": rounded(row["tilt_tolerance_nose_down_deg"], 2),
-        "share_within_5pct_at_tolerance": rounded(row["share_within_5pct_at_tolerance"], 4),
+        "bush_stiffness": json_number(row["bush_stiffness"], 4),
+        "equaliser_arm": json_number(row["equaliser_arm"], 6),
+        "contact_roll_radius": json_number(row["contact_roll_radius"], 6),
+        "friction_coefficient": json_number(row["friction_coefficient"], 4),
+        "spring_friction_band": json_number(row["spring_friction_band"], 2),
+        "tilt_tolerance_nose_up_deg": json_number(row["tilt_tolerance_nose_up_deg"], 2),
+        "tilt_tolerance_nose_down_deg": json_number(row["tilt_tolerance_nose_down_deg"], 2),
+        "share_within_5pct_at_tolerance": json_number(row["share_within_5pct_at_tolerance"], 4),
     }
 
 
@@ -93,10 +93,10 @@ def metrics(
     def summary(row: Mapping[str, Any]) -> dict[str, Any]:
         return {
             "design": row["design"], "kind": row["kind"], "pareto": bool(row["pareto"]),
-            "distance": rounded(row["distance"], 4), "share_within_5pct": rounded(row["share_within_5pct"], 4),
-            "share_within_5pct_interval": [rounded(row[f"share_within_5pct_{e}"], 4) for e in ("low", "high")],
-            "share_within_10pct": rounded(row["share_within_10pct"], 4),
-            "share_within_10pct_interval": [rounded(row[f"share_within_10pct_{e}"], 4) for e in ("low", "high")],
+            "distance": json_number(row["distance"], 4), "share_within_5pct": json_number(row["share_within_5pct"], 4),
+            "share_within_5pct_interval": [json_number(row[f"share_within_5pct_{e}"], 4) for e in ("low", "high")],
+            "share_within_10pct": json_number(row["share_within_10pct"], 4),
+            "share_within_10pct_interval": [json_number(row[f"share_within_10pct_{e}"], 4) for e in ("low", "high")],
             "n_failed": int(row["n_failed"]),
         }  # fmt: skip
 
@@ -115,7 +115,7 @@ def metrics(
         "failed": int(table["n_failed"].sum()),
         "interpolation_check": {
             "pairs": len(check),
-            "largest_max_deviation_difference_pct": rounded(
+            "largest_max_deviation_difference_pct": json_number(
                 100.0 * (check["max_deviation_interpolated"] - check["max_deviation_direct"]).abs().max(), 3
             )
             if len(check)

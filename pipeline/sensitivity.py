@@ -35,6 +35,7 @@ from SALib.util import extract_group_names
 
 from bogie.fleet.sampling import TYRE_WEAR_COLUMNS, design_seed
 from bogie.fleet.survey import AXLE_LOAD_COLUMNS
+from bogie.rounding import json_number
 from pipeline.ablation import (
     INHIBITOR_NAMES,
     SensitivityDataError,
@@ -45,7 +46,7 @@ from pipeline.ablation import (
 from pipeline.atomic import io_error, run_stage
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.sample import sensitivity_problem
-from pipeline.survey import RunsError, read_runs, rounded, write_outputs
+from pipeline.survey import RunsError, read_runs, write_outputs
 
 #: inequality measures (result columns) whose Sobol' indices are computed
 SOBOL_MEASURES: tuple[str, ...] = ("max_deviation", "p1", "road_wear_factor")
@@ -335,7 +336,7 @@ def sensitivity_metrics(
             "confidence_level": sens.confidence_level,
             "bootstrap_resamples": sens.bootstrap_resamples,
             "indices": {
-                row.factor: {k: rounded(getattr(row, k), 4) for k in ("ST", "ST_conf", "S1", "S1_conf")}
+                row.factor: {k: json_number(getattr(row, k), 4) for k in ("ST", "ST_conf", "S1", "S1_conf")}
                 for row in main_indices.itertuples()
             },
         },  # fmt: skip

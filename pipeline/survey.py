@@ -29,6 +29,7 @@ from bogie.fleet.design_table import DESIGN_COLUMNS, design_table
 from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.survey import REQUIRED_COLUMNS, SUSPENSION_STATISTICS, inequality_columns, readings, survey_tables
 from bogie.params import GRAVITY
+from bogie.rounding import json_number
 from bogie.weighings.writers import write_weighings
 from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import ConfigError, load_config
@@ -93,13 +94,6 @@ def check_complete(runs: pd.DataFrame, n_samples: int, protocols: Sequence[str],
         )
 
 
-def rounded(x: Any, digits: int) -> float | None:
-    """``x`` rounded for JSON; None for NaN or a missing value (JSON has no NaN)."""
-    if x is None or pd.isna(x):
-        return None
-    return round(float(x), digits) + 0.0  # + 0.0 turns -0.0 into 0.0
-
-
 #: headline column -> decimals in metrics/survey.json
 _HEADLINE_DIGITS = {
     "share_outside_5pct": 4, "share_over_10pct": 4, "mean_max_deviation": 4, "mean_spread_pct": 2,
@@ -118,21 +112,21 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
         "n_airborne": int(summary["n_airborne"].sum()),
     }
     for row in summary.itertuples(index=False):
-        entry = {key: rounded(getattr(row, key), digits) for key, digits in _HEADLINE_DIGITS.items()}
+        entry = {key: json_number(getattr(row, key), digits) for key, digits in _HEADLINE_DIGITS.items()}
         entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed), n_airborne=int(row.n_airborne))
         metrics.setdefault(row.protocol, {})[row.group] = entry
     by_kind: dict[str, Any] = {}
     for row in tables["by_suspension.csv"].to_dict("records"):
         entry = {"n_ok": int(row["n_ok"]), "n_failed": int(row["n_failed"]), "n_airborne": int(row["n_airborne"])}
-        entry.update({key: rounded(row[key], 4 if key.startswith("share") else 1) for key in SUSPENSION_STATISTICS})
+        entry.update({key: json_number(row[key], 4 if key.startswith("share") else 1) for key in SUSPENSION_STATISTICS})
         by_kind.setdefault(row["protocol"], {}).setdefault(row["group"], {})[row["suspension"]] = entry
     metrics["by_suspension"] = by_kind
     pairs = tables["static_vs_wim.csv"]
     if not pairs.empty:
         metrics["static_vs_wim"] = {
             row.group: {
-                "mean_dynamic_excess": rounded(row.mean_dynamic_excess, 4),
-                "corr_max_deviation": rounded(row.corr_max_deviation, 3),
+                "mean_dynamic_excess": json_number(row.mean_dynamic_excess, 4),
+                "corr_max_deviation": json_number(row.corr_max_deviation, 3),
                 "n_pairs": int(row.n_pairs),
             }
             for row in pairs.itertuples(index=False)
@@ -144,7 +138,7 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
             group: {
                 "class_reached": sub["class_reached"].iloc[0],
                 "required_share": float(sub["required_share"].iloc[0]),
-                **{f"sd_{row.criterion}_error_pct": rounded(row.sd_error_pct, 2) for row in sub.itertuples()},
+                **{f"sd_{row.criterion}_error_pct": json_number(row.sd_error_pct, 2) for row in sub.itertuples()},
             }
             for group, sub in wim_class.groupby("group", sort=False)
         }

@@ -32,8 +32,10 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration import SIZES, CalibrationError, Mapper, Table
-from bogie.fleet.calibration_table import _round, bogie_tilts, moved_samples, protocol_spec, weigh_readings
+from bogie.fleet.calibration_table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.protocol_settings import StaticProtocol
+from bogie.intervals import percentile_interval
+from bogie.rounding import json_number
 from bogie.weighings.stats import at_resolution, group_inequality
 
 __all__ = ["CAUSES", "SCENARIOS", "STATISTICS", "attribution", "scenario_loads"]
@@ -147,22 +149,26 @@ def attribution(
     return pd.DataFrame(rows, columns=["scenario", "group", "suspension", "n_groups", *STATISTICS]), metrics
 
 
+def _share(diff: np.ndarray, boot: np.ndarray, level: float) -> dict[str, float | None]:
+    """A cause's share of one statistic: the mean paired difference and its percentile interval, for JSON."""
+    low, high = percentile_interval(boot, level)
+    return {"value": json_number(diff.mean()), "low": json_number(low), "high": json_number(high)}
+
+
 def _metrics_of(per, means, n_groups, dropped, rng, resamples, level) -> dict[str, Any]:
     k = len(per["as_observed"])
     idx = rng.integers(0, k, size=(max(resamples, 2), k))
-    alpha = 1.0 - level
     causes = {}
     for cause, scenario in CAUSES.items():
         diff = per["as_observed"] - per[scenario]  # paired: the same groups
         boot = diff[idx].mean(axis=1)  # (resamples, statistics)
         causes[cause] = {
-            s: {"value": _round(diff[:, j].mean()), "low": _round(np.quantile(boot[:, j], alpha / 2)),
-                "high": _round(np.quantile(boot[:, j], 1 - alpha / 2))}
+            s: _share(diff[:, j], boot[:, j], level)
             for j, s in enumerate(STATISTICS)
         }  # fmt: skip
     return {
         "n_groups": n_groups, "n_dropped": dropped,
-        "as_observed": {s: _round(means["as_observed"][j]) for j, s in enumerate(STATISTICS)},
-        "at_rest": {s: _round(means["at_rest"][j]) for j, s in enumerate(STATISTICS)},
+        "as_observed": {s: json_number(means["as_observed"][j]) for j, s in enumerate(STATISTICS)},
+        "at_rest": {s: json_number(means["at_rest"][j]) for j, s in enumerate(STATISTICS)},
         "causes": causes,
     }  # fmt: skip

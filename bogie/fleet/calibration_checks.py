@@ -37,7 +37,6 @@ from bogie.fleet.calibration_fit import calibrate, priors_for
 from bogie.fleet.calibration_posterior import posterior
 from bogie.fleet.calibration_table import (
     _quiet,
-    _round,
     _summary,
     bogie_tilts,
     moved_samples,
@@ -48,6 +47,7 @@ from bogie.fleet.observed import by_size
 from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.metrics import max_deviation
 from bogie.params import INHIBITORS
+from bogie.rounding import json_number
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
 from bogie.weighings.writers import write_weighings
 
@@ -202,10 +202,10 @@ def held_out(
         direct_half = filtered(simulate_fleet(table, values_half, weight_step_kg=step, executor=executor), min_load_kg)
         odd_q = {k: observed_quantities(v) for k, v in odd.loads.items() if k in half.obs and len(v)}
         held.update(
-            fitted={q: _round(values_half[q]) for q in half.fitted},
-            distance_fit_half=_round(d_half, 5),
-            distance_held_out=_round(frame_distance(direct_half, odd_q, half.scales), 5),
-            distance_halves=_round(observed_distance(half.obs, odd_q, half.scales), 5),
+            fitted={q: json_number(values_half[q]) for q in half.fitted},
+            distance_fit_half=json_number(d_half, 5),
+            distance_held_out=json_number(frame_distance(direct_half, odd_q, half.scales), 5),
+            distance_halves=json_number(observed_distance(half.obs, odd_q, half.scales), 5),
             groups=groups_stats(odd.loads),
             calibrated_groups=frame_stats(direct_half),
         )
@@ -299,7 +299,7 @@ def _metrics(
         "method": "differential evolution on the energy distance, common random numbers, tabulated readings",
         "fitted": {
             q: {
-                k: (_round(v) if not isinstance(v, list) else v)
+                k: (json_number(v) if not isinstance(v, list) else v)
                 for k, v in e.items()
                 if k not in ("at_bound", "posterior")
             }
@@ -307,22 +307,22 @@ def _metrics(
         },  # fmt: skip
         # a fit (or posterior) piled against a bound is a finding about the model, not a value of the fleet
         "at_bounds": {
-            q: {k: (v if isinstance(v, str) else _round(v)) for k, v in e["at_bound"].items()}
+            q: {k: (v if isinstance(v, str) else json_number(v)) for k, v in e["at_bound"].items()}
             for q, e in result.fitted.items()
             if e.get("at_bound")
         },  # fmt: skip
         "posterior": _posterior_metrics(result.posterior, settings.confidence_level),
-        "fixed": {q: _round(v) for q, v in result.values.items() if q not in result.fitted},
+        "fixed": {q: json_number(v) for q, v in result.values.items() if q not in result.fitted},
         "confidence_level": settings.confidence_level,
         "bootstrap_resamples": settings.bootstrap_resamples,
-        "distance": _round(result.distance, 5),
-        "distance_direct": _round(frame_distance(direct, obs, scales), 5),
+        "distance": json_number(result.distance, 5),
+        "distance_direct": json_number(frame_distance(direct, obs, scales), 5),
         "sizes_fitted": sorted(obs),
         "evaluations": result.evaluations,
         "trade_offs": result.trade_offs,
         "table": {
             "n_bogies": len(table.size),
-            "tilts_deg": [_round(t, 3) for t in table.tilts],
+            "tilts_deg": [json_number(t, 3) for t in table.tilts],
             "site_iri_levels_m_km": [None if math.isnan(x) else x for x in table.iris],
             "n_weighings": int(np.prod(table.loads.shape[:4])),
             "n_failed": table.n_failed,
@@ -332,9 +332,9 @@ def _metrics(
         "held_out": held,
         "ablation": {
             f"{r.variant}/{r.group}": {
-                "mean_max_deviation_pct": _round(r.mean_max_deviation_pct),
-                "share_outside_5pct": _round(r.share_outside_5pct),
-                "buys_points": _round(r.buys_points),
+                "mean_max_deviation_pct": json_number(r.mean_max_deviation_pct),
+                "share_outside_5pct": json_number(r.share_outside_5pct),
+                "buys_points": json_number(r.buys_points),
                 "n_groups": int(r.n_groups),
             }
             for r in abl.itertuples()
@@ -345,7 +345,7 @@ def _metrics(
 def _faithful(table: float | None, direct: float | None, halves: float | None) -> dict[str, Any]:
     """Issue 30 Must 4: the table is faithful when the calibrated fleet simulated directly is as far from the survey
     as the table said, within the sampling floor (the distance between the survey's two halves)."""
-    gap = None if table is None or direct is None else _round(direct - table, 5)
+    gap = None if table is None or direct is None else json_number(direct - table, 5)
     faithful = None if gap is None or halves is None else bool(abs(gap) <= halves)
     return {"gap": gap, "floor": halves, "faithful": faithful}
 
@@ -359,7 +359,7 @@ def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
         "survey's summaries over the table (bogie.fleet.calibration_posterior)",
         "credible_level": level,
         "draws": len(post.draws),
-        "acceptance": _round(post.acceptance),
+        "acceptance": json_number(post.acceptance),
         "quantities": _summary(post.summary),
         "priors": post.priors,
     }

@@ -23,6 +23,8 @@ from bogie.fleet.calibration_posterior import Posterior, posterior
 from bogie.fleet.calibration_table import _quiet
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.fleet.priors import default_priors
+from bogie.intervals import percentile_interval
+from bogie.rounding import json_number
 
 __all__ = [
     "AT_BOUND", "PILED", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound", "bound_finding",
@@ -115,12 +117,11 @@ def bound_finding(value: float, bounds: Sequence[float], refits: Sequence[float]
 
 
 def _intervals(problem: Problem, best: np.ndarray, boot: pd.DataFrame, level: float) -> dict[str, dict[str, Any]]:
-    alpha = 1.0 - level
     fitted = {}
     for i, q in enumerate(problem.fitted):
         entry = {"value": float(best[i]), "low": None, "high": None, "bounds": list(problem.bounds[i])}
         if len(boot) >= 2:
-            entry["low"], entry["high"] = (float(np.quantile(boot[q], p)) for p in (alpha / 2, 1 - alpha / 2))
+            entry["low"], entry["high"] = (float(e) for e in percentile_interval(boot[q], level))
             # a basic interval must hold the estimate: the fit on all the data is one of the bootstrap's worlds
             entry["low"], entry["high"] = min(entry["low"], entry["value"]), max(entry["high"], entry["value"])
         refits = boot[q].to_numpy(dtype=float) if q in boot else np.zeros(0)
@@ -135,7 +136,7 @@ def _trade_offs(fitted: Sequence[str], corr: pd.DataFrame) -> list[dict[str, Any
         for b_ in fitted[i + 1 :]:
             r = corr.loc[a, b_] if not corr.empty else math.nan
             if np.isfinite(r) and abs(r) >= TRADE_OFF:
-                trade.append({"quantities": [a, b_], "correlation": round(float(r), 3)})
+                trade.append({"quantities": [a, b_], "correlation": json_number(r, 3)})
     return trade
 
 

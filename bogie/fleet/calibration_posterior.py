@@ -28,6 +28,7 @@ from bogie import numerics
 from bogie.fleet.calibration import Problem, _values, simulated
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.fleet.priors import Prior, log_prior
+from bogie.intervals import percentile_interval
 
 __all__ = ["BOOTSTRAP", "Posterior", "posterior", "summaries", "synthetic_likelihood"]
 
@@ -163,16 +164,16 @@ def posterior(
     kept = np.asarray(chain[burn:])
     frame = pd.DataFrame(kept, columns=list(problem.fitted))
     frame["log_likelihood"] = lls[burn:]
-    alpha = 1.0 - level
     summary = {}
     for i, q in enumerate(problem.fitted):
         x, (lo, hi) = kept[:, i], problem.bounds[i]
         margin = AT_BOUND * (hi - lo)
         share_low, share_high = float(np.mean(x <= lo + margin)), float(np.mean(x >= hi - margin))
         piled = "low" if share_low >= PILED else "high" if share_high >= PILED else None
+        low, high = percentile_interval(x, level)
         summary[q] = {
-            "median": float(np.median(x)), "low": float(np.quantile(x, alpha / 2)),
-            "high": float(np.quantile(x, 1 - alpha / 2)), "share_at_low": share_low, "share_at_high": share_high,
+            "median": float(np.median(x)), "low": float(low), "high": float(high),
+            "share_at_low": share_low, "share_at_high": share_high,
             "piled": piled,
         }  # fmt: skip
     flat = "flat over the bounds (no prior given)"

@@ -27,8 +27,10 @@ from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import bogie_from_sample, suspension_draw
 from bogie.fleet.tilted import Tilted
 from bogie.fleet.weighing import weigh
+from bogie.group_names import GROUP_AXLES
 from bogie.params import GRAVITY
 from bogie.road import wim
+from bogie.rounding import json_number
 
 __all__ = [
     "SIZES", "CalibrationError", "Mapper", "Table", "base_values", "bogie_tilts", "build_table", "crn_table",
@@ -37,7 +39,7 @@ __all__ = [
 ]  # fmt: skip
 
 #: the axle groups a calibration covers, and their axles
-SIZES: dict[str, int] = {"tandem": 2, "triaxle": 3}
+SIZES: dict[str, int] = GROUP_AXLES
 
 #: a map-like callable: ``mapper(func, items)`` gives ``func(item)`` of every item, in the items' order
 Mapper = Callable[[Callable[[Any], Any], Sequence[Any]], Iterable[Any]]
@@ -51,17 +53,11 @@ def _quiet(text: str) -> None:
     """A progress callback that says nothing."""
 
 
-def _round(x: Any, digits: int = 4) -> Any:
-    """A number for the metrics' JSON: rounded to ``digits``, -0.0 made 0.0; None for None, NaN and infinities."""
-    if x is None or (isinstance(x, float) and not math.isfinite(x)):
-        return None
-    return round(float(x), digits) + 0.0
-
-
 def _summary(entries: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
-    """Per quantity, a summary's numbers rounded (:func:`_round`), its words and Nones kept."""
+    """Per quantity, a summary's numbers rounded (:func:`bogie.rounding.json_number`), its words and Nones kept."""
     return {
-        q: {k: (v if v is None or isinstance(v, str) else _round(v)) for k, v in e.items()} for q, e in entries.items()
+        q: {k: (v if v is None or isinstance(v, str) else json_number(v)) for k, v in e.items()}
+        for q, e in entries.items()
     }
 
 

@@ -2,6 +2,7 @@
 
 from __future__ import annotations
 
+from bogie.group_names import GROUP_AXLES  # the axles of each group the fleet is made of, defined there
 from bogie.params import TARE_FRACTION
 from bogie.weighings.stats import PAIR_TOLERANCE, SHARE_TOLERANCE
 
@@ -12,8 +13,6 @@ __all__ = [
     "TILTED_QUANTITIES", "WIM_QUANTITIES", "n_axles",
 ]  # fmt: skip
 
-#: axles in each axle group the fleet is made of [-]
-GROUP_AXLES: dict[str, int] = {"tandem": 2, "triaxle": 3}
 
 #: the suspensions of a group: steel leaf springs linked by equalisers (bogie.params.Bogie), or air springs with
 #: connected bags (bogie.air.AirBogie)

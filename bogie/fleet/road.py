@@ -26,6 +26,7 @@ import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.design_analysis import FLEET_SLOT
+from bogie.intervals import percentile_interval
 from bogie.params import GRAVITY
 from bogie.weighings.stats import axle_columns
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, group_wear, hidden_overloads, wear_statistics
@@ -176,7 +177,6 @@ def design_savings(
         ``saved_hidden_overload`` with ``_low``/``_high`` [-].
     """
     both = scenario_runs(runs, designs, tilts_deg)
-    alpha = (1.0 - confidence) / 2.0
     rows = []
     streams = iter(np.random.SeedSequence(seed).spawn(len(GROUP_AXLES) * len(SCENARIOS)))
     for group in GROUP_AXLES:
@@ -209,7 +209,7 @@ def design_savings(
                 row[f"saved_wear_{name}"] = share(wa) - share(wb)
                 if draws is not None:
                     saved = share(wa, draws) - share(wb, draws)
-                    low, high = np.quantile(saved, [alpha, 1 - alpha])
+                    low, high = percentile_interval(saved, confidence)
                     row[f"saved_wear_{name}_low"], row[f"saved_wear_{name}_high"] = low, high
             legal = legal_group.get(group, math.nan)
             ha = hidden_overloads(la, n, legal, legal_axle)["hidden"].astype(float)
@@ -218,8 +218,8 @@ def design_savings(
             row["saved_hidden_overload"] = ha.mean() - hb.mean()
             if draws is not None:
                 saved = ha[draws].mean(axis=1) - hb[draws].mean(axis=1)
-                row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = np.quantile(
-                    saved, [alpha, 1 - alpha]
+                row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = percentile_interval(
+                    saved, confidence
                 )
             held = np.abs(b["held_tilt_deg"].to_numpy(dtype=float))
             row["held_tilt_deg_max"] = float(np.nanmax(held)) if scenario == "tilt_held" else math.nan

@@ -26,6 +26,7 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
+from bogie.group_names import GROUP_NAMES
 from bogie.weighings.stats import QUANTILES, group_inequality
 from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _LargeCell, _small_cell
 
@@ -36,7 +37,7 @@ SPILL_BLOCK = 1 << 18
 #: the most histogram bins of all ranks sought at once [-]: 2^21 (48 MiB of counts, least and greatest values)
 _BINS_TOTAL = 1 << 21
 #: the sizes spilled, by their code (the axles less two)
-SPILLED = ("tandem", "triaxle")
+SPILLED = GROUP_NAMES
 _COLUMNS = ("size", "station", "loads")  # int8, int32, three float64 a group
 
 

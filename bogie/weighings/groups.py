@@ -17,6 +17,7 @@ from collections.abc import Sequence
 import numpy as np
 import pandas as pd
 
+from bogie.group_names import GROUP_OF_AXLES
 from bogie.weighings._groups_core import split_groups
 from bogie.weighings._records import REL_TOL
 
@@ -33,8 +34,8 @@ US_TANDEM_M: tuple[float, float] = (40 * 0.0254, 96 * 0.0254)
 #: the grouping rules :func:`axle_groups` applies: ``spacing`` (axles at most ``group_spacing_m`` apart) and
 #: ``us-tandem`` (23 CFR 658.5's spacing band, :data:`US_TANDEM_M`)
 GROUPING_RULES: tuple[str, ...] = ("spacing", "us-tandem")
-#: group labels by number of axles
-SIZES: dict[int, str] = {2: "tandem", 3: "triaxle"}
+#: group labels by number of axles (:mod:`bogie.group_names`)
+SIZES: dict[int, str] = GROUP_OF_AXLES
 #: group positions a filter can ask for
 POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
 #: most axles in a group's columns of the group table [-] (a group with more is labelled ``other``)

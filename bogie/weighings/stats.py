@@ -20,6 +20,7 @@ import numpy as np
 import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
+from bogie.rounding import json_number
 from bogie.weighings._records import REL_TOL
 
 __all__ = [
@@ -228,7 +229,7 @@ def statistics_dict(stats: pd.DataFrame, by: str = "group", digits: int = 4) -> 
     """
 
     def num(x: float) -> float | None:
-        return None if pd.isna(x) else round(float(x), digits) + 0.0
+        return json_number(x, digits)
 
     out: dict[str, dict] = {}
     for row in stats.to_dict("records"):

@@ -17,6 +17,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie.group_names import GROUP_NAMES
 from bogie.weighings import _records
 from bogie.weighings._spill import SPILLED, GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
@@ -36,7 +37,7 @@ from bogie.weighings.wear import DAMAGE_EXPONENTS, EU_LEGAL_AXLE_KG, EU_LEGAL_GR
 __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
 
 #: the group sizes the statistics are tabulated for
-SURVEYED: tuple[str, ...] = ("tandem", "triaxle")
+SURVEYED: tuple[str, ...] = GROUP_NAMES
 
 
 #: the size labels of the position counts, by axles in the group (4 and more: other)

@@ -37,8 +37,9 @@ from numba import njit
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
-from bogie.intervals import wilson_interval
+from bogie.intervals import percentile_interval, wilson_interval
 from bogie.params import GRAVITY
+from bogie.rounding import json_number
 from bogie.weighings._records import REL_TOL
 from bogie.weighings.stats import _width, axle_columns
 
@@ -252,7 +253,6 @@ def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.Se
     """The figures of a cell of :data:`BOOTSTRAP_MAX_GROUPS` groups or fewer (or of any size without resamples):
     the extra wear with its percentile bootstrap intervals (drawn from ``stream``), and the hidden overloads."""
     m = len(n)
-    alpha = (1.0 - confidence) / 2.0
     row: dict = {}
     rng = np.random.default_rng(stream)
     cell_wear = {}
@@ -278,9 +278,9 @@ def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.Se
         row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
         if boot is not None:
             shares, extra = np.concatenate(boot[name][0]), np.concatenate(boot[name][1])
-            row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = np.quantile(shares, [alpha, 1 - alpha])
-            row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = np.quantile(
-                extra, [alpha, 1 - alpha]
+            row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = percentile_interval(shares, confidence)
+            row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = percentile_interval(
+                extra, confidence
             )
         else:
             for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
@@ -396,7 +396,7 @@ def wear_dict(table: pd.DataFrame, by: Sequence[str], digits: int = 4) -> dict:
     def num(x: float) -> float | int | None:
         if isinstance(x, (int, np.integer)):
             return int(x)
-        return None if x is None or not math.isfinite(x) else round(float(x), digits)
+        return json_number(x, digits)
 
     out: dict = {}
     for row in table.to_dict("records"):
