@@ -20,10 +20,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie.frame import DOF_NAMES, FrameModel, FrameSolution, _positive, beam_local_stiffness
+from bogie.frame import DOF_NAMES, FrameModel, FrameSolution, beam_local_stiffness
 from bogie.metrics import p as deviation_p
 from bogie.params import Bogie
 from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
+from bogie.ranges import check_positive
 
 __all__ = [
     "DOF_NAMES",
@@ -105,9 +106,9 @@ class MeshOptions:
             ("contact_stiffness", "N/m"),
             ("drag_link_area", "m^2"),
         ):
-            _positive(name, getattr(self, name), unit)
+            check_positive(name, getattr(self, name), unit)
         if self.tyre_longitudinal_stiffness is not None:
-            _positive("tyre_longitudinal_stiffness", self.tyre_longitudinal_stiffness, "N/m", allow_zero=True)
+            check_positive("tyre_longitudinal_stiffness", self.tyre_longitudinal_stiffness, "N/m", allow_zero=True)
         if not (math.isfinite(self.drag_link_rise) and abs(self.drag_link_rise) <= 0.5):
             raise ValueError(f"drag_link_rise = {self.drag_link_rise!r} is out of range: must be in [-0.5, 0.5] m")
 

@@ -26,6 +26,7 @@ from numpy.typing import NDArray
 
 from bogie import numerics
 from bogie._lu import lu_factor, lu_solve
+from bogie.ranges import check_positive
 
 DOF_NAMES = ("u", "w", "theta")
 #: smallest pivot of the Jacobi-scaled stiffness (unit diagonal) accepted as non-singular [-]
@@ -38,14 +39,6 @@ def _dof_index(dof: str | int) -> int:
     if isinstance(dof, int) and 0 <= dof < 3:
         return dof
     raise ValueError(f"dof = {dof!r} is not a degree of freedom: must be one of {', '.join(DOF_NAMES)} (or 0, 1, 2)")
-
-
-def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> float:
-    v = float(value)
-    ok = v >= 0.0 if allow_zero else v > 0.0
-    if not (math.isfinite(v) and ok):
-        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
-    return v
 
 
 def beam_local_stiffness(
@@ -67,9 +60,9 @@ def beam_local_stiffness(
     release_i, release_j
         Pin release (hinge) at end i, end j.
     """
-    _positive("ea", ea, "N")
-    _positive("ei", ei, "N m^2", allow_zero=release_i and release_j)
-    L = _positive("length", length, "m")
+    check_positive("ea", ea, "N")
+    check_positive("ei", ei, "N m^2", allow_zero=release_i and release_j)
+    L = check_positive("length", length, "m")
     a = ea / L
     k = np.zeros((6, 6))
     k[np.ix_([0, 3], [0, 3])] = a * np.array([[1.0, -1.0], [-1.0, 1.0]])
@@ -235,7 +228,7 @@ class FrameModel:
             Line of action (x, z) [-]; needed when the nodes coincide. Tension is positive along it from i to j.
         """
         i, j = self._check_node(i), self._check_node(j)
-        k = _positive("stiffness", stiffness, "N/m")
+        k = check_positive("stiffness", stiffness, "N/m")
         if direction is None:
             (xi, zi), (xj, zj) = self.coords[i], self.coords[j]
             direction = (xj - xi, zj - zi)
@@ -257,7 +250,7 @@ class FrameModel:
             Rotational rate [N m/rad].
         """
         i, j = self._check_node(i), self._check_node(j)
-        k = _positive("stiffness", stiffness, "N m/rad")
+        k = check_positive("stiffness", stiffness, "N m/rad")
         b = np.array([0.0, 0.0, -1.0, 0.0, 0.0, 1.0])
         return self._add(name, _Element("rotational_spring", (i, j), k * np.outer(b, b), k * b[None, :]))
 

@@ -25,7 +25,6 @@ References
 
 from __future__ import annotations
 
-import math
 from collections.abc import Callable
 from dataclasses import dataclass
 
@@ -45,6 +44,7 @@ from bogie._newmark_core import (
     _integrate,
     _integrate_linear_kernel,
 )
+from bogie.ranges import check_positive
 
 #: re-exported: the compiled LU factors (now in :mod:`bogie._lu`) and the model ids and statuses of the kernel
 __all__ = [
@@ -135,11 +135,6 @@ class IntegrationResult:
         return self.status == STATUS_OK
 
 
-def _check_positive(name: str, value: float, unit: str) -> None:
-    if not (math.isfinite(value) and value > 0.0):
-        raise ValueError(f"{name} = {value!r} is out of range: must be > 0 {unit}")
-
-
 def newmark_parameters(beta: float, gamma: float, rho_inf: float | None) -> tuple[float, float, float, float]:
     """(alpha_m, alpha_f, beta, gamma) for plain Newmark, or generalised-alpha when ``rho_inf`` is given."""
     if rho_inf is not None:
@@ -181,7 +176,7 @@ def integrate(
     are zero and each step starts from the last equilibrium.
     """
     u_limit = np.full(u0.shape[0], np.inf) if limits is None else np.asarray(limits, dtype=float)
-    _check_positive("dt", dt, "s")
+    check_positive("dt", dt, "s")
     if int(n_steps) != n_steps or n_steps < 1:
         raise ValueError(f"n_steps = {n_steps!r} must be an integer >= 1")
     if drive.shape[0] != n_steps + 1:
@@ -320,7 +315,7 @@ def integrate_linear(
     """
     mass, damping, stiffness = _system(M, C, K)
     n = mass.shape[0]
-    _check_positive("dt", dt, "s")
+    check_positive("dt", dt, "s")
     t = np.arange(int(n_steps) + 1) * float(dt)
     loads = _load_history(R, t, n)
     u_init = np.array(u0, dtype=float).reshape(n)

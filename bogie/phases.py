@@ -24,6 +24,7 @@ from bogie import _phases_core as pc
 from bogie import nonlinear as nl
 from bogie.newmark import _STATUS_TEXT, consistent_acceleration
 from bogie.params import Bogie
+from bogie.ranges import check_positive
 from bogie.results import Profile
 
 __all__ = ["MeanReading", "Phase", "PhaseOutcome", "PhasesRun", "RoadTable", "SensorReading", "kernel_cached", "run"]
@@ -46,14 +47,6 @@ _STATUS_TEXT = {
 }
 
 
-def _positive(name: str, value: float, unit: str, allow_zero: bool = False) -> float:
-    v = float(value)
-    ok = v >= 0.0 if allow_zero else v > 0.0
-    if not (math.isfinite(v) and ok):
-        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
-    return v
-
-
 @dataclass(frozen=True, eq=False)
 class RoadTable:
     """Road heights at the distances ``x0 + k dx``, k = 0 .. len(heights) - 1 [m], linear between them.
@@ -66,7 +59,7 @@ class RoadTable:
     heights: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "dx", _positive("dx", self.dx, "m"))
+        object.__setattr__(self, "dx", check_positive("dx", self.dx, "m"))
         h = np.ascontiguousarray(self.heights, dtype=float)
         if h.ndim != 1 or h.size < 2:
             raise ValueError(f"heights has shape {h.shape}: a road table needs at least 2 heights [m] in a 1-D array")
@@ -88,7 +81,7 @@ class RoadTable:
         With ``dx`` the spacing of a profile's own grid (:class:`bogie.road.ISO8608Profile`: length / points) the
         table holds that grid's heights and reproduces the profile's linear interpolation exactly.
         """
-        dx = _positive("dx", dx, "m")
+        dx = check_positive("dx", dx, "m")
         if not (math.isfinite(x_from) and math.isfinite(x_to) and x_to > x_from):
             raise ValueError(f"x_from = {x_from!r}, x_to = {x_to!r}: need finite distances [m] with x_to > x_from")
         k0 = math.floor(x_from / dx)
@@ -164,14 +157,14 @@ class Phase:
     name: str = "phase"
 
     def __post_init__(self) -> None:
-        _positive("duration", self.duration, "s")
-        _positive("dt", self.dt, "s")
+        check_positive("duration", self.duration, "s")
+        check_positive("dt", self.dt, "s")
         if self.dt > self.duration:
             raise ValueError(f"dt = {self.dt!r} is out of range: must be in (0, duration = {self.duration:g}] s")
         if self.tolerance is not None:
-            _positive("tolerance", self.tolerance, "m")
-            _positive("max_step", self.max_step, "s")
-        _positive("speed", self.speed, "m/s", allow_zero=True)
+            check_positive("tolerance", self.tolerance, "m")
+            check_positive("max_step", self.max_step, "s")
+        check_positive("speed", self.speed, "m/s", allow_zero=True)
         lf = self.load_factor if isinstance(self.load_factor, tuple) else (self.load_factor, self.load_factor)
         for value in lf:
             if not (math.isfinite(value) and 0.0 < value <= 2.0):
@@ -187,7 +180,7 @@ class Phase:
         elif isinstance(self.reading, SensorReading):
             if self.speed <= 0.0:
                 raise ValueError(f"a sensor reading needs a speed > 0 m/s, got speed = {self.speed!r}")
-            _positive("reading.half", self.reading.half, "s", allow_zero=True)
+            check_positive("reading.half", self.reading.half, "s", allow_zero=True)
 
     @property
     def load_factors(self) -> tuple[float, float]:

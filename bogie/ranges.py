@@ -116,6 +116,16 @@ def check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_
     return v
 
 
+def check_positive(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
+    """``value`` as a float if it is finite and > 0 (>= 0 if ``allow_zero``); else a ValueError naming ``name``, the
+    value and ``unit``."""
+    v = float(value)
+    ok = v >= 0.0 if allow_zero else v > 0.0
+    if not (math.isfinite(v) and ok):
+        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
+    return v
+
+
 def check_vector(
     name: str, value: Any, length: int, what: str, low: float, high: float, unit: str, low_inclusive: bool
 ) -> tuple[float, ...]:

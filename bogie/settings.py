@@ -18,7 +18,7 @@ from typing import Any
 
 import numpy as np
 
-__all__ = ["FrozenMap", "Setting", "check_settings", "declared", "setting"]
+__all__ = ["FrozenMap", "Setting", "check_settings", "check_value", "declared", "setting"]
 
 #: the metadata key of a declared field
 KEY = "bogie.setting"
@@ -124,6 +124,25 @@ def check_settings(obj: Any, error: type[Exception] = ValueError, prefix: str = 
     name``); the values are left as they were given."""
     for name, spec in declared(type(obj)).items():
         spec.check(prefix + name, getattr(obj, name), error)
+
+
+def check_value(
+    name: str,
+    value: Any,
+    unit: str = "-",
+    *,
+    low: float | None = None,
+    high: float | None = None,
+    low_open: bool = False,
+    high_open: bool = False,
+    whole: bool = False,
+    error: type[Exception] = ValueError,
+) -> Any:
+    """An argument that is not a settings field, checked as a declared one would be (:meth:`Setting.check`):
+    ``value`` as an int (``whole``) or a float, else ``error`` naming ``name``, the value, what is allowed and
+    ``unit``."""
+    Setting(unit, "", low, high, low_open, high_open, whole).check(name, value, error)
+    return int(value) if whole else float(value)
 
 
 class FrozenMap(Mapping):

@@ -41,6 +41,7 @@ from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, io_error, run_stage
 from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
+from pipeline.config.schema import CALIBRATION_METHOD_KEYS
 from pipeline.resources import worker_count
 from pipeline.sample import sample_fleet
 from pipeline.workers import map_ordered
@@ -55,11 +56,8 @@ __all__ = [
 def method_settings(config: Config) -> CalibrationSettings:
     """``calibrate:``'s fit, optimiser and bootstrap settings, and the master seed."""
     cal = config.calibrate
-    return CalibrationSettings(
-        fit=dict(cal.fit), seed=config.seed, maxiter=cal.maxiter, popsize=cal.popsize,
-        bootstrap_resamples=cal.bootstrap_resamples, confidence_level=cal.confidence_level,
-        posterior_draws=cal.posterior_draws,
-    )  # fmt: skip
+    shared = {key: getattr(cal, key) for key in CALIBRATION_METHOD_KEYS}  # declared by CalibrationSettings
+    return CalibrationSettings(fit=dict(cal.fit), seed=config.seed, **shared)
 
 
 def defaults(config: Config) -> dict[str, float]:

@@ -33,22 +33,19 @@ from typing import Any
 #: each public name -> the submodule that defines it
 _EXPORTS: dict[str, str] = {
     **dict.fromkeys(
-        ("DesignExperiment", "DesignSettings", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"),
-        "design",
+        ("DesignExperiment", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"), "design"
     ),
-    **dict.fromkeys(
-        ("DesignAnalysis", "DesignError", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "design_analysis"
-    ),
+    **dict.fromkeys(("DesignError", "DesignSettings"), "design_settings"),
+    **dict.fromkeys(("DesignAnalysis", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "design_analysis"),
     **dict.fromkeys(
         ("Choice", "Constant", "Distribution", "LogNormal", "LogUniform", "Normal", "ParameterError", "TruncNormal",
          "Uniform"),
         "distributions",
     ),
     **dict.fromkeys(
-        ("CalibrationError", "CalibrationSettings", "Observed", "Table", "base_values", "build_table", "make_problem",
-         "observed_groups"),
-        "calibration",
+        ("Observed", "Table", "base_values", "build_table", "make_problem", "observed_groups"), "calibration"
     ),
+    **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "calibration_settings"),
     "calibrate": "calibration_fit",
     **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "calibration_checks"),
     **dict.fromkeys(("compare", "simulated_readings"), "observed"),

@@ -28,18 +28,17 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
-from typing import Any
 
 import numpy as np
 import pandas as pd
 from scipy.optimize import differential_evolution
 
+from bogie.fleet.calibration_settings import ORDER, CalibrationSettings, check_fit
 from bogie.fleet.calibration_table import (
     SIZES,
     CalibrationError,
     Mapper,
     Table,
-    _whole,
     base_values,
     build_table,
     crn_table,
@@ -57,82 +56,8 @@ __all__ = [
     "make_problem", "observed_groups", "observed_quantities", "simulated",
 ]  # fmt: skip
 
-#: the fitted quantities in the order of the optimiser's vector
-ORDER: tuple[str, ...] = tuple(CALIBRATION_QUANTITIES)
 #: the fewest observed groups of one size that enter the distance (fewer: that size is left out, and said so)
 MIN_GROUPS = 10
-
-
-def check_fit(fit: Mapping[str, Sequence[float]]) -> None:
-    """Refuse bounds that are not ``{quantity: (low, high)}`` within the quantity's range, naming them and the unit.
-
-    Raises
-    ------
-    CalibrationError
-        If ``fit`` is empty, names a quantity not in :data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`, or has
-        bounds that are not two finite numbers ``low < high`` within the quantity's range.
-    """
-    if not fit:
-        raise CalibrationError(f"fit = {dict(fit)!r}: name at least one quantity to fit: {', '.join(ORDER)}")
-    for name, bounds in fit.items():
-        if name not in CALIBRATION_QUANTITIES:
-            allowed = ", ".join(ORDER)
-            raise CalibrationError(f"fit[{name!r}]: not a fleet quantity calibration can fit; allowed: {allowed}")
-        low, high, unit = CALIBRATION_QUANTITIES[name]
-        numbers = len(bounds) == 2 and all(
-            not isinstance(b, bool) and isinstance(b, (int, float)) and math.isfinite(b) for b in bounds
-        )
-        if not numbers or not bounds[0] < bounds[1] or bounds[0] < low or bounds[1] > high:
-            expected = f"must be (low, high), low < high, within [{low:g}, {high:g}] [{unit}]"
-            raise CalibrationError(f"fit[{name!r}] = {tuple(bounds)!r}: {expected}")
-
-
-@dataclass(frozen=True)
-class CalibrationSettings:
-    """How a calibration fits: the quantities and their bounds, the optimiser's settings, the bootstrap.
-
-    Attributes
-    ----------
-    fit
-        Quantity -> (low, high): the bounds of each fitted quantity in the unit of its name
-        (:data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`).
-    seed
-        Seed of the differential evolution (the fit's; resample ``b`` of the bootstrap is fitted with ``seed + 1 + b``)
-        and of the bootstrap's resampling [-], >= 0.
-    maxiter, popsize
-        Of scipy's ``differential_evolution`` [-]: generations >= 1, population multiplier >= 2.
-    bootstrap_resamples
-        Bootstrap resamples for the intervals and trade-offs [-], >= 0 (0: no intervals).
-    confidence_level
-        Of the intervals [-], in (0, 1).
-    posterior_draws
-        Metropolis draws of the posterior kept (a quarter more adapt the sampler first) [-], >= 0 (0: no posterior;
-        :mod:`bogie.fleet.calibration_posterior`).
-    priors
-        Quantity -> :class:`bogie.fleet.priors.Prior`; None: :func:`bogie.fleet.priors.default_priors` (each
-        documented with its source). A quantity left out is flat over its bounds.
-    """
-
-    fit: Mapping[str, tuple[float, float]]
-    seed: int
-    maxiter: int = 40
-    popsize: int = 8
-    bootstrap_resamples: int = 50
-    confidence_level: float = 0.9
-    posterior_draws: int = 4000
-    priors: Mapping[str, Any] | None = None
-
-    def __post_init__(self) -> None:
-        check_fit(self.fit)
-        object.__setattr__(self, "fit", {q: (float(b[0]), float(b[1])) for q, b in self.fit.items()})
-        _whole("seed", self.seed, 0)
-        _whole("maxiter", self.maxiter, 1)
-        _whole("popsize", self.popsize, 2)
-        _whole("bootstrap_resamples", self.bootstrap_resamples, 0)
-        _whole("posterior_draws", self.posterior_draws, 0)
-        level = self.confidence_level
-        if isinstance(level, bool) or not isinstance(level, (int, float)) or not 0.0 < level < 1.0:
-            raise CalibrationError(f"confidence_level = {level!r}: must lie in (0, 1) [-]")
 
 
 # ---- the observed side -------------------------------------------------------------------------------------------

@@ -21,6 +21,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
+from bogie.fleet.calibration_settings import CalibrationError
 from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.distributions import Distribution, TruncNormal, truncated_standard_normal_cdf
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
@@ -31,6 +32,7 @@ from bogie.group_names import GROUP_AXLES
 from bogie.params import GRAVITY
 from bogie.road import wim
 from bogie.rounding import json_number
+from bogie.settings import check_value
 
 __all__ = [
     "SIZES", "CalibrationError", "Mapper", "Table", "base_values", "bogie_tilts", "build_table", "crn_table",
@@ -45,10 +47,6 @@ SIZES: dict[str, int] = GROUP_AXLES
 Mapper = Callable[[Callable[[Any], Any], Sequence[Any]], Iterable[Any]]
 
 
-class CalibrationError(ValueError):
-    """An input that calibration cannot use (named, with what was expected)."""
-
-
 def _quiet(text: str) -> None:
     """A progress callback that says nothing."""
 
@@ -61,9 +59,9 @@ def _summary(entries: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, An
     }
 
 
-def _whole(name: str, value: Any, low: int) -> None:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise CalibrationError(f"{name} = {value!r}: must be a whole number >= {low} [-]")
+def _whole(name: str, value: Any, low: int) -> int:
+    """``value`` if it is a whole number >= ``low``, else a :class:`CalibrationError` naming ``name``."""
+    return check_value(name, value, low=low, whole=True, error=CalibrationError)
 
 
 # ---- the calibration fleet and its table of readings -------------------------------------------------------------

@@ -29,7 +29,6 @@ from __future__ import annotations
 
 import math
 import warnings
-from collections.abc import Mapping, Sequence
 from concurrent.futures import Executor
 from dataclasses import dataclass, field
 from typing import Any
@@ -38,7 +37,6 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.design_analysis import (
     FACTORS,
     FLEET_SLOT,
@@ -48,11 +46,12 @@ from bogie.fleet.design_analysis import (
     analyse_designs,
     guidance_sentences,
 )
+from bogie.fleet.design_settings import FACTOR_UNITS, DesignSettings
 from bogie.fleet.distributions import Distribution
 from bogie.fleet.protocol_settings import StaticProtocol
 from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, Fleet, design_seed, road_seed, sensor_seed, study_frame
 from bogie.fleet.weighing import CHUNK_ROWS, weigh_fleet
-from bogie.settings import FrozenMap, check_settings, setting
+from bogie.settings import check_value
 
 __all__ = [
     "CONDITION_DIMENSIONS", "FACTORS", "FACTOR_UNITS", "FLEET_SLOT", "HELD", "DesignError", "DesignExperiment",
@@ -62,11 +61,6 @@ __all__ = [
 
 #: the operating conditions, in the order of their design's dimensions (the order is part of the draws)
 CONDITION_DIMENSIONS: tuple[str, ...] = ("chassis_tilt", "payload_fraction", *TYRE_WEAR_COLUMNS, "road_class")
-#: unit of each design factor's levels (SI)
-FACTOR_UNITS: dict[str, str] = {
-    "bush_stiffness": "N m/rad", "equaliser_arm": "m", "contact_roll_radius": "m", "friction_coefficient": "-",
-    "spring_friction_band": "N",
-}  # fmt: skip
 #: the experiment's columns beside the sample's: each row's design, condition and slot (:data:`FLEET_SLOT` or the
 #: index into the tilt grid)
 EXPERIMENT_COLUMNS: tuple[str, ...] = ("design", "condition", "slot")
@@ -74,77 +68,7 @@ EXPERIMENT_COLUMNS: tuple[str, ...] = ("design", "condition", "slot")
 
 def _whole(name: str, value: Any, low: int) -> int:
     """``value`` if it is a whole number >= ``low``, else a :class:`DesignError` naming ``name``."""
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < low:
-        raise DesignError(f"{name} = {value!r}: must be a whole number >= {low} [-]")
-    return int(value)
-
-
-def _levels(factor: Any, levels: Any) -> tuple[float, ...]:
-    """A grid factor's levels as floats [SI], refused with a :class:`DesignError` naming what is wrong."""
-    if factor not in FACTORS:
-        raise DesignError(f"grid: {factor!r} is not a design factor; allowed: {', '.join(FACTORS)}")
-    where, unit = f"grid[{factor!r}] = {levels!r}", FACTOR_UNITS[factor]
-    if isinstance(levels, (str, bytes)) or not isinstance(levels, Sequence | np.ndarray) or len(levels) == 0:
-        raise DesignError(f"{where}: must be a sequence of one or more levels [{unit}]")
-    for i, v in enumerate(levels):
-        number = not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
-        if not (number and math.isfinite(v) and v >= 0.0):
-            raise DesignError(f"grid[{factor!r}][{i}] = {v!r}: must be a finite number >= 0 [{unit}]")
-    out = tuple(float(v) for v in levels)
-    if len(set(out)) != len(out):
-        raise DesignError(f"{where}: lists a level twice")
-    return out
-
-
-@dataclass(frozen=True)
-class DesignSettings:
-    """The controlled experiment's settings (``docs/design.md``), checked when made; each number setting's unit,
-    range and doc are declared with it (:mod:`bogie.settings`).
-
-    ``grid`` maps a design factor (:data:`FACTORS`) to its levels [SI: N m/rad, m, m, -, N]: the representative
-    designs are every combination, the other factors at today's typical values (the fleet distributions' medians);
-    the order of the factors and levels is the order of the designs. ``groups`` are the axle groups whose designs
-    are studied (``tandem``, ``triaxle``); each also runs its air-sprung group.
-
-    Raises
-    ------
-    DesignError
-        Naming the setting, its value, the allowed values and the unit.
-    """
-
-    grid: Mapping[str, Sequence[float]]
-    groups: tuple[str, ...] = tuple(GROUP_AXLES)
-    n_conditions: int = setting(
-        20, unit="-", low=2, whole=True,
-        doc="Operating conditions (tilt, tyre wear, payload, approach road) every design runs over.",
-    )  # fmt: skip
-    tilt_step_deg: float = setting(
-        0.5, unit="degree", low=0.0, low_open=True,
-        doc="Step of the chassis-tilt grid, outward from level over the tilt distribution's bounds.",
-    )  # fmt: skip
-    n_space_filling: int = setting(
-        6, unit="-", low=0, whole=True,
-        doc="Further designs per group, a scrambled Sobol' design over all five factors' fleet distributions.",
-    )  # fmt: skip
-    target_share: float = setting(
-        0.95, unit="-", low=0.0, high=1.0, low_open=True, high_open=True,
-        doc="The share of bogies within 5 % a design must keep.",
-    )  # fmt: skip
-    confidence_level: float = setting(
-        0.95, unit="-", low=0.0, high=1.0, low_open=True, high_open=True, doc="Of the shares' Wilson intervals."
-    )
-
-    def __post_init__(self) -> None:
-        groups = (self.groups,) if isinstance(self.groups, str) else tuple(self.groups)
-        if not groups or len(set(groups)) != len(groups) or not set(groups) <= set(GROUP_AXLES):
-            raise DesignError(
-                f"groups = {self.groups!r}: must be one or more distinct axle groups among {', '.join(GROUP_AXLES)}"
-            )
-        object.__setattr__(self, "groups", groups)
-        if not isinstance(self.grid, Mapping) or not self.grid:
-            raise DesignError(f"grid = {self.grid!r}: must map one or more of {', '.join(FACTORS)} to their levels")
-        object.__setattr__(self, "grid", FrozenMap({f: _levels(f, v) for f, v in self.grid.items()}))
-        check_settings(self, DesignError)
+    return check_value(name, value, low=low, whole=True, error=DesignError)
 
 
 @dataclass(frozen=True)

@@ -23,6 +23,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES
+from bogie.fleet.design_settings import FACTORS, DesignError
 from bogie.fleet.design_table import wilson_interval
 from bogie.metrics import max_deviation
 from bogie.weighings.stats import group_inequality
@@ -32,15 +33,6 @@ __all__ = [
     "describe", "guidance_sentences", "pareto_front", "tilt_tolerance", "tolerance_width",
 ]  # fmt: skip
 
-#: the design factors, SI sample columns: bush stiffness [N m/rad], equaliser arm [m], pad radius [m], spring-end
-#: friction coefficient [-] and the springs' interleaf friction band [N], in the order of ``design.json``'s keys
-FACTORS: tuple[str, ...] = (
-    "bush_stiffness",
-    "equaliser_arm",
-    "contact_roll_radius",
-    "friction_coefficient",
-    "spring_friction_band",
-)
 #: the other bogie parameters a design holds at the fleet's median (they are not design choices studied here)
 HELD: tuple[str, ...] = ("bush_damping", "spring_friction_decay")
 #: slot of a run at its condition's own sampled tilt (the other slots are indices into the tilt grid)
@@ -52,11 +44,6 @@ FINE_STEP_DEG = 0.01
 RUN_NEEDS: tuple[str, ...] = ("design", "condition", "slot", "status", "chassis_tilt", "outside_5pct", "over_10pct",
                               "max_deviation", "axle_load_1", "axle_load_2")  # fmt: skip
 DESIGN_NEEDS: tuple[str, ...] = ("design", "group", "kind", "suspension", *FACTORS, *HELD, "distance")
-
-
-class DesignError(ValueError):
-    """The design study cannot be set up from these arguments (the message names the argument, its value, the
-    allowed range and the unit)."""
 
 
 @dataclass(frozen=True)

@@ -173,27 +173,48 @@ def library_model(
     base: type[Strict] = Strict,
 ) -> type[Strict]:
     """The params.yaml section of the library settings class ``library``, built from its declarations
-    (:func:`bogie.settings.declared`): one key per declared field, in its order, its name the field's with the
-    suffix of its unit (:mod:`pipeline.config.si`), its type, range, unit and doc the declaration's.
-
-    Only what the YAML adds is given here: ``units``, a field's unit in the YAML where it is not the library's
-    (``sensor_axle_error``: ``%`` where the library takes a fraction), and ``bounds``, the project's stricter
-    bounds by key, each with its reason (a bound that is not stricter than the library's is refused when the model
-    is made); ``names``, what a name field's value is, in the messages (``sensor``: ``sensor type``). A key of a
-    setting that may be None may be left out (None). ``custom``: a field whose value is more than a number or a
-    name (a mapping, a list of names), by the library's field name: (its key, annotation, pydantic field). Every
-    field of ``library`` is a key, declared or custom. The model's ``library_class`` is ``library``, so that the
-    configuration holds the library's object."""
-    units, bounds, names, custom = units or {}, bounds or {}, names or {}, custom or {}
+    (:func:`bogie.settings.declared`; :func:`declared_fields`): one key per field, in its order. ``custom``: a field
+    whose value is more than a number or a name (a mapping, a list of names), by the library's field name: (its
+    key, annotation, pydantic field). Every field of ``library`` is a key, declared or custom. The model's
+    ``library_class`` is ``library``, so that the configuration holds the library's object."""
+    custom = custom or {}
     settings = declared(library)
+    made = declared_fields(name, library, list(settings), units, bounds, names)
     fields: dict[str, Any] = {}
     for attr in (f.name for f in dataclasses.fields(library)):
         if attr in custom:
             key, annotation, field = custom[attr]
             fields[key] = (annotation, field)
-            continue
-        if attr not in settings:
+        elif attr in settings:
+            fields.update(made[attr])
+        else:
             raise TypeError(f"{name}: {library.__name__}.{attr} is neither declared (bogie.settings) nor custom")
+    model = create_model(name, __base__=base, __doc__=doc, **fields)
+    model.library_class = library
+    return model
+
+
+def declared_fields(
+    model: str,
+    library: type,
+    attrs: list[str],
+    units: dict[str, str] | None = None,
+    bounds: dict[str, list[Bound]] | None = None,
+    names: dict[str, str] | None = None,
+) -> dict[str, dict[str, tuple[Any, Any]]]:
+    """The schema fields of the declared settings ``attrs`` of ``library``, by attribute: ``{attr: {key: (annotation,
+    field)}}``, the key the attribute's name with the suffix of its unit (:mod:`pipeline.config.si`), its type,
+    range, unit and doc the declaration's.
+
+    Only what the YAML adds is given here: ``units``, a field's unit in the YAML where it is not the library's
+    (``sensor_axle_error``: ``%`` where the library takes a fraction), and ``bounds``, the project's stricter
+    bounds by key, each with its reason (a bound that is not stricter than the library's is refused when the model
+    is made); ``names``, what a name field's value is, in the messages (``sensor``: ``sensor type``). A key of a
+    setting that may be None may be left out (None)."""
+    units, bounds, names = units or {}, bounds or {}, names or {}
+    settings = declared(library)
+    out: dict[str, dict[str, tuple[Any, Any]]] = {}
+    for attr in attrs:
         spec = settings[attr]
         unit = units.get(attr, spec.unit)
         suffix, factor, _si = UNITS.get(unit, ("", 1.0, unit))
@@ -206,17 +227,15 @@ def library_model(
             annotation = int if spec.whole else float
             limits = _library_limits(spec, factor)
             for which, value, _reason in bounds.get(key, ()):
-                _stricter(name, key, limits, which, value)
+                _stricter(model, key, limits, which, value)
             field = Field(description=spec.doc, json_schema_extra={"unit": unit}, **limits, **default)
         if spec.optional:
             annotation = annotation | None
-        fields[key] = (annotation, field)
-    unknown = set(bounds) - set(fields)
+        out[attr] = {key: (annotation, field)}
+    unknown = set(bounds) - {key for made in out.values() for key in made}
     if unknown:
-        raise TypeError(f"{name}: bounds for keys {sorted(unknown)} that {library.__name__} does not declare")
-    model = create_model(name, __base__=base, __doc__=doc, **fields)
-    model.library_class = library
-    return model
+        raise TypeError(f"{model}: bounds for keys {sorted(unknown)} that {library.__name__} does not declare")
+    return out
 
 
 def _library_limits(spec: Setting, factor: float) -> dict[str, float]:

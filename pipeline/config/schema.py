@@ -15,8 +15,9 @@ from __future__ import annotations
 from pathlib import PurePosixPath
 from typing import Annotated, Any, Literal
 
-from pydantic import AfterValidator, Field, ValidatorFunctionWrapHandler, model_validator
+from pydantic import AfterValidator, Field, ValidatorFunctionWrapHandler, create_model, model_validator
 
+from bogie.fleet.calibration_settings import CalibrationSettings
 from bogie.fleet.constants import (
     CALIBRATION_QUANTITIES,
     GROUP_AXLES,
@@ -25,7 +26,7 @@ from bogie.fleet.constants import (
     SITE_IRI_RANGE,
     SURVEY_PROTOCOLS,
 )
-from bogie.fleet.design import DesignSettings
+from bogie.fleet.design_settings import DesignSettings
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
 from pipeline.config.distributions import Strict
@@ -35,6 +36,7 @@ from pipeline.config.fields import (
     GroupLoads,
     GroupPresets,
     SuspensionMix,
+    declared_fields,
     distinct,
     integer,
     library_model,
@@ -276,7 +278,7 @@ class Survey(Strict):
     readings are written to ``data/survey/fleet_wim.<format>``."""
 
 
-class Calibrate(Strict):
+class _CalibrateTable(Strict):
     """``calibrate:`` the fleet quantities fitted to the observed survey."""
 
     protocol: Literal[("auto", *PROTOCOLS)] = named("protocol")  # type: ignore[valid-type]
@@ -309,16 +311,24 @@ class Calibrate(Strict):
         },
     )
     """The WIM site roughnesses the readings are tabulated at."""
-    bootstrap_resamples: int = integer(0, 10_000)
-    """Bootstrap resamples of the fitted values' intervals (0: none)."""
-    confidence_level: float = number("-", gt=0.0, lt=1.0)
-    """Confidence level of the fitted values' intervals."""
-    maxiter: int = integer(1, 10_000)
-    """Generations of the differential evolution."""
-    popsize: int = integer(2, 200)
-    """Population of the differential evolution, per fitted quantity."""
-    posterior_draws: int = integer(0, 1_000_000)
-    """Metropolis draws of the posterior kept, under the documented priors (0: no posterior)."""
+
+
+#: the keys of ``calibrate:`` that are the library's CalibrationSettings' (declared there, bogie.settings; its
+#: ``fit`` is the key above, its ``seed`` params.yaml's top-level one, its ``priors`` the documented defaults)
+CALIBRATION_METHOD_KEYS: tuple[str, ...] = (
+    "bootstrap_resamples", "confidence_level", "maxiter", "popsize", "posterior_draws",
+)  # fmt: skip
+Calibrate = create_model(
+    "Calibrate",
+    __base__=_CalibrateTable,
+    __doc__=_CalibrateTable.__doc__,
+    **{key: spec for made in declared_fields("Calibrate", CalibrationSettings, list(CALIBRATION_METHOD_KEYS), bounds={
+        "bootstrap_resamples": [("le", 10_000, "a sanity cap: 10^4 refits")],
+        "maxiter": [("le", 10_000, "a sanity cap: 10^4 generations")],
+        "popsize": [("le", 200, "a sanity cap: 200 a fitted quantity")],
+        "posterior_draws": [("le", 1_000_000, "a sanity cap: 10^6 draws")],
+    }).values() for key, spec in made.items()},
+)  # fmt: skip
 
 
 def _si_grid(grid: dict[str, list[float]]) -> FrozenMap:

@@ -12,7 +12,7 @@ import numpy as np
 import pytest
 from pydantic import BaseModel
 
-from bogie.fleet import DesignSettings, StaticProtocol, WimProtocol
+from bogie.fleet import CalibrationSettings, DesignSettings, StaticProtocol, WimProtocol
 from bogie.settings import FrozenMap, Setting, check_settings, declared, setting
 from pipeline.config import load_params, parse_config, schema
 from pipeline.config.errors import _bounds
@@ -63,10 +63,17 @@ def _schema_limits(info, factor: float) -> tuple[float, bool, float, bool]:
     return low, "gt" in bounds, high, "lt" in bounds
 
 
-@pytest.mark.parametrize("model", library_models(), ids=lambda m: m.__name__)
-def test_the_schema_allows_nothing_the_library_refuses(model):
+def declaring() -> list[tuple[type[BaseModel], type, list[str]]]:
+    """(a schema model, the library class, the settings of the class whose keys the model has)."""
+    found = [(m, m.library_class, list(declared(m.library_class))) for m in library_models()]
+    return [*found, (schema.Calibrate, CalibrationSettings, list(schema.CALIBRATION_METHOD_KEYS))]
+
+
+@pytest.mark.parametrize(("model", "library", "names"), declaring(), ids=lambda x: getattr(x, "__name__", ""))
+def test_the_schema_allows_nothing_the_library_refuses(model, library, names):
     keys = {attribute(key, info)[0]: key for key, info in model.model_fields.items()}
-    for name, spec in declared(model.library_class).items():
+    for name in names:
+        spec = declared(library)[name]
         if spec.choices is not None:
             continue
         info = model.model_fields[keys[name]]
@@ -164,3 +171,23 @@ def test_a_frozen_map_is_a_read_only_hashable_mapping():
     assert grid == {"a": (1.0, 2.0)} and hash(grid) == hash(FrozenMap({"a": (1.0, 2.0)}))
     with pytest.raises(TypeError):
         grid["b"] = (3.0,)  # type: ignore[index]
+
+
+def test_calibrates_method_keys_are_every_calibration_setting_the_yaml_sets(raw):
+    """``calibrate:`` is not one library class (its table's keys are the stage's), but every CalibrationSettings
+    field is a calibrate key, declared in the library, except the two params.yaml sets elsewhere: the seed (the
+    top-level one) and the priors (the documented defaults); and the stage passes each of them on."""
+    from pipeline.calibrate import method_settings
+    from pipeline.config.schema import CALIBRATION_METHOD_KEYS
+
+    fields = {f.name for f in dataclasses.fields(CalibrationSettings)}
+    assert fields - set(CALIBRATION_METHOD_KEYS) == {"fit", "seed", "priors"}
+    assert set(CALIBRATION_METHOD_KEYS) <= set(declared(CalibrationSettings))
+    for key in CALIBRATION_METHOD_KEYS:
+        assert schema.Calibrate.model_fields[key].description == declared(CalibrationSettings)[key].doc
+    raw["calibrate"].update(maxiter=7, popsize=3, bootstrap_resamples=11, confidence_level=0.8, posterior_draws=13)
+    settings = method_settings(parse_config(raw))
+    assert (settings.maxiter, settings.popsize, settings.bootstrap_resamples, settings.confidence_level,
+            settings.posterior_draws, settings.seed) == (7, 3, 11, 0.8, 13, raw["seed"])  # fmt: skip
+    # the library's range, the project's stricter bound beside it: popsize 2-200 (the issue's example)
+    assert _bounds(schema.Calibrate.model_fields["popsize"]) == {"ge": 2, "le": 200}
