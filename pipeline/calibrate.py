@@ -211,8 +211,8 @@ def write_outputs(
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
             fh.write("\n")
-        for name, frame in tables.items():
-            frame.to_csv(tmp_dir / name, index=False, float_format="%.6g")
+        for name, frame in tables.items():  # the library's tables by name; the stage's files by name + .csv
+            frame.to_csv(tmp_dir / f"{name}.csv", index=False, float_format="%.6g")
         if not tables:
             (tmp_dir / "README.txt").write_text(f"calibration skipped: {metrics['reason']}\n", encoding="utf-8")
 

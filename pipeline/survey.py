@@ -104,7 +104,7 @@ _HEADLINE_DIGITS = {
 
 def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
     """The small dict of metrics/survey.json: totals, then protocol -> group -> headline numbers, rounded."""
-    summary = tables["summary.csv"]
+    summary = tables["summary"]
     metrics: dict[str, Any] = {
         "n_runs": int(summary["n_runs"].sum()),
         "n_ok": int(summary["n_ok"].sum()),
@@ -116,12 +116,12 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
         entry.update(n_ok=int(row.n_ok), n_failed=int(row.n_failed), n_airborne=int(row.n_airborne))
         metrics.setdefault(row.protocol, {})[row.group] = entry
     by_kind: dict[str, Any] = {}
-    for row in tables["by_suspension.csv"].to_dict("records"):
+    for row in tables["by_suspension"].to_dict("records"):
         entry = {"n_ok": int(row["n_ok"]), "n_failed": int(row["n_failed"]), "n_airborne": int(row["n_airborne"])}
         entry.update({key: json_number(row[key], 4 if key.startswith("share") else 1) for key in SUSPENSION_STATISTICS})
         by_kind.setdefault(row["protocol"], {}).setdefault(row["group"], {})[row["suspension"]] = entry
     metrics["by_suspension"] = by_kind
-    pairs = tables["static_vs_wim.csv"]
+    pairs = tables["static_vs_wim"]
     if not pairs.empty:
         metrics["static_vs_wim"] = {
             row.group: {
@@ -131,7 +131,7 @@ def headline_metrics(tables: Mapping[str, pd.DataFrame]) -> dict[str, Any]:
             }
             for row in pairs.itertuples(index=False)
         }
-    wim_class = tables.get("wim_class.csv")
+    wim_class = tables.get("wim_class")
     if wim_class is not None and not wim_class.empty:
         # the COST 323 class the whole simulated system reaches (bogie.road.cost323; pi0 an assumption)
         metrics["wim_class"] = {
@@ -196,6 +196,15 @@ def _write_table(frame: pd.DataFrame, path: Path) -> None:
         frame.to_csv(path, index=False, float_format="%.6g")
 
 
+#: the survey's tables written as Parquet (the rest as CSV), by name
+PARQUET_TABLES: frozenset[str] = frozenset({"static_vs_wim_pairs"})
+
+
+def table_file(name: str) -> str:
+    """The file of a survey table (:func:`bogie.fleet.survey_tables`' name): ``<name>.csv``, or ``.parquet``."""
+    return f"{name}.parquet" if name in PARQUET_TABLES else f"{name}.csv"
+
+
 def write_outputs(
     tables: Mapping[str, pd.DataFrame], out_dir: str | Path, metrics: Mapping[str, Any], metrics_path: str | Path,
     records: tuple[str, pd.DataFrame, str] | None = None, stage: str = "survey", own: Sequence[str | Path] = (),
@@ -241,7 +250,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         return 2
     tables = survey_tables(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
-    tables["design_guidance.csv"] = design_table(inequality_columns(readings(runs)))
+    tables["design_guidance"] = design_table(inequality_columns(readings(runs)))
     records = None
     fmt = config.survey.export_format
     if fmt is not None:
@@ -256,7 +265,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         records = (f"fleet_wim.{fmt}", vehicles, fmt)
         metrics["export"] = {"format": fmt, "file": f"fleet_wim.{fmt}", **counts}
     try:
-        write_outputs(tables, args.out, metrics, args.metrics, records, own=own)
+        files = {table_file(name): frame for name, frame in tables.items()}  # the library names; the stage's files
+        write_outputs(files, args.out, metrics, args.metrics, records, own=own)
     except (OSError, ValueError) as exc:  # ValueError: a reading that does not fit the format's fields
         print(io_error("survey", exc) if isinstance(exc, OSError) else f"survey: {exc}", file=sys.stderr)
         return 2

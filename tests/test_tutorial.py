@@ -39,7 +39,7 @@ def test_the_tutorial_runs_and_gives_what_it_says():
     # one row per bogie and protocol, sample by sample, none dropped
     assert len(runs) == 100 and runs["protocol"].astype(str).tolist() == ["static", "wim"] * 50
     assert (runs["sample_id"].to_numpy() == samples["sample_id"].repeat(2).to_numpy()).all()
-    summary = tables["summary.csv"]
+    summary = tables["summary"]
     assert int(summary["n_runs"].sum()) == 100
     assert set(map(tuple, summary[["protocol", "group"]].astype(str).to_numpy())) == {
         ("static", "tandem"), ("static", "triaxle"), ("wim", "tandem"), ("wim", "triaxle"),

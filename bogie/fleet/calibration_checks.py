@@ -279,13 +279,13 @@ def calibrate_survey(
         )  # fmt: skip
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
     tables = {
-        "bootstrap.csv": result.bootstrap, "valley.csv": result.valley, "profiles.csv": result.profiles,
-        "calibrated.csv": direct, "ablation.csv": abl,
+        "bootstrap": result.bootstrap, "valley": result.valley, "profiles": result.profiles, "calibrated": direct,
+        "ablation": abl,
     }  # fmt: skip
     if result.posterior is not None:
-        tables["posterior.csv"] = result.posterior.draws
+        tables["posterior"] = result.posterior.draws
     if by_cause is not None:
-        tables["attribution.csv"] = by_cause
+        tables["attribution"] = by_cause
     return metrics, tables
 
 

@@ -419,22 +419,24 @@ def survey_tables(runs: pd.DataFrame, legal_axle_load: float, legal_group_load: 
     Returns
     -------
     dict
-        Output file name -> DataFrame (see ``docs/outputs.md``).
+        Table name -> DataFrame: ``summary``, ``by_suspension``, ``counts``, ``failures``, ``distributions``,
+        ``histograms``, ``tilt``, ``tyre_wear``, ``static_vs_wim``, ``static_vs_wim_pairs``, ``wim_class``, ``legal``
+        (the survey stage writes each as ``<name>.csv``, the pairs as Parquet: ``docs/outputs.md``).
     """
     ok = inequality_columns(readings(runs))
     legal = legal_limits(ok, legal_axle_load, legal_group_load)
     pairs, pair_summary = static_vs_wim(ok)
     return {
-        "summary.csv": summary_table(ok, runs, legal),
-        "by_suspension.csv": suspension_table(ok, runs),
-        "counts.csv": run_counts(runs),
-        "failures.csv": failure_table(runs),
-        "distributions.csv": distribution_stats(ok),
-        "histograms.csv": histograms(ok),
-        "tilt.csv": tilt_table(ok),
-        "tyre_wear.csv": wear_table(ok),
-        "static_vs_wim.csv": pair_summary,
-        "static_vs_wim_pairs.parquet": pairs,
-        "wim_class.csv": wim_class(ok),
-        "legal.csv": legal,
+        "summary": summary_table(ok, runs, legal),
+        "by_suspension": suspension_table(ok, runs),
+        "counts": run_counts(runs),
+        "failures": failure_table(runs),
+        "distributions": distribution_stats(ok),
+        "histograms": histograms(ok),
+        "tilt": tilt_table(ok),
+        "tyre_wear": wear_table(ok),
+        "static_vs_wim": pair_summary,
+        "static_vs_wim_pairs": pairs,
+        "wim_class": wim_class(ok),
+        "legal": legal,
     }

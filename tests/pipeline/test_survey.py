@@ -79,7 +79,7 @@ def test_shares_outside_the_5_and_10_percent_tolerances_count_exactly_those_grou
     assert ok["outside_5pct"].tolist() == [True, True, True] + [False] * 7
     assert ok["over_10pct"].tolist() == [True] + [False] * 9
     tables = survey_tables(frame(tolerance_fleet()), 10 * TONNE, LEGAL_GROUP)
-    summary = tables["summary.csv"].iloc[0]
+    summary = tables["summary"].iloc[0]
     assert summary["share_outside_5pct"] == pytest.approx(0.3)
     assert summary["share_over_10pct"] == pytest.approx(0.1)
 
@@ -147,7 +147,7 @@ def test_tilt_table_assigns_rows_to_bins_and_finds_the_rear_overload_nose_up():
     assert table.loc["[-1, -0.5)", "rear_heaviest_share"] == 0.0
     assert table.loc["[0.5, 1)", "mean_load_share_3"] == pytest.approx(np.mean([90 / 80, 85 / 80, 75 / 80]))
     assert table.loc["[0.5, 1)", "tilt_deg_low"] == 0.5
-    summary = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary.csv"].iloc[0]
+    summary = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)["summary"].iloc[0]
     # nose up beyond 0.5 degree: rows 0 and 2 (row 1 sits on 0.5, not above)
     assert summary["rear_overload_share_nose_up"] == pytest.approx(0.5)
     assert summary["n_nose_up"] == 2
@@ -238,11 +238,11 @@ def test_failed_rows_are_excluded_from_statistics_but_counted_with_their_message
     ]
     clean = survey_tables(frame(good), 10 * TONNE, LEGAL_GROUP)
     mixed = survey_tables(frame(good + failed), 10 * TONNE, LEGAL_GROUP)
-    pd.testing.assert_frame_equal(mixed["distributions.csv"], clean["distributions.csv"])
-    pd.testing.assert_frame_equal(mixed["tilt.csv"], clean["tilt.csv"])
+    pd.testing.assert_frame_equal(mixed["distributions"], clean["distributions"])
+    pd.testing.assert_frame_equal(mixed["tilt"], clean["tilt"])
     counts = run_counts(frame(good + failed)).iloc[0]
     assert (counts["n_runs"], counts["n_ok"], counts["n_failed"]) == (13, 10, 3)
-    summary = mixed["summary.csv"].iloc[0]
+    summary = mixed["summary"].iloc[0]
     assert summary["n_failed"] == 3 and summary["share_outside_5pct"] == pytest.approx(0.3)
     fails = failure_table(frame(good + failed))
     assert fails[["message", "n_failed", "example_sample_ids"]].values.tolist() == [
@@ -294,13 +294,13 @@ def test_the_suspension_table_splits_the_survey_into_steel_and_air_groups():
     air = [run(6 + i, [80e3, 80e3, 80e3]) for i in range(4)] + [run(10, [80e3] * 3, status="failed", message="x")]
     rows = [{**r, "suspension": "steel"} for r in steel] + [{**r, "suspension": "air"} for r in air]
     tables = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)
-    table = tables["by_suspension.csv"].set_index("suspension")
+    table = tables["by_suspension"].set_index("suspension")
     assert table.loc["steel", "share_outside_5pct"] == 1.0 and table.loc["air", "share_outside_5pct"] == 0.0
     assert table.loc["steel", "mean_spread_kg"] == pytest.approx(8e3 / GRAVITY)
     assert table.loc["air", "mean_spread_kg"] == 0.0
     assert (table.loc["air", "n_runs"], table.loc["air", "n_ok"], table.loc["air", "n_failed"]) == (5, 4, 1)
     # the survey itself (both kinds together, as a WIM file sees them): 6 of 10 readings outside
-    summary = tables["summary.csv"].set_index("group")
+    summary = tables["summary"].set_index("group")
     assert summary.loc["triaxle", "share_outside_5pct"] == pytest.approx(0.6)
     metrics = headline_metrics(tables)["by_suspension"]["static"]["triaxle"]
     assert metrics["air"]["n_failed"] == 1 and metrics["steel"]["share_over_10pct"] == 0.0
@@ -437,7 +437,7 @@ def test_a_reading_with_a_wheel_in_the_air_is_counted_and_kept_out_of_the_statis
     assert [r["wheel_airborne"] for r in rows] == [False] * 9 + [True]
     assert rows[-1]["max_deviation"] == pytest.approx(2.0)  # what an unflagged reading would add to the mean
     tables = survey_tables(frame(rows), 10 * TONNE, LEGAL_GROUP)
-    summary = tables["summary.csv"].iloc[0]
+    summary = tables["summary"].iloc[0]
     assert (summary["n_ok"], summary["n_airborne"]) == (10, 1)
     assert summary["share_outside_5pct"] == 0.0  # the nine real readings, all within 5 %
     assert summary["mean_max_deviation"] == pytest.approx(0.5 / 80.5)  # |W - mean| / mean of the nine
