@@ -24,9 +24,12 @@ from contextlib import ExitStack, contextmanager
 from pathlib import Path
 from typing import Any
 
+import yaml
+
 __all__ = [
-    "OUTPUT_MARKER", "LockedError", "OutputError", "atomic_outputs", "atomic_file", "guard_outputs", "io_error",
-    "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "run_stage", "stage_outputs",
+    "INPUT_ERRORS", "OUTPUT_MARKER", "LockedError", "OutputError", "StageError", "atomic_outputs", "atomic_file",
+    "guard_outputs", "io_error", "output_lock", "refuse_outputs", "remove_leftovers", "replace_dir", "run_stage",
+    "stage_inputs", "stage_outputs",
 ]  # fmt: skip
 
 try:  # POSIX: flock; Windows has no fcntl, and locks a byte of the file with msvcrt instead
@@ -412,6 +415,28 @@ def stage_outputs(
         yield
 
 
+class StageError(Exception):
+    """What stops a stage that is the user's to mend: :func:`run_stage` prints its one line (``<stage>: <what is
+    wrong>``) on stderr and exits 2, with no traceback."""
+
+
+#: the errors of a stage's inputs (params.yaml, the runs, a survey file, the other stages' outputs) that are the
+#: user's to mend, each with a message naming what is wrong: the configuration's and the library's own errors
+#: (ConfigError, RunsError, CalibrationError, DesignError...) are ValueErrors; a missing column a KeyError; a file
+#: that cannot be read an OSError; a params.yaml that is not YAML a YAMLError
+INPUT_ERRORS: tuple[type[BaseException], ...] = (ValueError, KeyError, OSError, yaml.YAMLError)
+
+
+@contextmanager
+def stage_inputs(stage: str, *more: type[BaseException], prefix: str = "") -> Iterator[None]:
+    """Around the reading of a stage's inputs: an error of :data:`INPUT_ERRORS` (or of ``more``) becomes a
+    :class:`StageError`, ``<stage>: <prefix><the error's message>``."""
+    try:
+        yield
+    except (*INPUT_ERRORS, *more) as exc:
+        raise StageError(f"{stage}: {prefix}{exc}") from exc
+
+
 def run_stage(
     stage: str, parser: Any, args: Any, work: Callable[[list[Path]], int], files: Sequence[str] = (),
     dirs: Sequence[str] = (),
@@ -419,7 +444,9 @@ def run_stage(
     """A stage's command around its ``work``: refuse output options that would destroy what the stage did not write
     (:func:`refuse_outputs`, before any work), own the outputs while it runs (:func:`stage_outputs`: a second process
     refused, a killed run's leftovers removed), then ``work(own)`` (``own``: the stage's default output folders) and
-    its exit code. A refused output, a locked one or an error of the file system is one line on stderr and exit 2.
+    its exit code. A refused output, a locked one, an error of the file system (:func:`io_error`) or a
+    :class:`StageError` (:func:`stage_inputs`) is one line on stderr and exit 2: the one place a stage's errors become
+    its exit code. A stage with no outputs of its own to guard passes none.
 
     ``files`` and ``dirs`` name the options (``args``' attributes) of the stage's output files and folders.
     """
@@ -430,6 +457,9 @@ def run_stage(
     try:
         with stage_outputs(stage, files=[getattr(args, n) for n in files], dirs=[getattr(args, n) for n in dirs]):
             return work(own)
+    except StageError as exc:
+        print(exc, file=sys.stderr)
+        return 2
     except LockedError as exc:
         print(f"{stage}: {exc}", file=sys.stderr)
         return 2

@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from bogie.fleet import calibration
 from bogie.fleet.calibration import CalibrationError, CalibrationSettings, Mapper, Observed, Table, base_values
@@ -38,8 +37,8 @@ from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.rounding import json_number
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import atomic_outputs, io_error, run_stage
-from pipeline.config import Config, ConfigError, ExecutionConfig, load_config, observed_file
+from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
+from pipeline.config import Config, ExecutionConfig, load_config, observed_file
 from pipeline.config.rules import calibration_tilt_count
 from pipeline.config.schema import CALIBRATION_METHOD_KEYS
 from pipeline.resources import worker_count
@@ -230,7 +229,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[Path] = ()) -> int:
     """The stage's work while it owns its outputs: read, calibrate, write; the exit code."""
-    try:
+    with stage_inputs("calibrate"):
         config = load_config(args.params, note=lambda line: log(f"calibrate: {line}"))
         path = observed_file(config.observed, Path(args.params).resolve().parent)
         if path is None or config.calibrate is None:
@@ -241,14 +240,7 @@ def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[P
             metrics, tables = skipped_metrics(reason), {}
         else:
             metrics, tables = run(config, path, log)
-    except (ConfigError, CalibrationError, OSError, ValueError, yaml.YAMLError) as exc:
-        print(f"calibrate: {exc}", file=sys.stderr)
-        return 2
-    try:
-        write_outputs(metrics, tables, args.out, args.metrics, own)
-    except OSError as exc:
-        print(io_error("calibrate", exc), file=sys.stderr)
-        return 2
+    write_outputs(metrics, tables, args.out, args.metrics, own)
     if metrics["skipped"]:
         print(f"calibrate: skipped, {metrics['reason']}")
     else:

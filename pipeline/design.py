@@ -23,15 +23,14 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from bogie.fleet.design import DesignExperiment, DesignSettings, design_experiment, experiment_runs, typical_design
 from bogie.fleet.design_analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
 from bogie.fleet.sampling import COLUMNS
 from bogie.rounding import json_number
-from pipeline.atomic import atomic_outputs, io_error, run_stage
+from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
 from pipeline.chunks import NotRunsDatasetError
-from pipeline.config import Config, ConfigError, load_config
+from pipeline.config import Config, load_config
 from pipeline.sample import fleet_model
 from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
@@ -193,11 +192,8 @@ def main(argv: list[str] | None = None) -> int:
 
 def _configured(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """Read params.yaml, then the stage's work (:func:`_stage`); the exit code."""
-    try:
+    with stage_inputs("design", prefix=f"{args.params}: "):
         config = load_config(args.params)
-    except (ConfigError, OSError, yaml.YAMLError) as exc:
-        print(f"design: {args.params}: {exc}", file=sys.stderr)
-        return 2
     log = lambda text: print(text, file=sys.stderr, flush=True)  # noqa: E731 - progress to the terminal and logs
     return _stage(config, Path(args.runs), Path(args.out), Path(args.metrics), log, own)
 
@@ -206,20 +202,13 @@ def _stage(
     config: Config, runs_dir: Path, out: Path, metrics_path: Path, log: Callable[[str], None], own: Sequence[Path] = ()
 ) -> int:
     """The stage's work while it owns its outputs: run, analyse, write; the exit code."""
-    try:
+    with stage_inputs("design", NotRunsDatasetError):
         if config.design is None:
             summary, frames = skipped_metrics("design is null in params.yaml (no design study asked for)"), {}
         else:
             analysis, conds, summary = run(config, runs_dir, log)
             frames = tables(analysis, conds)
-    except (DesignError, ValueError, NotRunsDatasetError) as exc:
-        print(f"design: {exc}", file=sys.stderr)
-        return 2
-    try:
-        write_outputs(frames, summary, out, metrics_path, own)
-    except OSError as exc:
-        print(io_error("design", exc), file=sys.stderr)
-        return 2
+    write_outputs(frames, summary, out, metrics_path, own)
     if not frames:
         runs_dir.mkdir(parents=True, exist_ok=True)  # the stage's other output exists, empty
         print(f"design: skipped, {summary['skipped']}")

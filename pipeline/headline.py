@@ -21,7 +21,7 @@ from typing import Any
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES, PROTOCOLS
-from pipeline.atomic import atomic_file, io_error
+from pipeline.atomic import atomic_file, run_stage, stage_inputs
 from pipeline.schema import read_runs_frame
 
 __all__ = ["headline", "main"]
@@ -70,24 +70,22 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--runs", default="data/runs", help="runs dataset (default: data/runs)")
     parser.add_argument("--out", default="metrics/headline.json", help="default: metrics/headline.json")
     args = parser.parse_args(argv)
+    return run_stage("headline", parser, args, lambda own: _stage(args))
+
+
+def _stage(args: argparse.Namespace) -> int:
+    """Read, sum up, write; the exit code (errors: :func:`pipeline.atomic.run_stage`'s)."""
     metrics = Path(args.metrics)
-    try:
+    with stage_inputs("headline"):
         survey = json.loads((metrics / "survey.json").read_text(encoding="utf-8"))
         sensitivity = json.loads((metrics / "sensitivity.json").read_text(encoding="utf-8"))
         road_file = metrics / "road.json"  # the road stage's (docs/pavement.md); a project without it has none
         road = json.loads(road_file.read_text(encoding="utf-8")) if road_file.is_file() else None
         # every part file verified (pipeline.schema.read_runs_frame): a damaged one is refused, not counted
         status = read_runs_frame(args.runs, columns=["status"])["status"].astype(str)
-    except (OSError, ValueError, KeyError) as exc:
-        print(f"headline: {exc}", file=sys.stderr)
-        return 2
     figures = headline(survey, sensitivity, status, road)
-    try:
-        with atomic_file(Path(args.out)) as tmp:
-            tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
-    except OSError as exc:
-        print(io_error("headline", exc), file=sys.stderr)
-        return 2
+    with atomic_file(Path(args.out)) as tmp:
+        tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
     print(f"headline: {figures['ranking']}; {figures['runs']} runs, {figures['failed']} failed; wrote {args.out}")
     return 0
 

@@ -34,7 +34,6 @@ from typing import Any
 
 import pandas as pd
 import pyarrow as pa
-import yaml
 
 from bogie.fleet.observed import (
     INEQUALITY_COLUMNS,
@@ -47,10 +46,10 @@ from bogie.fleet.observed import (
 )
 from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
-from pipeline.atomic import atomic_outputs, io_error, run_stage
-from pipeline.config import ConfigError, ObservedConfig, WimProtocol, load_config, observed_file
+from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
+from pipeline.config import ObservedConfig, WimProtocol, load_config, observed_file
 from pipeline.schema import ChecksummedWriter, checksummed_content
-from pipeline.survey import SURVEY_STUDY, RunsError, check_complete, read_runs
+from pipeline.survey import SURVEY_STUDY, check_complete, read_runs
 
 __all__ = [
     "COLUMN_TYPES", "GROUPS_SCHEMA", "SIMULATED_POSITIONS", "SIMULATED_SCHEMA", "GroupsFile", "arrow_schema",
@@ -265,7 +264,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    try:
+    with stage_inputs("observed"):
         config = load_config(args.params)
         observed = config.observed
         # the project root is where params.yaml is: observed.path is relative to it
@@ -273,18 +272,11 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         runs = read_runs(args.runs, SURVEY_STUDY, READING_RUN_COLUMNS)
         check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
         groups, observed_stats = observed_table(path, observed)
-    except (ConfigError, RunsError, OSError, ValueError, yaml.YAMLError) as exc:
-        print(f"observed: {exc}", file=sys.stderr)
-        return 2
     n_kept = observed_stats.pop("n_kept") if observed_stats is not None else 0
     step = observed_stats["records"]["weight_step_kg"] if observed_stats is not None else None
     readings, counts = simulated_readings(runs, observed.min_group_load, observed.position, step)
     metrics = observed_metrics(observed, observed_stats, simulated_statistics(readings, counts), config.protocol.wim)
-    try:
-        write_outputs(groups, readings, metrics, args.out, args.metrics, own=own)
-    except OSError as exc:
-        print(io_error("observed", exc), file=sys.stderr)
-        return 2
+    write_outputs(groups, readings, metrics, args.out, args.metrics, own=own)
     given = f"{n_kept} observed groups from {observed.path}" if path else "no observed survey given"
     print(f"observed: {given}, {len(readings)} simulated readings kept; wrote {args.out} and {args.metrics}")
     return 0

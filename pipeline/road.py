@@ -28,16 +28,15 @@ from pathlib import Path
 from typing import Any
 
 import pandas as pd
-import yaml
 
 from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
-from pipeline.atomic import atomic_outputs, io_error, run_stage
-from pipeline.config import ConfigError, load_config
+from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
+from pipeline.config import load_config
 from pipeline.schema import read_checksummed, read_runs_frame
-from pipeline.survey import SURVEY_STUDY, RunsError, read_runs
+from pipeline.survey import SURVEY_STUDY, read_runs
 
 __all__ = ["CONFIDENCE", "RESAMPLES", "main", "observed_wear", "road_metrics"]
 
@@ -111,7 +110,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    try:
+    with stage_inputs("road"):
         config = load_config(args.params)
         legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
         legal_axle = float(config.fleet.legal_axle_load) / GRAVITY
@@ -126,9 +125,6 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         rerun = "delete it and rerun the observed stage"
         groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
-    except (ConfigError, RunsError, OSError, ValueError, KeyError, yaml.YAMLError) as exc:
-        print(f"road: {exc}", file=sys.stderr)
-        return 2
     simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence=CONFIDENCE,
                            seed=config.seed)  # fmt: skip
     observed = observed_wear(groups, legal_group, legal_axle, config.seed)
@@ -139,20 +135,14 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
                                  seed=config.seed)  # fmt: skip
         note = None
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
-    try:
-        with atomic_outputs(files=[args.metrics], dirs=[args.out], stage="road", own=own) as ((tmp_json,), (tmp_dir,)):
-            with open(tmp_json, "w", encoding="utf-8") as fh:
-                json.dump(metrics, fh, indent=2, allow_nan=False)
-                fh.write("\n")
-            simulated.assign(source="simulated").to_csv(tmp_dir / "wear.csv", index=False, float_format="%.6g")
-            if len(observed):
-                observed.assign(source="observed").to_csv(
-                    tmp_dir / "observed_wear.csv", index=False, float_format="%.6g"
-                )
-            savings.to_csv(tmp_dir / "savings.csv", index=False, float_format="%.6g")
-    except OSError as exc:
-        print(io_error("road", exc), file=sys.stderr)
-        return 2
+    with atomic_outputs(files=[args.metrics], dirs=[args.out], stage="road", own=own) as ((tmp_json,), (tmp_dir,)):
+        with open(tmp_json, "w", encoding="utf-8") as fh:
+            json.dump(metrics, fh, indent=2, allow_nan=False)
+            fh.write("\n")
+        simulated.assign(source="simulated").to_csv(tmp_dir / "wear.csv", index=False, float_format="%.6g")
+        if len(observed):
+            observed.assign(source="observed").to_csv(tmp_dir / "observed_wear.csv", index=False, float_format="%.6g")
+        savings.to_csv(tmp_dir / "savings.csv", index=False, float_format="%.6g")
     told = "no observed survey" if not len(observed) else f"{int(observed['n_groups'].sum())} observed groups"
     print(
         f"road: {int(simulated['n_groups'].sum())} simulated laden readings, {told}; wrote {args.out}, {args.metrics}"

@@ -19,7 +19,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
 
 from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.sampling import (
@@ -36,7 +35,7 @@ from bogie.fleet.sampling import (
 )
 from bogie.fleet.sampling import sample_fleet as fleet_sample
 from bogie.params import INHIBITORS
-from pipeline.atomic import io_error
+from pipeline.atomic import run_stage, stage_inputs
 from pipeline.config import Config, ConfigError, load_config
 from pipeline.resources import available_memory
 from pipeline.schema import write_checksummed
@@ -229,26 +228,20 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--out", default="data/samples", help="output directory (default: data/samples)")
     args = parser.parse_args(argv)
-    try:
+    return run_stage("sample", parser, args, lambda own: _stage(args))
+
+
+def _stage(args: argparse.Namespace) -> int:
+    """Sample every study, then write them all; the exit code (errors: :func:`pipeline.atomic.run_stage`'s)."""
+    # everything is sampled before anything is written: a failure leaves the previous outputs untouched
+    with stage_inputs("sample", prefix=f"{args.params}: "):
         config = load_config(args.params)
         check_memory(config, available_memory())
-    except (ConfigError, OSError, yaml.YAMLError) as exc:
-        print(f"sample: {args.params}: {exc}", file=sys.stderr)
-        return 2
-    # everything is sampled before anything is written: a failure leaves the previous outputs untouched
-    try:
         frames = sample_studies(config)
-    except ConfigError as exc:
-        print(f"sample: {args.params}: {exc}", file=sys.stderr)
-        return 2
     out = Path(args.out)
-    try:
-        out.mkdir(parents=True, exist_ok=True)
-        for study, frame in frames.items():
-            write_parquet_atomic(frame, out / f"{study}.parquet")
-    except OSError as exc:
-        print(io_error("sample", exc), file=sys.stderr)
-        return 2
+    out.mkdir(parents=True, exist_ok=True)
+    for study, frame in frames.items():
+        write_parquet_atomic(frame, out / f"{study}.parquet")
     counts = ", ".join(f"{study} {len(frame)}" for study, frame in frames.items())
     print(f"sample: wrote {counts} rows to {out}")
     return 0

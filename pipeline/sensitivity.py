@@ -29,7 +29,6 @@ from typing import Any
 
 import numpy as np
 import pandas as pd
-import yaml
 from SALib.analyze import sobol
 from SALib.util import extract_group_names
 
@@ -43,10 +42,10 @@ from pipeline.ablation import (
     ablation_metrics,
     ablation_pairs,
 )
-from pipeline.atomic import io_error, run_stage
-from pipeline.config import Config, ConfigError, load_config
+from pipeline.atomic import run_stage, stage_inputs
+from pipeline.config import Config, load_config
 from pipeline.sample import sensitivity_problem
-from pipeline.survey import RunsError, read_runs, write_outputs
+from pipeline.survey import read_runs, write_outputs
 
 #: inequality measures (result columns) whose Sobol' indices are computed
 SOBOL_MEASURES: tuple[str, ...] = ("max_deviation", "p1", "road_wear_factor")
@@ -365,7 +364,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    try:
+    with stage_inputs("sensitivity"):
         config = load_config(args.params)
         sens = config.sensitivity
         problem = sensitivity_problem(config)
@@ -377,9 +376,6 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         seed = bootstrap_seed(config.seed, "sensitivity_bootstrap")
         indices = sobol_table(design, problem, sens.bootstrap_resamples, sens.confidence_level, seed)
         pairs = ablation_pairs(ablation)
-    except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
-        print(f"sensitivity: {exc}", file=sys.stderr)
-        return 2
     seed = bootstrap_seed(config.seed, "ablation_bootstrap")
     effects = ablation_effects(pairs, sens.bootstrap_resamples, sens.confidence_level, seed)
     metrics = sensitivity_metrics(indices, design, effects, config)
@@ -389,11 +385,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         "ablation.csv": effects,
         "ablation_pairs.parquet": pairs,
     }
-    try:
-        write_outputs(tables, args.out, metrics, args.metrics, stage="sensitivity", own=own)
-    except OSError as exc:
-        print(io_error("sensitivity", exc), file=sys.stderr)
-        return 2
+    write_outputs(tables, args.out, metrics, args.metrics, stage="sensitivity", own=own)
     print(f"sensitivity: ranking by {metrics['ranking_measure']}: {' > '.join(metrics['ranking'])}; wrote {args.out}")
     return 0
 

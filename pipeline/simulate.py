@@ -42,11 +42,11 @@ from pathlib import Path
 
 import pandas as pd
 import pyarrow as pa
-import yaml
 from joblib import Parallel, delayed, parallel_config
 
 from bogie.fleet.sampling import COLUMNS
 from bogie.fleet.weighing import weigh_rows
+from pipeline.atomic import StageError, run_stage, stage_inputs
 from pipeline.chunks import (
     Chunk,
     Log,
@@ -63,7 +63,7 @@ from pipeline.chunks import (
     runs_lock,
     write_part,
 )
-from pipeline.config import Config, ConfigError, ExecutionConfig, load_config
+from pipeline.config import Config, ExecutionConfig, load_config
 from pipeline.portable import warn_if_unportable
 from pipeline.resources import worker_count
 from pipeline.sample import STUDIES
@@ -416,25 +416,23 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--samples", default="data/samples", help="sample tables (default: data/samples)")
     parser.add_argument("--out", default="data/runs", help="runs dataset directory (default: data/runs)")
     args = parser.parse_args(argv)
-    try:
+    return run_stage("simulate", parser, args, lambda own: _stage(args))
+
+
+def _stage(args: argparse.Namespace) -> int:
+    """Read, compile, simulate; the exit code (errors: :func:`pipeline.atomic.run_stage`'s)."""
+    with stage_inputs("simulate", prefix=f"{args.params}: "):
         config = load_config(args.params)
-    except (ConfigError, OSError, yaml.YAMLError) as exc:
-        print(f"simulate: {args.params}: {exc}", file=sys.stderr)
-        return 2
-    try:
+    with stage_inputs("simulate"):
         samples = read_samples(args.samples)
-    except (OSError, ValueError) as exc:
-        print(f"simulate: {exc}", file=sys.stderr)
-        return 2
     protocols = {study: study_protocols(config, study) for study in samples}
     # the compile said before the portability check, whose numerics digest would otherwise run it without a word
     compile_kernels(samples, protocols, _print)
     warn_if_unportable("simulate")
     try:
         simulate_samples(samples, protocols, config.execution, args.out)
-    except (NotRunsDatasetError, RunsLockedError, OtherNumericsError, OSError) as exc:
-        print(f"simulate: {exc}", file=sys.stderr)
-        return 2
+    except (NotRunsDatasetError, RunsLockedError, OtherNumericsError, OSError) as exc:  # the runs dataset's own
+        raise StageError(f"simulate: {exc}") from exc
     return 0
 
 

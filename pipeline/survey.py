@@ -23,7 +23,6 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pyarrow as pa
-import yaml
 
 from bogie.fleet.design_table import DESIGN_COLUMNS, design_table
 from bogie.fleet.sampling import bogie_from_sample
@@ -31,8 +30,8 @@ from bogie.fleet.survey import REQUIRED_COLUMNS, SUSPENSION_STATISTICS, inequali
 from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.weighings.writers import write_weighings
-from pipeline.atomic import atomic_outputs, io_error, run_stage
-from pipeline.config import ConfigError, load_config
+from pipeline.atomic import StageError, atomic_outputs, run_stage, stage_inputs
+from pipeline.config import load_config
 from pipeline.schema import SchemaError, check_runs, checksummed_content, read_checksummed, read_runs_frame
 
 #: the study a roadside survey samples
@@ -241,35 +240,28 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    try:
+    with stage_inputs("survey"):
         config = load_config(args.params)
         runs = read_runs(args.runs, SURVEY_STUDY, (*REQUIRED_COLUMNS, *DESIGN_COLUMNS))
         check_complete(runs, config.fleet.n_bogies, config.protocol.run, SURVEY_STUDY)
-    except (ConfigError, RunsError, OSError, yaml.YAMLError) as exc:
-        print(f"survey: {exc}", file=sys.stderr)
-        return 2
     tables = survey_tables(runs, config.fleet.legal_axle_load, config.fleet.legal_group_load)
     metrics = headline_metrics(tables)
     tables["design_guidance"] = design_table(inequality_columns(readings(runs)))
     records = None
     fmt = config.survey.export_format
     if fmt is not None:
-        try:
+        with stage_inputs("survey"):
             samples = read_checksummed(
                 Path(args.samples) / f"{SURVEY_STUDY}.parquet", "delete it and rerun the sample stage"
             ).to_pandas()
-        except OSError as exc:
-            print(f"survey: {exc}", file=sys.stderr)
-            return 2
         vehicles, counts = wim_records(runs, samples, config.protocol.wim.speed)
         records = (f"fleet_wim.{fmt}", vehicles, fmt)
         metrics["export"] = {"format": fmt, "file": f"fleet_wim.{fmt}", **counts}
+    files = {table_file(name): frame for name, frame in tables.items()}  # the library names; the stage's files
     try:
-        files = {table_file(name): frame for name, frame in tables.items()}  # the library names; the stage's files
         write_outputs(files, args.out, metrics, args.metrics, records, own=own)
-    except (OSError, ValueError) as exc:  # ValueError: a reading that does not fit the format's fields
-        print(io_error("survey", exc) if isinstance(exc, OSError) else f"survey: {exc}", file=sys.stderr)
-        return 2
+    except ValueError as exc:  # a reading that does not fit the export format's fields (an OSError: run_stage's)
+        raise StageError(f"survey: {exc}") from exc
     n_ok, n_runs, n_failed = metrics["n_ok"], metrics["n_runs"], metrics["n_failed"]
     print(f"survey: {n_ok} of {n_runs} runs succeeded ({n_failed} failed); wrote {args.out} and {args.metrics}")
     return 0

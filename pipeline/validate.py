@@ -20,11 +20,9 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-import yaml
-
 from bogie.fleet.distributions import Distribution
-from pipeline.atomic import atomic_file, io_error
-from pipeline.config import ConfigError, check_params
+from pipeline.atomic import atomic_file, run_stage, stage_inputs
+from pipeline.config import check_params
 
 __all__ = ["as_json", "main"]
 
@@ -49,19 +47,17 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--params", default="params.yaml", help="parameter file (default: params.yaml)")
     parser.add_argument("--out", default="data/config.json", help="validated configuration (default: data/config.json)")
     args = parser.parse_args(argv)
+    return run_stage("validate", parser, args, lambda own: _stage(args))
+
+
+def _stage(args: argparse.Namespace) -> int:
+    """Validate, write, say so; the exit code (errors: :func:`pipeline.atomic.run_stage`'s)."""
     notes: list[str] = []
-    try:
-        # a wrong observed.path is found now, with the bad keys, not after the simulation (observed checks it again)
+    # a wrong observed.path is found now, with the bad keys, not after the simulation (observed checks it again)
+    with stage_inputs("validate", prefix=f"{args.params}: "):
         config = check_params(args.params, notes.append)
-    except (ConfigError, OSError, yaml.YAMLError) as exc:
-        print(f"validate: {args.params}: {exc}", file=sys.stderr)
-        return 2
-    try:
-        with atomic_file(Path(args.out)) as tmp:
-            tmp.write_text(json.dumps(as_json(config), indent=1) + "\n", encoding="utf-8")
-    except OSError as exc:
-        print(io_error("validate", exc), file=sys.stderr)
-        return 2
+    with atomic_file(Path(args.out)) as tmp:
+        tmp.write_text(json.dumps(as_json(config), indent=1) + "\n", encoding="utf-8")
     print(f"validate: {args.params} is valid; wrote {args.out}")
     for note in notes:
         print(f"validate: {note}")

@@ -14,12 +14,10 @@ from typing import Any
 
 import matplotlib
 import pandas as pd
-import yaml
 from matplotlib.backends.backend_pdf import PdfPages
 
 from bogie.results import DynamicResult
-from pipeline.atomic import atomic_outputs, io_error, run_stage
-from pipeline.config import ConfigError
+from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
 from pipeline.report.context import Context, Page
 from pipeline.report.inputs import ReportInputs, read_inputs
 from pipeline.report.layout import contents, freeze_layout, number_pages
@@ -37,7 +35,6 @@ from pipeline.report.pages import (
 )  # fmt: skip
 from pipeline.report.style import STYLE
 from pipeline.report.tables import plot_series
-from pipeline.survey import RunsError
 
 __all__ = ["PAGES", "PNG_DPI", "build_pages", "main", "make_report", "report_series", "write_report"]
 
@@ -176,19 +173,12 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    try:
+    with stage_inputs("report"):
         dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration, args.design)
         inputs = read_inputs(args.params, args.samples, args.runs, *dirs)
-    except (ConfigError, RunsError, OSError, KeyError, ValueError, yaml.YAMLError) as exc:
-        print(f"report: {exc}", file=sys.stderr)
-        return 2
-    try:
-        numbers = make_report(
-            inputs, args.pdf, args.png, args.plots, lambda text: print(text, file=sys.stderr, flush=True), own
-        )
-    except OSError as exc:
-        print(io_error("report", exc), file=sys.stderr)
-        return 2
+    numbers = make_report(
+        inputs, args.pdf, args.png, args.plots, lambda text: print(text, file=sys.stderr, flush=True), own
+    )
     failed = int(inputs.runs["status"].ne("ok").sum())
     print(f"report: wrote {args.pdf} ({numbers['pages']} pages; {failed} failed runs listed), {args.png}, {args.plots}")
     return 0

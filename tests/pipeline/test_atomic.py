@@ -109,3 +109,57 @@ def test_the_pipeline_imports_where_there_is_no_fcntl():
         for node in ast.walk(tree):
             if isinstance(node, ast.Import) and any(a.name == "fcntl" for a in node.names):
                 assert id(node) in guarded, f"{path}:{node.lineno} imports fcntl outside a try"
+
+
+# ---- the one stage runner (issue 42 Must 3) ----------------------------------------------------------------------
+def _runner(work, tmp_path):
+    import argparse
+
+    from pipeline.atomic import run_stage
+
+    parser = argparse.ArgumentParser()
+    parser.add_argument("--out", default=str(tmp_path / "out"))
+    args = parser.parse_args([])
+    return run_stage("demo", parser, args, lambda own: work(), dirs=["out"])
+
+
+@pytest.mark.parametrize(
+    ("error", "line"),
+    [
+        (ValueError("x = 3: must be below 2"), "demo: x = 3: must be below 2"),
+        (KeyError("axle_load_3"), "demo: 'axle_load_3'"),
+        (FileNotFoundError(2, "No such file or directory", "params.yaml"),
+         "demo: [Errno 2] No such file or directory: 'params.yaml'"),
+        (__import__("yaml").YAMLError("mapping values are not allowed here"),
+         "demo: mapping values are not allowed here"),
+    ],
+)  # fmt: skip
+def test_an_input_error_is_one_line_naming_the_stage_and_exit_2(tmp_path, capsys, error, line):
+    from pipeline.atomic import stage_inputs
+
+    def work():
+        with stage_inputs("demo"):
+            raise error
+
+    assert _runner(work, tmp_path) == 2
+    assert capsys.readouterr().err.splitlines() == [line]
+
+
+def test_a_write_error_is_the_file_systems_line_and_a_bug_is_not_swallowed(tmp_path, capsys):
+    def full():
+        raise OSError(28, "No space left on device", str(tmp_path / "out" / "a.csv"))
+
+    assert _runner(full, tmp_path) == 2
+    assert (
+        capsys.readouterr().err.strip()
+        == f"demo: cannot write {tmp_path / 'out' / 'a.csv'}: [Errno 28] No space left on device"
+    )
+
+    def bug():
+        from pipeline.atomic import stage_inputs
+
+        with stage_inputs("demo"):
+            raise RuntimeError("a bug, not an input")  # not an input error: a traceback, never exit 2
+
+    with pytest.raises(RuntimeError, match="a bug"):
+        _runner(bug, tmp_path)
