@@ -301,7 +301,7 @@ def test_a_length_equal_to_the_wheelbase_is_read_and_one_unit_shorter_is_not(tmp
 
 
 def test_values_at_a_ranges_ends_are_in():
-    from bogie.weighings.readers import _outside
+    from bogie.weighings._checks import _outside
 
     lo, hi = 0.6, 18.75
     assert not _outside(np.array([60 * 0.01, 1875 * 0.01, 6 * 0.1]), lo, hi).any()

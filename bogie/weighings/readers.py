@@ -28,45 +28,34 @@ import numpy as np
 import pandas as pd
 
 from bogie.weighings import _records
+from bogie.weighings._checks import _alike, _check_vehicles, _flag_repeats
 from bogie.weighings._csv import _parse_csv
+from bogie.weighings._fixed import _parse_fixed
 from bogie.weighings._records import (
-    _FIELD_BYTE,
     AXLE_LOAD_RANGE,
     CSV_LANE_RANGE,
     CSV_MAX_AXLES,
-    DUPLICATE,
     EXAMPLES,
-    GROSS_TOLERANCE,
     MAX_AXLES,
     MAX_BAD_FRACTION,
     MAX_FILE_BYTES,
     MEMORY_PER_BYTE,
-    NO_AXLES,
-    NON_NUMERIC,
-    REL_TOL,
-    SHORT_HEADER,
     SNIFF_LINES,
     SPACING_RANGE,
     SPEED_RANGE,
     SURVEY_BASE_MEMORY,
-    TOO_SHORT,
-    TWO_DIGIT_PIVOT,
     YEAR_RANGE,
-    _check_calendar,
-    _gather,
     _head,
-    _Lines,
     _Reasons,
     _shown,
     _split,
-    _stray_bytes,
     _timestamps,
     survey_memory,
     uncompressed_size,
 )
-from bogie.weighings._stream import CHUNK_BYTES, SeenStore, blocks, key_hashes
-from bogie.weighings._tmg import ALIKE, POUND, TMG_LAYOUTS, parse_tmg, split_dummies
-from bogie.weighings.formats import FORMATS, LAYOUTS, FixedWidthLayout
+from bogie.weighings._stream import CHUNK_BYTES, SeenStore, blocks
+from bogie.weighings._tmg import ALIKE, TMG_LAYOUTS, parse_tmg, split_dummies
+from bogie.weighings.formats import FORMATS, LAYOUTS
 from bogie.weighings.resolution import (
     WEIGHT_STEPS_KG,
     ResidueCounts,
@@ -163,237 +152,6 @@ class ReadResult:
         text = f"{self.n_read} records read, {self.n_skipped} skipped"
         text += f" ({self.reasons()})" if self.skipped else ""
         return text + "".join(f"; {n} {what}" for what, n in self.counted.items())
-
-
-# ---- fixed width ---------------------------------------------------------------------------------------------------
-def _parse_fixed(lines: _Lines, layout: FixedWidthLayout) -> dict:
-    """Every record of ``lines`` in ``layout``: the columns (values of bad records undefined) and the reasons."""
-    reasons = _Reasons(len(lines))
-    raw = _header_fields(lines, layout, reasons)
-    axles = _axle_fields(lines, layout, reasons, raw["n_axles"])
-    # any other byte but a digit or a space, in a field or in the padding past the last axle: a form feed, a tab,
-    # a Unicode line separator, binary data
-    reasons.flag(_stray_bytes(lines, _FIELD_BYTE), NON_NUMERIC)
-    stamp = _checked_stamp(layout, reasons, raw)
-    return {"reasons": reasons, **_scaled(layout, raw, axles), "stamp": stamp}
-
-
-def _header_fields(lines: _Lines, layout: FixedWidthLayout, reasons: _Reasons) -> dict[str, np.ndarray]:
-    """The header's integer fields of every record (0 where unread); flags short records, bad digits and a number of
-    axles out of range, and a record too short for its axles."""
-    m = len(lines)
-    length = lines.end - lines.start
-    reasons.flag(length < layout.fixed_width, SHORT_HEADER)
-    alive = np.flatnonzero(reasons.ok)
-    raw: dict[str, np.ndarray] = {}
-    for f in layout.header:
-        raw[f.name] = np.zeros(m, np.int64)
-        raw[f.name][alive], good = _gather(lines, alive, f.start, f.width)
-        bad = np.zeros(m, bool)
-        bad[alive[~good]] = True
-        reasons.flag(bad, NON_NUMERIC)
-    n = raw["n_axles"]
-    reasons.flag(n == 0, NO_AXLES)
-    most = min(MAX_AXLES, layout.max_axles)
-    reasons.flag((n < 2) | (n > most), f"implausible number of axles (allowed 2-{most})")
-    last = max(f.end for f in layout.axles.fields if f.per == "axle")
-    reasons.flag(length < layout.axles.start + layout.axles.stride * (n - 1) + last, TOO_SHORT)
-    return raw
-
-
-def _axle_fields(lines: _Lines, layout: FixedWidthLayout, reasons: _Reasons, n: np.ndarray) -> dict[str, np.ndarray]:
-    """Each per-axle (and per-spacing) field of the records still good, by axle (-1 where the record has none)."""
-    m = len(lines)
-    alive_mask = reasons.ok
-    width = int(n[alive_mask].max()) if alive_mask.any() else 2
-    axles: dict[str, np.ndarray] = {}
-    for f in layout.axles.fields:
-        count = width if f.per == "axle" else width - 1
-        values = np.full((m, max(count, 0)), -1, np.int64)
-        for k in range(count):
-            rows = np.flatnonzero(alive_mask & (n > (k if f.per == "axle" else k + 1)))
-            offset = layout.axles.start + layout.axles.stride * k + f.start
-            values[rows, k], good = _gather(lines, rows, offset, f.width)
-            bad = np.zeros(m, bool)
-            bad[rows[~good]] = True
-            reasons.flag(bad, NON_NUMERIC)
-        axles[f.name] = values
-    return axles
-
-
-def _checked_stamp(layout: FixedWidthLayout, reasons: _Reasons, raw: dict[str, np.ndarray]) -> tuple:
-    """The records' time stamps (year, month, day, hour, minute, microsecond of the minute), their groups, direction
-    and calendar checked."""
-    n = raw["n_axles"]
-    if "n_groups" in raw:
-        reasons.flag((raw["n_groups"] < 1) | (raw["n_groups"] > n), "implausible number of axle groups")
-    base = layout.direction_base
-    reasons.flag((raw["direction"] != base) & (raw["direction"] != base + 1), f"direction not {base} or {base + 1}")
-    reasons.flag(raw["lane"] < 1, "lane 0 (the formats count lanes from 1)")
-    year = raw["year"]
-    if layout.year_digits == 2:  # the century is not written: POSIX %y
-        year = year + np.where(year >= TWO_DIGIT_PIVOT, 1900, 2000)
-    if "millisecond" in raw:  # MON: milliseconds of the minute
-        micro = raw["millisecond"] * 1000
-    else:
-        micro = raw["second"] * 1_000_000 + raw["second_100"] * 10_000
-    _check_calendar(reasons, year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro)
-    return (year, raw["month"], raw["day"], raw["hour"], raw["minute"], micro)
-
-
-def _scaled(layout: FixedWidthLayout, raw: dict[str, np.ndarray], axles: dict[str, np.ndarray]) -> dict:
-    """The fields in the layout's units: the vehicle columns, the axle loads, spacings and widths (NaN where none)."""
-    m, n = len(raw["n_axles"]), raw["n_axles"]
-    scale = layout.scales
-    load_unit = layout.axle_field("axle_load").scale
-    base = layout.direction_base
-    columns = {
-        "head": raw["head"], "speed": raw["speed"] * scale["speed"],
-        "gross_weight": raw["gross_weight"] * scale["gross_weight"], "length": raw["length"] * scale["length"],
-        "n_axles": n, "n_groups": raw["n_groups"].astype(float) if "n_groups" in raw else np.full(m, np.nan),
-        "lane": raw["lane"], "direction": raw["direction"] - base + 1,
-        "transverse_position": raw["transverse_position"] * scale["transverse_position"],
-    }  # fmt: skip
-    loads = np.where(axles["axle_load"] >= 0, axles["axle_load"] * load_unit, np.nan)
-    spacings = np.where(axles["spacing"] >= 0, axles["spacing"] * layout.axle_field("spacing").scale, np.nan)
-    widths = None
-    if "axle_width" in axles:
-        widths = np.where(axles["axle_width"] >= 0, axles["axle_width"] * layout.axle_field("axle_width").scale, np.nan)
-    return {
-        "columns": columns, "loads": loads, "spacings": spacings, "widths": widths,
-        "gross_step": scale["gross_weight"], "load_step": load_unit,
-        # the wheelbase check's integers: the length and the spacings in the format's own units
-        "length_units": (raw["length"], scale["length"]),
-        "spacing_units": (axles["spacing"], layout.axle_field("spacing").scale),
-    }  # fmt: skip
-
-
-# ---- checks every format shares ------------------------------------------------------------------------------------
-def _residues(parsed: dict, ok: np.ndarray) -> ResidueCounts:
-    """The residue counts of the axle loads of the ``ok`` records (:mod:`bogie.weighings.resolution`)."""
-    base = parsed.get("weight_base", "kg")
-    counts = ResidueCounts(parsed["load_step"] or 1.0, POUND if base == "lb" else 1.0, base)
-    counts.add(parsed["loads"][ok])
-    return counts
-
-
-def _check_vehicles(parsed: dict, gross_kg: float | None = None) -> tuple[ResidueCounts, float | None]:
-    """The plausibility checks, in their order, on every record not bad yet. Returns the residue counts of the loads
-    that passed the checks before the gross weight's, and the weight step the gross-weight check allowed for:
-    ``gross_kg``, or (None) the one these counts support."""
-    reasons: _Reasons = parsed["reasons"]
-    col = parsed["columns"]
-    loads, spacings = parsed["loads"], parsed["spacings"]
-    # each range's ends are in: a value derived from a field (an integer times its unit) is compared with a tolerance
-    # of REL_TOL, so that a field written at an end (18.75 m as 1875 cm) is not lost to a float's last bit
-    lo, hi = AXLE_LOAD_RANGE
-    reasons.flag(_outside(loads, lo, hi).any(axis=1), f"implausible axle load (allowed {lo:g}-{hi:g} kg)")
-    lo, hi = SPACING_RANGE
-    reasons.flag(_outside(spacings, lo, hi).any(axis=1), f"implausible axle spacing (allowed {lo:g}-{hi:g} m)")
-    lo, hi = SPEED_RANGE
-    speed = col["speed"]
-    reasons.flag(_outside(speed, lo, hi), f"implausible speed (allowed {lo * 3.6:g}-{hi * 3.6:g} km/h)")
-    counts = _residues(parsed, reasons.ok)
-    step = detect_resolution(counts).step_kg if gross_kg is None else gross_kg
-    total = np.nansum(loads, axis=1)
-    gross = col["gross_weight"]
-    if not np.isnan(gross).all():
-        # half a step of the gross weight's field and of each axle's, at the file's resolution if coarser
-        load_half = max(step or 0.0, parsed["load_step"]) / 2
-        gross_half = max(step or 0.0, parsed["gross_step"]) / 2
-        slack = GROSS_TOLERANCE * total + gross_half + col["n_axles"] * load_half
-        # a gross weight 2.2 times the axles' sum: the gross in pounds and the axles in kilograms (or a file of
-        # the other edition); said as such, not as any other mismatch
-        pounds = np.abs(gross - total / POUND) <= GROSS_TOLERANCE * total / POUND + gross_half
-        reasons.flag(pounds & (np.abs(gross - total) > slack), "gross weight 2.2 times the sum of the axle loads: "
-                     "pounds where kilograms are expected?")  # fmt: skip
-        reasons.flag(np.abs(gross - total) > slack, "gross weight is not the sum of the axle loads")
-    reasons.flag(_shorter_than_wheelbase(parsed), "length shorter than the wheelbase")
-    return counts, step
-
-
-def _outside(values: np.ndarray, lo: float, hi: float) -> np.ndarray:
-    """``values`` outside [lo, hi], the ends in, to a relative :data:`REL_TOL` (NaN is never outside)."""
-    return (values < lo - REL_TOL * abs(lo)) | (values > hi + REL_TOL * abs(hi))
-
-
-def _shorter_than_wheelbase(parsed: dict) -> np.ndarray:
-    """Records whose stated length is shorter than the sum of their axle spacings (a length of 0: not given).
-
-    In a fixed-width format the two are compared as the integers the file holds, in the format's unit (every
-    layout writes the length and the spacings in one unit): a length equal to the wheelbase to the unit is not
-    shorter. Summing the spacings in metres in floating point lost 2.9 % of a real MON file's records (2.95 + 1.35 =
-    4.300000000000001 > 4.3). Where the units differ, or the values are decimals (CSV), the comparison allows
-    :data:`REL_TOL`."""
-    length = parsed["columns"]["length"]
-    if "length_units" in parsed:
-        (length_int, length_unit), (spacing_int, spacing_unit) = parsed["length_units"], parsed["spacing_units"]
-        if length_unit == spacing_unit:
-            wheelbase = np.where(spacing_int > 0, spacing_int, 0).sum(axis=1)
-            return (length_int > 0) & (length_int < wheelbase)
-    wheelbase = np.nansum(parsed["spacings"], axis=1)
-    return (length > 0) & (length < wheelbase * (1.0 - REL_TOL))
-
-
-def _key_columns(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> dict[str, np.ndarray]:
-    """The record columns a repeat shares with the record it repeats, but its axles: time, lane, direction, speed
-    (and the station of a TMG file). The one definition of the key, with the axle loads and spacings
-    (:func:`_repeat_key` exactly, :func:`_hashes` by hash)."""
-    col = parsed["columns"]
-    extra = parsed.get("extra", {})
-    return {
-        "t": stamps[rows].view(np.int64), "lane": col["lane"][rows], "dir": col["direction"][rows],
-        "speed": col["speed"][rows], **({"station": extra["station"][rows]} if "station" in extra else {}),
-    }  # fmt: skip
-
-
-def _repeat_key(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> pd.DataFrame:
-    """The key of ``rows`` as a table, to compare exactly: :func:`_key_columns`, the axle loads and spacings."""
-    return pd.DataFrame({
-        **_key_columns(parsed, stamps, rows),
-        **{f"w{i}": parsed["loads"][rows, i] for i in range(parsed["loads"].shape[1])},
-        **{f"s{i}": parsed["spacings"][rows, i] for i in range(parsed["spacings"].shape[1])},
-    })  # fmt: skip
-
-
-def _hashes(parsed: dict, stamps: np.ndarray, rows: np.ndarray) -> np.ndarray:
-    """The 64-bit hashes of the repeat keys (:func:`_repeat_key`) of ``rows``, for the records of earlier chunks."""
-    columns = list(_key_columns(parsed, stamps, rows).values())
-    return key_hashes(columns, parsed["loads"][rows], parsed["spacings"][rows], parsed["columns"]["n_axles"][rows])
-
-
-def _alike(parsed: dict, stamps: np.ndarray, seen: SeenStore | None) -> int:
-    """How many good records are alike an earlier one (:func:`_repeat_key`; of an earlier chunk, by
-    :func:`_hashes`): counted for a file of hourly time stamps, where two alike trucks in one hour are two
-    vehicles."""
-    good = np.flatnonzero(parsed["reasons"].ok)
-    alike = np.zeros(len(good), bool)
-    if len(good) >= 2:
-        alike = _repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()
-    if seen is not None and len(good):
-        hashes = _hashes(parsed, stamps, good)
-        alike = alike | seen.add(stamps[good], hashes)
-    return int(alike.sum())
-
-
-def _flag_repeats(parsed: dict, stamps: np.ndarray, seen: SeenStore | None = None) -> None:
-    """A good record equal to an earlier good one in time, lane, direction, speed, axle loads and spacings is bad:
-    a WIM system does not weigh two vehicles in one lane at one instant (a record repeated by a copy or a retry)."""
-    reasons: _Reasons = parsed["reasons"]
-    everyone = np.flatnonzero(reasons.ok)
-    repeat = np.zeros(len(reasons.code), bool)
-    # only records that share their time with another can repeat one: compare the rest of the key for those only
-    if len(everyone) >= 2:
-        same_time = pd.Series(stamps[everyone].view(np.int64)).duplicated(keep=False).to_numpy()
-        good = everyone[same_time]
-        if len(good) >= 2:
-            repeat[good[_repeat_key(parsed, stamps, good).duplicated(keep="first").to_numpy()]] = True
-    if seen is not None and len(everyone):  # a repeat of a record of an earlier chunk, by its hash
-        hashes = _hashes(parsed, stamps, everyone)
-        # a repeat within the chunk has the hash of the record it repeats, added here too: adding every hash adds
-        # the same set as adding the first of each only
-        repeat[everyone[seen.add(stamps[everyone], hashes)]] = True
-    reasons.flag(repeat, DUPLICATE)
 
 
 # ---- the file ------------------------------------------------------------------------------------------------------
