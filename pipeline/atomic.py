@@ -422,9 +422,11 @@ class StageError(Exception):
 
 #: the errors of a stage's inputs (params.yaml, the runs, a survey file, the other stages' outputs) that are the
 #: user's to mend, each with a message naming what is wrong: the configuration's and the library's own errors
-#: (ConfigError, RunsError, CalibrationError, DesignError...) are ValueErrors; a missing column a KeyError; a file
-#: that cannot be read an OSError; a params.yaml that is not YAML a YAMLError
-INPUT_ERRORS: tuple[type[BaseException], ...] = (ValueError, KeyError, OSError, yaml.YAMLError)
+#: (ConfigError, RunsError, CalibrationError, DesignError, FleetError...) are ValueErrors, by the project's rule that
+#: bad input raises a ValueError naming the parameter, value, range and unit; a file that cannot be read an OSError;
+#: a params.yaml that is not YAML a YAMLError. A KeyError, TypeError, IndexError... is a bug: a traceback (a stage
+#: whose inputs are other stages' files, where a missing key is a damaged input, adds KeyError by ``more``)
+INPUT_ERRORS: tuple[type[BaseException], ...] = (ValueError, OSError, yaml.YAMLError)
 
 
 @contextmanager

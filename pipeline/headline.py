@@ -76,7 +76,7 @@ def main(argv: list[str] | None = None) -> int:
 def _stage(args: argparse.Namespace) -> int:
     """Read, sum up, write; the exit code (errors: :func:`pipeline.atomic.run_stage`'s)."""
     metrics = Path(args.metrics)
-    with stage_inputs("headline"):
+    with stage_inputs("headline", KeyError):
         survey = json.loads((metrics / "survey.json").read_text(encoding="utf-8"))
         sensitivity = json.loads((metrics / "sensitivity.json").read_text(encoding="utf-8"))
         road_file = metrics / "road.json"  # the road stage's (docs/pavement.md); a project without it has none

@@ -44,6 +44,7 @@ from bogie.fleet.observed import (
     simulated_statistics,
     with_inequality,
 )
+from bogie.rounding import json_number
 from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
@@ -190,8 +191,8 @@ def wim_model(wim: WimProtocol) -> dict[str, Any]:
         "contact_length_m": wim.contact_length if length else None,
         "sensor_error": error,
         "sensor": wim.sensor if error else None,
-        "sensor_vehicle_error_pct": round(100.0 * wim.vehicle_error_sd, 6) if error else None,
-        "sensor_axle_error_pct": round(100.0 * wim.axle_error_sd, 6) if error else None,
+        "sensor_vehicle_error_pct": json_number(100.0 * wim.vehicle_error_sd, 6) if error else None,
+        "sensor_axle_error_pct": json_number(100.0 * wim.axle_error_sd, 6) if error else None,
     }
 
 

@@ -31,6 +31,7 @@ import pandas as pd
 
 from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
+from bogie.rounding import json_number
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
@@ -68,10 +69,10 @@ def road_metrics(
 ) -> dict[str, Any]:
     """metrics/road.json: the settings, the simulated and observed figures and the savings, NaN as null."""
     return {
-        "legal_group_load_kg": {k: round(float(v), 1) for k, v in legal_group.items()},
-        "legal_axle_load_kg": round(float(legal_axle), 1),
-        "min_group_load_kg": round(float(min_group_load), 1),
-        "standard_axle_kg": round(STANDARD_AXLE_KG, 1),
+        "legal_group_load_kg": {k: json_number(v, 1) for k, v in legal_group.items()},
+        "legal_axle_load_kg": json_number(legal_axle, 1),
+        "min_group_load_kg": json_number(min_group_load, 1),
+        "standard_axle_kg": json_number(STANDARD_AXLE_KG, 1),
         "exponents": dict(DAMAGE_EXPONENTS),
         "confidence_level": CONFIDENCE,
         "simulated": wear_dict(simulated, ["protocol", "group", "suspension"]) if len(simulated) else {},
@@ -110,7 +111,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    with stage_inputs("road"):
+    with stage_inputs("road", KeyError):
         config = load_config(args.params)
         legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
         legal_axle = float(config.fleet.legal_axle_load) / GRAVITY

@@ -253,8 +253,9 @@ def calibrate_survey(
         ``distance``, ``distance_direct``, the table's size, the observed, calibrated and held-out statistics, the
         ablation (``docs/calibration.md``, ``docs/outputs.md``).
     tables : dict
-        ``bootstrap.csv``, ``valley.csv``, ``profiles.csv``, ``calibrated.csv`` (the calibrated fleet simulated
-        directly and filtered) and ``ablation.csv`` as DataFrames.
+        DataFrames by name: ``bootstrap``, ``valley``, ``profiles``, ``calibrated`` (the calibrated fleet simulated
+        directly and filtered), ``ablation``, and ``posterior`` (with posterior draws) and ``attribution`` (a WIM
+        calibration with a static protocol); the calibrate stage writes each as ``<name>.csv``.
 
     Raises
     ------

@@ -379,6 +379,11 @@ def stream_weighings(
     vehicle table (the good records, as :func:`read_weighings`' rows, in file order), and the result is
     :func:`read_weighings`' without its vehicles (``n_vehicles`` counts them).
 
+    ``consume`` runs on a second thread while the next chunk is parsed: one call at a time, in file order, the next
+    only once the last returned, and an error it raises stops the read and is raised here as it was; a consumer
+    tied to its thread (a ``threading.local``, a sqlite3 connection made with ``check_same_thread``) must not be
+    used. ``start`` runs on the calling thread, with no call of ``consume`` in flight.
+
     The gross-weight check allows for the file's weight resolution, which is known only at the end: the first
     chunk's is used, and if the whole file's differs, the file is read again with it (``start`` is called before
     every pass, so that the consumer begins afresh). The records are then those of a whole-file read, and so are

@@ -160,7 +160,8 @@ def observed_survey(
     sink
         None, or an object with ``start()`` and ``write(groups)``: given each chunk's kept groups (every size, all
         columns) as they are made, after a ``start()`` before every pass over the file (the pipeline's observed
-        stage writes its groups file so).
+        stage writes its groups file so). ``write`` runs on the reader's second thread (one call at a time, in file
+        order; :func:`bogie.weighings.readers.stream_weighings`), ``start`` on the calling thread.
 
     Raises
     ------

@@ -173,7 +173,7 @@ def main(argv: list[str] | None = None) -> int:
 
 def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
-    with stage_inputs("report"):
+    with stage_inputs("report", KeyError):
         dirs = (args.survey, args.sensitivity, args.metrics, args.observed, args.calibration, args.design)
         inputs = read_inputs(args.params, args.samples, args.runs, *dirs)
     numbers = make_report(

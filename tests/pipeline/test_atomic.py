@@ -124,21 +124,21 @@ def _runner(work, tmp_path):
 
 
 @pytest.mark.parametrize(
-    ("error", "line"),
+    ("error", "more", "line"),
     [
-        (ValueError("x = 3: must be below 2"), "demo: x = 3: must be below 2"),
-        (KeyError("axle_load_3"), "demo: 'axle_load_3'"),
-        (FileNotFoundError(2, "No such file or directory", "params.yaml"),
+        (ValueError("x = 3: must be below 2"), (), "demo: x = 3: must be below 2"),
+        (FileNotFoundError(2, "No such file or directory", "params.yaml"), (),
          "demo: [Errno 2] No such file or directory: 'params.yaml'"),
-        (__import__("yaml").YAMLError("mapping values are not allowed here"),
+        (__import__("yaml").YAMLError("mapping values are not allowed here"), (),
          "demo: mapping values are not allowed here"),
+        (KeyError("axle_load_3"), (KeyError,), "demo: 'axle_load_3'"),  # a stage reading another's files adds it
     ],
 )  # fmt: skip
-def test_an_input_error_is_one_line_naming_the_stage_and_exit_2(tmp_path, capsys, error, line):
+def test_an_input_error_is_one_line_naming_the_stage_and_exit_2(tmp_path, capsys, error, more, line):
     from pipeline.atomic import stage_inputs
 
     def work():
-        with stage_inputs("demo"):
+        with stage_inputs("demo", *more):
             raise error
 
     assert _runner(work, tmp_path) == 2
@@ -163,3 +163,12 @@ def test_a_write_error_is_the_file_systems_line_and_a_bug_is_not_swallowed(tmp_p
 
     with pytest.raises(RuntimeError, match="a bug"):
         _runner(bug, tmp_path)
+
+    def missing_key():
+        from pipeline.atomic import stage_inputs
+
+        with stage_inputs("demo"):
+            return {}["fitted"]  # a bug in a stage's own code, not a damaged input: a traceback
+
+    with pytest.raises(KeyError, match="fitted"):
+        _runner(missing_key, tmp_path)
