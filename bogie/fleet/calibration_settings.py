@@ -64,15 +64,15 @@ class CalibrationSettings:
         doc="Seed of the differential evolution (the fit's; resample b of the bootstrap is fitted with seed + 1 + b) "
         "and of the bootstrap's resampling.",
     )  # fmt: skip
-    maxiter: int = setting(40, unit="-", low=1, whole=True, doc="Generations of scipy's differential evolution.")
-    popsize: int = setting(
-        8, unit="-", low=2, whole=True, doc="Population of the differential evolution, per fitted quantity."
-    )
     bootstrap_resamples: int = setting(
         50, unit="-", low=0, whole=True, doc="Bootstrap resamples of the fitted values' intervals (0: none)."
     )
     confidence_level: float = setting(
         0.9, unit="-", low=0.0, high=1.0, low_open=True, high_open=True, doc="Of the fitted values' intervals."
+    )
+    maxiter: int = setting(40, unit="-", low=1, whole=True, doc="Generations of scipy's differential evolution.")
+    popsize: int = setting(
+        8, unit="-", low=2, whole=True, doc="Population of the differential evolution, per fitted quantity."
     )
     posterior_draws: int = setting(
         4000, unit="-", low=0, whole=True,

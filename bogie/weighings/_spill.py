@@ -26,7 +26,7 @@ import numpy as np
 import pandas as pd
 from numba import njit
 
-from bogie.group_names import GROUP_NAMES
+from bogie.group_names import GROUP_AXLES, GROUP_NAMES
 from bogie.weighings.stats import QUANTILES, group_inequality
 from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _LargeCell, _small_cell
 
@@ -38,6 +38,8 @@ SPILL_BLOCK = 1 << 18
 _BINS_TOTAL = 1 << 21
 #: the sizes spilled, by their code (the axles less two)
 SPILLED = GROUP_NAMES
+# the spill's size code is the axles less two: a group of another size, or another order, would be miscounted
+assert all(GROUP_AXLES[name] == code + 2 for code, name in enumerate(SPILLED))
 _COLUMNS = ("size", "station", "loads")  # int8, int32, three float64 a group
 
 

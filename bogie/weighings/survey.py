@@ -19,7 +19,7 @@ import pandas as pd
 
 from bogie.group_names import GROUP_NAMES
 from bogie.weighings import _records
-from bogie.weighings._spill import SPILLED, GroupSpill, spilled_statistics, spilled_wear
+from bogie.weighings._spill import GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
 from bogie.weighings.groups import (
     GROUP_SPACING_M,
@@ -322,8 +322,6 @@ class _Tally:
             }
         return out
 
-
-assert SURVEYED == (SIZES[2], SIZES[3]) == SPILLED  # the spill's codes: the axles less two
 
 #: the columns of a surveyed group the spill keeps when the groups are not (``keep_groups=False``)
 _COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")

@@ -29,6 +29,7 @@ from bogie.fleet.constants import (
 from bogie.fleet.design_settings import DesignSettings
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.fleet.sampling import SAMPLINGS
+from bogie.settings import declared
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.fields import (
@@ -106,7 +107,7 @@ Static = library_model(
              "nothing to read"),
             ("le", 600.0, "a sanity cap: ten minutes"),
         ],
-        "dt_s": [("le", 0.01, "a sanity cap: 10 ms, a tenth of the axle hop period")],
+        "dt_s": [("le", 0.01, "a sanity cap: 10 ms")],
         "step_tolerance_m": [("le", 1e-4, "1e-4 m per step is already a tenth of a millimetre, far coarser than a "
                               "reading needs")],
     },
@@ -121,7 +122,7 @@ Wim = library_model(
             ("le", 50.0, "180 km/h: above it the value was most likely given in km/h"),
         ],
         "approach_length_m": [("le", 10_000.0, "a sanity cap: ten kilometres")],
-        "dt_s": [("le", 0.01, "a sanity cap: 10 ms, a tenth of the axle hop period")],
+        "dt_s": [("le", 0.01, "a sanity cap: 10 ms")],
         "site_length_before_m": [("le", 1000.0, "COST 323 sets its requirements over 50 m before the sensor")],
         "site_length_after_m": [("le", 1000.0, "and 25 m after it")],
         "site_iri_m_km": [
@@ -313,11 +314,10 @@ class _CalibrateTable(Strict):
     """The WIM site roughnesses the readings are tabulated at."""
 
 
-#: the keys of ``calibrate:`` that are the library's CalibrationSettings' (declared there, bogie.settings; its
-#: ``fit`` is the key above, its ``seed`` params.yaml's top-level one, its ``priors`` the documented defaults)
-CALIBRATION_METHOD_KEYS: tuple[str, ...] = (
-    "bootstrap_resamples", "confidence_level", "maxiter", "popsize", "posterior_draws",
-)  # fmt: skip
+#: the keys of ``calibrate:`` that are the library's CalibrationSettings' declared settings, in its order (declared
+#: there, bogie.settings), but its ``seed``, params.yaml's top-level one; its ``fit`` is the key above, its ``priors``
+#: the documented defaults
+CALIBRATION_METHOD_KEYS: tuple[str, ...] = tuple(name for name in declared(CalibrationSettings) if name != "seed")
 Calibrate = create_model(
     "Calibrate",
     __base__=_CalibrateTable,
