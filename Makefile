@@ -61,7 +61,7 @@ lint: $(STAMP)
 bench: $(STAMP)
 	$(BIN)/python -m bench
 
-# docs/validation.md's tables from bogie.cases (after any change to the physics); `--check` only compares
+# docs/validation.md's tables from bogie.steel.cases (after any change to the physics); `--check` only compares
 validation-tables: $(STAMP)
 	$(BIN)/python tools/validation_tables.py
 

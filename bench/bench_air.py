@@ -15,10 +15,11 @@ import time
 
 import numpy as np
 
-from bogie import air, nonlinear
+from bogie import air
 from bogie.air import dynamics as air_dynamics
 from bogie.air import static as air_static
 from bogie.road import ISO8608Profile
+from bogie.steel import nonlinear
 
 DT = 1e-3
 

@@ -1,6 +1,6 @@
 """Linear model: our compiled Newmark kernel against scipy's Radau on case L01, at equal accuracy.
 
-Both solvers integrate the problem :func:`bogie.linear.simulate` builds for case L01: the matrices of
+Both solvers integrate the problem :func:`bogie.steel.linear.simulate` builds for case L01: the matrices of
 ``cases.get("L01").bogie()``, started at rest in static equilibrium, loaded by the road-load history R sampled every
 dt = 0.0625 s and taken as piecewise linear in between (all that a Newmark step of that size sees of the road).
 Radau works on the first-order form (massless undamped freedoms condensed out, massless damped ones first order)
@@ -27,10 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from bogie import cases, linear
-from bogie.newmark import consistent_acceleration, linear_steps, massless_dofs
 from bogie.params import Bogie
 from bogie.road import RampedStep, axle_heights
+from bogie.steel import cases, linear
+from bogie.steel.newmark import consistent_acceleration, linear_steps, massless_dofs
 
 CASE = "L01"
 #: Table 1, run L01: steps, time step [s], speed [m/s]; main() checks that the system reproduces cases.run(CASE)
@@ -140,7 +140,8 @@ def first_order_form(M: NDArray[np.float64], C: NDArray[np.float64], K: NDArray[
 
 
 def problem() -> Problem:
-    """The arrays :func:`bogie.linear.simulate` builds for case :data:`CASE` (same bogie, road, start and loads)."""
+    """The arrays :func:`bogie.steel.linear.simulate` builds for case :data:`CASE` (same bogie, road, start and
+    loads)."""
     bogie = cases.get(CASE).bogie()
     mats = linear.matrices(bogie)
     t = np.arange(N_STEPS + 1) * DT
@@ -155,7 +156,7 @@ def problem() -> Problem:
 
 
 def newmark(pb: Problem, refinement: int = 1) -> SimpleNamespace:
-    """Our kernel, called as :func:`bogie.linear.simulate` calls it, at dt / refinement on interpolated loads."""
+    """Our kernel, called as :func:`bogie.steel.linear.simulate` calls it, at dt / refinement on interpolated loads."""
     n_steps = pb.n_steps * refinement
     loads = pb.loads
     if refinement > 1:
@@ -190,7 +191,7 @@ def radau(
 
 
 def nondimensional_loads(pb: Problem, u: NDArray[np.float64], v: NDArray[np.float64]) -> NDArray[np.float64]:
-    """W / W_ref, W_ref the mean initial wheel load, as in :func:`bogie.linear.simulate`."""
+    """W / W_ref, W_ref the mean initial wheel load, as in :func:`bogie.steel.linear.simulate`."""
     w = linear.wheel_loads_from_state(pb.bogie, pb.mats, u, v, pb.rates)
     return w / np.mean(w[0])
 
@@ -269,10 +270,10 @@ def main() -> None:
     k = int(np.searchsorted(steps, ramp_start))
     across = (float(steps[k - 1]), float(steps[k]))
 
-    code = f"import bogie.cases as c; c.run({CASE!r})"
+    code = f"import bogie.steel.cases as c; c.run({CASE!r})"
     process_time(code, repeats=1)  # warms numba's on-disk cache if the sources changed since the last run
     t_first = process_time(code)
-    t_import = process_time("import bogie.cases")
+    t_import = process_time("import bogie.steel.cases")
     with tempfile.TemporaryDirectory() as cache:
         t_cold = process_time(code, env={**os.environ, "NUMBA_CACHE_DIR": cache}, repeats=1)
 
@@ -286,7 +287,7 @@ def main() -> None:
           f"e_p {check[1]:.1e}")  # fmt: skip
     print(f"  ours, Newmark (average acceleration) at dt = {DT:g} s: e_W {e_ours[0]:.2e}, e_p {e_ours[1]:.2e}")
     print("Time of one run (median, this process):")
-    print(f"  ours, compiled kernel (bogie.newmark.linear_steps){t_kernel * 1e3:8.3f} ms  "
+    print(f"  ours, compiled kernel (bogie.steel.newmark.linear_steps){t_kernel * 1e3:8.3f} ms  "
           f"{t_kernel / n_steps * 1e6:.2f} us per step")  # fmt: skip
     print(f"  ours, whole cases.run({CASE!r}) incl. road, loads     {t_run * 1e3:8.3f} ms")
     print("  scipy solve_ivp(method='Radau'), exact Jacobian, atol = rtol * max|x_i|; rtol ladder per max_step:")

@@ -2,11 +2,11 @@
 
 Four measurements, all in one process except the fresh-process ones (see ``bench/README.md``):
 
-1. ``bogie.nonlinear.simulate`` of ``triaxle_stage1()`` (preset inhibitors) over an ISO 8608 class B road at 15 m/s
-   for 20 s at dt = 1 ms: median of repeats after a warm-up (target under 50 ms), and the compiled kernel alone.
+1. ``bogie.steel.nonlinear.simulate`` of ``triaxle_stage1()`` (preset inhibitors) over an ISO 8608 class B road at 15
+   m/s for 20 s at dt = 1 ms: median of repeats after a warm-up (target under 50 ms), and the compiled kernel alone.
 2. The peer: ``scipy.integrate.solve_ivp`` (Radau and BDF) on the model's first-order form x = [u, v, s],
    du/dt = v, M dv/dt = -f(u, v, s, drive(t)), ds/dt = (s_rm(u, s) - s) / tau, where f is the *same compiled*
-   internal force :func:`bogie._nonlinear_core.force` the kernel uses and s_rm the plastic slip its return map
+   internal force :func:`bogie.steel.force.core.force` the kernel uses and s_rm the plastic slip its return map
    gives from the slip s: the friction force stays capped at the Coulomb limit and the slip relaxes to the
    return-mapped one in a time tau (a viscoplastic regularisation; tau -> 0 is the kernel's law). Both solvers see
    the same drive (the 1 ms input rows, linear in between). Errors are against our kernel at dt / 64 on that drive
@@ -34,13 +34,13 @@ import numpy as np
 from numpy.typing import NDArray
 from scipy.integrate import solve_ivp
 
-from bogie import _nonlinear_core as core
-from bogie import nonlinear as nl
-from bogie import phases
-from bogie.newmark import MODEL_NONLINEAR, IntegrationResult, consistent_acceleration, integrate
 from bogie.params import Bogie
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
+from bogie.steel import nonlinear as nl
+from bogie.steel import phases
+from bogie.steel.force import core
+from bogie.steel.newmark import MODEL_NONLINEAR, IntegrationResult, consistent_acceleration, integrate
 
 SPEED, DURATION, DT = 15.0, 20.0, 1e-3  # [m/s], [s], [s]
 #: ISO 8608 class B, 400 m long so that the 300 m run does not repeat it
@@ -113,7 +113,7 @@ def refined(inputs: nl.Inputs, r: int) -> nl.Inputs:
 
 @dataclass(frozen=True)
 class KernelCall:
-    """The arguments :func:`bogie.nonlinear.simulate` passes to the compiled kernel, prepared once."""
+    """The arguments :func:`bogie.steel.nonlinear.simulate` passes to the compiled kernel, prepared once."""
 
     bogie: Bogie
     inputs: nl.Inputs
@@ -135,7 +135,7 @@ class KernelCall:
         core.force(
             state.u, state.v, drive[0], data_f, data_i, state.history, state.history.copy(), f0,
             np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(core.RECORD_PER_AXLE * n), False, False,
-            np.zeros(nl._work_size(bogie)),
+            np.zeros(nl.work_size(bogie)),
         )  # fmt: skip
         return cls(bogie, inputs, mass, data_f, data_i, drive, state, consistent_acceleration(mass, f0))
 
@@ -144,15 +144,15 @@ class KernelCall:
         b, s = self.bogie, self.state
         return integrate(
             MODEL_NONLINEAR, self.mass, self.drive, self.data_f, self.data_i, s.u.copy(), s.v.copy(), self.a0,
-            s.history.copy(), self.inputs.dt, self.inputs.n_steps, nl._tolerance(b), max_iter=25, max_halvings=5,
-            n_record=core.RECORD_PER_AXLE * b.n_axles, work_size=nl._work_size(b), limits=nl.limits(b),
+            s.history.copy(), self.inputs.dt, self.inputs.n_steps, nl.residual_tolerance(b), max_iter=25,
+            max_halvings=5, n_record=core.RECORD_PER_AXLE * b.n_axles, work_size=nl.work_size(b), limits=nl.limits(b),
         )  # fmt: skip
 
 
 class FirstOrderForm:
     """x = [u, v, s] with du/dt = v, M dv/dt = -f(u, v, s, drive(t)), ds/dt = (s_rm(u, s) - s) / tau.
 
-    f and s_rm come from one call of the compiled :func:`bogie._nonlinear_core.force` with the slip s as the
+    f and s_rm come from one call of the compiled :func:`bogie.steel.force.core.force` with the slip s as the
     friction history: f holds the friction force of the return map (capped at the Coulomb limit mu N) and s_rm is
     the plastic slip the return map would commit. During stick s_rm = s; during slip s relaxes towards s_rm with
     time constant tau. The right-hand side is Lipschitz continuous but not smooth at stick/slip changes.
@@ -172,7 +172,7 @@ class FirstOrderForm:
             np.zeros((self.n_dof, self.n_dof)),
             np.zeros((self.n_dof, self.n_dof)),
             np.zeros(core.RECORD_PER_AXLE * n),
-            np.zeros(nl._work_size(call.bogie)),
+            np.zeros(nl.work_size(call.bogie)),
             np.zeros(core.history_length(n)),
             call.drive[0].copy(),
         )
@@ -286,9 +286,10 @@ def main() -> None:
     call = KernelCall.prepare(bogie, inputs)
     kernel = call.run()
     if not np.array_equal(kernel.record[:, :n], result.wheel_loads):
-        raise RuntimeError("the benchmark's kernel call differs from bogie.nonlinear.simulate")
-    # the weighings' kernel (bogie.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start at rest,
-    # no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it per row
+        raise RuntimeError("the benchmark's kernel call differs from bogie.steel.nonlinear.simulate")
+    # the weighings' kernel (bogie.steel.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start at
+    # rest, no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it per
+    # row
     profile = ISO8608Profile(**ROAD)
     table = phases.RoadTable.from_profile(
         profile, bogie.axle_x[0] - bogie.axle_x[-1] - 0.01, SPEED * DURATION + 0.01, profile.grid_spacing
@@ -398,13 +399,14 @@ def main() -> None:
 
     # ---- 3. fresh processes ----
     code = (
-        "import bogie.nonlinear as nl; from bogie.params import triaxle_stage1; from bogie.road import ISO8608Profile; "
+        "import bogie.steel.nonlinear as nl; from bogie.params import triaxle_stage1; "
+        "from bogie.road import ISO8608Profile; "
         "b = triaxle_stage1(); nl.simulate(b, nl.road_inputs(b, ISO8608Profile('B', seed=1), 15.0, 1.0, 1e-3))"
     )
     process_time(code, repeats=1)  # warms numba's on-disk cache if the sources changed since the last run
     t_first = process_time(code)
-    t_import = process_time("import bogie.nonlinear, bogie.road")
-    t_numba = process_time("import bogie.nonlinear, bogie.road; bogie._nonlinear_core.scratch_size(3)")
+    t_import = process_time("import bogie.steel.nonlinear, bogie.road")
+    t_numba = process_time("import bogie.steel.nonlinear, bogie.road; bogie.steel.force.core.scratch_size(3)")
     with tempfile.TemporaryDirectory() as cache:
         t_cold = process_time(code, env={**os.environ, "NUMBA_CACHE_DIR": cache}, repeats=1)
 
@@ -417,15 +419,15 @@ def main() -> None:
     print(f"Load average (1 min) of the machine at the start {load_start:.1f}, at the end {os.getloadavg()[0]:.1f} "
           f"on {os.cpu_count()} cores")  # fmt: skip
     print(f"1. One {DURATION:g} s run (median of {n_rep} after a warm-up, least in brackets; single-threaded):")
-    print(f"   bogie.nonlinear.simulate (pack, static start, kernel, result) {t_sim * 1e3:6.1f} ms "
+    print(f"   bogie.steel.nonlinear.simulate (pack, static start, kernel, result) {t_sim * 1e3:6.1f} ms "
           f"({min(headline['simulate']) * 1e3:.1f})  {t_sim / n_steps * 1e6:.2f} us per step   "
           f"target < 50 ms: {verdict}")  # fmt: skip
-    print(f"   compiled kernel alone (bogie.newmark.integrate)               {t_kernel * 1e3:6.1f} ms "
+    print(f"   compiled kernel alone (bogie.steel.newmark.integrate)               {t_kernel * 1e3:6.1f} ms "
           f"({min(headline['kernel']) * 1e3:.1f})  {t_kernel / n_steps * 1e6:.2f} us per step, "
           f"{kernel.n_iterations / n_steps:.2f} Newton iterations per step")  # fmt: skip
     evals = phased.phases[0].force_evaluations / n_steps
     verdict = "met" if t_phases < 0.01 else "NOT met"
-    print(f"   bogie.phases.run (the weighings' kernel, readings only)      {t_phases * 1e3:6.1f} ms "
+    print(f"   bogie.steel.phases.run (the weighings' kernel, readings only)      {t_phases * 1e3:6.1f} ms "
           f"({min(headline['phases']) * 1e3:.1f})  {t_phases / n_steps * 1e6:.2f} us per step, "
           f"{evals:.2f} force evaluations per step   target <= 10 ms: {verdict}")  # fmt: skip
     print(f"   wheel loads W / W_ref against the kernel at dt/{FULL_REFINEMENT}: simulate max {e_ours_full[0]:.2e} "
@@ -466,7 +468,7 @@ def main() -> None:
         )
     print(f"3. Fresh process, `python -c` importing bogie and running {1.0:g} s of the tri-axle model (median of 3):")
     print(f"   warm numba cache {t_first:.2f} s   target < 1 s: {'met' if t_first < 1.0 else 'NOT met'}")
-    print(f"     import bogie.nonlinear, bogie.road alone {t_import:.2f} s; import + first call of any cached "
+    print(f"     import bogie.steel.nonlinear, bogie.road alone {t_import:.2f} s; import + first call of any cached "
           f"numba function {t_numba:.2f} s")  # fmt: skip
     print(f"   empty cache (compiles everything) {t_cold:.1f} s (one run)")
     print(f"4. Cost against the number of axles ({DURATION:g} s at {DT * 1e3:g} ms; median of 9, interleaved):")

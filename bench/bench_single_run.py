@@ -1,8 +1,8 @@
 """Issue 15's second target: one 20 s tri-axle run at 1 ms in at most 10 ms, single-threaded, built two ways.
 
-``python -m bench.bench_single_run [--rounds N]`` times ``bogie.phases.run`` (the weighings' kernel, readings only) on
-``bench_nonlinear``'s problem (``triaxle_stage1()``, ISO 8608 class B, 15 m/s, 20 s in fixed 1 ms steps) in child
-processes of two kinds, alternately, so that a burst of other work on the shared machine falls on both:
+``python -m bench.bench_single_run [--rounds N]`` times ``bogie.steel.phases.run`` (the weighings' kernel, readings
+only) on ``bench_nonlinear``'s problem (``triaxle_stage1()``, ISO 8608 class B, 15 m/s, 20 s in fixed 1 ms steps) in
+child processes of two kinds, alternately, so that a burst of other work on the shared machine falls on both:
 
 * ``pinned``: numba compiling for x86-64-v3, as ``import bogie`` fixes it (:func:`bogie.numerics.fix_compile_target`)
   in every stage and every user's process;
@@ -44,7 +44,7 @@ TARGET = 0.010
 CHILD = """
 import sys, time, json
 import numba
-from bogie import phases
+from bogie.steel import phases
 from bogie.params import triaxle_stage1
 from bogie.road import ISO8608Profile
 SPEED, DURATION, DT = float(sys.argv[3]), float(sys.argv[4]), float(sys.argv[5])

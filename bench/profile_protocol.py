@@ -5,9 +5,9 @@ Measured on the first tandem and the first tri-axle bogie of a fixed fleet sampl
 
 1. **Work per phase** (counts from the kernel, exact): accepted and rejected steps, force evaluations (the 2n + 1
    of each tangent included), tangents formed, factorisations of the iteration matrix and steps whose first
-   correction was accepted unchecked (``bogie.phases.PhaseOutcome``), and the evaluations per step.
+   correction was accepted unchecked (``bogie.steel.phases.PhaseOutcome``), and the evaluations per step.
 2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigh``, the compiled
-   call (``bogie._phases_core.run_phases``) within it, and so the Python around it (the road tables, the phases,
+   call (``bogie.steel.phases._core.run_phases``) within it, and so the Python around it (the road tables, the phases,
    the result row); the time per step and per force evaluation of the compiled call.
 3. **Unit costs** (compiled loops, no Python in between, best of 5): one force evaluation with the record (the
    hysteresis' exponential running), forming and factoring the 2n x 2n iteration matrix, one solve with its factors.
@@ -44,10 +44,10 @@ def _sample() -> tuple[list[dict], dict]:
 
 def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
     """Best-of-REPEATS time of ``weigh`` and of its compiled call [s], and the phases' outcomes."""
-    from bogie import _phases_core as pc
-    from bogie import phases
     from bogie.fleet import protocols as protocol
     from bogie.fleet.sampling import bogie_from_sample
+    from bogie.steel import phases
+    from bogie.steel.phases import _core as pc
 
     bogie = bogie_from_sample(record)
     inner = {"t": 0.0}
@@ -82,10 +82,10 @@ def _unit_costs(record: dict) -> dict[str, float]:
     """Compiled-loop costs [us] of one force evaluation, one factorisation and one solve, for ``record``'s bogie."""
     from numba import njit
 
-    from bogie import _nonlinear_core as nlc
-    from bogie import nonlinear as nl
-    from bogie._lu import lu_factor, lu_solve
     from bogie.fleet.sampling import bogie_from_sample
+    from bogie.lu import lu_factor, lu_solve
+    from bogie.steel import nonlinear as nl
+    from bogie.steel.force import core as nlc
 
     @njit
     def force_loop(count, u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, work):

@@ -4,7 +4,7 @@
 checkout's ``data/samples`` (run ``make repro`` or ``dvc repro sample`` first) by the study's protocols, serially in
 one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigh`, the road tables' cache emptied first),
 after an untimed warm-up that loads the kernels. For each (study, protocol, group) it prints the runs, the time per
-run, the compiled call's share (``bogie._phases_core.run_phases``, timed around each call), the Python around it
+run, the compiled call's share (``bogie.steel.phases._core.run_phases``, timed around each call), the Python around it
 (road tables, phases, packing, result row), ``bogie_from_sample`` per run, the step attempts per run (accepted
 and rejected steps, from the kernel's statistics), the kernel's time per attempt and the category's share of the
 total; then the totals and the load average. Contiguous slices keep the ablation's variants of a bogie together,
@@ -35,9 +35,9 @@ def main(argv: list[str] | None = None) -> None:
 
     import pandas as pd
 
-    from bogie import _phases_core as pc
     from bogie.fleet import protocols as protocol
     from bogie.fleet.sampling import bogie_from_sample
+    from bogie.steel.phases import _core as pc
     from pipeline.config import load_config
     from pipeline.simulate import study_protocols
 
@@ -49,7 +49,7 @@ def main(argv: list[str] | None = None) -> None:
         start = time.perf_counter()
         out = kernel(*a)
         call["time"] += time.perf_counter() - start
-        stats = a[23]  # the per-phase statistics the kernel fills (bogie.phases.run's argument order)
+        stats = a[23]  # the per-phase statistics the kernel fills (bogie.steel.phases.run's argument order)
         call["attempts"] += int(stats[:, pc.S_STEPS].sum() + stats[:, pc.S_REJECTED].sum())
         return out
 

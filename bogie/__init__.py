@@ -1,6 +1,7 @@
 """bogie: why mechanically equalised multi-axle trailer bogies do not share load equally.
 
-Modules: :mod:`bogie.params` (the bogie), :mod:`bogie.presets` (its presets), :mod:`bogie.static` (Stage 2, Equation 1),
+Modules: :mod:`bogie.params` (the bogie), :mod:`bogie.presets` (its presets), :mod:`bogie.steel` (the steel model: the
+reference's four stages, the integrator and the weighing's phases),
 :mod:`bogie.metrics` (p, P1, RMS, LSC, DLC, road-wear factor), :mod:`bogie.plotting` (figures).
 """
 
@@ -42,6 +43,10 @@ _set_numba_cache_dir()
 from bogie.numerics import fix_compile_target as _fix_compile_target  # noqa: E402
 
 _fix_compile_target()
+
+from bogie import _moved  # noqa: E402
+
+_moved.install()  # the steel model's old module paths, for one release (bogie/_moved.py)
 
 from bogie.params import INHIBITORS, Bogie  # noqa: E402
 from bogie.presets import preset, tandem_trrl, triaxle_stage1  # noqa: E402

@@ -18,7 +18,7 @@ import math
 import numpy as np
 from numba import njit
 
-from bogie._lu import lu_factor, lu_solve
+from bogie.lu import lu_factor, lu_solve
 
 
 @njit(cache=True)

@@ -14,7 +14,7 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
 
     fe_points = None
     if args.fe:
-        from bogie.fe import figure2_points
+        from bogie.steel.fe import figure2_points
 
         fe_points = figure2_points(chassis_deflection=args.alpha_mm / 1e3)
     fig = figure2(q_max=args.q_max, chassis_deflection=args.alpha_mm / 1e3, fe_points=fe_points)
@@ -24,7 +24,7 @@ def _cmd_figure2(args: argparse.Namespace) -> int:
 
 
 def _figures(case, values: dict) -> str:
-    """A run's figures with their units (:meth:`bogie.cases.Case.unit`): ``p1_front_on_step 1583 N``."""
+    """A run's figures with their units (:meth:`bogie.steel.cases.Case.unit`): ``p1_front_on_step 1583 N``."""
     return ", ".join(f"{k} {v:.4g} {case.unit(k)}" if isinstance(v, float) else f"{k} {v} {case.unit(k)}"
                      for k, v in values.items())  # fmt: skip
 
@@ -44,7 +44,7 @@ def _image_suffix(parser: argparse.ArgumentParser, option: str, path: str | None
 def _cmd_case_list() -> int:
     import textwrap
 
-    from bogie import cases
+    from bogie.steel import cases
 
     for name in cases.names():
         case = cases.get(name)
@@ -58,7 +58,7 @@ def _cmd_case_list() -> int:
 
 
 def _cmd_case(args: argparse.Namespace) -> int:
-    from bogie import cases
+    from bogie.steel import cases
 
     if args.name.lower() == "list":
         return _cmd_case_list()
@@ -200,17 +200,17 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
 
 def design_loads_table(name: str, bogie, chassis_tilt_deg: float) -> tuple[str, list[float]]:
     """The text ``bogie design show`` prints, and the static tyre loads [N] it prints, one per axle: the linear
-    static model at the tilt (:func:`bogie.static.tilted_axle_loads`)."""
+    static model at the tilt (:func:`bogie.steel.static.tilted_axle_loads`)."""
     import math
 
-    from bogie.static import tilted_axle_loads
+    from bogie.steel.static import tilted_axle_loads
 
     loads = [float(w) for w in tilted_axle_loads(bogie, math.radians(chassis_tilt_deg))]
     total = sum(loads)
     lines = [
         f"{name}: {bogie.n_axles} axles at x = {', '.join(f'{v:g}' for v in bogie.axle_x)} m behind the king pin, "
         f"chassis tilt {chassis_tilt_deg:+g} degree (nose up +)",
-        "static tyre loads of one side (linear static model, bogie.static.tilted_axle_loads):",
+        "static tyre loads of one side (linear static model, bogie.steel.static.tilted_axle_loads):",
         f"{'axle':>4} {'x [m]':>7} {'load [kN]':>10} {'share [%]':>10}",
     ]
     lines += [
@@ -260,7 +260,7 @@ def build_parser() -> argparse.ArgumentParser:
     fig2.add_argument("--q-max", type=float, default=20.0, help="largest q on the axis [-] (default 20)")
     fig2.add_argument("--alpha-mm", type=float, default=57.0, help="chassis deflection alpha [mm] (default 57)")
     fig2.add_argument(
-        "--fe", action="store_true", help="overlay the Stage 1 finite element points at q = 4.3 (bogie.fe)"
+        "--fe", action="store_true", help="overlay the Stage 1 finite element points at q = 4.3 (bogie.steel.fe)"
     )
     fig2.set_defaults(func=_cmd_figure2, parser=fig2)
     case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, N01-N29); 'list' lists them")

@@ -16,8 +16,9 @@ import math
 
 import numpy as np
 
-from bogie import numerics, phases
+from bogie import numerics
 from bogie.presets import triaxle_stage1
+from bogie.steel import phases
 
 __all__ = ["numerics_digest"]
 
@@ -31,9 +32,9 @@ def numerics_digest() -> str:
     """A short hex digest of results whose last bits depend on how this process computes.
 
     :mod:`bogie.numerics`'s elementary functions on fixed arguments, and a short weighing by the compiled kernels
-    (:func:`bogie.phases.run`: the Stage 1 tri-axle tilted nose up, its payload ramped on, then crawling over a wavy
-    road with adaptive steps, where spring-end friction and rolling contacts act). Two processes with the same digest
-    compute the same bits in bogie; with different digests (another C library, another compile target, another
+    (:func:`bogie.steel.phases.run`: the Stage 1 tri-axle tilted nose up, its payload ramped on, then crawling over a
+    wavy road with adaptive steps, where spring-end friction and rolling contacts act). Two processes with the same
+    digest compute the same bits in bogie; with different digests (another C library, another compile target, another
     architecture) their results may differ in the last bits. About 2 ms once the kernels are compiled, once a
     process."""
     digest = hashlib.sha256()

@@ -204,7 +204,7 @@ def matmul(a, b) -> np.ndarray:
 
 
 def solve(a, b) -> np.ndarray:
-    """x with a x = b, by LU with partial pivoting (:mod:`bogie._lu`), every sum in index order [-].
+    """x with a x = b, by LU with partial pivoting (:mod:`bogie.lu`), every sum in index order [-].
 
     ``numpy.linalg.solve`` calls LAPACK, whose BLAS kernels OpenBLAS chooses by the CPU; this gives the same bits on
     every x86-64 machine. ``b`` is a vector or a matrix of columns. Raises ``numpy.linalg.LinAlgError`` for a singular

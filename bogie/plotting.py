@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from bogie.metrics import p
 from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
-from bogie.static import nondimensional_loads
+from bogie.steel.static import nondimensional_loads
 
 #: the reference's Figure 2: chassis slopes 0 to 2 degrees in half-degree steps
 FIGURE2_SLOPES_DEG = (0.0, 0.5, 1.0, 1.5, 2.0)
@@ -129,10 +129,10 @@ def case_history(result, title: str = "", note: str = "", case=None, ours: dict 
     note
         A line printed under the title (e.g. what the reference reported).
     case
-        The :class:`bogie.cases.Case` of the run, if it is one. For a Table 2 run the P1 panel is in newtons, the
+        The :class:`bogie.steel.cases.Case` of the run, if it is one. For a Table 2 run the P1 panel is in newtons, the
         unit of the reference's table, with the reference's figures and ``ours`` (the run's summary) drawn on it.
     ours
-        The run's summary (:func:`bogie.cases.summary`), drawn with the reference's for a Table 2 run.
+        The run's summary (:func:`bogie.steel.cases.summary`), drawn with the reference's for a Table 2 run.
     """
     panels = 3 if "centre_displacement" in result.extras else 2
     fig = new_figure(7.0, 2.0 + 1.9 * panels)
@@ -201,7 +201,7 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
     bogie
         A :class:`bogie.params.Bogie`.
     loads
-        Each axle's static tyre load, front to rear [N] (:func:`bogie.static.tilted_axle_loads`).
+        Each axle's static tyre load, front to rear [N] (:func:`bogie.steel.static.tilted_axle_loads`).
     chassis_tilt
         Pitch of the chassis, nose up positive [rad]: the rear of the drawing lower.
     title

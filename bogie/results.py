@@ -16,7 +16,8 @@ Profile = Callable[[ArrayLike], NDArray[np.float64]]
 
 
 #: the unit of each history a run records, by name without its axle or end index (SI; "-" non-dimensional): the
-#: linear model's (bogie.linear) and the non-linear model's (bogie._nonlinear_layout.RECORD, bogie.nonlinear) extras
+#: linear model's (bogie.steel.linear) and the non-linear model's (bogie.steel.force.layout.RECORD,
+#: bogie.steel.nonlinear) extras
 HISTORY_UNITS: dict[str, str] = {
     "wheel_load": "N", "nondimensional_load": "-", "p": "-", "p1": "-", "chassis_pitch": "rad",
     "centre_displacement": "m", "equaliser_rotation": "rad", "road_height": "m", "axle_displacement": "m",

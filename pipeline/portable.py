@@ -5,7 +5,7 @@ process was started with (``docs/architecture.md``, "The same bits on every mach
 
 * the elementary functions that feed results (samples, roads, tapers) are :mod:`bogie.numerics`'s, which call the C
   library's scalar functions whatever SIMD loops numpy dispatches to on the CPU (AVX-512 or AVX2);
-* the small matrix products and solves are :mod:`bogie.numerics`'s and :mod:`bogie._lu`'s, with their sums in index
+* the small matrix products and solves are :mod:`bogie.numerics`'s and :mod:`bogie.lu`'s, with their sums in index
   order, not BLAS's, whose kernel OpenBLAS picks by the CPU;
 * ``import bogie`` fixes the CPU numba compiles the kernels for (x86-64-v3) before anything is compiled
   (:func:`bogie.numerics.fix_compile_target`).

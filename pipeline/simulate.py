@@ -339,7 +339,7 @@ def compile_kernels(
     suspension, study's protocols; at most :data:`WARM_SAMPLES`) of ``samples`` here, which compiles and caches
     every kernel they use, and says how long that took; the workers then load the cache. Returns the seconds spent
     (0 when the cache was there)."""
-    from bogie.phases import kernel_cached
+    from bogie.steel.phases import kernel_cached
 
     if kernel_cached():
         return 0.0

@@ -9,10 +9,11 @@ import math
 import numpy as np
 import pytest
 
-from bogie import air, nonlinear
+from bogie import air
 from bogie.air import dynamics as air_dynamics
 from bogie.air import static as air_static
 from bogie.road import ISO8608Profile, RampedStep
+from bogie.steel import nonlinear
 
 MAKERS = [air.air_tandem, air.air_triaxle]
 #: allowed wheel-load difference rk4 - lsoda, as a fraction of the static wheel load

@@ -10,12 +10,13 @@ import math
 import numpy as np
 import pytest
 
-from bogie import air, nonlinear, static
+from bogie import air
 from bogie.air import dynamics as air_dynamics
 from bogie.air import static as air_static
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.results import DynamicResult
 from bogie.road import RampedStep
+from bogie.steel import nonlinear, static
 
 PAIRS = [(air.air_tandem, tandem_trrl), (air.air_triaxle, triaxle_stage1)]
 MAKERS = [air.air_tandem, air.air_triaxle]

@@ -10,10 +10,10 @@ from _fleets import PRESETS, fleet
 
 import bogie.fleet as bf
 from bogie import tandem_trrl, triaxle_stage1
-from bogie._nonlinear_pack import design_wheel_loads
 from bogie.bogie_file import FILE_KEYS, BogieFileError, base_bogie, load_bogie, read_bogie_text
 from bogie.params import GRAVITY, PRESET_EQUALISER_STOP, Bogie
-from bogie.static import tilted_axle_loads
+from bogie.steel.force.pack import design_wheel_loads
+from bogie.steel.static import tilted_axle_loads
 
 ROOT = Path(__file__).resolve().parents[1]
 EXAMPLE = ROOT / "bogies" / "example_triaxle.yaml"

@@ -3,9 +3,9 @@
 import numpy as np
 import pytest
 
-from bogie import cases, linear
 from bogie.presets import tandem_trrl
 from bogie.road import RampedStep
+from bogie.steel import cases, linear
 
 #: Table 1's number of steps and time step
 TABLE1_STEPS = {

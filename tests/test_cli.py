@@ -35,7 +35,7 @@ def test_version_is_the_installed_package_version():
 
 
 def test_case_list_names_every_run_with_its_whole_description_wrapped(capsys):
-    from bogie import cases
+    from bogie.steel import cases
 
     assert main(["case", "list"]) == 0
     lines = capsys.readouterr().out.splitlines()
@@ -81,7 +81,7 @@ def test_figures_are_byte_reproducible_in_every_vector_format(tmp_path):
 
 
 def test_result_objects_print_one_line():
-    from bogie import cases
+    from bogie.steel import cases
 
     text = repr(cases.run("L03"))
     assert text.startswith("DynamicResult(status='ok', 2 axles, 201 samples, t 0 to 25 s, wheel loads ")
@@ -101,9 +101,9 @@ def test_a_cases_csv_header_gives_every_columns_unit(tmp_path, capsys):
 
 def test_design_show_prints_the_library_s_static_loads_summing_to_the_group_load(tmp_path, capsys):
     from bogie import triaxle_stage1
-    from bogie._nonlinear_pack import design_wheel_loads
     from bogie.params import GRAVITY
-    from bogie.static import tilted_axle_loads
+    from bogie.steel.force.pack import design_wheel_loads
+    from bogie.steel.static import tilted_axle_loads
 
     out = tmp_path / "tri.png"
     assert main(["design", "show", "triaxle_stage1", "--out", str(out)]) == 0

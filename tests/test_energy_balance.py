@@ -16,9 +16,9 @@ import math
 import numpy as np
 import pytest
 
-from bogie import nonlinear as nl
 from bogie.params import GRAVITY
 from bogie.presets import tandem_trrl, triaxle_stage1
+from bogie.steel import nonlinear as nl
 
 PRESETS = [tandem_trrl, triaxle_stage1]
 

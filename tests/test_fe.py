@@ -4,10 +4,10 @@ import numpy as np
 import pytest
 
 from bogie.cli import main
-from bogie.fe import FrameModel, MeshOptions, beam_local_stiffness, fe_wheel_loads, figure2_points, solve_fe
 from bogie.metrics import p
 from bogie.presets import tandem_trrl, triaxle_stage1
-from bogie.static import nondimensional_loads, solve_static, wheel_loads
+from bogie.steel.fe import FrameModel, MeshOptions, beam_local_stiffness, fe_wheel_loads, figure2_points, solve_fe
+from bogie.steel.static import nondimensional_loads, solve_static, wheel_loads
 
 EA, EI, L, P = 2.0e8, 5.0e4, 1.7, 1.0e3  # [N], [N m^2], [m], [N]
 ALPHA = 0.057  # [m]

@@ -1,6 +1,6 @@
 """The compiled internal force against a plain copy of its former formulas: the same physics to round-off.
 
-The force was made cheaper by computing the same quantities another way (``bogie._nonlinear_core``'s module text):
+The force was made cheaper by computing the same quantities another way (``bogie.steel.force.core``'s module text):
 the leaf end angles' sines and cosines from the chord's unit vector and angle sums instead of atan2 and four
 library calls per spring, and short Taylor series for small angles. :func:`reference_internal` keeps the former
 arithmetic (atan2, library sin and cos, every helper as it was) in plain Python, so these tests fail if a
@@ -16,9 +16,9 @@ from decimal import Decimal, getcontext
 import numpy as np
 import pytest
 
-from bogie import _nonlinear_core as core
-from bogie import nonlinear as nl
 from bogie.presets import tandem_trrl, triaxle_stage1
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import core
 
 #: the largest difference allowed, relative to the scale of each compared quantity
 RELATIVE = 1e-12
@@ -197,8 +197,8 @@ def random_states(bogie, rng, count):
 
     The axles follow the pitched and raised chassis within a few centimetres, so that the springs' deflections stay
     those of a bogie: near operation the chassis pitches by up to 1.7 degrees and the equalisers turn up to 14
-    degrees from it, towards the limits up to 20 and 60 degrees (:func:`bogie.nonlinear.limits`). Road inputs, load
-    factors and histories (slips, deflections, hysteretic forces within the band) are random in both.
+    degrees from it, towards the limits up to 20 and 60 degrees (:func:`bogie.steel.nonlinear.limits`). Road inputs,
+    load factors and histories (slips, deflections, hysteretic forces within the band) are random in both.
     """
     n = bogie.n_axles
     limits = nl.limits(bogie)

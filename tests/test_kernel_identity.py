@@ -27,11 +27,11 @@ import numpy as np
 import pytest
 from _fingerprint import describe, fingerprint
 
-from bogie import _nonlinear_core as core
-from bogie import nonlinear as nl
-from bogie.newmark import MODEL_LINEAR, MODEL_NONLINEAR, consistent_acceleration, integrate
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import core
+from bogie.steel.newmark import MODEL_LINEAR, MODEL_NONLINEAR, consistent_acceleration, integrate
 
 DATA = Path(__file__).parent / "data" / "kernel_identity.npz"
 MACHINE = DATA.with_name("kernel_identity.machine.json")
@@ -95,7 +95,7 @@ def _raw_runs():
             np.zeros(n_rec),
             False,
             False,
-            np.zeros(nl._work_size(tri)),
+            np.zeros(nl.work_size(tri)),
         )
         a0 = consistent_acceleration(mass, f0)
         res[name] = integrate(
@@ -110,11 +110,11 @@ def _raw_runs():
             st.history.copy(),
             inputs.dt,
             inputs.n_steps,
-            nl._tolerance(tri),
+            nl.residual_tolerance(tri),
             max_iter=mi,
             max_halvings=mh,
             n_record=n_rec,
-            work_size=nl._work_size(tri),
+            work_size=nl.work_size(tri),
             limits=nl.limits(tri),
         )
     rng = np.random.default_rng(3)

@@ -3,9 +3,9 @@ import math
 import numpy as np
 import pytest
 
-from bogie import linear, static
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import Flat
+from bogie.steel import linear, static
 
 
 def test_freedoms_and_matrix_properties():

@@ -5,7 +5,7 @@ import pytest
 from scipy.integrate import solve_ivp
 from scipy.linalg import expm
 
-from bogie.newmark import generalized_alpha, integrate_linear
+from bogie.steel.newmark import generalized_alpha, integrate_linear
 
 
 def _three_dof(damped: bool):
@@ -154,7 +154,7 @@ def test_bad_input_is_refused():
 def test_linear_loop_gives_the_general_newton_kernels_histories(rho_inf):
     # integrate_linear factors once and makes one correction per step; the general kernel iterates Newton on the
     # same residual: for a linear system both must give the same numbers
-    from bogie.newmark import MODEL_LINEAR, consistent_acceleration, integrate
+    from bogie.steel.newmark import MODEL_LINEAR, consistent_acceleration, integrate
 
     M, C, K = _three_dof(damped=True)
     M[2, 2] = 0.0  # a massless freedom too
@@ -174,7 +174,7 @@ def test_linear_loop_gives_the_general_newton_kernels_histories(rho_inf):
 
 
 def test_compiled_lu_solves_a_pivoting_system():
-    from bogie._lu import lu_factor, lu_solve
+    from bogie.lu import lu_factor, lu_solve
 
     a = np.array([[0.0, 2.0, 1.0], [1.0, 1.0, 0.0], [3.0, 0.0, 1.0]])
     b = np.array([1.0, 2.0, 3.0])

@@ -5,12 +5,13 @@ import math
 import numpy as np
 import pytest
 
-from bogie import _nonlinear_core as core
-from bogie import cases, linear, metrics
-from bogie import nonlinear as nl
+from bogie import metrics
 from bogie.params import GRAVITY, INHIBITORS, NO_STOP
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep, Sinusoid
+from bogie.steel import cases, linear
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import core
 
 
 def rod_geometry(bogie, u, dh, axle_x):
@@ -290,8 +291,8 @@ def test_record_slices_cover_the_record_once():
 
 
 def test_a_time_step_longer_than_the_phase_is_refused_not_stretched():
-    from bogie import nonlinear
     from bogie.presets import tandem_trrl
+    from bogie.steel import nonlinear
 
     b = tandem_trrl()
     with pytest.raises(ValueError, match=r"dt = 10 is out of range: must be in \(0, duration = 2\] s"):

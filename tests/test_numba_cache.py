@@ -177,8 +177,9 @@ EVERY_KERNEL = textwrap.dedent(
 
     import numpy as np
     import pipeline
-    from bogie import cases, numerics
-    from bogie.static import wheel_loads
+    from bogie import numerics
+    from bogie.steel import cases
+    from bogie.steel.static import wheel_loads
     from bogie.params import triaxle_stage1
     from pipeline.config import load_config
     from pipeline.sample import sample_studies

@@ -57,7 +57,7 @@ def test_every_bogie_module_imports_and_runs_with_the_pipeline_packages_missing(
         for info in pkgutil.walk_packages(bogie.__path__, "bogie."):  # subpackages too (air, fleet, weighings)
             importlib.import_module(info.name)
         from bogie import triaxle_stage1
-        from bogie.static import wheel_loads
+        from bogie.steel.static import wheel_loads
         loads = wheel_loads(triaxle_stage1(), 0.057, 0.0174533)
         assert loads[-1] > loads[0], loads  # nose up: the rear axle heaviest
         print("ok")

@@ -1,15 +1,15 @@
-"""bogie.phases: a weighing's phases in one compiled call, fixed or adaptive steps, only the readings kept."""
+"""bogie.steel.phases: a weighing's phases in one compiled call, fixed or adaptive steps, only the readings kept."""
 
 import math
 
 import numpy as np
 import pytest
 
-from bogie import nonlinear as nl
-from bogie import phases as ph
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import ISO8608Profile, Sinusoid
 from bogie.road.wim import sensor_reading
+from bogie.steel import nonlinear as nl
+from bogie.steel import phases as ph
 
 
 @pytest.fixture(scope="module")

@@ -11,11 +11,12 @@ import math
 import numpy as np
 import pytest
 
-from bogie import linear, metrics, static
-from bogie import nonlinear as nl
+from bogie import metrics
 from bogie.params import INHIBITORS, NO_STOP, Bogie
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep
+from bogie.steel import linear, static
+from bogie.steel import nonlinear as nl
 
 MAKERS = [tandem_trrl, triaxle_stage1]
 
@@ -186,7 +187,7 @@ def _fields(bogie):
 
 def test_the_rods_derivatives_are_those_of_its_position():
     # the rod's generalised forces use dx/dtheta_c and dx/dz_i: check them against central differences of x
-    from bogie import _nonlinear_core as core
+    from bogie.steel.force import core
 
     xi, zeta, length, dh = 6.19, -0.3, 0.5, 0.14
     for theta, z in ((0.0, 0.0), (0.0175, -0.02), (-0.03, 0.05)):

@@ -5,19 +5,20 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from bogie import nonlinear as nl
 from bogie.params import Bogie, equaliser_arm_changes, with_equaliser_arms
 from bogie.presets import preset, preset_fields
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import pack
 
 
 @pytest.mark.parametrize("name", ["tandem_trrl", "triaxle_stage1"])
 def test_relaxed_pack_and_drive_row(name):
     bogie = preset(name, chassis_tilt=0.01)
     relaxed = nl.pack(bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0))
-    mass, data_f, data_i = nl._packed(bogie)
-    data_f[nl._FRICTION_SLOTS] = 0.0
+    mass, data_f, data_i = nl.cached_pack(bogie)
+    data_f[nl.FRICTION_SLOTS] = 0.0
     assert data_f.tobytes() == relaxed[1].tobytes() and np.array_equal(data_i, relaxed[2])
-    assert nl._packed(bogie)[1].tobytes() == nl.pack(bogie)[1].tobytes()  # the cached copy was not changed
+    assert nl.cached_pack(bogie)[1].tobytes() == nl.pack(bogie)[1].tobytes()  # the cached copy was not changed
     t = np.arange(50) * 0.01
     inputs = nl.Inputs(0.01, np.sin(t)[:, None] * np.ones(bogie.n_axles), np.cos(t)[:, None] * np.ones(bogie.n_axles),
                        0.5 + 0.1 * t, 0.002 * t)  # fmt: skip
@@ -69,21 +70,21 @@ def test_iso8608_grid_heights_are_the_profiles_own_at_the_grid_points():
 
 def test_one_cache_of_a_bogies_pack_serves_the_equilibrium_and_the_phases():
     """issue 29: nonlinear and phases kept one id()-keyed cache each of the same pack; now nl.constants is the one."""
-    from bogie import phases
+    from bogie.steel import phases
 
     assert not hasattr(phases, "_CONSTANTS") and not hasattr(nl, "_PACKED")
     bogie = preset("tandem_trrl", chassis_tilt=0.01)
     c = nl.constants(bogie)
     assert nl.constants(bogie) is c
-    assert nl._CONSTANTS[id(bogie)][0] is bogie  # the entry holds its bogie: its id() cannot pass to another object
-    mass, data_f, data_i = nl._packed(bogie)
+    assert pack._CONSTANTS[id(bogie)][0] is bogie  # the entry holds its bogie: its id() cannot pass to another object
+    mass, data_f, data_i = nl.cached_pack(bogie)
     packed = nl.pack(bogie)
     assert data_f.tobytes() == c.data_f.tobytes() == packed[1].tobytes() and data_f is not c.data_f
     assert np.array_equal(mass, packed[0]) and np.array_equal(data_i, packed[2])
     data_f[:] = 0.0
     assert nl.constants(bogie).data_f.tobytes() == packed[1].tobytes()  # the equilibrium's copy, not the cache
-    levers = nl._levers(bogie)
-    assert c.r_tol.tobytes() == nl._tolerance(bogie).tobytes() == nl._tolerance(bogie, levers).tobytes()
+    levers = pack._levers(bogie)
+    assert c.r_tol.tobytes() == nl.residual_tolerance(bogie).tobytes() == nl.residual_tolerance(bogie, levers).tobytes()
     assert c.u_limit.tobytes() == nl.limits(bogie).tobytes()
     twin = preset("tandem_trrl", chassis_tilt=0.01)  # equal, another object: an entry of its own, never by equality
     assert twin == bogie and nl.constants(twin) is not c

@@ -5,11 +5,11 @@ import math
 import numpy as np
 import pytest
 
-from bogie import _nonlinear_core as core
-from bogie import nonlinear as nl
 from bogie.params import INHIBITORS
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.road import RampedStep, axle_heights
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import core
 
 BAND = 2000.0  # [N]
 DECAY = 0.005  # [m]

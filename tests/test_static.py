@@ -7,7 +7,7 @@ from hypothesis import strategies as st
 
 from bogie.metrics import p
 from bogie.presets import tandem_trrl, triaxle_stage1
-from bogie.static import equation1_mapping, nondimensional_loads, solve_static, wheel_loads
+from bogie.steel.static import equation1_mapping, nondimensional_loads, solve_static, wheel_loads
 
 q_values = st.floats(min_value=0.0, max_value=1e4, allow_nan=False)
 d_values = st.floats(min_value=-5.0, max_value=5.0, allow_nan=False)

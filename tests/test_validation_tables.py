@@ -1,4 +1,4 @@
-"""docs/validation.md's tables are what tools/validation_tables.py computes from bogie.cases now (issue 12).
+"""docs/validation.md's tables are what tools/validation_tables.py computes from bogie.steel.cases now (issue 12).
 
 Running every named case takes about a second once numba has compiled the kernels (which the other tests compile
 anyway), so the check runs with the rest of the suite instead of being marked slow.
@@ -10,7 +10,7 @@ from pathlib import Path
 
 import pytest
 
-from bogie import cases
+from bogie.steel import cases
 
 ROOT = Path(__file__).resolve().parents[1]
 _spec = importlib.util.spec_from_file_location("validation_tables", ROOT / "tools" / "validation_tables.py")

@@ -8,9 +8,10 @@ Run: ``python tools/house.py [--json]``. Reads the source only (``ast``); import
   counts them (``_phases_step._solve_step`` 109).
 - *Private import*: ``from M import _name`` of a project module ``M`` other than the importing one (a module's own
   underscore kernel counts: the issue's 144 are "across files"); *across packages* when ``M``'s package is not the
-  importer's, and then any name of a private module (``from bogie._phases_core import run_phases`` in bogie.fleet)
+  importer's, and then any name of a private module (``from bogie.steel.phases._core import run_phases`` in bogie.fleet)
   counts too.
 - *Circle*: a strongly connected component of more than one module in the graph of imports between project modules
+  (importing ``a.b.c`` from outside ``a.b`` is an edge to ``a.b`` too: its ``__init__.py`` runs first)
   (every import, lazy ones inside functions included, but for a module ``__getattr__``'s: a deprecation shim).
 """
 
@@ -51,6 +52,15 @@ def _resolve(node: ast.ImportFrom, name: str, path: Path) -> str:
     return ".".join([*base, node.module] if node.module else base)
 
 
+def _packages_run(dest: str, importer: str, mods: dict[str, Path]) -> set[str]:
+    """The packages whose ``__init__.py`` importing ``dest`` runs first, but for those enclosing the importer (its
+    own package ran before it did): importing ``a.b.c`` from outside ``a.b`` runs ``a/b/__init__.py``, so a heavy
+    package ``__init__`` that imports back makes a circle the plain edges do not show."""
+    parts = dest.split(".")
+    outer = {".".join(parts[:k]) for k in range(1, len(parts))}
+    return {p for p in outer if p in mods and not (importer == p or importer.startswith(p + "."))}
+
+
 def measure(root: Path = ROOT) -> dict:
     mods = modules(root)
     lines: dict[str, int] = defaultdict(int)
@@ -80,6 +90,7 @@ def measure(root: Path = ROOT) -> dict:
                     dest = sub if sub in mods else target
                     if dest in mods and dest != name:
                         graph[name].add(dest)
+                        graph[name] |= _packages_run(dest, name, mods)
                     if dest not in mods or dest == name:
                         continue
                     private_name = alias.name.startswith("_")
@@ -91,6 +102,7 @@ def measure(root: Path = ROOT) -> dict:
                 for alias in node.names:
                     if alias.name in mods and alias.name != name:
                         graph[name].add(alias.name)
+                        graph[name] |= _packages_run(alias.name, name, mods)
     return {
         "lines_per_package": dict(sorted(lines.items())),
         "modules_over_500": sorted(long_modules, reverse=True),

@@ -1,13 +1,13 @@
-"""Regenerate the tables of ``docs/validation.md`` from :mod:`bogie.cases` (issue 12, "After the changes").
+"""Regenerate the tables of ``docs/validation.md`` from :mod:`bogie.steel.cases` (issue 12, "After the changes").
 
 ``python tools/validation_tables.py`` (or ``make validation-tables``) runs every named case and rewrites each table
 between its markers, ``<!-- table:NAME begin -->`` and ``<!-- table:NAME end -->``, leaving the rest of the page
 alone; ``--check`` writes nothing and exits with 1, naming the rows that differ, if the page's tables are not what
 the cases give now. Run it after any change to the physics: the tables were once written by hand and went stale.
 
-Every "ours" figure is computed here, from the cases exactly as :mod:`bogie.cases` defines them (no overrides);
-every reference figure and run setting comes from the case records (:data:`bogie.cases.TABLE1`,
-:data:`bogie.cases.TABLE2`), never retyped. Comments quote only figures computed here. Figures are given to three
+Every "ours" figure is computed here, from the cases exactly as :mod:`bogie.steel.cases` defines them (no overrides);
+every reference figure and run setting comes from the case records (:data:`bogie.steel.cases.TABLE1`,
+:data:`bogie.steel.cases.TABLE2`), never retyped. Comments quote only figures computed here. Figures are given to three
 significant figures, Table 2's loads in newtons to four as ``bogie case`` prints them, ratios to two, the
 reference's as its records hold them; the same cases give the same bytes.
 """
@@ -24,8 +24,8 @@ from pathlib import Path
 
 import numpy as np
 
-from bogie import cases, linear
 from bogie.road import RampedStep
+from bogie.steel import cases, linear
 
 DOC = Path(__file__).resolve().parents[1] / "docs" / "validation.md"
 #: the finer time step of Table 1's convergence column, as a fraction of Table 1's
@@ -108,7 +108,7 @@ def _rocking_hz(name: str) -> float:
 
 
 def compute() -> Figures:
-    """Run every case of :mod:`bogie.cases` once, and Table 1's runs again at the finer time step."""
+    """Run every case of :mod:`bogie.steel.cases` once, and Table 1's runs again at the finer time step."""
     results = {name: cases.run(name) for name in cases.names()}
     return Figures(
         summary={name: cases.summary(name, result) for name, result in results.items()},
@@ -267,7 +267,7 @@ def differences(text: str, tables: dict[str, str]) -> list[str]:
             rows.insert(0, "(header)")
         out.append(f"table {name}: rows that differ: {', '.join(rows) or '(blank lines only)'}")
         out += difflib.unified_diff(lines_old, lines_new, f"{DOC.name} ({name}, committed)",
-                                    f"{DOC.name} ({name}, from bogie.cases)", n=0, lineterm="")  # fmt: skip
+                                    f"{DOC.name} ({name}, from bogie.steel.cases)", n=0, lineterm="")  # fmt: skip
     return out
 
 
@@ -285,7 +285,7 @@ def main(argv: Sequence[str] | None = None) -> int:
             print("\n".join(diff))
             print(f"{args.doc}: the tables are stale; `make validation-tables` rewrites them", file=sys.stderr)
             return 1
-        print(f"{args.doc}: every table matches bogie.cases")
+        print(f"{args.doc}: every table matches bogie.steel.cases")
         return 0
     new = render(text, tables)
     if new != text:

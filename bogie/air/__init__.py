@@ -3,7 +3,7 @@
 Per axle a bag (effective area changing linearly with height, volume with dV/de = A_e, a barotropic polytropic
 gas whose mass is the state), the bags of the side connected to one line through equal linear restrictions, a
 levelling valve with a dead band, a viscous damper per axle, the steel model's tyres and radius rods, chassis pitch
-about the king pin, payload and tilt as in :mod:`bogie.nonlinear`. The derivation is ``docs/air-suspension.md``.
+about the king pin, payload and tilt as in :mod:`bogie.steel.nonlinear`. The derivation is ``docs/air-suspension.md``.
 
 This module holds the parameters (:class:`AirBogie`, validated), the bag's and the gas's relations, the
 closed-form equalisation time constants and the presets; :mod:`bogie.air.static` the state at rest and

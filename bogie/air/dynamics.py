@@ -2,7 +2,7 @@
 
 The state is the chassis pitch, the axle displacements, their rates, the air in each bag and the running
 integrals of the dissipations and works; a compiled RK4 (:mod:`bogie.air._core`, the default) or scipy's LSODA
-(the reference) integrates it over :class:`bogie.nonlinear.Inputs` (``docs/air-suspension.md``, "Numerics").
+(the reference) integrates it over :class:`bogie.steel.nonlinear.Inputs` (``docs/air-suspension.md``, "Numerics").
 The result is a :class:`~bogie.results.DynamicResult`, as the steel model's.
 """
 
@@ -17,9 +17,9 @@ from numpy.typing import ArrayLike, NDArray
 from bogie import air
 from bogie.air import _core as _air_core
 from bogie.air import static as air_static
-from bogie.nonlinear import Inputs
 from bogie.params import GRAVITY
 from bogie.results import DynamicResult
+from bogie.steel.nonlinear import Inputs
 
 
 @dataclass(frozen=True, repr=False)
@@ -228,7 +228,7 @@ def simulate(
     rtol: float = 1e-8,
     method: str = "rk4",
 ) -> AirResult:
-    """Integrate the air-sprung group over ``inputs`` (:func:`bogie.nonlinear.road_inputs`, ``hold``, ...).
+    """Integrate the air-sprung group over ``inputs`` (:func:`bogie.steel.nonlinear.road_inputs`, ``hold``, ...).
 
     Parameters
     ----------

@@ -12,7 +12,7 @@ and the sensor's own error, a factor common to the pass's axles and each axle's 
 ``sensor_seed`` (:func:`bogie.road.wim.sensor_factors`). With no site, a point sensor and sensor ``none`` this is the
 instantaneous wheel force on the sampled road. Sources and the effect of each part: ``docs/wim-site.md``.
 
-Both run the full non-linear model: :mod:`bogie.nonlinear` for a steel-equalised group, :mod:`bogie.air.dynamics`
+Both run the full non-linear model: :mod:`bogie.steel.nonlinear` for a steel-equalised group, :mod:`bogie.air.dynamics`
 for an air-sprung one (:class:`bogie.air.AirBogie`: the same loading, roads, site, sensor and readings; its bags
 start levelled and equalised, its valve and pipe work throughout). One side of the bogie is modelled; axle loads are
 twice the wheel loads (both sides alike). :func:`weigh` returns one flat row of results, never raises for a
@@ -31,14 +31,15 @@ from typing import Any
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import nonlinear, numerics
-from bogie import phases as phases_mod
+from bogie import numerics
 from bogie.air import AirBogie
 from bogie.air import dynamics as air_dynamics
 from bogie.fleet.constants import READ_TIME, TARE_FRACTION
 from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
 from bogie.params import Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile, wim
+from bogie.steel import nonlinear
+from bogie.steel import phases as phases_mod
 
 #: length over which the random approach road blends into the level weighbridge or starts from level [m]
 BLEND_LENGTH = 1.0
@@ -142,7 +143,7 @@ class Weighing:
     chassis_pitch
         Chassis pitch at the end [rad], nose up positive.
     run
-        A steel group's run of :func:`bogie.phases.run`: each phase's work (steps, force evaluations, ...) and, if
+        A steel group's run of :func:`bogie.steel.phases.run`: each phase's work (steps, force evaluations, ...) and, if
         asked for, the history of the wheel loads; None for an air-sprung group, which :mod:`bogie.air.dynamics`
         steps.
     """
@@ -204,8 +205,8 @@ def _static_table(road_class: str, road_seed: int, approach_length: float, group
 def static_phases(
     bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: StaticProtocol
 ) -> list[phases_mod.Phase]:
-    """The static protocol's phases (:mod:`bogie.phases`): the load ramp from the tare, the crawl over the approach
-    road onto the weighbridge, the settle with its reading over the last :data:`READ_TIME`."""
+    """The static protocol's phases (:mod:`bogie.steel.phases`): the load ramp from the tare, the crawl over the
+    approach road onto the weighbridge, the settle with its reading over the last :data:`READ_TIME`."""
     dt = spec.dt
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     distance = _crawl_distance(spec.approach_length, group_length)
@@ -236,7 +237,7 @@ def static_weighbridge(
 ) -> Weighing:
     """Run the static protocol; the reading is each wheel's mean load over the last :data:`READ_TIME` [N].
 
-    ``history``: keep a steel group's wheel loads at every step in ``Weighing.run`` (:func:`bogie.phases.run`).
+    ``history``: keep a steel group's wheel loads at every step in ``Weighing.run`` (:func:`bogie.steel.phases.run`).
     """
     if isinstance(bogie, AirBogie):
         return _air_static(bogie, payload_fraction, road_class, road_seed, spec)
@@ -332,7 +333,7 @@ def _wim_table(
 def wim_phases(
     bogie: Bogie, payload_fraction: float, road_class: str, road_seed: int, spec: WimProtocol
 ) -> list[phases_mod.Phase]:
-    """The WIM protocol's one phase (:mod:`bogie.phases`): the pass over the approach road and the site at fixed
+    """The WIM protocol's one phase (:mod:`bogie.steel.phases`): the pass over the approach road and the site at fixed
     steps of ``spec.dt``, with the sensor's reading of each tyre's passage."""
     group_length = bogie.axle_x[-1] - bogie.axle_x[0]
     table, duration, crossing, half, flat = _wim_table(road_class, road_seed, spec, group_length)

@@ -61,8 +61,9 @@ STUDY = textwrap.dedent(
     import hashlib, math, sys
     import numpy as np
     import pipeline
-    from bogie import cases, fe, numerics
-    from bogie.static import nondimensional_loads, wheel_loads
+    from bogie import numerics
+    from bogie.steel import cases, fe
+    from bogie.steel.static import nondimensional_loads, wheel_loads
     from bogie.params import triaxle_stage1
     from pipeline.config import load_config
     from pipeline.sample import sample_studies

@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bogie import nonlinear
 from bogie.fleet.protocols import wim_pass
 from bogie.fleet.sampling import bogie_from_sample
 from bogie.fleet.weighing import weigh
 from bogie.road.wim import sensor_factors
+from bogie.steel import nonlinear
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
 

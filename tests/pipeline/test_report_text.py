@@ -418,7 +418,7 @@ def test_reference_captions():
         "2.47 % of the largest p; agreement asks within 10 %)."
     )
     assert paras[1].startswith('What the reference reported: the curves of Equations 1 and 2 show "that')
-    assert "with α = 57 mm (bogie.static)" in paras[2]
+    assert "with α = 57 mm (bogie.steel.static)" in paras[2]
     assert "at q = 4.3: p = 0.012, 0.500 for slopes 0, 0.5° against 0.000, 0.500 from Equation 1." in paras[2]
     # L01 over a Table 1 of 0.25 (L01) and 0.2 (L03): ours 0.1234 and 0.06, so L03 / L01 = 0.486 (theirs 0.8) and
     # our peak is 0.49 x theirs: the finding holds, the size is within a factor of 2
@@ -438,7 +438,7 @@ def test_reference_captions():
     assert paras[1].endswith("Our peak is 0.49 x the reference's, outside a factor of 2: the reference's geometry is "
                              "lost (below), so only the trend is held to it.")  # fmt: skip
     assert paras[2] == "What the reference reported (Table 1, Figures 5-8): peak p = 0.25, P1 = 0.1; quoted words"
-    assert 'Ours (bogie.cases.run("L01"): the Stage 3' in paras[3]
+    assert 'Ours (bogie.steel.cases.run("L01"): the Stage 3' in paras[3]
     assert "peak p = 0.123, P1 = 0.050, 0.49 times the reference's p." in paras[3]
     refs = {"N10": (1200.4, 800.0), "N19": (300.0, 250.0), "N20": (1000.0, 900.0), "N21": (500.0, 400.0)}
     front = {"N10": 1000.0, "N19": 250.0, "N20": 1000.0, "N21": 333.0}

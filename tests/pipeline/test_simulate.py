@@ -526,8 +526,8 @@ def test_a_worker_that_computes_other_bits_is_refused_and_writes_nothing(config,
 def test_numbas_cache_is_found_where_its_locator_puts_a_modules_index(tmp_path):
     import hashlib
 
-    from bogie import _phases_core
     from bogie.numba_cache import is_cached
+    from bogie.steel.phases import _core as _phases_core
 
     parent = Path(_phases_core.__file__).resolve().parent
     sub = tmp_path / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"

@@ -12,11 +12,12 @@ from typing import Any
 import numpy as np
 from matplotlib.figure import Figure
 
-from bogie import cases, fe, metrics
+from bogie import metrics
 from bogie.plotting import case_history, figure2
 from bogie.presets import triaxle_stage1
 from bogie.results import DynamicResult
-from bogie.static import nondimensional_loads
+from bogie.steel import cases, fe
+from bogie.steel.static import nondimensional_loads
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import adopt_page, new_page, text_block

@@ -1,12 +1,12 @@
 """Compiled phases of a weighing (numba): the static equilibrium to start from and a sequence of phases, each
-stepped with fixed or adaptive time steps, in one call (:mod:`bogie.phases` is the Python layer).
+stepped with fixed or adaptive time steps, in one call (:mod:`bogie.steel.phases` is the Python layer).
 
 A phase's drive is computed at any time inside the kernel instead of being read from a table of rows: the payload
 load factor follows a cosine ramp in closed form, the king pin height is constant, and the road height under each
 axle is read from a uniform table of road heights (linear between its points, so its rate is exactly the table's
 slope times the speed). A phase is stepped by the same Newmark / generalised-alpha residual and Newton iteration as
-:mod:`bogie._newmark_core` (its inlined helpers are reused), either with a fixed step, or with steps chosen by the
-local error estimate of Zienkiewicz and Xie [1]_ and a PI step-size controller [2]_, rounded down to a geometric
+:mod:`bogie.steel.newmark.kernels` (its inlined helpers are reused), either with a fixed step, or with steps chosen by
+the local error estimate of Zienkiewicz and Xie [1]_ and a PI step-size controller [2]_, rounded down to a geometric
 ladder of steps. The iteration matrices are kept as inverses, one for each step they were formed for, and dropped
 when the tangent is formed anew: a step that stays on its rung (most do, where the controller's steps change by a
 few percent at every step) reuses its matrix, and a Newton solve is a matrix-vector product. Only what the
@@ -14,15 +14,16 @@ weighings read is kept: the state at the end, the time-mean tyre loads over a wi
 reads as the tyres pass over it, and whether an equaliser bore on its bump stop in the window. Equations:
 ``docs/phases.md``.
 
-The kernel is split by its parts (issue 29): :mod:`bogie._phases_layout` the layout of a phase row
+The kernel is split by its parts (issue 29): :mod:`bogie.steel.phases._layout` the layout of a phase row
 (``phases[p]``, floats; :data:`PHASE_COLUMNS` names them, the ``P_*`` constants index them), of the statistics and
-of the records, :mod:`bogie._phases_step` the drive and one step's Newton iteration, :mod:`bogie._phases_readings`
-the readings, :mod:`bogie._phases_adaptive` the adaptive step control, :mod:`bogie._equilibrium_core` the
-equilibrium to start from; this module the loop over a phase's steps (fixed steps here) and the run. The kernel's
-functions pass their arrays grouped in records, tuples unpacked by name (the model, the phase's course, the state,
-the trial state, the saved state, Newton's work space and the phase's outputs): see the comment block "the records a
-phase is stepped with" in :mod:`bogie._phases_layout`, and its ``J_*`` and ``C_*`` constants for the solver's memory
-and counts. Every name of the layout and the controller's constants are importable from here as before.
+of the records, :mod:`bogie.steel.phases._step` the drive and one step's Newton iteration,
+:mod:`bogie.steel.phases._readings` the readings, :mod:`bogie.steel.phases._adaptive` the adaptive step control,
+:mod:`bogie.steel.force.equilibrium` the equilibrium to start from; this module the loop over a phase's steps (fixed
+steps here) and the run. The kernel's functions pass their arrays grouped in records, tuples unpacked by name (the
+model, the phase's course, the state, the trial state, the saved state, Newton's work space and the phase's outputs):
+see the comment block "the records a phase is stepped with" in :mod:`bogie.steel.phases._layout`, and its ``J_*`` and
+``C_*`` constants for the solver's memory and counts. Every name of the layout and the controller's constants are
+importable from here as before.
 
 References
 ----------
@@ -38,16 +39,16 @@ from __future__ import annotations
 import numpy as np
 from numba import njit
 
-from bogie import _nonlinear_core as nlc
-from bogie._equilibrium_core import relaxed_equilibrium
-from bogie._newmark_core import (  # noqa: F401 - the statuses run_phases returns, importable from here as before
+from bogie.steel.force import core as nlc
+from bogie.steel.force.equilibrium import relaxed_equilibrium
+from bogie.steel.newmark.kernels import (  # noqa: F401 - the statuses run_phases returns, importable from here as before
     STATUS_NO_CONVERGENCE,
     STATUS_NOT_FINITE,
     STATUS_OK,
     STATUS_OUT_OF_RANGE,
     STATUS_SINGULAR,
 )
-from bogie._phases_adaptive import (  # noqa: F401 - the controller's constants, importable from here as before
+from bogie.steel.phases._adaptive import (  # noqa: F401 - the controller's constants, importable from here as before
     _LOG2_MAX_GROWTH,
     _LOG2_MIN_SHRINK,
     _LOG2_MIN_STEP,
@@ -62,8 +63,8 @@ from bogie._phases_adaptive import (  # noqa: F401 - the controller's constants,
     SAFETY,
     _adaptive_steps,
 )
-from bogie._phases_layout import *  # noqa: F403 - the layout, importable from here as before
-from bogie._phases_layout import (
+from bogie.steel.phases._layout import *  # noqa: F403 - the layout, importable from here as before
+from bogie.steel.phases._layout import (
     C_EVALS,
     C_FACTORS,
     C_TANGENTS,
@@ -88,15 +89,15 @@ from bogie._phases_layout import (
     S_UNCHECKED,
     STATUS_NO_EQUILIBRIUM,
 )
-from bogie._phases_readings import _accepted, _trace
-from bogie._phases_step import _commit, _drive, _keep_correction, _solve_step
+from bogie.steel.phases._readings import _accepted, _trace
+from bogie.steel.phases._step import _commit, _drive, _keep_correction, _solve_step
 
 
 # ---- a phase ---------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _phase_loop(model, course, state, trial, saved, newton, out, t_offset):
     """Step one phase (``course``) from ``state``; returns (status, time reached [s], |r|, on_stop). The records:
-    see "the records a phase is stepped with" in :mod:`bogie._phases_layout`; ``t_offset`` [s] is the phase's
+    see "the records a phase is stepped with" in :mod:`bogie.steel.phases._layout`; ``t_offset`` [s] is the phase's
     start in the trace.
 
     Fixed steps (:func:`_fixed_steps`): round(duration / dt) steps of equal length; a step whose Newton iteration
@@ -124,7 +125,7 @@ def _phase_loop(model, course, state, trial, saved, newton, out, t_offset):
 
 @njit(cache=True, _nrt=False)
 def _fixed_steps(model, course, state, trial, saved, newton, out, t_offset):
-    """The fixed steps of a phase (:func:`_phase_loop`): those of a table of rows at t = k dt (bogie.nonlinear's
+    """The fixed steps of a phase (:func:`_phase_loop`): those of a table of rows at t = k dt (bogie.steel.nonlinear's
     inputs), round(duration / dt) of them. A step whose Newton iteration fails is taken again from its start (kept in
     ``saved``) as 2, 4, ... sub-steps (2^:data:`MAX_HALVINGS` at most), the sub-steps of 2^j with matrix j: a step is
     2^level sub-steps, level 0 the step itself, all solved at one place (a second call of the inlined
@@ -174,7 +175,7 @@ def _fixed_steps(model, course, state, trial, saved, newton, out, t_offset):
 @njit(cache=True)
 def _work_records(n, n_axles, n_hist, n_record, work_size, check_every):
     """The records a run's steps work in (see "the records a phase is stepped with" in
-    :mod:`bogie._phases_layout`), zeros but for
+    :mod:`bogie.steel.phases._layout`), zeros but for
     jst[:data:`J_CHECK_EVERY`]: (trial, saved, newton, loads0, acc, trace_count)."""
     trial = (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n_hist))
     saved = (np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n), np.zeros(n_hist))
@@ -212,7 +213,7 @@ def run_phases(
     """Run ``phases`` in order from (u, v, a, hist), or with ``at_rest`` from the static equilibrium at the first
     phase's start with the friction relaxed (written into u, hist; v = a = 0 there, then a from M a = -f).
 
-    ``mass`` is the mass matrix, diagonal (:func:`bogie.nonlinear.pack` makes it so). ``readings`` (n_phases,
+    ``mass`` is the mass matrix, diagonal (:func:`bogie.steel.force.pack` makes it so). ``readings`` (n_phases,
     2 n_axles) receives each phase's reading (mean tyre loads, or the sensor's integrals of
     F o and o), ``on_stop`` whether an equaliser bore on its stop in the phase's window, ``stats`` the phase's
     :data:`STAT_COLUMNS`, ``trace`` the rows of :func:`_trace` at the start and after every accepted step while

@@ -3,11 +3,11 @@
 A weighbridge or a weigh-in-motion (WIM) reading needs a few numbers from a simulation, not its history: the
 state at the end, the mean tyre loads over a window, the loads a WIM sensor reads as the tyres pass. :func:`run`
 steps a list of :class:`Phase` (a load ramp, a pass over a road, a hold) from rest or from a given state in one
-call of :func:`bogie._phases_core.run_phases`, which computes each phase's drive at any time (the load ramp in
+call of :func:`bogie.steel.phases._core.run_phases`, which computes each phase's drive at any time (the load ramp in
 closed form, the road from a :class:`RoadTable`) and keeps only those readings. A phase is stepped with fixed steps
-of ``dt`` (the scheme of :func:`bogie.nonlinear.simulate`) or, given a ``tolerance``, with adaptive steps under
+of ``dt`` (the scheme of :func:`bogie.steel.nonlinear.simulate`) or, given a ``tolerance``, with adaptive steps under
 control of their local error: long where nothing changes fast, short where the road or a friction contact does.
-Equations, the controller and the accuracy record: ``docs/phases.md``. :func:`bogie.nonlinear.simulate` remains
+Equations, the controller and the accuracy record: ``docs/phases.md``. :func:`bogie.steel.nonlinear.simulate` remains
 the tool for time histories.
 """
 
@@ -19,13 +19,13 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import NDArray
 
-from bogie import _nonlinear_core as core
-from bogie import _phases_core as pc
-from bogie import nonlinear as nl
-from bogie.newmark import _STATUS_TEXT, consistent_acceleration
 from bogie.params import Bogie
 from bogie.ranges import check_positive
 from bogie.results import Profile
+from bogie.steel import nonlinear as nl
+from bogie.steel.force import core
+from bogie.steel.newmark import STATUS_TEXT, consistent_acceleration
+from bogie.steel.phases import _core as pc
 
 __all__ = ["MeanReading", "Phase", "PhaseOutcome", "PhasesRun", "RoadTable", "SensorReading", "kernel_cached", "run"]
 
@@ -38,10 +38,10 @@ def kernel_cached() -> bool:
     return is_cached(pc.__file__, function="run_phases")
 
 
-#: Newton iterations per step and the residual tolerance are those of :func:`bogie.nonlinear.simulate`
+#: Newton iterations per step and the residual tolerance are those of :func:`bogie.steel.nonlinear.simulate`
 MAX_ITER = 25
 _STATUS_TEXT = {
-    **_STATUS_TEXT,
+    **STATUS_TEXT,
     pc.STATUS_STEP_TOO_SMALL: f"the adaptive step fell below {pc.MIN_STEP:g} s",
     pc.STATUS_NO_EQUILIBRIUM: "no static equilibrium to start from",
 }
@@ -122,7 +122,7 @@ class Phase:
         [s].
     load_factor
         Payload load factor [-], constant, or (start, end) for a cosine ramp over the phase (as
-        :func:`bogie.nonlinear.load_ramp`).
+        :func:`bogie.steel.nonlinear.load_ramp`).
     road
         Road under the axles (a :class:`RoadTable`), or None for a level road.
     speed
@@ -231,7 +231,7 @@ class PhasesRun:
         return self.status == "ok"
 
 
-_RELAXED_SLOTS = np.asarray(nl._FRICTION_SLOTS, dtype=np.int64)
+_RELAXED_SLOTS = np.asarray(nl.FRICTION_SLOTS, dtype=np.int64)
 _SCHEME = (0.25, 0.5, 0.0, 0.0)  # Newmark's average acceleration: (beta, gamma, alpha_m, alpha_f)
 
 
@@ -284,7 +284,7 @@ def _rows(phases: list[Phase], c: nl.Constants) -> tuple[NDArray[np.float64], ND
 
 
 def _first_drive_row(phase: Phase, c: nl.Constants, n: int) -> NDArray[np.float64]:
-    """The drive row at a phase's start, as :func:`bogie._phases_core._drive` computes it (for the Python
+    """The drive row at a phase's start, as :func:`bogie.steel.phases._core._drive` computes it (for the Python
     equilibrium the kernel falls back on)."""
     drv = np.zeros(2 * n + 2)
     rows, road_h = _rows([phase], c)
@@ -309,7 +309,7 @@ def run(
         The phases, at least one.
     initial
         The state to start from; None: at rest, in the static equilibrium at the first phase's start with the
-        friction relaxed (:func:`bogie.nonlinear.equilibrium`; its continuation from the design state if Newton
+        friction relaxed (:func:`bogie.steel.force.equilibrium`; its continuation from the design state if Newton
         alone does not reach one).
     history
         Also return the wheel loads and chassis pitch at every accepted step (for plots and checks; the weighings
@@ -317,13 +317,14 @@ def run(
     check_every
         A step's first Newton correction is accepted without evaluating its residual where the contraction measured
         at the last checked step puts it far inside the tolerance, and checked at least every ``check_every`` steps
-        (``docs/phases.md``); 1 checks every step, as :func:`bogie.nonlinear.simulate` does.
+        (``docs/phases.md``); 1 checks every step, as :func:`bogie.steel.nonlinear.simulate` does.
 
     Returns
     -------
     PhasesRun
         "failed" with the solver's message (the phase, its time and the residual) if a step could not be solved;
-        never NaN. Raises what :func:`bogie.nonlinear.equilibrium` raises if there is no equilibrium to start from.
+        never NaN. Raises what :func:`bogie.steel.force.equilibrium` raises if there is no equilibrium to start
+        from.
     """
     phases = list(phases)
     if not phases:
@@ -359,7 +360,7 @@ def _start(bogie: Bogie, initial: nl.State | None) -> tuple[np.ndarray, ...]:
     n = bogie.n_axles
     if initial is None:
         return np.zeros(2 * n), np.zeros(2 * n), np.zeros(2 * n), np.zeros(core.history_length(n))
-    hist = nl._history(bogie, initial.history, "initial.history")
+    hist = nl.checked_history(bogie, initial.history, "initial.history")
     u, v, a = (np.array(x, dtype=float) for x in (initial.u, initial.v, initial.a))
     return u, v, a, hist
 
@@ -402,7 +403,7 @@ def _run_kernel(
 
 
 def _continued_start(bogie: Bogie, first: Phase, c: nl.Constants) -> nl.State:
-    """The state at rest at the first phase's start by :func:`bogie.nonlinear.equilibrium` (its continuation from
+    """The state at rest at the first phase's start by :func:`bogie.steel.force.equilibrium` (its continuation from
     the design state), with the acceleration consistent with its forces."""
     n = bogie.n_axles
     ndof = 2 * n

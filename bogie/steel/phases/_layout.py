@@ -1,6 +1,6 @@
-"""The layout of :mod:`bogie._phases_core`'s kernel: the columns of a phase row and of a phase's statistics, the
-statuses it adds to :mod:`bogie._newmark_core`'s, the solver's memory and counts (``J_*``, ``C_*``) and the records
-its functions pass their arrays in (the comment block "the records a phase is stepped with" below).
+"""The layout of :mod:`bogie.steel.phases._core`'s kernel: the columns of a phase row and of a phase's statistics, the
+statuses it adds to :mod:`bogie.steel.newmark.kernels`'s, the solver's memory and counts (``J_*``, ``C_*``) and the
+records its functions pass their arrays in (the comment block "the records a phase is stepped with" below).
 
 Layout of a phase row (``phases[p]``, floats; :data:`PHASE_COLUMNS` names them): see the ``P_*`` constants.
 """
@@ -81,8 +81,8 @@ MAX_HALVINGS = 5
 # passes a tuple's members as it passes arguments: the same arrays, the same arithmetic as when _phase_loop took them
 # as 46 arguments). Each function unpacks the members it uses by name, in this order:
 #   model  = (mass, data_f, data_i, r_tol, u_limit, scheme, max_iter): the bogie and the solver, read only. mass is
-#            the diagonal of the mass matrix (n), data_f / data_i the model's pack (bogie._nonlinear_core), r_tol the
-#            residual's tolerance of each freedom and u_limit its range (n each), scheme (beta, gamma, alpha_m,
+#            the diagonal of the mass matrix (n), data_f / data_i the model's pack (bogie.steel.force.core), r_tol
+#            the residual's tolerance of each freedom and u_limit its range (n each), scheme (beta, gamma, alpha_m,
 #            alpha_f), max_iter the Newton iterations a step may take
 #   course = (phase, road_h, offsets, levers): the phase's row (P_*), the concatenated road tables [m], each axle's
 #            distance behind the front one [m] and each freedom's lever to a wheel [m] (the adaptive error's), read

@@ -1,4 +1,4 @@
-"""Compiled kernels of the time integrator :mod:`bogie.newmark` (numba): the general Newton stepping loop
+"""Compiled kernels of the time integrator :mod:`bogie.steel.newmark` (numba): the general Newton stepping loop
 :func:`_integrate` for every model, and the one-correction loop :func:`_integrate_linear_kernel` for constant
 matrices.
 
@@ -28,8 +28,8 @@ import math
 import numpy as np
 from numba import njit
 
-from bogie import _nonlinear_core as nlc
-from bogie._lu import lu_factor, lu_solve
+from bogie.lu import lu_factor, lu_solve
+from bogie.steel.force import core as nlc
 
 MODEL_LINEAR = 0
 MODEL_NONLINEAR = 1
@@ -84,7 +84,7 @@ def _predict(drive, row, frac1, u, v, a, dt, drv, u_new, quasi_static):
 
 
 @njit(cache=True, inline="always")
-def _kinematics(u, v, a, u_new, dt, beta, gamma, c_a, v_new, a_new, quasi_static):
+def kinematics(u, v, a, u_new, dt, beta, gamma, c_a, v_new, a_new, quasi_static):
     """Newmark: the accelerations and velocities that go with the displacements ``u_new`` at the step's end."""
     for i in range(u.shape[0]):
         if quasi_static:
@@ -133,7 +133,7 @@ def _factor_iteration_matrix(mass, kt, ct, c_a, c_v, alpha_m, alpha_f, dt, jac, 
 
 
 @njit(cache=True, inline="always")
-def _halve(du, u_new):
+def halve(du, u_new):
     """Go back half of the last update."""
     for i in range(du.shape[0]):
         du[i] *= 0.5
@@ -141,7 +141,7 @@ def _halve(du, u_new):
 
 
 @njit(cache=True, inline="always")
-def _pull_inside(du, u_new, u_limit):
+def pull_inside(du, u_new, u_limit):
     """After an update ``du`` to ``u_new``: halve it back until |u_new| is inside ``u_limit`` (30 times at most);
     False if never."""
     n = du.shape[0]
@@ -152,7 +152,7 @@ def _pull_inside(du, u_new, u_limit):
                 inside = False
         if inside:
             return True
-        _halve(du, u_new)
+        halve(du, u_new)
     return False
 
 
@@ -164,7 +164,7 @@ def _update(jac, piv, res, du, u_new, u_limit):
     for i in range(n):
         du[i] = res[i]
         u_new[i] += res[i]
-    return _pull_inside(du, u_new, u_limit)
+    return pull_inside(du, u_new, u_limit)
 
 
 @njit(cache=True, inline="always")
@@ -201,7 +201,7 @@ def _attempt(
     fresh = want
     backtracks = 0
     for it in range(max_iter + 1):
-        _kinematics(u, v, a, u_new, dt, beta, gamma, c_a, v_new, a_new, quasi_static)
+        kinematics(u, v, a, u_new, dt, beta, gamma, c_a, v_new, a_new, quasi_static)
         _force(model, u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, True, want, work)
         rnorm, finite = _residual(mass, a, a_new, f_old, f_new, alpha_m, alpha_f, r_tol, res)
         if not finite:
@@ -215,7 +215,7 @@ def _attempt(
         if it > 0 and rnorm > r_prev and backtracks < 6:
             # the last update overshot: go back half of it and look again
             backtracks += 1
-            _halve(du, u_new)
+            halve(du, u_new)
             continue
         backtracks = 0
         if it > 0 and not fresh and rnorm > 0.25 * r_prev:

@@ -1,7 +1,7 @@
-"""One step of a phase of :mod:`bogie._phases_core`: the drive at any time, the step's Newmark / generalised-alpha
+"""One step of a phase of :mod:`bogie.steel.phases._core`: the drive at any time, the step's Newmark / generalised-alpha
 residual and its Newton iteration (the iteration matrices kept as inverses, a first correction accepted unchecked
 where its measured contraction allows), and the state's commit. The records the functions take: "the records a phase
-is stepped with" in :mod:`bogie._phases_layout`.
+is stepped with" in :mod:`bogie.steel.phases._layout`.
 """
 
 from __future__ import annotations
@@ -10,19 +10,19 @@ import math
 
 from numba import njit
 
-from bogie import _nonlinear_core as nlc
-from bogie._lu import invert
-from bogie._newmark_core import (
+from bogie.lu import invert
+from bogie.steel.force import core as nlc
+from bogie.steel.newmark.kernels import (
     STATUS_NO_CONVERGENCE,
     STATUS_NOT_FINITE,
     STATUS_OK,
     STATUS_OUT_OF_RANGE,
     STATUS_SINGULAR,
-    _halve,
-    _kinematics,
-    _pull_inside,
+    halve,
+    kinematics,
+    pull_inside,
 )
-from bogie._phases_layout import (
+from bogie.steel.phases._layout import (
     C_EVALS,
     C_FACTORS,
     C_TANGENTS,
@@ -89,9 +89,9 @@ def _drive(phase, road_h, offsets, n, t, drv):
 # ---- one step --------------------------------------------------------------------------------------------------
 @njit(cache=True, inline="always")
 def _force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, record, want, work):
-    """The model force (:func:`bogie._nonlinear_core.force`), inlined where a step evaluates it: its body is a call
-    of the compiled :func:`bogie._nonlinear_core._internal` and, for a tangent, a loop of them. As a call of its own
-    (it was one, to keep the step loop small) every evaluation passed its 12 arrays twice, to it and on to
+    """The model force (:func:`bogie.steel.force.core.force`), inlined where a step evaluates it: its body is a
+    call of the compiled :func:`bogie.steel.force.core._internal` and, for a tangent, a loop of them. As a call of
+    its own (it was one, to keep the step loop small) every evaluation passed its 12 arrays twice, to it and on to
     ``_internal``: inlined, the 20 s tri-axle run takes 9.3 ms instead of 10.1 (issue 15, ``bench.bench_single_run``),
     the same bits."""
     nlc.force(u, v, drv, data_f, data_i, hist, hist_new, f, kt, ct, rec, record, want, work)
@@ -117,7 +117,7 @@ def _residual(mass, a, a_new, f_old, f_new, alpha_m, alpha_f, r_tol, res):
 @njit(cache=True, inline="always")
 def _update(inv, k, res, du, u_new, u_limit):
     """Newton update u_new += J^-1 res with the inverse ``inv[k]`` of the iteration matrix, halved until inside
-    ``u_limit`` (30 times at most); False if never (:func:`bogie._newmark_core._update`)."""
+    ``u_limit`` (30 times at most); False if never (:func:`bogie.steel.newmark.kernels._update`)."""
     n = du.shape[0]
     for i in range(n):
         s = 0.0
@@ -125,7 +125,7 @@ def _update(inv, k, res, du, u_new, u_limit):
             s += inv[k, i, j] * res[j]
         du[i] = s
         u_new[i] += s
-    return _pull_inside(du, u_new, u_limit)
+    return pull_inside(du, u_new, u_limit)
 
 
 @njit(cache=True, inline="always")
@@ -143,15 +143,15 @@ def _form_matrix(jac, slot, kt, ct, mass, c_a, c_v, alpha_m, alpha_f):
 def _solve_step(model, state, trial, newton, h, slot):
     """Newton-Raphson for one step of size ``h`` from ``state`` to the drive ``drv`` into ``trial``; returns
     (status, |r|). The records: see "the records a phase is stepped with" in
-    :mod:`bogie._phases_layout`.
+    :mod:`bogie.steel.phases._layout`.
 
-    The iteration of :func:`bogie._newmark_core._attempt`: predictor of constant acceleration, the full residual,
-    modified Newton with the iteration matrix kept while the residual falls at least fourfold, backtracking when
-    it grows. K_T and C_T are kept from their last formation, and so are the iteration matrices formed from them
+    The iteration of :func:`bogie.steel.newmark.kernels._attempt`: predictor of constant acceleration, the full
+    residual, modified Newton with the iteration matrix kept while the residual falls at least fourfold, backtracking
+    when it grows. K_T and C_T are kept from their last formation, and so are the iteration matrices formed from them
     for several steps (:data:`RUNG_MATRICES`): ``jac[k]`` for the step ``keys[k]`` (0: none); this step's is
     ``jac[slot]``, formed only when it is missing or for another step, a formation being far cheaper than a
     tangent's 2n + 1 force evaluations. A new tangent drops them all. ``jac`` holds the matrices' inverses
-    (:func:`bogie._lu.invert`): one is solved with at every iteration of many steps and formed rarely, and a solve
+    (:func:`bogie.lu.invert`): one is solved with at every iteration of many steps and formed rarely, and a solve
     with the inverse is a matrix-vector product. ``jst`` (:data:`J_TANGENT`...) is read and updated, ``corr`` =
     [this step's plain predictor, the last accepted step's correction], ``counts`` (:data:`C_EVALS`...) incremented.
     """
@@ -190,7 +190,7 @@ def _solve_step(model, state, trial, newton, h, slot):
         jst[J_CHECK_EVERY] > 0.0 and jst[J_SINCE_CHECK] + 1.0 < jst[J_CHECK_EVERY] and alpha_f == 0.0 and not want
     )
     for it in range(max_iter + 1):
-        _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
+        kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
         _force(u_new, v_new, drv, data_f, data_i, hist, hist_new, f_new, kt, ct, rec, False, want, work)
         counts[C_EVALS] += 1.0
         if want:
@@ -214,7 +214,7 @@ def _solve_step(model, state, trial, newton, h, slot):
             break
         if it > 0 and rnorm > r_prev and backtracks < 6:
             backtracks += 1
-            _halve(du, u_new)
+            halve(du, u_new)
             continue
         backtracks = 0
         if it > 0 and not fresh and rnorm > 0.25 * r_prev:
@@ -243,7 +243,7 @@ def _solve_step(model, state, trial, newton, h, slot):
             # the correction's expected residual is far inside the tolerance: accept it unchecked, with the
             # history of the predictor's evaluation (it differs from the corrected state's by the correction, far
             # below the tolerance); the readings are taken at the accepted state by the caller
-            _kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
+            kinematics(u, v, a, u_new, h, beta, gamma, c_a, v_new, a_new, False)
             jst[J_SINCE_CHECK] += 1.0
             counts[C_UNCHECKED] += 1.0
             return STATUS_OK, rho * r_first

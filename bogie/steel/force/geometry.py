@@ -1,4 +1,4 @@
-"""The geometry of the Stage 4 model's force (:mod:`bogie._nonlinear_core`), inlined into it: body points, the
+"""The geometry of the Stage 4 model's force (:mod:`bogie.steel.force.core`), inlined into it: body points, the
 short sine and cosine series of small angles, the spring ends' rolled contact points and the radius rods.
 """
 

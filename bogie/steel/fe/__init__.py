@@ -1,4 +1,5 @@
-"""Stage 1: the finite element mesh of one side of a multi-axle bogie, on the frame solver of :mod:`bogie.frame`.
+"""Stage 1: the finite element mesh of one side of a multi-axle bogie, on the frame solver of
+:mod:`bogie.steel.fe.frame`.
 
 :func:`build_mesh` turns a :class:`~bogie.params.Bogie` into the reference's Stage 1 model: hangers and equaliser
 brackets clamped to the bed, equalisers pinned to their brackets with the bush as a rotational spring, leaf springs
@@ -6,9 +7,9 @@ as beams resting on vertical slipper contacts, axles and wheels, tyre springs to
 The bed is given a rigid translation ``alpha`` and pitch ``psi`` as prescribed displacements. Derivations, the mesh
 drawing and the comparison with the static model are in ``docs/fe-model.md``.
 
-The frame solver's names (:class:`~bogie.frame.FrameModel`, :class:`~bogie.frame.FrameSolution`,
-:func:`~bogie.frame.beam_local_stiffness`, :data:`~bogie.frame.DOF_NAMES`) are re-exported here, where they lived
-before :mod:`bogie.frame` existed.
+The frame solver's names (:class:`~bogie.steel.fe.frame.FrameModel`, :class:`~bogie.steel.fe.frame.FrameSolution`,
+:func:`~bogie.steel.fe.frame.beam_local_stiffness`, :data:`~bogie.steel.fe.frame.DOF_NAMES`) are re-exported here, where
+they lived before :mod:`bogie.steel.fe.frame` existed.
 """
 
 from __future__ import annotations
@@ -20,11 +21,11 @@ from dataclasses import dataclass, field
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie.frame import DOF_NAMES, FrameModel, FrameSolution, beam_local_stiffness
 from bogie.metrics import p as deviation_p
 from bogie.params import Bogie
 from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
 from bogie.ranges import check_positive
+from bogie.steel.fe.frame import DOF_NAMES, FrameModel, FrameSolution, beam_local_stiffness
 
 __all__ = [
     "DOF_NAMES",
@@ -123,7 +124,7 @@ class BogieFEResult:
         Vertical tyre force of each axle, compression positive, front to rear [N].
     equaliser_rotation
         Rotation of each equaliser relative to its bracket, rear tip down positive as in
-        :func:`bogie.static.solve_static` [rad].
+        :func:`bogie.steel.static.solve_static` [rad].
     drag_link_forces
         Tension in each drag link, front to rear [N]; empty without drag links.
     tyre_longitudinal_forces
@@ -392,7 +393,7 @@ def fe_wheel_loads(
     chassis_rotation
         Bed pitch psi, nose up positive [rad].
     drag_links
-        Fit drag links (radius rods); without them the loads agree with :func:`bogie.static.wheel_loads` to the
+        Fit drag links (radius rods); without them the loads agree with :func:`bogie.steel.static.wheel_loads` to the
         compliance of the steel parts (``docs/fe-model.md``).
     options
         Mesh properties; :class:`MeshOptions` defaults if None.

@@ -1,7 +1,7 @@
-"""The layout of the Stage 4 model's packed data (:mod:`bogie._nonlinear_core`'s force): the one definition of
+"""The layout of the Stage 4 model's packed data (:mod:`bogie.steel.force.core`'s force): the one definition of
 ``data_f`` (the scalars of :data:`SCALARS`, then the arrays of :data:`ARRAYS`), the record (:data:`RECORD`), the
 history (:data:`HISTORY`) and the force's work buffer (:data:`WORK`), with their compiled offsets and their Python
-slices. :mod:`bogie._nonlinear_core` re-exports every name: ``core.SCALARS`` and the like work as before.
+slices. :mod:`bogie.steel.force.core` re-exports every name: ``core.SCALARS`` and the like work as before.
 """
 
 from __future__ import annotations

@@ -1,13 +1,13 @@
 """The compiled static equilibrium of the non-linear model (numba): bogie's one Newton iteration on the force
-without inertia (issue 29: it was written twice, in Python for :func:`bogie.nonlinear.equilibrium` and compiled for
-the start of :func:`bogie._phases_core.run_phases`).
+without inertia (issue 29: it was written twice, in Python for :func:`bogie.steel.force.equilibrium` and compiled
+for the start of :func:`bogie.steel.phases._core.run_phases`).
 
-:func:`newton` solves f(u) = 0 for the force of :func:`bogie._nonlinear_core.force` at one drive row from a given
+:func:`newton` solves f(u) = 0 for the force of :func:`bogie.steel.force.core.force` at one drive row from a given
 start: a tangent at every iterate, each step limited to :data:`STEP_LIMIT` rad or m, backtracking (halving, at most
 :data:`BACKTRACKS` times) while the tolerance-scaled residual norm does not fall, and half of the last step taken
 back where the tangent is singular. Its callers choose the start, the history the friction starts from and whether
 the friction is relaxed: :func:`relaxed_equilibrium` (the phases' start: the friction relaxed, from the design
-position pitched to the king pin, :func:`design_start`) and :func:`bogie.nonlinear._equilibrium` (any history, any
+position pitched to the king pin, :func:`design_start`) and :func:`bogie.steel.nonlinear._equilibrium` (any history, any
 start, and the errors' messages). The residual norm is summed freedom by freedom in order, as the compiled one always
 was: numpy's pairwise sum (the former Python iteration's) is the same sum below 8 freedoms, and from 8 on it differs
 in the last bits, which moves a result only where a trial's norm ties the last one's to those bits.
@@ -20,8 +20,8 @@ import math
 import numpy as np
 from numba import njit
 
-from bogie import _nonlinear_core as nlc
-from bogie._lu import lu_factor, lu_solve
+from bogie.lu import lu_factor, lu_solve
+from bogie.steel.force import core as nlc
 
 #: what :func:`newton` returns: converged inside the freedoms' limits; converged outside them; no convergence in
 #: :data:`MAX_ITERATIONS`; a singular tangent with no step to take back
@@ -127,7 +127,7 @@ def newton(data_f, data_i, drv, u, hist, hist_new, f, r_tol, u_limit, rec, work)
 
 @njit(cache=True)
 def relaxed_equilibrium(data_f, data_i, drv, u, hist_new, r_tol, u_limit, relaxed_slots, bogie_centre_x, rec, work):
-    """The equilibrium a run starts from at rest (:func:`bogie._phases_core.run_phases`): :func:`newton` with the
+    """The equilibrium a run starts from at rest (:func:`bogie.steel.phases._core.run_phases`): :func:`newton` with the
     friction relaxed (the slots ``relaxed_slots`` of a copy of ``data_f`` zeroed, the history zero) from
     :func:`design_start`. Writes the solution to ``u`` and its history (each contact's slip where it carries no
     friction, each spring on its elastic line) to ``hist_new``; returns whether it converged inside the limits."""

@@ -1,4 +1,4 @@
-"""A small 2-D linear frame finite element solver (used by the Stage 1 mesh of :mod:`bogie.fe`).
+"""A small 2-D linear frame finite element solver (used by the Stage 1 mesh of :mod:`bogie.steel.fe`).
 
 The solver (:class:`FrameModel`) works in a vertical plane: ``x`` rearward, ``z`` upward, three degrees of freedom
 per node: ``u`` (along x) [m], ``w`` (along z) [m] and ``theta``, the rotation from x towards z (counter-clockwise
@@ -25,7 +25,7 @@ import scipy.sparse.csgraph as csgraph
 from numpy.typing import NDArray
 
 from bogie import numerics
-from bogie._lu import lu_factor, lu_solve
+from bogie.lu import lu_factor, lu_solve
 from bogie.ranges import check_positive
 
 DOF_NAMES = ("u", "w", "theta")
@@ -374,7 +374,7 @@ class FrameModel:
         # Jacobi scaling puts translations and rotations on one footing for the singularity test
         scale = 1.0 / np.sqrt(diag)
         k_scaled = sp.diags(scale) @ k_ff @ sp.diags(scale)  # numerics-ok: scipy.sparse products (no BLAS)
-        # dense LU with partial pivoting in compiled code (bogie._lu), every sum in index order: SuperLU's dense
+        # dense LU with partial pivoting in compiled code (bogie.lu), every sum in index order: SuperLU's dense
         # blocks go through BLAS, whose kernel, and so the last bits, OpenBLAS picks by the CPU (bogie/numerics.py).
         # The models have tens to a few hundred free DOFs, where this costs milliseconds.
         lu = np.ascontiguousarray(k_scaled.toarray())

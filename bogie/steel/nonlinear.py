@@ -5,10 +5,10 @@ Finite chassis pitch and equaliser rotation, spring-end contact points that roll
 elastic-plastic return map), interleaf friction of the leaf springs (``spring_friction_band``, Fancher's
 hysteresis), bush stiffness and damping, unilateral tyres with per-axle wear, axle masses,
 payload on the chassis and chassis tilt from a king pin rise. The equations are in ``docs/models.md``; the
-compiled force is :mod:`bogie._nonlinear_core`; time stepping is :mod:`bogie.newmark`; the static equilibrium's
-Newton iteration is compiled, :mod:`bogie._equilibrium_core` (the one the phases start from). The pack of a bogie's
-parameters, the cache of its constants and the freedoms' limits are :mod:`bogie._nonlinear_pack`, whose names are
-importable from here.
+compiled force is :mod:`bogie.steel.force.core`; time stepping is :mod:`bogie.steel.newmark`; the static
+equilibrium's Newton iteration is compiled, :mod:`bogie.steel.force.equilibrium` (the one the phases start from).
+The pack of a bogie's parameters, the cache of its constants and the freedoms' limits are
+:mod:`bogie.steel.force.pack`, whose names are importable from here.
 
 A simulation is driven by :class:`Inputs` (road height and rate under each axle, payload load factor, king pin
 rise, each per time step) and starts from a :class:`State`; its result carries the final state, so runs chain:
@@ -23,36 +23,27 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import _equilibrium_core as eq
-from bogie import _nonlinear_core as core
 from bogie import numerics
-from bogie._nonlinear_pack import (  # noqa: F401 - the packing, importable from here as before
-    _CONSTANTS,
-    _CONSTANTS_LOCK,
-    _CONSTANTS_SIZE,
-    _FRICTION_SLOTS,
+from bogie.params import Bogie
+from bogie.results import DynamicResult, Profile
+from bogie.road import axle_heights
+from bogie.steel.force import core
+from bogie.steel.force import equilibrium as eq
+from bogie.steel.force.pack import (  # noqa: F401 - the packing's public names, importable from here as before
+    FRICTION_SLOTS,
     Constants,
-    _array_lengths,
-    _check_limits,
-    _contacts,
-    _history,
-    _levers,
-    _mean,
-    _packed,
-    _packed_arrays,
-    _packed_scalars,
-    _tolerance,
-    _work_size,
+    cached_pack,
+    check_limits,
+    checked_history,
     constants,
     design_wheel_loads,
     dof_names,
     limits,
     pack,
+    residual_tolerance,
+    work_size,
 )
-from bogie.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
-from bogie.params import Bogie
-from bogie.results import DynamicResult, Profile
-from bogie.road import axle_heights
+from bogie.steel.newmark import MODEL_NONLINEAR, consistent_acceleration, integrate
 
 
 # ---- inputs and state ------------------------------------------------------------------------------------------
@@ -203,7 +194,7 @@ class State:
     """Configuration of the model: displacements, velocities, accelerations and the history variables.
 
     ``u`` = [chassis pitch [rad], equaliser rotations [rad], axle displacements [m]] from the design position.
-    ``history`` holds the variables of :data:`bogie._nonlinear_core.HISTORY` (4n): the spring ends' plastic
+    ``history`` holds the variables of :data:`bogie.steel.force.core.HISTORY` (4n): the spring ends' plastic
     slips [m], then each spring's deflection [m] and the hysteretic part of its force [N] at the last step.
     """
 
@@ -290,7 +281,7 @@ def _continued_equilibrium(bogie: Bogie, drive_row: NDArray[np.float64], history
 
 def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, u0: ArrayLike | None) -> State:
     """Newton's static equilibrium from ``u0`` (see :func:`equilibrium`): the compiled
-    :func:`bogie._equilibrium_core.newton`, the one the phases start from, and its failures as errors."""
+    :func:`bogie.steel.force.equilibrium.newton`, the one the phases start from, and its failures as errors."""
     n = bogie.n_axles
     ndof = 2 * n
     relaxed = history is None
@@ -298,9 +289,9 @@ def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, 
     # relaxed: the pack of bogie.replace(friction_coefficient=0.0, spring_friction_band=0.0), without a new bogie
     data_f = c.data_f.copy()
     if relaxed:
-        data_f[_FRICTION_SLOTS] = 0.0
+        data_f[FRICTION_SLOTS] = 0.0
     drv = np.ascontiguousarray(drive_row, dtype=float)
-    hist = np.zeros(core.history_length(n)) if relaxed else _history(bogie, history, "history")
+    hist = np.zeros(core.history_length(n)) if relaxed else checked_history(bogie, history, "history")
     hist_new = hist.copy()
     if u0 is None:
         # start with the bogie end of the chassis at its design height, so that no spring starts slack
@@ -310,7 +301,7 @@ def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, 
         u = np.array(u0, dtype=float)
     f = np.zeros(ndof)
     rec = np.zeros(core.record_length(n))
-    work = np.zeros(_work_size(bogie))
+    work = np.zeros(work_size(bogie))
     status = eq.newton(data_f, c.data_i, drv, u, hist, hist_new, f, c.r_tol, c.u_limit, rec, work)
     if status == eq.SINGULAR:
         raise RuntimeError(
@@ -323,7 +314,7 @@ def _equilibrium(bogie: Bogie, drive_row: ArrayLike, history: ArrayLike | None, 
             f"static equilibrium did not converge: largest force residual {np.max(np.abs(f)):.3g} "
             f"(on {dof_names(n)[worst]}) at u = {np.array2string(u, precision=4)}"
         )
-    _check_limits(bogie, u)
+    check_limits(bogie, u)
     return State(u=u, v=np.zeros(ndof), a=np.zeros(ndof), history=hist_new.copy() if relaxed else hist.copy())
 
 
@@ -388,23 +379,23 @@ def simulate(
     J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
     dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
-    mass, data_f, data_i = _packed(bogie)
+    mass, data_f, data_i = cached_pack(bogie)
     drive = inputs.drive(bogie)
     state = equilibrium(bogie, drive[0]) if initial is None else initial
-    _history(bogie, state.history, "initial.history")
+    checked_history(bogie, state.history, "initial.history")
     n_rec = core.record_length(bogie.n_axles)
     ndof = 2 * bogie.n_axles
     f0 = np.zeros(ndof)
     hist_new = state.history.copy()
     core.force(
         state.u, state.v, drive[0], data_f, data_i, state.history, hist_new, f0,
-        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False, np.zeros(_work_size(bogie)),
+        np.zeros((ndof, ndof)), np.zeros((ndof, ndof)), np.zeros(n_rec), False, False, np.zeros(work_size(bogie)),
     )  # fmt: skip
     a0 = consistent_acceleration(mass, f0) if initial is None else state.a
     run = integrate(
         MODEL_NONLINEAR, mass, drive, data_f, data_i, state.u.copy(), state.v.copy(), a0, state.history.copy(),
-        inputs.dt, inputs.n_steps, _tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
-        max_halvings=max_halvings, n_record=n_rec, work_size=_work_size(bogie), limits=limits(bogie),
+        inputs.dt, inputs.n_steps, residual_tolerance(bogie), rho_inf=rho_inf, max_iter=max_iter,
+        max_halvings=max_halvings, n_record=n_rec, work_size=work_size(bogie), limits=limits(bogie),
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=run.v[-1].copy(), a=run.a[-1].copy(), history=run.history.copy())
     return _result(bogie, run, inputs, final if run.success else None)
@@ -422,12 +413,12 @@ def static_loads(bogie: Bogie, inputs: Inputs, initial: State | None = None) -> 
     _, data_f, data_i = pack(quiet)
     drive = inputs.drive(quiet)
     state = equilibrium(quiet, drive[0]) if initial is None else initial
-    _history(bogie, state.history, "initial.history")
+    checked_history(bogie, state.history, "initial.history")
     ndof = 2 * bogie.n_axles
     run = integrate(
         MODEL_NONLINEAR, np.zeros((ndof, ndof)), drive, data_f, data_i, state.u.copy(), np.zeros(ndof),
-        np.zeros(ndof), state.history.copy(), inputs.dt, inputs.n_steps, _tolerance(bogie), max_iter=200,
-        max_halvings=8, n_record=core.record_length(bogie.n_axles), work_size=_work_size(bogie),
+        np.zeros(ndof), state.history.copy(), inputs.dt, inputs.n_steps, residual_tolerance(bogie), max_iter=200,
+        max_halvings=8, n_record=core.record_length(bogie.n_axles), work_size=work_size(bogie),
         limits=limits(bogie), quasi_static=True,
     )  # fmt: skip
     final = State(u=run.u[-1].copy(), v=np.zeros(ndof), a=np.zeros(ndof), history=run.history.copy())

@@ -1,6 +1,6 @@
-"""The Stage 4 model's constants of a bogie (:mod:`bogie.nonlinear`, which re-exports every name here): the pack of
-its parameters for the compiled force (:func:`pack`, the layout of :mod:`bogie._nonlinear_layout`), the cache of a
-bogie's :class:`Constants` (:func:`constants`: the pack, the axles' offsets, each freedom's lever, residual tolerance
+"""The Stage 4 model's constants of a bogie (:mod:`bogie.steel.nonlinear`, which re-exports every name here): the pack
+of its parameters for the compiled force (:func:`pack`, the layout of :mod:`bogie.steel.force.layout`), the cache of
+a bogie's :class:`Constants` (:func:`constants`: the pack, the axles' offsets, each freedom's lever, residual tolerance
 and limit), the freedoms' names and limits, and the check of a history's length.
 """
 
@@ -14,8 +14,8 @@ from dataclasses import dataclass
 import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
-from bogie import _nonlinear_core as core
 from bogie.params import GRAVITY, Bogie, design_spring_loads
+from bogie.steel.force import core
 
 
 # ---- packing ---------------------------------------------------------------------------------------------------
@@ -66,7 +66,7 @@ def _contacts(bogie: Bogie) -> tuple[list[int], list[float], list[float], list[f
 
 
 def _packed_scalars(bogie: Bogie) -> dict[str, float]:
-    """The scalars of ``data_f`` by name (:data:`bogie._nonlinear_core.SCALARS`), SI."""
+    """The scalars of ``data_f`` by name (:data:`bogie.steel.force.core.SCALARS`), SI."""
     return {
         "road_spring_stiffness": bogie.road_spring_stiffness,
         "tyre_stiffness": bogie.tyre_stiffness,
@@ -88,7 +88,7 @@ def _packed_scalars(bogie: Bogie) -> dict[str, float]:
 
 
 def _packed_arrays(bogie: Bogie) -> tuple[dict[str, list[float]], list[int]]:
-    """The arrays of ``data_f`` by name (:data:`bogie._nonlinear_core.ARRAYS`), SI, and the contacts' bodies.
+    """The arrays of ``data_f`` by name (:data:`bogie.steel.force.core.ARRAYS`), SI, and the contacts' bodies.
 
     Element by element in Python floats (issue 15: numpy's calls on arrays of two or three entries cost more than
     their arithmetic; the same IEEE operations in the same order give the same bits), numpy only for the chord
@@ -133,15 +133,15 @@ def _packed_arrays(bogie: Bogie) -> tuple[dict[str, list[float]], list[int]]:
 
 @functools.cache
 def _array_lengths(n: int) -> tuple[int, ...]:
-    """Each packed array's length for ``n`` axles (:func:`bogie._nonlinear_core.array_length`, a compiled call)."""
+    """Each packed array's length for ``n`` axles (:func:`bogie.steel.force.core.array_length`, compiled)."""
     return tuple(core.array_length(k, n) for k in range(len(core.ARRAYS)))
 
 
 def pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
-    """Mass matrix and the packed parameters (``data_f``, ``data_i``) of :mod:`bogie._nonlinear_core`.
+    """Mass matrix and the packed parameters (``data_f``, ``data_i``) of :mod:`bogie.steel.force.core`.
 
-    The layout is the core's: its :data:`~bogie._nonlinear_core.SCALARS`, then its
-    :data:`~bogie._nonlinear_core.ARRAYS`, each as long as :func:`~bogie._nonlinear_core.array_length` says.
+    The layout is the core's: its :data:`~bogie.steel.force.core.SCALARS`, then its
+    :data:`~bogie.steel.force.core.ARRAYS`, each as long as :func:`~bogie.steel.force.core.array_length` says.
     The mass matrix is diagonal (the kernels use only its diagonal).
     """
     n = bogie.n_axles
@@ -175,8 +175,8 @@ class Constants:
 
 
 #: the bogies :func:`constants` computed last with their constants, by identity: the one cache of a bogie's pack,
-#: for the equilibrium (:func:`_packed`) and the phases (:func:`bogie.phases.run`). Each entry holds its bogie, so
-#: while it lives no other object can take that id() (the ``is`` test says so too). Not by equality: two equal
+#: for the equilibrium (:func:`cached_pack`) and the phases (:func:`bogie.steel.phases.run`). Each entry holds its
+#: bogie, so while it lives no other object can take that id() (the ``is`` test says so too). Not by equality: two equal
 #: bogies (0.0 == -0.0) may pack other bits, and hashing every field would cost more than the lookup saves.
 _CONSTANTS: dict[int, tuple[Bogie, Constants]] = {}
 #: how many bogies :data:`_CONSTANTS` keeps
@@ -186,7 +186,8 @@ _CONSTANTS_LOCK = threading.Lock()
 
 def constants(bogie: Bogie) -> Constants:
     """The bogie's :class:`Constants`, computed once for the phases and the equilibrium of its weighings (issue 15:
-    a static weighing packed the same bogie four times). Shared: do not change the arrays (:func:`_packed` copies)."""
+    a static weighing packed the same bogie four times). Shared: do not change the arrays (:func:`cached_pack`
+    copies)."""
     hit = _CONSTANTS.get(id(bogie))
     if hit is not None and hit[0] is bogie:
         return hit[1]
@@ -198,7 +199,7 @@ def constants(bogie: Bogie) -> Constants:
         data_i=data_i,
         offsets=np.asarray(bogie.axle_x, dtype=float) - bogie.axle_x[0],
         levers=levers,
-        r_tol=_tolerance(bogie, levers),
+        r_tol=residual_tolerance(bogie, levers),
         u_limit=limits(bogie),
         kingpin=float(bogie.kingpin_height_offset),
     )
@@ -209,7 +210,7 @@ def constants(bogie: Bogie) -> Constants:
     return found
 
 
-def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
+def cached_pack(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDArray[np.int64]]:
     """:func:`pack` of ``bogie`` from :func:`constants`, packed once per bogie. Fresh copies: the caller may change
     them."""
     c = constants(bogie)
@@ -218,10 +219,10 @@ def _packed(bogie: Bogie) -> tuple[NDArray[np.float64], NDArray[np.float64], NDA
 
 #: where the relaxed equilibrium zeroes the friction in ``data_f`` (friction_coefficient and spring_friction_band
 #: are scalars of the pack only: nothing else packed depends on them)
-_FRICTION_SLOTS = [core.SCALARS.index("friction_coefficient"), core.SCALARS.index("spring_friction_band")]
+FRICTION_SLOTS = [core.SCALARS.index("friction_coefficient"), core.SCALARS.index("spring_friction_band")]
 
 
-def _work_size(bogie: Bogie) -> int:
+def work_size(bogie: Bogie) -> int:
     return core.work_size(bogie.n_axles)
 
 
@@ -235,7 +236,7 @@ def limits(bogie: Bogie) -> NDArray[np.float64]:
     return np.asarray([math.radians(20.0)] + [math.radians(60.0)] * (n - 1) + [0.5] * n)
 
 
-def _check_limits(bogie: Bogie, u: NDArray[np.float64]) -> None:
+def check_limits(bogie: Bogie, u: NDArray[np.float64]) -> None:
     """Refuse a solution outside the freedoms' limits (:func:`limits`): a ``ValueError`` naming the freedom, its
     value and the limit with their unit. Beyond the limits the model's equilibria are spurious, not a bogie's."""
     names = dof_names(bogie.n_axles)
@@ -269,14 +270,14 @@ def _levers(bogie: Bogie) -> NDArray[np.float64]:
     return np.asarray([bogie.bogie_centre_x] + [arm] * (bogie.n_axles - 1) + [1.0] * bogie.n_axles, dtype=float)
 
 
-def _tolerance(bogie: Bogie, levers: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
+def residual_tolerance(bogie: Bogie, levers: NDArray[np.float64] | None = None) -> NDArray[np.float64]:
     """Residual tolerance per freedom: 1e-5 of the design wheel load times each freedom's lever [N, N m]
     (:func:`_levers`, given or computed)."""
     w = _mean(design_wheel_loads(bogie))
     return 1e-5 * w * (_levers(bogie) if levers is None else levers)
 
 
-def _history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]:
+def checked_history(bogie: Bogie, history: ArrayLike, what: str) -> NDArray[np.float64]:
     """A copy of a history (:attr:`State.history`) after checking its length against the bogie's axles."""
     hist = np.array(history, dtype=float)
     expected = core.history_length(bogie.n_axles)

@@ -1,6 +1,6 @@
-"""Adaptive steps of a phase of :mod:`bogie._phases_core`: the local error estimate of Zienkiewicz and Xie [1]_ and a
-PI step-size controller [2]_, its steps rounded down to a geometric ladder of steps (rungs) that keep their iteration
-matrices, each step ending at the next boundary (a mean reading's window, the phase's end) at the latest.
+"""Adaptive steps of a phase of :mod:`bogie.steel.phases._core`: the local error estimate of Zienkiewicz and Xie [1]_
+and a PI step-size controller [2]_, its steps rounded down to a geometric ladder of steps (rungs) that keep their
+iteration matrices, each step ending at the next boundary (a mean reading's window, the phase's end) at the latest.
 
 References
 ----------
@@ -17,8 +17,8 @@ import math
 
 from numba import njit
 
-from bogie._newmark_core import STATUS_OK
-from bogie._phases_layout import (
+from bogie.steel.newmark.kernels import STATUS_OK
+from bogie.steel.phases._layout import (
     J_TANGENT,
     P_DT,
     P_DURATION,
@@ -33,8 +33,8 @@ from bogie._phases_layout import (
     S_REJECTED,
     STATUS_STEP_TOO_SMALL,
 )
-from bogie._phases_readings import _accepted
-from bogie._phases_step import _commit, _drive, _keep_correction, _solve_step
+from bogie.steel.phases._readings import _accepted
+from bogie.steel.phases._step import _commit, _drive, _keep_correction, _solve_step
 
 #: PI step-size controller [2]: h_new = h * SAFETY * err^-(K_I + K_P) * err_prev^K_P, for a local error of order 3
 SAFETY = 0.9

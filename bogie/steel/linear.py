@@ -27,10 +27,10 @@ import numpy as np
 from numpy.typing import NDArray
 
 from bogie import numerics
-from bogie.newmark import consistent_acceleration, linear_steps
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
 from bogie.road import axle_heights
+from bogie.steel.newmark import consistent_acceleration, linear_steps
 
 #: ground springs are this many times stiffer than the tyres
 GROUND_STIFFNESS_FACTOR = 1000.0
@@ -206,7 +206,7 @@ def simulate(
     front_axle_start
         Road distance of the front axle at t = 0 [m].
     beta, gamma, rho_inf
-        Integration parameters (see :func:`bogie.newmark.integrate_linear`).
+        Integration parameters (see :func:`bogie.steel.newmark.integrate_linear`).
     ground_stiffness_factor
         Ground springs' stiffness over the tyre stiffness [-].
 

@@ -1,7 +1,7 @@
 """Time integration: Newmark (beta, gamma) and generalised-alpha with Newton-Raphson iterations.
 
-One compiled kernel (:func:`bogie._newmark_core._integrate`, called by :func:`integrate`) steps every model of the
-project. It solves
+One compiled kernel (:func:`bogie.steel.newmark.kernels._integrate`, called by :func:`integrate`) steps every model of
+the project. It solves
 
     M a + f(u, v, t, history) = 0
 
@@ -12,7 +12,7 @@ tangent; a step that does not converge is retried as 2, 4, ... sub-steps; a step
 with a status, the time and the residual, never with NaN. History variables (friction slips) are committed only
 after a step has converged. Linear systems with constant matrices (:func:`integrate_linear`,
 :func:`linear_steps`) use a loop that needs one correction per step. This module is the Python layer (checks,
-parameters, results); the compiled loops are in :mod:`bogie._newmark_core`, the LU factors in :mod:`bogie._lu`.
+parameters, results); the compiled loops are in :mod:`bogie.steel.newmark.kernels`, the LU factors in :mod:`bogie.lu`.
 Derivation and verification: ``docs/dynamics.md``.
 
 References
@@ -32,8 +32,9 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
-from bogie._lu import lu_factor, lu_solve
-from bogie._newmark_core import (
+from bogie.lu import lu_factor, lu_solve
+from bogie.ranges import check_positive
+from bogie.steel.newmark.kernels import (
     MODEL_LINEAR,
     MODEL_NONLINEAR,
     STATUS_NO_CONVERGENCE,
@@ -44,9 +45,8 @@ from bogie._newmark_core import (
     _integrate,
     _integrate_linear_kernel,
 )
-from bogie.ranges import check_positive
 
-#: re-exported: the compiled LU factors (now in :mod:`bogie._lu`) and the model ids and statuses of the kernel
+#: re-exported: the compiled LU factors (now in :mod:`bogie.lu`) and the model ids and statuses of the kernel
 __all__ = [
     "MODEL_LINEAR",
     "MODEL_NONLINEAR",
@@ -67,7 +67,7 @@ __all__ = [
     "newmark_parameters",
 ]
 
-_STATUS_TEXT = {
+STATUS_TEXT = {
     STATUS_OK: "ok",
     STATUS_NO_CONVERGENCE: "Newton iterations did not converge",
     STATUS_NOT_FINITE: "non-finite state",
@@ -208,7 +208,7 @@ def _stop_message(status: int, t: NDArray[np.float64], last: int, n_steps: int, 
     if status == STATUS_OK:
         return "ok"
     return (
-        f"{_STATUS_TEXT[status]} at t = {t[last]:.6g} s (step {last + 1} of {n_steps}, after {max_halvings} "
+        f"{STATUS_TEXT[status]} at t = {t[last]:.6g} s (step {last + 1} of {n_steps}, after {max_halvings} "
         f"halvings of dt = {dt:g} s); scaled residual {rnorm:.3g} (1 = tolerance)"
     )
 
@@ -350,7 +350,7 @@ def linear_steps(
     )
     if status != STATUS_OK:
         raise RuntimeError(
-            f"integrate_linear failed: {_STATUS_TEXT[status]} at t = 0 s (M / (beta dt^2) + C gamma / (beta dt) + K "
+            f"integrate_linear failed: {STATUS_TEXT[status]} at t = 0 s (M / (beta dt^2) + C gamma / (beta dt) + K "
             "is singular)"
         )
     return uu, vv, aa

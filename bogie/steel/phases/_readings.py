@@ -1,4 +1,4 @@
-"""The readings of a phase of :mod:`bogie._phases_core`, integrated as its steps are accepted: the time-mean of
+"""The readings of a phase of :mod:`bogie.steel.phases._core`, integrated as its steps are accepted: the time-mean of
 the tyre loads over a window, a WIM sensor's average of each tyre's force over its passage (:mod:`bogie.road.wim` in
 time), whether an equaliser bore on its stop in the window, and the trace.
 """
@@ -7,8 +7,8 @@ from __future__ import annotations
 
 from numba import njit
 
-from bogie import _nonlinear_core as nlc
-from bogie._phases_layout import (
+from bogie.steel.force import core as nlc
+from bogie.steel.phases._layout import (
     P_READING,
     P_SENSOR_CENTRE,
     P_SENSOR_FLAT,

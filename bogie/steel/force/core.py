@@ -8,8 +8,8 @@ equations of motion are M a + f = 0. Its tangent K_T = df/du is formed by forwar
 algorithmic force (the friction return map included), which is the consistent tangent of the discrete problem;
 C_T = df/dv is exact.
 
-Packed parameters (built by :func:`bogie.nonlinear.pack`); :mod:`bogie._nonlinear_layout` is the one definition of
-their layout (every name of it importable from here, as when it was part of this module):
+Packed parameters (built by :func:`bogie.steel.force.pack`); :mod:`bogie.steel.force.layout` is the one
+definition of their layout (every name of it importable from here, as when it was part of this module):
 
 * ``data_i = [n, pad_body_0 .. pad_body_{2n-1}]``: the body carrying contact e (-1 chassis, j equaliser j);
   contact 2i is spring i's front end, 2i + 1 its rear end.
@@ -27,8 +27,8 @@ Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at
 and the axle's vertical freedom.
 
 The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, in
-:mod:`bogie._nonlinear_geometry`; the springs with their end friction's return map, pad moments, tyre loads, bushes,
-bump stops, the record, here); when they were split from a former single routine they kept its arithmetic in the
+:mod:`bogie.steel.force.geometry`; the springs with their end friction's return map, pad moments, tyre loads,
+bushes, bump stops, the record, here); when they were split from a former single routine they kept its arithmetic in the
 same order, so results were bit-identical to it (the radius rods and the equaliser stops, added later, changed the
 physics). The helpers are inlined into :func:`_internal` at numba IR level (``inline="always"``): as separate calls
 they doubled the cost of a force evaluation. The helpers used inside loops take and return scalars, and the short
@@ -54,7 +54,7 @@ import math
 
 from numba import njit
 
-from bogie._nonlinear_geometry import (  # noqa: F401 - what the force uses, and the geometry's names as before
+from bogie.steel.force.geometry import (  # noqa: F401 - what the force uses, and the geometry's names as before
     SIN_COS_SERIES_BOUND,
     _body_point,
     _chassis_point,
@@ -62,7 +62,7 @@ from bogie._nonlinear_geometry import (  # noqa: F401 - what the force uses, and
     _rolled_contacts,
     _sin_cos,
 )
-from bogie._nonlinear_layout import (  # noqa: F401 - what the force uses, and the layout's names as before
+from bogie.steel.force.layout import (  # noqa: F401 - what the force uses, and the layout's names as before
     _BAND,
     _BETA,
     _C0,

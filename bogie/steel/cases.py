@@ -1,4 +1,4 @@
-"""The reference's named runs, reproducible by name: ``bogie.cases.run("L01")``, ``bogie.cases.run("N10")``.
+"""The reference's named runs, reproducible by name: ``bogie.steel.cases.run("L01")``, ``bogie.steel.cases.run("N10")``.
 
 * L01-L07 (Table 1): the Stage 3 linear model on :func:`~bogie.presets.tandem_trrl` with Table 1's bush
   stiffness, bush damping, axle mass, number of steps, time step and speed, over the ramped step of Figure 4.
@@ -19,11 +19,12 @@ from typing import Any
 
 import numpy as np
 
-from bogie import linear, metrics, nonlinear, numerics
+from bogie import metrics, numerics
 from bogie.params import TARE_FRACTION, Bogie, design_spring_loads, with_equaliser_arms
 from bogie.presets import tandem_trrl
 from bogie.results import DynamicResult
 from bogie.road import ISO8608Profile, RampedStep
+from bogie.steel import linear, nonlinear
 
 #: the front axle starts this far before the step [m], so every run begins with a settled static state
 STEP_LEAD = 0.5

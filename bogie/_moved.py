@@ -1,0 +1,64 @@
+"""Modules that moved, found at their old paths for one release with a DeprecationWarning naming the new home.
+
+Issue 42 moved the steel model's modules into :mod:`bogie.steel` (``docs/architecture.md``). ``import bogie.static``
+or ``from bogie.nonlinear import simulate`` still works: :class:`MovedFinder`, installed by ``import bogie``, imports
+the new module, warns once per old path, and binds the old name to the very same module object (so a patch applied
+through either name is seen through both). Remove an entry, or the whole table, at the next release.
+"""
+
+from __future__ import annotations
+
+import importlib
+import importlib.abc
+import importlib.machinery
+import sys
+import warnings
+from types import ModuleType
+
+#: old dotted path -> new dotted path
+MOVED: dict[str, str] = {
+    "bogie.static": "bogie.steel.static",
+    "bogie.linear": "bogie.steel.linear",
+    "bogie.fe": "bogie.steel.fe",
+    "bogie.frame": "bogie.steel.fe.frame",
+    "bogie.cases": "bogie.steel.cases",
+    "bogie.nonlinear": "bogie.steel.nonlinear",
+    "bogie.newmark": "bogie.steel.newmark",
+    "bogie.phases": "bogie.steel.phases",
+}
+
+
+class _AliasLoader(importlib.abc.Loader):
+    """Loads an old path as the module at its new one."""
+
+    def __init__(self, new: str) -> None:
+        self.new = new
+
+    def create_module(self, spec: importlib.machinery.ModuleSpec) -> ModuleType:
+        return ModuleType(spec.name)  # a placeholder: exec_module puts the real module in its place
+
+    def exec_module(self, module: ModuleType) -> None:
+        old = module.__name__
+        warnings.warn(
+            f"{old} moved to {self.new} (issue 42); the old path works until the next release",
+            DeprecationWarning,
+            stacklevel=2,
+        )
+        # the import system returns whatever sys.modules holds under the old name once this returns
+        sys.modules[old] = importlib.import_module(self.new)
+
+
+class MovedFinder(importlib.abc.MetaPathFinder):
+    """Finds the old paths of :data:`MOVED`, and nothing else."""
+
+    def find_spec(self, fullname: str, path: object, target: object = None) -> importlib.machinery.ModuleSpec | None:
+        new = MOVED.get(fullname)
+        if new is None:
+            return None
+        return importlib.machinery.ModuleSpec(fullname, _AliasLoader(new))
+
+
+def install() -> None:
+    """Put :class:`MovedFinder` on ``sys.meta_path`` once (after the standard finders: a real module wins)."""
+    if not any(isinstance(finder, MovedFinder) for finder in sys.meta_path):
+        sys.meta_path.append(MovedFinder())

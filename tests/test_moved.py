@@ -1,0 +1,50 @@
+"""The steel model's old module paths (issue 42 moved them into bogie.steel) work for one release, with a warning."""
+
+import subprocess
+import sys
+from pathlib import Path
+
+from bogie._moved import MOVED
+
+ROOT = Path(__file__).resolve().parent.parent
+
+
+def test_an_old_path_is_the_new_module_and_warns_naming_its_new_home():
+    code = """
+import sys, warnings
+import bogie
+import bogie.steel.nonlinear as new
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    from bogie.nonlinear import simulate
+    import bogie.static
+    from bogie import phases
+assert simulate is new.simulate
+assert sys.modules["bogie.nonlinear"] is new
+assert bogie.static is sys.modules["bogie.steel.static"]
+assert phases is sys.modules["bogie.steel.phases"]
+messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+assert any(m.startswith("bogie.nonlinear moved to bogie.steel.nonlinear") for m in messages), messages
+assert any(m.startswith("bogie.static moved to bogie.steel.static") for m in messages), messages
+print("ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"
+
+
+def test_every_moved_path_has_a_new_module_and_no_file_left_at_the_old_one():
+    for old, new in MOVED.items():
+        old_file = ROOT.joinpath(*old.split("."))
+        assert not old_file.with_suffix(".py").exists() and not (old_file / "__init__.py").exists(), old
+        new_file = ROOT.joinpath(*new.split("."))
+        assert new_file.with_suffix(".py").is_file() or (new_file / "__init__.py").is_file(), new
+
+
+def test_an_unknown_module_of_bogie_is_still_an_import_error():
+    import importlib
+
+    import pytest
+
+    with pytest.raises(ModuleNotFoundError):
+        importlib.import_module("bogie.no_such_module")
