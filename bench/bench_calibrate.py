@@ -48,7 +48,7 @@ MARGINS = {"share_outside_5pct": 0.05, "share_over_10pct": 0.03, "mean_spread_kg
 
 
 def main(argv: list[str] | None = None) -> None:
-    from bogie.fleet import calibration_checks as K
+    from bogie.fleet.calibration import checks as K
     from pipeline import calibrate as C
     from pipeline.config import parse_config
 

@@ -1,11 +1,12 @@
 """The calibration's objective, one evaluation, against its peer measured in the same run (issue 30 Must 7).
 
 The fit evaluates the distance thousands of times per refit (``docs/calibration.md``), so its cost sets the
-calibration's. The objective presorts the observed side once per fit (:class:`bogie.fleet.calibration._SortedSample`)
-and computes each group's shares and spread without the survey statistics' other quantities. The peer is the same
-distance by the previous code's path: :func:`bogie.fleet.calibration.simulated`, then the distance with
-:func:`scipy.stats.energy_distance` sorting both sides at every evaluation (:func:`scipy_distance`, here). Both are
-checked equal (to 1e-12 relative) before they are timed.
+calibration's. The objective presorts the observed side once per fit
+(:class:`bogie.fleet.calibration.problem._SortedSample`) and computes each group's shares and spread without the survey
+statistics' other quantities. The peer is the same distance by the previous code's path:
+:func:`bogie.fleet.calibration.problem.simulated`, then the distance with :func:`scipy.stats.energy_distance` sorting
+both sides at every evaluation (:func:`scipy_distance`, here). Both are checked equal (to 1e-12 relative) before they
+are timed.
 
 The table is an analytic one (no simulation; its readings linear in tilt and in the contact-roll radius, as in
 ``tests/test_fleet_tilted.py``) of :data:`N_BOGIES` calibration bogies, tri-axles and tandems, against
@@ -30,10 +31,10 @@ REPEATS = 400
 
 
 def _problem():
-    from bogie.fleet import calibration as L
-    from bogie.fleet import calibration_table as T
-    from bogie.fleet.distributions import LogUniform, TruncNormal, Uniform
-    from bogie.fleet.protocol_settings import StaticProtocol
+    from bogie.fleet.calibration import problem as L
+    from bogie.fleet.calibration import table as T
+    from bogie.fleet.sampling.distributions import LogUniform, TruncNormal, Uniform
+    from bogie.fleet.weighing.settings import StaticProtocol
 
     tilt, radius, bush = TruncNormal(0.005, 0.014, -0.035, 0.035), Uniform(0.0, 0.12), LogUniform(1.0, 3000.0)
     rng = np.random.default_rng(5)
@@ -88,7 +89,7 @@ def _time(f, thetas) -> float:
 
 
 def main() -> None:
-    from bogie.fleet import calibration as L
+    from bogie.fleet.calibration import problem as L
 
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} on {os.cpu_count()} CPUs", flush=True)
     problem = _problem()

@@ -21,8 +21,8 @@ import numba
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.weighing import weigh
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.weigh import weigh
 from pipeline.config import Config, load_config
 from pipeline.sample import sample_fleet, sample_studies
 from pipeline.simulate import simulate_samples, study_protocols

@@ -7,7 +7,7 @@ before this branch's changes) extracted with ``git archive`` into a cache direct
 later runs so that its numba cache stays warm. Every worker samples the
 same :data:`N_BOGIES` fleet bogies (``params.yaml`` of this tree, ``fleet.n_bogies`` set to that), loads the
 compiled kernels with one untimed weighing per protocol, then times :data:`PASSES` passes of
-:func:`bogie.fleet.weighing.weigh` over the sample per protocol. Workers of the two trees alternate
+:func:`bogie.fleet.weighing.weigh.weigh` over the sample per protocol. Workers of the two trees alternate
 (:data:`ROUNDS` rounds, which goes first alternating) so that a burst of other work on the shared machine falls on
 both; the best pass of each protocol is kept. ``--reference HEAD`` with a clean tree times the same code twice: the
 ratio it prints is the bench's own scatter.
@@ -44,7 +44,7 @@ ROUNDS = 3
 #: where reference trees are extracted (one directory per commit hash)
 TREE_CACHE = Path(os.environ.get("XDG_CACHE_HOME", Path.home() / ".cache")) / "bogie-bench-trees"
 PROTOCOLS = ("static", "wim")
-#: the float result columns compared (bogie.fleet.runs.RESULT_COLUMNS without the flags)
+#: the float result columns compared (bogie.fleet.weighing.runs.RESULT_COLUMNS without the flags)
 FLOAT_COLUMNS = (
     *(f"axle_load_{i + 1}" for i in range(6)), *(f"load_share_{i + 1}" for i in range(6)),
     "group_load", "p", "p1", "max_deviation", "spread", "spread_kg", "road_wear_factor", "chassis_pitch",
@@ -58,8 +58,8 @@ def worker(out: str, params: str, n_bogies: int, divisor: int, passes: int) -> N
     import dataclasses
 
     import bogie
-    from bogie.fleet.sampling import bogie_from_sample
-    from bogie.fleet.weighing import weigh
+    from bogie.fleet.sampling.sample import bogie_from_sample
+    from bogie.fleet.weighing.weigh import weigh
     from pipeline.config import load_config
     from pipeline.sample import sample_fleet
 

@@ -2,10 +2,10 @@
 
 ``python -m bench.bench_stage_overhead [--base REV] [--repeats N]`` runs the default params.yaml's studies (15 608
 runs in chunks of ``execution.chunk_size``) through :func:`pipeline.simulate.simulate_samples` with
-:func:`bogie.fleet.weighing.weigh` replaced by a stub that returns a precomputed valid row, so that only the stage's own
-work runs: planning and hashing the chunks, building each chunk's rows (``bogie_from_sample`` included), passing
-them between processes, writing and checking the part files, and verifying them on a rerun. Each measurement is a
-fresh process (the stub is installed in it and in its loky workers by a ``sitecustomize`` module), alternately for
+:func:`bogie.fleet.weighing.weigh.weigh` replaced by a stub that returns a precomputed valid row, so that only the
+stage's own work runs: planning and hashing the chunks, building each chunk's rows (``bogie_from_sample`` included),
+passing them between processes, writing and checking the part files, and verifying them on a rerun. Each measurement is
+a fresh process (the stub is installed in it and in its loky workers by a ``sitecustomize`` module), alternately for
 the base revision (its ``pipeline`` and ``bogie`` exported with ``git archive``) and for this checkout; the best of
 ``--repeats`` is kept, as the machine is shared. The machine's load average is printed with the figures.
 
@@ -48,7 +48,7 @@ import os
 if os.environ.get("BENCH_STUB_WEIGH"):
     import numpy as np
 
-    import bogie.fleet.protocols as protocol
+    import bogie.fleet.weighing.protocols as protocol
     import pipeline.simulate as simulate
 
     _ROWS = {}
@@ -136,8 +136,8 @@ def _child_import() -> dict:
 def _child_startup() -> dict:
     """A fresh worker's imports and first weighings (real ones), beyond a second weighing of each kind [s]."""
     result = _child_import()
-    from bogie.fleet.sampling import bogie_from_sample
-    from bogie.fleet.weighing import weigh
+    from bogie.fleet.sampling.sample import bogie_from_sample
+    from bogie.fleet.weighing.weigh import weigh
 
     config, samples, protocols = _child_samples()
     fleet = samples["fleet"]

@@ -6,9 +6,9 @@ Measured on the first tandem and the first tri-axle bogie of a fixed fleet sampl
 1. **Work per phase** (counts from the kernel, exact): accepted and rejected steps, force evaluations (the 2n + 1
    of each tangent included), tangents formed, factorisations of the iteration matrix and steps whose first
    correction was accepted unchecked (``bogie.steel.phases.PhaseOutcome``), and the evaluations per step.
-2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigh``, the compiled
-   call (``bogie.steel.phases._core.run_phases``) within it, and so the Python around it (the road tables, the phases,
-   the result row); the time per step and per force evaluation of the compiled call.
+2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigh.weigh``, the
+   compiled call (``bogie.steel.phases._core.run_phases``) within it, and so the Python around it (the road tables, the
+   phases, the result row); the time per step and per force evaluation of the compiled call.
 3. **Unit costs** (compiled loops, no Python in between, best of 5): one force evaluation with the record (the
    hysteresis' exponential running), forming and factoring the 2n x 2n iteration matrix, one solve with its factors.
 
@@ -44,8 +44,8 @@ def _sample() -> tuple[list[dict], dict]:
 
 def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
     """Best-of-REPEATS time of ``weigh`` and of its compiled call [s], and the phases' outcomes."""
-    from bogie.fleet import protocols as protocol
-    from bogie.fleet.sampling import bogie_from_sample
+    from bogie.fleet.sampling.sample import bogie_from_sample
+    from bogie.fleet.weighing import protocols as protocol
     from bogie.steel import phases
     from bogie.steel.phases import _core as pc
 
@@ -82,7 +82,7 @@ def _unit_costs(record: dict) -> dict[str, float]:
     """Compiled-loop costs [us] of one force evaluation, one factorisation and one solve, for ``record``'s bogie."""
     from numba import njit
 
-    from bogie.fleet.sampling import bogie_from_sample
+    from bogie.fleet.sampling.sample import bogie_from_sample
     from bogie.lu import lu_factor, lu_solve
     from bogie.steel import nonlinear as nl
     from bogie.steel.force import core as nlc

@@ -2,10 +2,10 @@
 
 ``python -m bench.profile_stage [--fraction F]`` weighs the first fraction ``F`` (default 0.1) of each study of this
 checkout's ``data/samples`` (run ``make repro`` or ``dvc repro sample`` first) by the study's protocols, serially in
-one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigh`, the road tables' cache emptied first),
-after an untimed warm-up that loads the kernels. For each (study, protocol, group) it prints the runs, the time per
-run, the compiled call's share (``bogie.steel.phases._core.run_phases``, timed around each call), the Python around it
-(road tables, phases, packing, result row), ``bogie_from_sample`` per run, the step attempts per run (accepted
+one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigh.weigh`, the road tables' cache emptied
+first), after an untimed warm-up that loads the kernels. For each (study, protocol, group) it prints the runs, the time
+per run, the compiled call's share (``bogie.steel.phases._core.run_phases``, timed around each call), the Python around
+it (road tables, phases, packing, result row), ``bogie_from_sample`` per run, the step attempts per run (accepted
 and rejected steps, from the kernel's statistics), the kernel's time per attempt and the category's share of the
 total; then the totals and the load average. Contiguous slices keep the ablation's variants of a bogie together,
 as in the stage (they share a road). Compare shares and ratios, not times: the machine is shared.
@@ -35,8 +35,8 @@ def main(argv: list[str] | None = None) -> None:
 
     import pandas as pd
 
-    from bogie.fleet import protocols as protocol
-    from bogie.fleet.sampling import bogie_from_sample
+    from bogie.fleet.sampling.sample import bogie_from_sample
+    from bogie.fleet.weighing import protocols as protocol
     from bogie.steel.phases import _core as pc
     from pipeline.config import load_config
     from pipeline.simulate import study_protocols

@@ -1,6 +1,7 @@
 """Modules that moved, found at their old paths for one release with a DeprecationWarning naming the new home.
 
-Issue 42 moved the steel model's modules into :mod:`bogie.steel` (``docs/architecture.md``). ``import bogie.static``
+Issue 42 moved the steel model's modules into :mod:`bogie.steel` and grouped :mod:`bogie.fleet` by concern
+(``docs/architecture.md``). ``import bogie.static``
 or ``from bogie.nonlinear import simulate`` still works: :class:`MovedFinder`, installed by ``import bogie``, imports
 the new module, warns once per old path, and binds the old name to the very same module object (so a patch applied
 through either name is seen through both). Remove an entry, or the whole table, at the next release.
@@ -25,7 +26,19 @@ MOVED: dict[str, str] = {
     "bogie.nonlinear": "bogie.steel.nonlinear",
     "bogie.newmark": "bogie.steel.newmark",
     "bogie.phases": "bogie.steel.phases",
-}
+    # bogie.fleet grouped by concern; bogie.fleet.sampling, .weighing, .calibration and .design are rooms now, their
+    # former modules' names still found there (bogie.lazy)
+    **{f"bogie.fleet.{old}": f"bogie.fleet.{new}" for old, new in (
+        ("distributions", "sampling.distributions"), ("seeds", "sampling.seeds"), ("tilted", "sampling.tilted"),
+        ("protocol_settings", "weighing.settings"), ("protocols", "weighing.protocols"), ("runs", "weighing.runs"),
+        ("survey", "weighing.survey"), ("observed", "weighing.observed"),
+        ("calibration_settings", "calibration.settings"), ("calibration_table", "calibration.table"),
+        ("calibration_fit", "calibration.fit"), ("calibration_posterior", "calibration.posterior"),
+        ("priors", "calibration.priors"), ("calibration_attribution", "calibration.attribution"),
+        ("calibration_checks", "calibration.checks"), ("design_settings", "design.settings"),
+        ("design_analysis", "design.analysis"), ("design_table", "design.table"),
+    )},
+}  # fmt: skip
 
 
 class _AliasLoader(importlib.abc.Loader):

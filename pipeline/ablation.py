@@ -14,8 +14,8 @@ import numpy as np
 import pandas as pd
 from scipy import stats
 
-from bogie.fleet.sampling import VARIANTS
-from bogie.fleet.survey import inequality_columns
+from bogie.fleet.sampling.sample import VARIANTS
+from bogie.fleet.weighing.survey import inequality_columns
 from bogie.params import INHIBITORS
 from bogie.rounding import json_number
 from pipeline.survey import RunsError

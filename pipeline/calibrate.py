@@ -4,8 +4,8 @@
 distribution's centre and spread, the air share, the WIM site's roughness, the sensor's error) so that the
 simulated readings' distributions of each axle position's load share and of the spread match the observed survey's
 under the same filters (``observed:``). The method and its checks are the library's, with plain arguments:
-:mod:`bogie.fleet.calibration` (the calibration fleet's table of readings, the distance, the fit, the bootstrap;
-``docs/calibration.md``) and :mod:`bogie.fleet.calibration_checks` (the calibrated fleet simulated directly, the
+:mod:`bogie.fleet.calibration.problem` (the calibration fleet's table of readings, the distance, the fit, the bootstrap;
+``docs/calibration.md``) and :mod:`bogie.fleet.calibration.checks` (the calibrated fleet simulated directly, the
 held-out half, the ablation). This stage reads params.yaml, turns it into those arguments (the calibration fleet is
 the first ``calibrate.n_bogies`` bogies of the fleet study), weighs on the pipeline's one executor
 (:func:`pipeline.workers.map_ordered`: simulate's loky pool, or the dask cluster of ``execution.backend: dask``)
@@ -30,11 +30,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet import calibration
-from bogie.fleet.calibration import CalibrationError, CalibrationSettings, Mapper, Observed, Table, base_values
-from bogie.fleet.calibration_checks import calibrate_survey
+from bogie.fleet.calibration import problem as calibration
+from bogie.fleet.calibration.checks import calibrate_survey
+from bogie.fleet.calibration.problem import CalibrationError, CalibrationSettings, Mapper, Observed, Table, base_values
 from bogie.fleet.constants import TILTED_QUANTITIES
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.rounding import json_number
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
@@ -85,7 +85,7 @@ def _tilt_grid(config: Config) -> np.ndarray:
 
 
 def _fleet(config: Config) -> dict[str, Any]:
-    """:func:`bogie.fleet.calibration.crn_table`'s arguments from params.yaml."""
+    """:func:`bogie.fleet.calibration.problem.crn_table`'s arguments from params.yaml."""
     cal = config.calibrate
     settings: StaticProtocol | WimProtocol = config.protocol.static if cal.protocol == "static" else config.protocol.wim
     return {
@@ -134,7 +134,7 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
     Raises
     ------
     CalibrationError
-        If too few groups of either size pass the filters (:func:`bogie.fleet.calibration.observed_groups`).
+        If too few groups of either size pass the filters (:func:`bogie.fleet.calibration.problem.observed_groups`).
     """
     obs = config.observed
     survey = observed_survey(path, obs.format, obs.min_group_load / 1000.0, obs.group_spacing, obs.position,
@@ -157,7 +157,7 @@ def skipped_metrics(reason: str) -> dict[str, Any]:
 
 def run(config: Config, path: Path, progress: Callable[[str], None] = print) -> tuple[dict, dict[str, pd.DataFrame]]:
     """The whole calibration of params.yaml: metrics and the tables of data/calibration/
-    (:func:`bogie.fleet.calibration_checks.calibrate_survey`)."""
+    (:func:`bogie.fleet.calibration.checks.calibrate_survey`)."""
     observed, _ = observed_groups(path, config)
     table = build_table(config, progress)
     metrics, tables = calibrate_survey(

@@ -32,8 +32,8 @@ import scipy
 
 from bogie.bogie_file import base_fields
 from bogie.digest import numerics_digest
-from bogie.fleet.sampling import COLUMNS
-from bogie.fleet.weighing import Protocols
+from bogie.fleet.sampling.sample import COLUMNS
+from bogie.fleet.weighing.weigh import Protocols
 from bogie.numba_cache import hash_sources
 from bogie.numerics import compile_target
 from bogie.presets import PRESETS
@@ -106,7 +106,7 @@ def chunk_hash(study: str, rows: Mapping[str, np.ndarray], protocols: Protocols,
     study
         Study name.
     rows
-        The chunk's sample rows: each column of :data:`bogie.fleet.sampling.COLUMNS` as an array.
+        The chunk's sample rows: each column of :data:`bogie.fleet.sampling.sample.COLUMNS` as an array.
     protocols
         The study's protocols in run order, each with its settings (SI).
     code
@@ -133,9 +133,9 @@ def chunk_hash(study: str, rows: Mapping[str, np.ndarray], protocols: Protocols,
 class Chunk:
     """One task and its part file (compared by identity: it holds the sample rows).
 
-    ``rows`` holds the chunk's samples column by column, each column of :data:`bogie.fleet.sampling.COLUMNS` a list of
-    Python values (what ``to_dict("records")`` gives): a task's argument that pickles in a tenth of the time a frame
-    of the same rows takes, and that a worker reads without pandas.
+    ``rows`` holds the chunk's samples column by column, each column of :data:`bogie.fleet.sampling.sample.COLUMNS` a
+    list of Python values (what ``to_dict("records")`` gives): a task's argument that pickles in a tenth of the time a
+    frame of the same rows takes, and that a worker reads without pandas.
     """
 
     study: str

@@ -1,8 +1,8 @@
 """DVC stage ``design``: design guidance from a controlled experiment -> data/design/, metrics/design.json.
 
 ``python -m pipeline.design`` reads params.yaml (``design:``; null: the stage writes a metrics file saying it was
-not asked for), runs the controlled design experiment of :mod:`bogie.fleet.design` (the method: the designs, the
-operating conditions, the tilt grid, the sample rows) and analyses it with :mod:`bogie.fleet.design_analysis` (the
+not asked for), runs the controlled design experiment of :mod:`bogie.fleet.design.experiment` (the method: the designs,
+the operating conditions, the tilt grid, the sample rows) and analyses it with :mod:`bogie.fleet.design.analysis` (the
 shares within 5 % with Wilson intervals, the tilt tolerances, the Pareto fronts, the guidance sentences); the
 method is ``docs/design.md``'s. This module is the stage: params.yaml's ``design:`` as
 :class:`bogie.fleet.DesignSettings`, the runs and the outputs.
@@ -24,9 +24,15 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.design import DesignExperiment, DesignSettings, design_experiment, experiment_runs, typical_design
-from bogie.fleet.design_analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
-from bogie.fleet.sampling import COLUMNS
+from bogie.fleet.design.analysis import DesignAnalysis, DesignError, analyse_designs, guidance_sentences
+from bogie.fleet.design.experiment import (
+    DesignExperiment,
+    DesignSettings,
+    design_experiment,
+    experiment_runs,
+    typical_design,
+)
+from bogie.fleet.sampling.sample import COLUMNS
 from bogie.rounding import json_number
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
 from pipeline.chunks import NotRunsDatasetError
@@ -58,7 +64,8 @@ def settings(config: Config) -> DesignSettings:
 
 
 def experiment(config: Config) -> DesignExperiment:
-    """The experiment of params.yaml: :func:`bogie.fleet.design.design_experiment` of its fleet, ``design:`` and
+    """The experiment of params.yaml: :func:`bogie.fleet.design.experiment.design_experiment` of its fleet, ``design:``
+    and
     master seed."""
     return design_experiment(fleet_model(config), settings(config), config.seed)
 

@@ -35,7 +35,7 @@ from typing import Any
 import pandas as pd
 import pyarrow as pa
 
-from bogie.fleet.observed import (
+from bogie.fleet.weighing.observed import (
     INEQUALITY_COLUMNS,
     READING_RUN_COLUMNS,
     SIMULATED_COLUMNS,
@@ -82,8 +82,8 @@ def arrow_schema(columns: Sequence[str]) -> pa.Schema:
 
 #: data/observed/groups.parquet: the columns of bogie.weighings.groups.axle_groups, then the inequality quantities
 GROUPS_SCHEMA = arrow_schema((*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS))
-#: data/observed/simulated.parquet: one row per simulated reading kept (bogie.fleet.observed.SIMULATED_COLUMNS),
-#: loads in kg as the observed ones
+#: data/observed/simulated.parquet: one row per simulated reading kept
+#: (bogie.fleet.weighing.observed.SIMULATED_COLUMNS), loads in kg as the observed ones
 SIMULATED_SCHEMA = arrow_schema(SIMULATED_COLUMNS)
 
 

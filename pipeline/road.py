@@ -87,7 +87,7 @@ def _design_inputs(config, design_runs: Path, design_dir: Path) -> tuple[pd.Data
     design study."""
     if config.design is None:
         return None
-    from bogie.fleet.design import experiment_runs
+    from bogie.fleet.design.experiment import experiment_runs
     from pipeline.design import experiment
 
     exp = experiment(config)

@@ -21,7 +21,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES
-from bogie.fleet.sampling import (
+from bogie.fleet.sampling.sample import (
     COLUMNS,
     FLEET_QUANTITIES,
     SCALAR_QUANTITIES,
@@ -33,7 +33,7 @@ from bogie.fleet.sampling import (
     sensor_seed,
     study_frame,
 )
-from bogie.fleet.sampling import sample_fleet as fleet_sample
+from bogie.fleet.sampling.sample import sample_fleet as fleet_sample
 from bogie.params import INHIBITORS
 from pipeline.atomic import run_stage, stage_inputs
 from pipeline.config import Config, ConfigError, load_config

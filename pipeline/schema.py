@@ -1,7 +1,7 @@
 """The one schema of the runs dataset (``data/runs``): every column's type and unit, used to write and to read.
 
-One row per sampled bogie and protocol: the sample's columns (:data:`bogie.fleet.sampling.COLUMNS`, ``study`` being the
-partition directory), then the weighing's result. A failed weighing (``status = "failed"``, the reason in
+One row per sampled bogie and protocol: the sample's columns (:data:`bogie.fleet.sampling.sample.COLUMNS`, ``study``
+being the partition directory), then the weighing's result. A failed weighing (``status = "failed"``, the reason in
 ``message``) has every result column null (NaN in pandas floats, ``<NA>`` in the booleans): never a made-up number,
 so an unfiltered mean is NaN rather than silently wrong. A successful row has no null. Each field's unit is in its
 Parquet field metadata (key ``unit``); the text columns are dictionary-encoded, so pandas reads them back as
@@ -22,7 +22,7 @@ import pandas as pd
 import pyarrow as pa
 import pyarrow.parquet as pq
 
-from bogie.fleet.runs import (
+from bogie.fleet.weighing.runs import (
     CATEGORICAL,
     CATEGORIES,
     RESULT_COLUMNS,
@@ -136,7 +136,7 @@ def table_from_rows(rows: Sequence[Mapping[str, object]]) -> pa.Table:
         codes = _CODES[field.name]
         dictionary = _DICTIONARIES[field.name]
         if field.name == "preset" and not all(v in codes for v in values):
-            # bogie files' paths after the presets' names (bogie.fleet.runs.preset_categories)
+            # bogie files' paths after the presets' names (bogie.fleet.weighing.runs.preset_categories)
             labels = preset_categories([v for v in values if v is not None and v == v])
             codes, dictionary = {v: i for i, v in enumerate(labels)}, pa.array(labels, pa.string())
         # a null label (None or NaN) stays null; an unknown one is collected for the error

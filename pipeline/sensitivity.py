@@ -32,8 +32,8 @@ import pandas as pd
 from SALib.analyze import sobol
 from SALib.util import extract_group_names
 
-from bogie.fleet.sampling import TYRE_WEAR_COLUMNS, design_seed
-from bogie.fleet.survey import AXLE_LOAD_COLUMNS
+from bogie.fleet.sampling.sample import TYRE_WEAR_COLUMNS, design_seed
+from bogie.fleet.weighing.survey import AXLE_LOAD_COLUMNS
 from bogie.rounding import json_number
 from pipeline.ablation import (
     INHIBITOR_NAMES,

@@ -44,8 +44,8 @@ import pandas as pd
 import pyarrow as pa
 from joblib import Parallel, delayed, parallel_config
 
-from bogie.fleet.sampling import COLUMNS
-from bogie.fleet.weighing import weigh_rows
+from bogie.fleet.sampling.sample import COLUMNS
+from bogie.fleet.weighing.weigh import weigh_rows
 from pipeline.atomic import StageError, run_stage, stage_inputs
 from pipeline.chunks import (
     Chunk,
@@ -84,16 +84,16 @@ def run_chunk(rows: pd.DataFrame, protocols: Protocols) -> pd.DataFrame:
     Parameters
     ----------
     rows
-        Sample rows (columns of :data:`bogie.fleet.sampling.COLUMNS`), in ``sample_id`` order.
+        Sample rows (columns of :data:`bogie.fleet.sampling.sample.COLUMNS`), in ``sample_id`` order.
     protocols
         (name, settings) pairs, in the order their rows appear for each sample.
 
     Returns
     -------
     pandas.DataFrame
-        ``len(rows) * len(protocols)`` rows with the columns and dtypes of :data:`bogie.fleet.runs.RUN_COLUMNS`.
-        A sample that is not a valid bogie, or whose weighing fails, gets rows with ``status = "failed"``, the
-        reason in ``message`` and nulls in every result column.
+        ``len(rows) * len(protocols)`` rows with the columns and dtypes of
+        :data:`bogie.fleet.weighing.runs.RUN_COLUMNS`. A sample that is not a valid bogie, or whose weighing fails, gets
+        rows with ``status = "failed"``, the reason in ``message`` and nulls in every result column.
     """
     # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
     return runs_frame(weigh_rows({c: rows[c].tolist() for c in rows.columns}, protocols))
@@ -263,8 +263,8 @@ def simulate_samples(
     Parameters
     ----------
     samples
-        Sample table of each study to simulate (columns of :data:`bogie.fleet.sampling.COLUMNS`). Parts of studies not
-        in this mapping are deleted from ``out``.
+        Sample table of each study to simulate (columns of :data:`bogie.fleet.sampling.sample.COLUMNS`). Parts of
+        studies not in this mapping are deleted from ``out``.
     protocols
         The protocols of each study (:func:`study_protocols`).
     execution

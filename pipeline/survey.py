@@ -2,9 +2,9 @@
 
 ``python -m pipeline.survey`` reads the fleet study's runs (``data/runs/study=fleet``) and tabulates, per protocol
 (static weighbridge, weigh-in-motion) and axle group (tandem, tri-axle), what a road authority's survey of that
-fleet would find (:func:`bogie.fleet.survey.survey`, every statistic a plain function of a runs DataFrame), and the
-design guidance (the share within 5 % binned by the design parameters, with Wilson intervals:
-:mod:`bogie.fleet.design_table`; the report draws it). This module reads, calls and writes. Definitions, units and
+fleet would find (:func:`bogie.fleet.weighing.survey.survey`, every statistic a plain function of a runs DataFrame), and
+the design guidance (the share within 5 % binned by the design parameters, with Wilson intervals:
+:mod:`bogie.fleet.design.table`; the report draws it). This module reads, calls and writes. Definitions, units and
 file layout: ``docs/outputs.md``.
 
 Failed runs (``status == "failed"``, zeros in their numbers) are excluded from every statistic and counted in
@@ -24,9 +24,15 @@ import numpy as np
 import pandas as pd
 import pyarrow as pa
 
-from bogie.fleet.design_table import DESIGN_COLUMNS, design_table
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.survey import REQUIRED_COLUMNS, SUSPENSION_STATISTICS, inequality_columns, readings, survey_tables
+from bogie.fleet.design.table import DESIGN_COLUMNS, design_table
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.survey import (
+    REQUIRED_COLUMNS,
+    SUSPENSION_STATISTICS,
+    inequality_columns,
+    readings,
+    survey_tables,
+)
 from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.weighings.writers import write_weighings

@@ -20,7 +20,7 @@ from collections.abc import Mapping
 from pathlib import Path
 from typing import Any
 
-from bogie.fleet.distributions import Distribution
+from bogie.fleet.sampling.distributions import Distribution
 from pipeline.atomic import atomic_file, run_stage, stage_inputs
 from pipeline.config import check_params
 

@@ -10,7 +10,7 @@ import pytest
 from _fleets import DISTS, PRESETS, fleet
 
 import bogie.fleet as bf
-from bogie.fleet.observed import simulated_readings
+from bogie.fleet.weighing.observed import simulated_readings
 from bogie.params import GRAVITY
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)

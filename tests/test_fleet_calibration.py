@@ -1,4 +1,5 @@
-"""bogie.fleet.calibration with plain arguments (issue 29): known fleet values recovered, the table, bad arguments.
+"""bogie.fleet.calibration.problem with plain arguments (issue 29): known fleet values recovered, the table, bad
+arguments.
 
 The recovery test needs no simulation: the calibration fleet's table holds readings that are a known function of the
 tilt (a steel group's outer axles share its load 1 -+ 0.02 per degree of tilt, an air group's axles equally), and the
@@ -16,9 +17,9 @@ import pytest
 from _fleets import DISTS, fleet
 
 import bogie.fleet as bf
-from bogie.fleet import calibration as L
-from bogie.fleet import calibration_checks as K
-from bogie.fleet import calibration_fit as F
+from bogie.fleet.calibration import checks as K
+from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import problem as L
 from bogie.weighings.survey import observed_survey
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3)
@@ -209,7 +210,7 @@ def test_the_ablation_states_a_size_the_baseline_has_no_laden_group_of(monkeypat
     import numpy as np
     import pandas as pd
 
-    from bogie.fleet import calibration_checks as K
+    from bogie.fleet.calibration import checks as K
 
     def fake(table, values, variant, steel_only=False, executor=None):
         rows = [{"group": "tandem", "n_axles": 2, "axle_load_1": 8000.0, "axle_load_2": 8200.0, "axle_load_3": np.nan}]

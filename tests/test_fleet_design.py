@@ -1,4 +1,4 @@
-"""bogie.fleet.design: the design experiment with plain arguments (issue 29), no params file, no pipeline.
+"""bogie.fleet.design.experiment: the design experiment with plain arguments (issue 29), no params file, no pipeline.
 
 The analysis reads a hand-made runs table whose answers are worked out here. A tandem with axle loads
 W0 = 1 + s, W1 = 1 - s [10 kN] is within 5 % while (W0 - W1) / W0 = 2 |s| / (1 + |s|) <= 0.05, that is
@@ -16,8 +16,8 @@ import pytest
 from _fleets import DISTS, fleet
 
 import bogie.fleet as bf
-from bogie.fleet import design as L
-from bogie.fleet import design_analysis as A
+from bogie.fleet.design import analysis as A
+from bogie.fleet.design import experiment as L
 
 STATIC = bf.StaticProtocol(load_time=2.0, approach_length=5.0, crawl_speed=1.4, settle_time=3.0, dt=1e-3,
                            step_tolerance=2e-7)  # fmt: skip

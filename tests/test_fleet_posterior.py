@@ -7,11 +7,11 @@ import numpy as np
 import pytest
 from test_fleet_tilted import BUSH, FIT, RADIUS, TILT, TRUTH, radius_survey, radius_table
 
-from bogie.fleet import calibration as L
-from bogie.fleet import calibration_fit as F
-from bogie.fleet import calibration_posterior as P
+from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import posterior as P
+from bogie.fleet.calibration import problem as L
+from bogie.fleet.calibration.priors import Prior, default_priors, log_prior
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, PILED
-from bogie.fleet.priors import Prior, default_priors, log_prior
 
 
 def test_every_fittable_quantity_has_a_prior_with_a_source():

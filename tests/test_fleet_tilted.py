@@ -13,11 +13,11 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bogie.fleet import calibration as L
-from bogie.fleet import calibration_fit as F
-from bogie.fleet import calibration_table as T
-from bogie.fleet.distributions import LogUniform, TruncNormal, Uniform
-from bogie.fleet.tilted import Tilted, effective_fraction
+from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import problem as L
+from bogie.fleet.calibration import table as T
+from bogie.fleet.sampling.distributions import LogUniform, TruncNormal, Uniform
+from bogie.fleet.sampling.tilted import Tilted, effective_fraction
 
 RADIUS = Uniform(0.0, 0.12)  # [m]
 BUSH = LogUniform(1.0, 3000.0)  # [N m/rad]

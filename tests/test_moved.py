@@ -48,3 +48,37 @@ def test_an_unknown_module_of_bogie_is_still_an_import_error():
 
     with pytest.raises(ModuleNotFoundError):
         importlib.import_module("bogie.no_such_module")
+
+
+def test_the_fleet_rooms_keep_their_former_modules_names_and_the_flat_paths_warn():
+    code = """
+import warnings
+with warnings.catch_warnings(record=True) as caught:
+    warnings.simplefilter("always")
+    from bogie.fleet.calibration_fit import calibrate
+    from bogie.fleet.calibration import observed_groups, calibrate as calibrate2
+    from bogie.fleet.sampling import sample_fleet, road_seed
+    from bogie.fleet.design import study_designs, FACTORS
+    from bogie.fleet.weighing import weigh_fleet, Protocols
+from bogie.fleet.calibration.fit import calibrate as new
+from bogie.fleet.calibration.problem import observed_groups as groups
+from bogie.fleet.sampling.sample import sample_fleet as sample
+from bogie.fleet.design.experiment import FACTORS as factors
+from bogie.fleet.weighing.weigh import Protocols as protocols
+assert calibrate is new and calibrate2 is new and observed_groups is groups and sample_fleet is sample
+assert FACTORS is factors and Protocols is protocols
+messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
+assert messages == ["bogie.fleet.calibration_fit moved to bogie.fleet.calibration.fit (issue 42); the old path works "
+                    "until the next release"], messages
+import bogie.fleet.calibration as room
+try:
+    room.no_such_name
+except AttributeError as error:
+    assert "no_such_name" in str(error)
+else:
+    raise AssertionError("a missing name was found")
+print("ok")
+"""
+    out = subprocess.run([sys.executable, "-c", code], capture_output=True, text=True, cwd=ROOT)
+    assert out.returncode == 0, out.stderr
+    assert out.stdout.strip() == "ok"

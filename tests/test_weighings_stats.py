@@ -83,7 +83,7 @@ def test_a_table_without_axle_loads_is_refused():
 
 
 def test_the_survey_stage_summary_uses_these_statistics():
-    from bogie.fleet.survey import inequality_columns, summary_table
+    from bogie.fleet.weighing.survey import inequality_columns, summary_table
 
     rng = np.random.default_rng(4)
     loads = 80e3 * (1 + 0.06 * rng.standard_normal((12, 3)))

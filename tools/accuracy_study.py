@@ -26,8 +26,8 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bogie.fleet import protocols as protocol  # noqa: E402
-from bogie.fleet.sampling import bogie_from_sample  # noqa: E402
+from bogie.fleet.sampling.sample import bogie_from_sample  # noqa: E402
+from bogie.fleet.weighing.weigh import protocols as protocol  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
 from pipeline.sample import sample_fleet, sample_sensitivity  # noqa: E402
 

@@ -17,9 +17,9 @@ import sys
 
 import numpy as np
 
-from bogie.fleet.design import FLEET_SLOT, conditions, design_points, design_samples, typical_design
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.weighing import weigh
+from bogie.fleet.design.experiment import FLEET_SLOT, conditions, design_points, design_samples, typical_design
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.weigh import weigh
 from pipeline import design
 from pipeline.config import load_config
 from pipeline.sample import fleet_model

@@ -11,7 +11,7 @@ then the other two parts alone, then the defaults with another sensor or class. 
 sensor seeds in every configuration (common random numbers), so a difference between two rows is the
 configurations' difference, not another draw. The statistics are the survey's
 (:func:`bogie.weighings.stats.survey_statistics`) over the readings without an axle at 0 N
-(:func:`bogie.fleet.survey.readings`). One process: the machine is shared.
+(:func:`bogie.fleet.weighing.survey.readings`). One process: the machine is shared.
 """
 
 from __future__ import annotations
@@ -26,9 +26,9 @@ from pathlib import Path
 
 import pandas as pd
 
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.survey import readings
-from bogie.fleet.weighing import weigh
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.survey import readings
+from bogie.fleet.weighing.weigh import weigh
 from bogie.params import GRAVITY
 from bogie.weighings.stats import survey_statistics
 from pipeline.config import WimProtocol, load_params, parse_config

@@ -36,8 +36,8 @@ PROTOCOLS: tuple[str, ...] = ("static", "wim")
 #: WIM readings, a weighbridge file's are static ones
 SURVEY_PROTOCOLS: dict[str, str] = {"wim": "wim", "weighbridge": "static"}
 
-#: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``), each with its
-#: physical range and unit
+#: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration.problem`, ``docs/calibration.md``), each
+#: with its physical range and unit
 CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg
     "chassis_tilt_sd_deg": (0.01, 5.0, "degree"),  # its spread (parent sd)
@@ -45,14 +45,14 @@ CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "site_iri_m_km": (0.3, 10.0, "m/km"),  # the WIM site's roughness
     "sensor_error_pct": (0.0, 30.0, "%"),  # sd of the WIM sensor's own error on each axle reading (s_a; the part
     # common to a pass's axles cancels in the load shares and is not fitted)
-    # the mean of distributions.contact_roll_radius_mm, moved by an exponential tilt (bogie.fleet.tilted); the range
-    # is the Bogie field's (bogie.ranges), a fit's must lie strictly within the fleet distribution's support
+    # the mean of distributions.contact_roll_radius_mm, moved by an exponential tilt (bogie.fleet.sampling.tilted); the
+    # range is the Bogie field's (bogie.ranges), a fit's must lie strictly within the fleet distribution's support
     "contact_roll_radius_mean_mm": (0.0, 500.0, "mm"),
     # the geometric mean of distributions.bush_stiffness (log-uniform), moved the same way
     "bush_stiffness_geomean": (1e-3, 1e7, "N m/rad"),
 }
-#: the fitted quantities that move a fleet distribution of an inhibitor (bogie.fleet.tilted): the sample column each
-#: moves, and the factor from its SI unit to the unit of the fitted mean
+#: the fitted quantities that move a fleet distribution of an inhibitor (bogie.fleet.sampling.tilted): the sample column
+#: each moves, and the factor from its SI unit to the unit of the fitted mean
 TILTED_QUANTITIES: dict[str, tuple[str, float]] = {
     "contact_roll_radius_mean_mm": ("contact_roll_radius", 1000.0),
     "bush_stiffness_geomean": ("bush_stiffness", 1.0),

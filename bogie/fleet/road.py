@@ -25,7 +25,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES
-from bogie.fleet.design_analysis import FLEET_SLOT
+from bogie.fleet.design.analysis import FLEET_SLOT
 from bogie.intervals import percentile_interval
 from bogie.params import GRAVITY
 from bogie.weighings.stats import axle_columns
@@ -52,8 +52,8 @@ def fleet_wear(
     Parameters
     ----------
     runs
-        A fleet's runs (:data:`bogie.fleet.runs.RUN_COLUMNS`): axle loads [N], ``status``; a failed run is left out
-        and counted in ``n_failed`` of its cell.
+        A fleet's runs (:data:`bogie.fleet.weighing.runs.RUN_COLUMNS`): axle loads [N], ``status``; a failed run is left
+        out and counted in ``n_failed`` of its cell.
     legal_group, legal_axle
         Legal load of each group size and of one axle [kg].
     min_group_load
@@ -91,8 +91,8 @@ def scenario_runs(runs: pd.DataFrame, designs: pd.DataFrame, tilts_deg: Sequence
     Parameters
     ----------
     runs
-        The experiment's runs with ``design``, ``condition`` and ``slot`` (:func:`bogie.fleet.design.experiment_runs`),
-        axle loads [N], ``status``, ``chassis_tilt_deg``.
+        The experiment's runs with ``design``, ``condition`` and ``slot``
+        (:func:`bogie.fleet.design.experiment.experiment_runs`), axle loads [N], ``status``, ``chassis_tilt_deg``.
     designs
         The design table (``data/design/designs.csv``, best first): ``design``, ``group``, ``kind`` (``typical``,
         ``grid``, ``space``, ``air``), ``tilt_tolerance_nose_up_deg`` and ``_nose_down_deg`` [degree].

@@ -1,10 +1,10 @@
 """The params.yaml form of a distribution: one pydantic model per ``kind``, a union tagged by ``kind``.
 
 Each model holds the parameters exactly as written in params.yaml, in the unit of the quantity's key; its
-:meth:`DistributionSpec.build` makes the sampling class of :mod:`bogie.fleet.distributions` from them, which checks
-the rules that span parameters (``low < high``, one weight per value) and raises
-:class:`~bogie.fleet.distributions.ParameterError`. The conversion to SI and the check against the physical range of
-the quantity are done per quantity by :mod:`pipeline.config.schema`.
+:meth:`DistributionSpec.build` makes the sampling class of :mod:`bogie.fleet.sampling.distributions` from them, which
+checks the rules that span parameters (``low < high``, one weight per value) and raises
+:class:`~bogie.fleet.sampling.distributions.ParameterError`. The conversion to SI and the check against the physical
+range of the quantity are done per quantity by :mod:`pipeline.config.schema`.
 """
 
 from __future__ import annotations
@@ -14,7 +14,7 @@ from typing import Annotated, Any, ClassVar, Literal
 
 from pydantic import BaseModel, ConfigDict, Field
 
-from bogie.fleet.distributions import (
+from bogie.fleet.sampling.distributions import (
     Choice,
     Constant,
     Distribution,
@@ -57,7 +57,7 @@ class DistributionSpec(Strict):
 
         Raises
         ------
-        bogie.fleet.distributions.ParameterError
+        bogie.fleet.sampling.distributions.ParameterError
             If the parameters do not make a distribution (``high <= low``, a weight per value missing...).
         """
         args = {name: getattr(self, name) for name in type(self).model_fields if name != "kind"}

@@ -15,7 +15,7 @@ from typing import Annotated, Any
 
 from pydantic import Field, ValidatorFunctionWrapHandler, WrapValidator, create_model
 
-from bogie.fleet.distributions import Choice, Constant, Distribution, ParameterError
+from bogie.fleet.sampling.distributions import Choice, Constant, Distribution, ParameterError
 from bogie.params import AXLE_RANGES, SCALAR_RANGES, FieldRange
 from pipeline.config.distributions import ROAD_CLASSES, DistributionSpec, LabelSpec, NumericSpec, Strict
 from pipeline.config.errors import config_error

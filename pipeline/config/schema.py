@@ -17,7 +17,7 @@ from typing import Annotated, Any, Literal
 
 from pydantic import AfterValidator, Field, ValidatorFunctionWrapHandler, create_model, model_validator
 
-from bogie.fleet.calibration_settings import CalibrationSettings
+from bogie.fleet.calibration.settings import CalibrationSettings
 from bogie.fleet.constants import (
     CALIBRATION_QUANTITIES,
     GROUP_AXLES,
@@ -26,9 +26,9 @@ from bogie.fleet.constants import (
     SITE_IRI_RANGE,
     SURVEY_PROTOCOLS,
 )
-from bogie.fleet.design_settings import DesignSettings
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
-from bogie.fleet.sampling import SAMPLINGS
+from bogie.fleet.design.settings import DesignSettings
+from bogie.fleet.sampling.sample import SAMPLINGS
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.settings import declared
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error

@@ -3,13 +3,13 @@
 Each key is declared once, in :mod:`pipeline.config.schema`; the classes here are made from its models by
 :func:`pipeline.config.si.config_class` (an attribute per key, named and converted by the unit its field declares;
 the table is in :mod:`pipeline.config.si`), and :func:`pipeline.config.settings.load_config` fills them. The
-protocols' settings are the library's own classes (:mod:`bogie.fleet.protocol_settings`). Every attribute is SI, but
+protocols' settings are the library's own classes (:mod:`bogie.fleet.weighing.settings`). Every attribute is SI, but
 for the IRI (m/km, its own unit) and the tilt grids' steps (``tilt_step_deg``, named with their unit, degree).
 """
 
 from __future__ import annotations
 
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from pipeline.config import schema
 from pipeline.config.si import FrozenMap, config_class
 

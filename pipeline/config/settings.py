@@ -28,7 +28,7 @@ import yaml
 from pydantic import ValidationError
 
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
 from bogie.weighings.readers import (
     MAX_FILE_BYTES,

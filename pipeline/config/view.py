@@ -15,7 +15,7 @@ from pydantic import BaseModel, TypeAdapter, ValidationError
 from bogie.fleet.constants import (
     SURVEY_PROTOCOLS,
 )
-from bogie.fleet.distributions import ParameterError
+from bogie.fleet.sampling.distributions import ParameterError
 from bogie.params import INHIBITORS
 from pipeline.config.distributions import NumericSpec
 from pipeline.config.errors import locate

@@ -15,7 +15,7 @@ import pandas as pd
 
 import bogie
 import pipeline
-from bogie.fleet.survey import REQUIRED_COLUMNS, inequality_columns, readings
+from bogie.fleet.weighing.survey import REQUIRED_COLUMNS, inequality_columns, readings
 from pipeline.config import Config, load_config, load_params
 from pipeline.schema import SchemaError, read_checksummed, read_runs_frame
 from pipeline.survey import RunsError, read_runs

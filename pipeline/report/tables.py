@@ -15,8 +15,8 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import PROTOCOLS
-from bogie.fleet.design_table import DESIGN_BINS
-from bogie.fleet.sampling import TYRE_WEAR_COLUMNS
+from bogie.fleet.design.table import DESIGN_BINS
+from bogie.fleet.sampling.sample import TYRE_WEAR_COLUMNS
 from pipeline.config import Config
 from pipeline.report.style import GROUP_LABEL, QUANTITY, factor_label
 from pipeline.sample import STUDIES

@@ -26,8 +26,8 @@ from pathlib import Path
 import pytest
 
 from bogie.fleet.constants import MAX_AXLES
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.weighing import weigh
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.weigh import weigh
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
 

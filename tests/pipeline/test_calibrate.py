@@ -18,8 +18,8 @@ import pytest
 import yaml
 from scipy.stats import truncnorm
 
-from bogie.fleet import calibration as L
-from bogie.fleet import calibration_checks as K
+from bogie.fleet.calibration import checks as K
+from bogie.fleet.calibration import problem as L
 from bogie.params import INHIBITORS
 from pipeline import calibrate as C
 from pipeline.config import ConfigError, parse_config

@@ -10,7 +10,7 @@ import numpy as np
 import pytest
 from scipy import stats
 
-from bogie.fleet.distributions import Choice, Constant, LogNormal, LogUniform, Normal, TruncNormal, Uniform
+from bogie.fleet.sampling.distributions import Choice, Constant, LogNormal, LogUniform, Normal, TruncNormal, Uniform
 from bogie.params import GRAVITY
 from pipeline.config import ConfigError, load_config, load_params, parse_config
 
@@ -411,7 +411,7 @@ def test_a_bad_bogie_file_is_named_with_its_key_and_what_is_wrong(raw, monkeypat
 
 
 def test_runs_on_a_bogie_file_keep_its_path_as_a_category_after_the_presets():
-    from bogie.fleet.runs import SchemaError, preset_categories
+    from bogie.fleet.weighing.runs import SchemaError, preset_categories
 
     assert preset_categories(["triaxle_stage1", "tandem_trrl"]) == ("tandem_trrl", "triaxle_stage1")
     labels = ["tandem_trrl", "bogies/b.yaml", "bogies/a.yml", None]

@@ -1,6 +1,6 @@
 """The design stage: tolerances and shares against hand-worked answers, common random numbers, bad input, a run.
 
-The analysis tests feed :func:`bogie.fleet.design_analysis.analyse_designs` runs whose axle loads are linear in tilt
+The analysis tests feed :func:`bogie.fleet.design.analysis.analyse_designs` runs whose axle loads are linear in tilt
 with known slopes, so the share within 5 % against tilt, and the tolerance where it falls below the target, are worked
 out by hand:
 a tandem with loads W0 = 1 + a t, W1 = 1 - a t is within 5 % while (W0 - W1) / max = 2 a |t| / (1 + a |t|) <= 0.05,
@@ -18,8 +18,8 @@ import pandas as pd
 import pytest
 import yaml
 
-from bogie.fleet import design as L
-from bogie.fleet import design_analysis as A
+from bogie.fleet.design import analysis as A
+from bogie.fleet.design import experiment as L
 from pipeline import design as D
 from pipeline.config import ConfigError, parse_config
 from pipeline.sample import fleet_model

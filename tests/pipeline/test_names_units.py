@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from bogie.fleet.runs import RESULT_COLUMNS, UNITS
-from bogie.fleet.sampling import TYRE_WEAR_COLUMNS
+from bogie.fleet.sampling.sample import TYRE_WEAR_COLUMNS
+from bogie.fleet.weighing.runs import RESULT_COLUMNS, UNITS
 from bogie.weighings.groups import axle_groups
 from bogie.weighings.readers import read_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, statistics_dict, survey_statistics

@@ -19,7 +19,7 @@ import pytest
 import yaml
 from _flips import PLACES, flip
 
-from bogie.fleet.weighing import result_row
+from bogie.fleet.weighing.weigh import result_row
 from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
 from bogie.weighings.groups import POSITIONS
@@ -87,7 +87,7 @@ def metrics(root):
 
 
 def test_the_tables_columns_are_the_librarys_each_with_a_type_and_a_unit():
-    from bogie.fleet.observed import INEQUALITY_COLUMNS, SIMULATED_COLUMNS
+    from bogie.fleet.weighing.observed import INEQUALITY_COLUMNS, SIMULATED_COLUMNS
     from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 
     assert tuple(GROUPS_SCHEMA.names) == (*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS)

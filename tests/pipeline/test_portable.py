@@ -23,7 +23,7 @@ from scipy.stats import truncnorm
 
 from bogie import numerics
 from bogie.digest import numerics_digest
-from bogie.fleet.distributions import truncated_standard_normal_ppf
+from bogie.fleet.sampling.distributions import truncated_standard_normal_ppf
 from pipeline import portable
 from pipeline.deps import ROOT
 

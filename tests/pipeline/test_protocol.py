@@ -7,8 +7,8 @@ import numpy as np
 
 from bogie import metrics
 from bogie.fleet.constants import MAX_AXLES
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.weighing import Outcome, result_rows, weigh
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.weigh import Outcome, result_rows, weigh
 from bogie.params import NO_STOP
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
@@ -51,7 +51,7 @@ def test_the_road_tables_are_the_protocols_roads_value_for_value():
     # the same numbers as calling the approach road (and the WIM site road) at the table's distances
     import dataclasses
 
-    from bogie.fleet import protocols as protocol
+    from bogie.fleet.weighing import protocols as protocol
 
     config = load_config(ROOT / "params.yaml")
     fleet = sample_fleet(config)
@@ -77,7 +77,7 @@ def test_weighings_that_share_a_cached_road_give_what_a_fresh_road_gives():
     # the ablation's variants of a bogie and the Sobol' design's samples share roads, and the protocols keep the
     # last road tables (issue 15): a weighing that finds its road cached, after others have run on it, must give the
     # row it gives on a freshly synthesised road, and nothing may write into a shared table
-    from bogie.fleet import protocols as protocol
+    from bogie.fleet.weighing import protocols as protocol
 
     config = load_config(ROOT / "params.yaml")
     fleet = sample_fleet(config)

@@ -6,9 +6,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from bogie.fleet.protocols import wim_pass
-from bogie.fleet.sampling import bogie_from_sample
-from bogie.fleet.weighing import weigh
+from bogie.fleet.sampling.sample import bogie_from_sample
+from bogie.fleet.weighing.protocols import wim_pass
+from bogie.fleet.weighing.weigh import weigh
 from bogie.road.wim import sensor_factors
 from bogie.steel import nonlinear
 from pipeline.config import load_config

@@ -5,7 +5,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bogie.fleet.design_analysis import guidance_sentences
+from bogie.fleet.design.analysis import guidance_sentences
 from pipeline.report import text
 from pipeline.report.pages import guidance as G
 from pipeline.report.style import QUANTITY

@@ -1,5 +1,5 @@
 """The report's derived tables (pipeline.report.tables, the summary and Appendix C rows) and the survey's design
-guidance table they draw from (bogie.fleet.design_table.design_table), on small hand-computed inputs."""
+guidance table they draw from (bogie.fleet.design.table.design_table), on small hand-computed inputs."""
 
 import math
 from pathlib import Path
@@ -8,7 +8,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bogie.fleet.design_table import design_table, wilson_interval
+from bogie.fleet.design.table import design_table, wilson_interval
 from pipeline.config import load_params, parse_config
 from pipeline.report import tables
 from pipeline.report.pages.appendix import failures_table

@@ -196,7 +196,7 @@ def tiny_params() -> dict:
 
 def _survey(path: Path) -> None:
     """A small synthetic survey (200 vehicles of another fleet, written as the csv weighings format)."""
-    from bogie.fleet import calibration_checks as K
+    from bogie.fleet.calibration import checks as K
     from pipeline import calibrate as C
     from pipeline.config import parse_config
 

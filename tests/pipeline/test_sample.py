@@ -14,7 +14,7 @@ import pytest
 import yaml
 from SALib.analyze import sobol as sobol_analyze
 
-from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS, bogie_from_sample, road_seed, sensor_seed
+from bogie.fleet.sampling.sample import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS, bogie_from_sample, road_seed, sensor_seed
 from bogie.params import GRAVITY, INHIBITORS, design_spring_loads
 from pipeline.config import ConfigError, load_params, parse_config
 from pipeline.sample import (

@@ -23,7 +23,7 @@ import yaml
 from _flips import flip
 
 from bogie import numerics
-from bogie.fleet.sampling import COLUMNS
+from bogie.fleet.sampling.sample import COLUMNS
 from pipeline.chunks import (
     HASH_KEY,
     NUMERICS_KEY,

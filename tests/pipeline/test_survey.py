@@ -13,7 +13,7 @@ import pytest
 import yaml
 from _flips import PLACES, flip
 
-from bogie.fleet.survey import (
+from bogie.fleet.weighing.survey import (
     band,
     distribution_stats,
     failure_table,
@@ -28,7 +28,7 @@ from bogie.fleet.survey import (
     wear_table,
     wim_class,
 )
-from bogie.fleet.weighing import result_row
+from bogie.fleet.weighing.weigh import result_row
 from bogie.params import GRAVITY
 from pipeline.config import load_params, parse_config
 from pipeline.sample import sample_studies, write_parquet_atomic
@@ -459,7 +459,7 @@ def export_dir(stage_dir, fmt):
 def test_the_fleets_wim_readings_are_written_as_records_that_read_back_at_the_formats_resolution(
     stage_dir, fmt, step_kg, step_m
 ):
-    from bogie.fleet.sampling import bogie_from_sample
+    from bogie.fleet.sampling.sample import bogie_from_sample
     from bogie.weighings.readers import read_weighings
 
     fleet, argv = export_dir(stage_dir, fmt)

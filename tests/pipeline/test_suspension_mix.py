@@ -8,7 +8,7 @@ import pytest
 import yaml
 
 from bogie.air import AirBogie
-from bogie.fleet.sampling import bogie_from_sample
+from bogie.fleet.sampling.sample import bogie_from_sample
 from pipeline.config import ConfigError, parse_config
 from pipeline.sample import VARIANTS, sample_ablation, sample_fleet
 from pipeline.simulate import run_chunk, study_protocols

@@ -8,7 +8,7 @@ from pathlib import Path
 
 import pytest
 
-from bogie.fleet import calibration_table
+from bogie.fleet.calibration import table as calibration_table
 from pipeline import calibrate, workers
 from pipeline.config import ConfigError, load_config, load_params, parse_config
 from pipeline.config.schema import Params

@@ -12,7 +12,7 @@ from matplotlib.figure import Figure
 
 from bogie import numerics
 from bogie.fleet.constants import PAIR_TOLERANCE, READ_TIME, SHARE_TOLERANCE, TARE_FRACTION
-from bogie.fleet.survey import NOSE_UP_DEG
+from bogie.fleet.weighing.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, table_pages, text_block, text_page

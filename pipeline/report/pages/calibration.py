@@ -282,7 +282,7 @@ CHECK_FITS = ((0.45, 7.9), (0.47, 7.6), (0.5, 7.4), (0.53, 7.1), (0.56, 6.8))
 
 
 # ---- what the WIM shows, by cause ---------------------------------------------------------------------------------
-#: the causes attributed (bogie.fleet.calibration_attribution.CAUSES), their labels and colours
+#: the causes attributed (bogie.fleet.calibration.attribution.CAUSES), their labels and colours
 CAUSE_LABEL: dict[str, tuple[str, str]] = {
     "resolution": ("file resolution", "C7"), "sensor": ("sensor error", "C4"), "tilt": ("chassis tilt", "C3"),
     "dynamics": ("dynamics", "C2"),

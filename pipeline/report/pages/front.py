@@ -10,8 +10,8 @@ from typing import Any
 import pandas as pd
 from matplotlib.figure import Figure
 
-from bogie.fleet.sampling import VARIANTS
-from bogie.fleet.survey import NOSE_UP_DEG
+from bogie.fleet.sampling.sample import VARIANTS
+from bogie.fleet.weighing.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import A4, LEFT, RIGHT, first_fit, page_header, table_axes, text_block

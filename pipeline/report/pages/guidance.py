@@ -6,7 +6,7 @@ group as a reference line), the share within 5 % against chassis tilt of the typ
 widest tilt tolerance and the air group, and a table of each group's Pareto front. The tilt tolerance: the
 tolerated nose-up and nose-down tilt of the grid's representative designs against bush stiffness, a panel per
 contact roll radius and a line per arm length, and a table. The sentences under them are ``metrics/design.json``'s
-``guidance``, generated from the numbers by :func:`bogie.fleet.design_analysis.guidance_sentences`, each put on its
+``guidance``, generated from the numbers by :func:`bogie.fleet.design.analysis.guidance_sentences`, each put on its
 page by its kind (:func:`sentence_kinds`, :data:`SENTENCE_PAGE`). The prose is in ``templates/guidance_*.j2``. When
 the stage was skipped, one page says why.
 """
@@ -22,7 +22,7 @@ import pandas as pd
 from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
-from bogie.fleet.design_analysis import tolerance_width
+from bogie.fleet.design.analysis import tolerance_width
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import first_fit, new_page, table_axes, text_block, text_page
@@ -66,7 +66,7 @@ def design_cells(row: Mapping[str, Any]) -> list[str]:
 
 # ---- the design stage's sentences -----------------------------------------------------------------------------------
 #: the page each kind of guidance sentence goes under. Per group,
-#: :func:`bogie.fleet.design_analysis.guidance_sentences` writes, in this order: ``tolerance`` (the widest tilt
+#: :func:`bogie.fleet.design.analysis.guidance_sentences` writes, in this order: ``tolerance`` (the widest tilt
 #: tolerance, or that none is tolerated), ``typical`` (today's typical design, when the group has one), ``fleet`` (the
 #: best design across the fleet's own conditions), ``air`` (the air-sprung group, when it ran)
 SENTENCE_PAGE: dict[str, str] = {"tolerance": "tolerance", "typical": "tolerance", "fleet": "experiment",

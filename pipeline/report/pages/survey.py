@@ -14,7 +14,7 @@ from matplotlib.figure import Figure
 from matplotlib.lines import Line2D
 
 from bogie.fleet.constants import n_axles
-from bogie.fleet.survey import NOSE_UP_DEG
+from bogie.fleet.weighing.survey import NOSE_UP_DEG
 from pipeline.report import text
 from pipeline.report.context import Context, Page
 from pipeline.report.layout import new_page, text_block

@@ -2,7 +2,7 @@
 
 A prior is what is known of a quantity before the survey: a range or a distribution, and where it comes from. Where
 no source gives more than a range, the prior is flat over it and says so. The calibration's posterior
-(:mod:`bogie.fleet.calibration_posterior`) is the prior times the survey's synthetic likelihood, within the fit's
+(:mod:`bogie.fleet.calibration.posterior`) is the prior times the survey's synthetic likelihood, within the fit's
 bounds (the prior truncated to them). Never tune a prior to a survey (issue 30, "Not allowed").
 """
 
@@ -82,8 +82,9 @@ def default_priors(
     base: Mapping[str, float], supports: Mapping[str, tuple[float, float]] | None = None
 ) -> dict[str, Prior]:
     """The documented prior of every quantity of :data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`, given the
-    fleet's values ``base`` (:func:`bogie.fleet.calibration.base_values`: the sensor type's error) and, per moved
-    inhibitor quantity, the ``supports`` of the fleet's distribution (:meth:`bogie.fleet.tilted.Tilted.mean_range`,
+    fleet's values ``base`` (:func:`bogie.fleet.calibration.problem.base_values`: the sensor type's error) and, per
+    moved inhibitor quantity, the ``supports`` of the fleet's distribution
+    (:meth:`bogie.fleet.sampling.tilted.Tilted.mean_range`,
     in the quantity's unit): its mean's prior is flat over it (None or absent: no prior for it)."""
     priors = {
         "chassis_tilt_mean_deg": Prior(

@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
-from bogie.fleet.sampling import TYRE_WEAR_COLUMNS
+from bogie.fleet.sampling.sample import TYRE_WEAR_COLUMNS
 from bogie.params import GRAVITY
 from bogie.road.cost323 import REQUIRED_SHARE, class_test
 from bogie.road.wim import COST323_TOLERANCES

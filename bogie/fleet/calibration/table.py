@@ -1,4 +1,4 @@
-"""The calibration fleet and its table of readings (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``).
+"""The calibration fleet and its table of readings (:mod:`bogie.fleet.calibration.problem`, ``docs/calibration.md``).
 
 The one simulation a calibration needs: every calibration bogie weighed, error free, as its steel group and as the
 air-sprung group on the same trailer, at every tilt of a grid and (WIM) every site roughness (:func:`build_table`);
@@ -21,13 +21,13 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.calibration_settings import CalibrationError
+from bogie.fleet.calibration.settings import CalibrationError
 from bogie.fleet.constants import TILTED_QUANTITIES
-from bogie.fleet.distributions import Distribution, TruncNormal, truncated_standard_normal_cdf
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
-from bogie.fleet.sampling import bogie_from_sample, suspension_draw
-from bogie.fleet.tilted import Tilted
-from bogie.fleet.weighing import weigh
+from bogie.fleet.sampling.distributions import Distribution, TruncNormal, truncated_standard_normal_cdf
+from bogie.fleet.sampling.sample import bogie_from_sample, suspension_draw
+from bogie.fleet.sampling.tilted import Tilted
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
+from bogie.fleet.weighing.weigh import weigh
 from bogie.group_names import GROUP_AXLES
 from bogie.params import GRAVITY
 from bogie.road import wim
@@ -107,7 +107,7 @@ class Table:
 def tilted_families(inhibitor_distributions: Mapping[str, Distribution] | None) -> dict[str, Tilted]:
     """Per quantity of :data:`~bogie.fleet.constants.TILTED_QUANTITIES` whose sample column has a uniform or a
     log-uniform distribution in ``inhibitor_distributions`` (sample column -> the fleet's distribution, SI): the
-    family a fit moves it in (:class:`bogie.fleet.tilted.Tilted`). Other kinds are left out: their mean is not
+    family a fit moves it in (:class:`bogie.fleet.sampling.tilted.Tilted`). Other kinds are left out: their mean is not
     fitted."""
     families = {}
     for quantity, (column, scale) in TILTED_QUANTITIES.items():
@@ -247,7 +247,7 @@ def crn_table(
         bogie keeps its tilt's rank under it), another kind keeps each bogie's sampled tilt.
     seed, study
         The fleet's master seed [-] and study name, of each bogie's suspension draw
-        (:func:`bogie.fleet.sampling.suspension_draw`).
+        (:func:`bogie.fleet.sampling.sample.suspension_draw`).
     protocol, settings
         ``static`` with a :class:`StaticProtocol` or ``wim`` with a :class:`WimProtocol`: the readings the survey is
         held against (error free in the table; the sensor's error is a fitted quantity).
@@ -364,7 +364,7 @@ def _tilts_of(table: Table, values: Mapping[str, float]) -> dict[str, float]:
 def steel_weights(table: Table, values: Mapping[str, float]) -> np.ndarray:
     """(n,) each calibration bogie's steel group's weight in a fleet whose inhibitor distributions have the means of
     ``values`` (:data:`~bogie.fleet.constants.TILTED_QUANTITIES`): the product of the density ratios of its sampled
-    values (:meth:`bogie.fleet.tilted.Tilted.weights`), up to a common factor; ones for the fleet's own."""
+    values (:meth:`bogie.fleet.sampling.tilted.Tilted.weights`), up to a common factor; ones for the fleet's own."""
     w = np.ones(len(table.size))
     for quantity, t in _tilts_of(table, values).items():
         w = w * table.tilted[quantity].weights(table.column(TILTED_QUANTITIES[quantity][0]), t)
@@ -373,7 +373,8 @@ def steel_weights(table: Table, values: Mapping[str, float]) -> np.ndarray:
 
 def moved_samples(table: Table, values: Mapping[str, float]) -> pd.DataFrame:
     """The calibration bogies' samples in a fleet whose inhibitor distributions have the means of ``values``: each
-    sampled value moved to its rank under the moved distribution (:meth:`bogie.fleet.tilted.Tilted.moved`), for a
+    sampled value moved to its rank under the moved distribution (:meth:`bogie.fleet.sampling.tilted.Tilted.moved`), for
+    a
     direct simulation. The table's own samples when no mean moves."""
     tilts = _tilts_of(table, values)
     if not tilts:

@@ -27,8 +27,8 @@ from bogie import air
 from bogie.air import AirBogie
 from bogie.bogie_file import base_bogie, base_fields, is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, SUSPENSIONS
-from bogie.fleet.distributions import Choice, Distribution
-from bogie.fleet.seeds import (
+from bogie.fleet.sampling.distributions import Choice, Distribution
+from bogie.fleet.sampling.seeds import (
     design_seed,
     road_seed,
     sensor_seed,
@@ -108,7 +108,7 @@ COLUMNS: dict[str, str] = {
 #: [N m s/rad], ``friction_coefficient`` [-], ``contact_roll_radius`` [m], ``chassis_tilt`` (nose up +) [rad],
 #: ``payload_fraction`` (of the legal group load) [-], ``equaliser_arm`` [m], ``spring_friction_band`` (half-width)
 #: [N], ``spring_friction_decay`` [m], ``tyre_wear`` (loss of tyre radius, drawn per axle) [m] and ``road_class``
-#: (ISO 8608 class of the approach road, a :class:`~bogie.fleet.distributions.Choice` of labels)
+#: (ISO 8608 class of the approach road, a :class:`~bogie.fleet.sampling.distributions.Choice` of labels)
 FLEET_QUANTITIES: tuple[str, ...] = (*SCALAR_QUANTITIES, "tyre_wear", "road_class")
 
 #: the uniform designs of the unit hypercube: Latin hypercube, scrambled Sobol' (scipy.stats.qmc)
@@ -152,7 +152,7 @@ class Fleet:
     ----------
     distributions
         Quantity name -> its distribution, in SI units: every name of :data:`FLEET_QUANTITIES`, each a
-        :class:`~bogie.fleet.distributions.Distribution` (``road_class`` a ``Choice`` of ISO 8608 labels). A
+        :class:`~bogie.fleet.sampling.distributions.Distribution` (``road_class`` a ``Choice`` of ISO 8608 labels). A
         sample outside a quantity's physical range (:mod:`bogie.params`) is not refused here: its weighings are
         rows with ``status = "failed"`` and the reason.
     axle_mix

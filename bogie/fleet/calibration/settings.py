@@ -1,6 +1,6 @@
 """How a calibration fits (``docs/calibration.md``), in a module of their own so that what only reads settings
 (params.yaml's loader) does not import the calibration: the settings class, the check of its bounds and its error.
-:mod:`bogie.fleet.calibration` re-exports them."""
+:mod:`bogie.fleet.calibration.problem` re-exports them."""
 
 from __future__ import annotations
 
@@ -54,8 +54,8 @@ class CalibrationSettings:
 
     ``fit`` maps a quantity to (low, high), the bounds of each fitted quantity in the unit of its name
     (:data:`~bogie.fleet.constants.CALIBRATION_QUANTITIES`). ``priors`` maps a quantity to a
-    :class:`bogie.fleet.priors.Prior`; None: :func:`bogie.fleet.priors.default_priors` (each documented with its
-    source); a quantity left out is flat over its bounds.
+    :class:`bogie.fleet.calibration.priors.Prior`; None: :func:`bogie.fleet.calibration.priors.default_priors` (each
+    documented with its source); a quantity left out is flat over its bounds.
     """
 
     fit: Mapping[str, tuple[float, float]]
@@ -77,7 +77,7 @@ class CalibrationSettings:
     posterior_draws: int = setting(
         4000, unit="-", low=0, whole=True,
         doc="Metropolis draws of the posterior kept, a quarter more adapting the sampler first (0: no posterior; "
-        "bogie.fleet.calibration_posterior).",
+        "bogie.fleet.calibration.posterior).",
     )  # fmt: skip
     priors: Mapping[str, Any] | None = None
 

@@ -1,8 +1,8 @@
 """The design experiment's analysis: shares within 5 % with Wilson intervals, tilt tolerances, Pareto fronts, words.
 
-:func:`analyse_designs` reads the runs of a controlled design experiment (:mod:`bogie.fleet.design` makes its rows
-and weighs them): each design's share of groups within 5 % and within 10 % at the conditions' own tilts, with Wilson
-score intervals; its share within 5 % against chassis tilt, the grid runs' axle loads interpolated linearly on a
+:func:`analyse_designs` reads the runs of a controlled design experiment (:mod:`bogie.fleet.design.experiment` makes its
+rows and weighs them): each design's share of groups within 5 % and within 10 % at the conditions' own tilts, with
+Wilson score intervals; its share within 5 % against chassis tilt, the grid runs' axle loads interpolated linearly on a
 :data:`FINE_STEP_DEG` axis; its nose-up and nose-down tilt tolerance (:func:`tilt_tolerance`); the interpolation
 checked against the runs at the conditions' own tilts; and each group's Pareto front (:func:`pareto_front`) of share
 against the distance from today's typical design. :func:`guidance_sentences` puts the table in words a designer and
@@ -23,8 +23,8 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.constants import GROUP_AXLES
-from bogie.fleet.design_settings import FACTORS, DesignError
-from bogie.fleet.design_table import wilson_interval
+from bogie.fleet.design.settings import FACTORS, DesignError
+from bogie.fleet.design.table import wilson_interval
 from bogie.metrics import max_deviation
 from bogie.weighings.stats import group_inequality
 
@@ -218,13 +218,13 @@ def analyse_designs(
     Parameters
     ----------
     runs
-        The experiment's runs (:func:`bogie.fleet.design.weigh_designs`): columns ``design``, ``condition``,
+        The experiment's runs (:func:`bogie.fleet.design.experiment.weigh_designs`): columns ``design``, ``condition``,
         ``slot`` (:data:`FLEET_SLOT`: at the condition's own tilt; else the index into ``tilts``), ``status``,
         ``chassis_tilt`` [rad], ``axle_load_1..`` [N], ``outside_5pct``, ``over_10pct``, ``max_deviation`` [-].
         A failed run is left out of its design's shares and counted in ``n_failed``.
     designs
-        The designs (:func:`bogie.fleet.design.design_points`): ``design``, ``group``, ``kind``, ``suspension``,
-        the :data:`FACTORS` and :data:`HELD` [SI] and ``distance`` [-].
+        The designs (:func:`bogie.fleet.design.experiment.design_points`): ``design``, ``group``, ``kind``,
+        ``suspension``, the :data:`FACTORS` and :data:`HELD` [SI] and ``distance`` [-].
     tilts
         The tilt grid [degree] the slots index, strictly increasing.
     target_share

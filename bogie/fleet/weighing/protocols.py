@@ -35,7 +35,7 @@ from bogie import numerics
 from bogie.air import AirBogie
 from bogie.air import dynamics as air_dynamics
 from bogie.fleet.constants import READ_TIME, TARE_FRACTION
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.params import Bogie
 from bogie.road import ISO8608_CLASSES, ISO8608Profile, wim
 from bogie.steel import nonlinear

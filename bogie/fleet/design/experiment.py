@@ -20,7 +20,7 @@ over all five factors' fleet distributions. The air-sprung group of the same tra
 runs over the same conditions as a reference.
 
 :func:`design_experiment` makes the experiment's sample rows, :func:`weigh_designs` weighs them
-(:func:`bogie.fleet.weigh_fleet`, any executor), :func:`bogie.fleet.design_analysis.analyse_designs` analyses the
+(:func:`bogie.fleet.weigh_fleet`, any executor), :func:`bogie.fleet.design.analysis.analyse_designs` analyses the
 runs and :func:`study_designs` does all three. A failed run is a ``failed`` row, left out of its design's shares and
 counted in ``n_failed``. Same arguments and seed, same tables: whatever the executor or the number of workers.
 """
@@ -37,7 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
-from bogie.fleet.design_analysis import (
+from bogie.fleet.design.analysis import (
     FACTORS,
     FLEET_SLOT,
     HELD,
@@ -46,11 +46,19 @@ from bogie.fleet.design_analysis import (
     analyse_designs,
     guidance_sentences,
 )
-from bogie.fleet.design_settings import FACTOR_UNITS, DesignSettings
-from bogie.fleet.distributions import Distribution
-from bogie.fleet.protocol_settings import StaticProtocol
-from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, Fleet, design_seed, road_seed, sensor_seed, study_frame
-from bogie.fleet.weighing import CHUNK_ROWS, weigh_fleet
+from bogie.fleet.design.settings import FACTOR_UNITS, DesignSettings
+from bogie.fleet.sampling.distributions import Distribution
+from bogie.fleet.sampling.sample import (
+    COLUMNS,
+    TYRE_WEAR_COLUMNS,
+    Fleet,
+    design_seed,
+    road_seed,
+    sensor_seed,
+    study_frame,
+)
+from bogie.fleet.weighing.settings import StaticProtocol
+from bogie.fleet.weighing.weigh import CHUNK_ROWS, weigh_fleet
 from bogie.settings import check_value
 
 __all__ = [
@@ -84,7 +92,7 @@ class DesignExperiment:
     designs
         The designs (:func:`design_points`).
     samples
-        The sample rows (:func:`design_samples`): the columns of :data:`bogie.fleet.sampling.COLUMNS`, then
+        The sample rows (:func:`design_samples`): the columns of :data:`bogie.fleet.sampling.sample.COLUMNS`, then
         ``design``, ``condition`` and ``slot``.
     """
 
@@ -166,7 +174,7 @@ def conditions(fleet: Fleet, n_conditions: int, seed: int) -> pd.DataFrame:
     n_conditions
         Number of conditions [-], at least 2.
     seed
-        Master seed [-] (study ``design``: :func:`bogie.fleet.sampling.design_seed`).
+        Master seed [-] (study ``design``: :func:`bogie.fleet.sampling.sample.design_seed`).
 
     Returns
     -------
@@ -257,8 +265,8 @@ def design_samples(fleet: Fleet, designs: pd.DataFrame, conds: pd.DataFrame, til
     Returns
     -------
     pandas.DataFrame
-        The columns of :data:`bogie.fleet.sampling.COLUMNS` (study ``design``; ``base_id`` is the condition), then
-        ``design``, ``condition`` and ``slot`` [-]; design by design, condition by condition, own tilt first.
+        The columns of :data:`bogie.fleet.sampling.sample.COLUMNS` (study ``design``; ``base_id`` is the condition),
+        then ``design``, ``condition`` and ``slot`` [-]; design by design, condition by condition, own tilt first.
     """
     n_c, n_t = len(conds), len(tilts)
     per = n_c * (n_t + 1)
@@ -351,8 +359,8 @@ def study_designs(
     Returns
     -------
     DesignStudy
-        The rows, the runs, :func:`~bogie.fleet.design_analysis.analyse_designs`'s tables and
-        :func:`~bogie.fleet.design_analysis.guidance_sentences`.
+        The rows, the runs, :func:`~bogie.fleet.design.analysis.analyse_designs`'s tables and
+        :func:`~bogie.fleet.design.analysis.guidance_sentences`.
     """
     experiment = design_experiment(fleet, settings, seed)
     runs = weigh_designs(experiment, static, executor)

@@ -7,19 +7,19 @@ error [%]. In short:
 
 1. **The calibration fleet** (:func:`crn_table`): sampled bogies, each both as its steel group and as the air-sprung
    group on the same trailer, with common random numbers: one uniform for its tilt (its tilt's rank under the
-   fleet's distribution), one for its suspension (:func:`bogie.fleet.sampling.suspension_draw`) and one standard
+   fleet's distribution), one for its suspension (:func:`bogie.fleet.sampling.sample.suspension_draw`) and one standard
    normal per axle for the sensor (its ``sensor_seed``).
 2. **A table of readings** (:func:`build_table`): every group weighed, error free, at every tilt of a grid and, for
    WIM, at every site roughness; a fleet of given quantities is then interpolated (:func:`fleet_readings`).
 3. **The distance** (:func:`distance`): over laden tandem and tri-axle groups, the sum over each axle position's
    load share and the spread [%] of the energy distance between the observed and the simulated distribution, each
    over the observed quantity's standard deviation.
-4. **The fit** (:func:`fit`; :func:`bogie.fleet.calibration_fit.calibrate`): scipy's seeded
+4. **The fit** (:func:`fit`; :func:`bogie.fleet.calibration.fit.calibrate`): scipy's seeded
    ``differential_evolution``; intervals from a bootstrap of the observed records and of the calibration bogies
    together; a fit piled against a bound flagged; trade-offs, the valley and the profiles.
 
 The checks of a calibration (the fleet simulated directly, a held-out half, the ablation) and the whole calibration
-of a survey in one call are :mod:`bogie.fleet.calibration_checks`. Same arguments, same numbers: whatever the
+of a survey in one call are :mod:`bogie.fleet.calibration.checks`. Same arguments, same numbers: whatever the
 executor or the number of workers.
 """
 
@@ -33,8 +33,8 @@ import numpy as np
 import pandas as pd
 from scipy.optimize import differential_evolution
 
-from bogie.fleet.calibration_settings import ORDER, CalibrationSettings, check_fit
-from bogie.fleet.calibration_table import (
+from bogie.fleet.calibration.settings import ORDER, CalibrationSettings, check_fit
+from bogie.fleet.calibration.table import (
     SIZES,
     CalibrationError,
     Mapper,
@@ -46,7 +46,7 @@ from bogie.fleet.calibration_table import (
     steel_weights,
 )
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, TILTED_QUANTITIES, WIM_QUANTITIES
-from bogie.fleet.distributions import TruncNormal
+from bogie.fleet.sampling.distributions import TruncNormal
 from bogie.weighings.stats import at_resolution
 from bogie.weighings.survey import ObservedSurvey
 
@@ -137,7 +137,7 @@ def simulated(
     """The simulated survey: the calibration groups that pass the filters (every axle read and loaded, the group at
     least ``min_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
     bootstrap count ``slot_counts``, None: 1; a steel group also by its density ratio under the fitted inhibitor
-    distributions, :func:`~bogie.fleet.calibration_table.steel_weights`); every reading first read at the observed
+    distributions, :func:`~bogie.fleet.calibration.table.steel_weights`); every reading first read at the observed
     file's resolution ``weight_step_kg`` [kg] (None: as it is)."""
     readings = at_resolution(fleet_readings(table, values), weight_step_kg)
     share = values["air_share"]

@@ -1,7 +1,7 @@
 """The calibration and what bounds it: the fit, its bootstrap intervals, a fit piled against a bound, the
 trade-offs between fitted quantities, the valley of the most correlated pair and each quantity's profile.
 
-:func:`calibrate` runs them on a :class:`~bogie.fleet.calibration.Problem` (``docs/calibration.md``). A fit at a
+:func:`calibrate` runs them on a :class:`~bogie.fleet.calibration.problem.Problem` (``docs/calibration.md``). A fit at a
 bound of its range, or bootstrap refits piled against one, is flagged (:func:`bound_finding`): a finding about the
 model (the data ask for a value the range excludes, or the quantity absorbs what the model misstates), not a value
 of the fleet.
@@ -18,11 +18,11 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.calibration import CalibrationSettings, Problem, _values, fit
-from bogie.fleet.calibration_posterior import Posterior, posterior
-from bogie.fleet.calibration_table import _quiet
+from bogie.fleet.calibration.posterior import Posterior, posterior
+from bogie.fleet.calibration.priors import default_priors
+from bogie.fleet.calibration.problem import CalibrationSettings, Problem, _values, fit
+from bogie.fleet.calibration.table import _quiet
 from bogie.fleet.constants import AT_BOUND, PILED
-from bogie.fleet.priors import default_priors
 from bogie.intervals import percentile_interval
 from bogie.rounding import json_number
 
@@ -62,7 +62,7 @@ class Calibration:
     values
         Every quantity's value in the calibrated fleet (the base's for an unfitted one).
     posterior
-        The posterior (:func:`bogie.fleet.calibration_posterior.posterior`); None with ``posterior_draws`` 0.
+        The posterior (:func:`bogie.fleet.calibration.posterior.posterior`); None with ``posterior_draws`` 0.
     """
 
     fitted: dict[str, dict[str, float]]
@@ -180,7 +180,7 @@ def calibrate(
 
 
 def priors_for(problem: Problem, settings: CalibrationSettings) -> dict[str, Any]:
-    """The settings' priors, or the documented defaults (:func:`bogie.fleet.priors.default_priors`) for the
+    """The settings' priors, or the documented defaults (:func:`bogie.fleet.calibration.priors.default_priors`) for the
     problem's fleet."""
     if settings.priors is not None:
         return dict(settings.priors)

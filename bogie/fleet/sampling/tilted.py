@@ -27,7 +27,7 @@ import numpy as np
 from scipy.optimize import brentq
 
 from bogie import numerics
-from bogie.fleet.distributions import Distribution, LogUniform, Uniform
+from bogie.fleet.sampling.distributions import Distribution, LogUniform, Uniform
 
 __all__ = ["MAX_TILT", "Tilted", "effective_fraction"]
 
@@ -57,8 +57,8 @@ class Tilted:
 
     @classmethod
     def of(cls, dist: Distribution, scale: float = 1.0) -> Tilted:
-        """The family of ``dist``: a :class:`~bogie.fleet.distributions.Uniform` or a
-        :class:`~bogie.fleet.distributions.LogUniform` (another kind has no such family here: ValueError)."""
+        """The family of ``dist``: a :class:`~bogie.fleet.sampling.distributions.Uniform` or a
+        :class:`~bogie.fleet.sampling.distributions.LogUniform` (another kind has no such family here: ValueError)."""
         if type(dist) is Uniform:
             return cls(float(dist.low), float(dist.high), False, scale)
         if type(dist) is LogUniform:

@@ -5,7 +5,7 @@ The likelihood. Per size fitted, the survey is summarised by a few smooth statis
 (:func:`summaries`: the mean load share of each axle position but the last, the sd of each position's share, the
 mean and sd of the spread). Their sampling distribution is taken as normal (Wood 2010's synthetic likelihood; Price
 et al. 2018): ``s_obs ~ N(s(theta), S)``, ``s(theta)`` the calibration fleet's summaries at ``theta`` (from the
-table, :func:`bogie.fleet.calibration.simulated`), and ``S = S_obs + S_sim`` the summaries' covariance under a
+table, :func:`bogie.fleet.calibration.problem.simulated`), and ``S = S_obs + S_sim`` the summaries' covariance under a
 bootstrap of the observed groups (the survey's sampling error) plus under a bootstrap of the calibration bogies at
 the fit (the table's Monte Carlo error), both estimated once. A fixed covariance is the usual simplification; the
 summaries' covariance changes little across the posterior's width.
@@ -25,9 +25,9 @@ import numpy as np
 import pandas as pd
 
 from bogie import numerics
-from bogie.fleet.calibration import Problem, _values, simulated
+from bogie.fleet.calibration.priors import Prior, log_prior
+from bogie.fleet.calibration.problem import Problem, _values, simulated
 from bogie.fleet.constants import AT_BOUND, PILED
-from bogie.fleet.priors import Prior, log_prior
 from bogie.intervals import percentile_interval
 
 __all__ = ["BOOTSTRAP", "Posterior", "posterior", "summaries", "synthetic_likelihood"]

@@ -1,6 +1,6 @@
 """The design guidance's settings (``docs/design.md``), in a module of their own so that what only reads settings
 (params.yaml's loader) does not import the experiment: the design factors and their units, the settings class and
-its error. :mod:`bogie.fleet.design` and :mod:`bogie.fleet.design_analysis` re-export them."""
+its error. :mod:`bogie.fleet.design.experiment` and :mod:`bogie.fleet.design.analysis` re-export them."""
 
 from __future__ import annotations
 

@@ -1,6 +1,6 @@
 """The seeds of a fleet study: every random draw (a study's design points, a row's road, WIM sensor and suspension)
-from its own stream of the master seed, the study and the row (:mod:`bogie.fleet.sampling`, "Seeds"), so that a
-row's draws do not depend on the other rows, their order or the number of workers. :mod:`bogie.fleet.sampling`
+from its own stream of the master seed, the study and the row (:mod:`bogie.fleet.sampling.sample`, "Seeds"), so that a
+row's draws do not depend on the other rows, their order or the number of workers. :mod:`bogie.fleet.sampling.sample`
 re-exports them."""
 
 from __future__ import annotations

@@ -1,11 +1,12 @@
 """Weighing sampled bogies: each sample row by each protocol, one run row per weighing, never an exception.
 
 :func:`weigh_fleet` weighs a table of samples (:func:`bogie.fleet.sample_fleet`) by the protocols given (a static
-weighbridge, a WIM pass: their settings in :mod:`bogie.fleet.protocol_settings`, their simulation in
-:mod:`bogie.fleet.protocols`) and returns the runs table (:mod:`bogie.fleet.runs`): one row per (sample, protocol).
-A sample that is not a valid bogie or whose simulation fails is a row with ``status = "failed"``, its reason in
-``message`` and every result null; it is never dropped, and nothing raises for it. Every run is a pure function of
-its sample row and protocol, so the table is the same whatever the executor, the number of workers or the chunking.
+weighbridge, a WIM pass: their settings in :mod:`bogie.fleet.weighing.settings`, their simulation in
+:mod:`bogie.fleet.weighing.protocols`) and returns the runs table (:mod:`bogie.fleet.weighing.runs`): one row per
+(sample, protocol). A sample that is not a valid bogie or whose simulation fails is a row with ``status = "failed"``,
+its reason in ``message`` and every result null; it is never dropped, and nothing raises for it. Every run is a pure
+function of its sample row and protocol, so the table is the same whatever the executor, the number of workers or the
+chunking.
 """
 
 from __future__ import annotations
@@ -24,10 +25,10 @@ from numpy.typing import NDArray
 from bogie import metrics
 from bogie.air import AirBogie
 from bogie.fleet.constants import MAX_AXLES, PAIR_TOLERANCE, PROTOCOLS, SHARE_TOLERANCE
-from bogie.fleet.protocol_settings import StaticProtocol, WimProtocol
-from bogie.fleet.protocols import static_weighbridge, wim_pass
-from bogie.fleet.runs import RESULT_COLUMNS, RUN_COLUMNS, runs_frame
-from bogie.fleet.sampling import COLUMNS, bogie_from_sample
+from bogie.fleet.sampling.sample import COLUMNS, bogie_from_sample
+from bogie.fleet.weighing.protocols import static_weighbridge, wim_pass
+from bogie.fleet.weighing.runs import RESULT_COLUMNS, RUN_COLUMNS, runs_frame
+from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.params import GRAVITY, Bogie
 
 __all__ = ["Outcome", "Protocols", "result_row", "result_rows", "weigh", "weigh_fleet", "weigh_rows", "weighing"]
@@ -39,7 +40,7 @@ Protocols = tuple[tuple[str, StaticProtocol | WimProtocol], ...]
 def result_row(
     protocol: str, n_axles: int, wheel_loads: NDArray[np.float64] | None, pitch: float, on_stop: bool = False
 ) -> dict[str, Any]:
-    """The result columns of one weighing (:data:`bogie.fleet.runs.RESULT_COLUMNS`) with ``protocol``.
+    """The result columns of one weighing (:data:`bogie.fleet.weighing.runs.RESULT_COLUMNS`) with ``protocol``.
 
     Axle loads [N] are twice the wheel loads (both sides); an axle the group does not have reads 0. With no
     ``wheel_loads`` (a failed weighing) every result is null: NaN for the numbers, None for the two flags.
@@ -215,10 +216,10 @@ def weigh_fleet(
     Parameters
     ----------
     samples
-        Sample rows with the columns of :data:`bogie.fleet.sampling.COLUMNS` (:func:`bogie.fleet.sample_fleet`).
+        Sample rows with the columns of :data:`bogie.fleet.sampling.sample.COLUMNS` (:func:`bogie.fleet.sample_fleet`).
     protocols
-        Protocol name (``static``, ``wim``) -> its settings (:class:`~bogie.fleet.protocol_settings.StaticProtocol`,
-        :class:`~bogie.fleet.protocol_settings.WimProtocol`); each sample's rows follow this order.
+        Protocol name (``static``, ``wim``) -> its settings (:class:`~bogie.fleet.weighing.settings.StaticProtocol`,
+        :class:`~bogie.fleet.weighing.settings.WimProtocol`); each sample's rows follow this order.
     executor
         Where to weigh: None in this process; any :class:`concurrent.futures.Executor` (a
         ``ProcessPoolExecutor``, a dask ``Client.get_executor()``) maps chunks of ``chunk_rows`` samples over its
@@ -230,9 +231,9 @@ def weigh_fleet(
     -------
     pandas.DataFrame
         ``len(samples) * len(protocols)`` rows, sample by sample, with the columns and dtypes of
-        :data:`bogie.fleet.runs.RUN_COLUMNS` (SI; ``chassis_tilt_deg`` in degrees). A sample that is not a valid
-        bogie, or whose weighing fails, has rows with ``status = "failed"``, the reason in ``message`` and nulls in
-        every result column.
+        :data:`bogie.fleet.weighing.runs.RUN_COLUMNS` (SI; ``chassis_tilt_deg`` in degrees). A sample that is not a
+        valid bogie, or whose weighing fails, has rows with ``status = "failed"``, the reason in ``message`` and nulls
+        in every result column.
 
     Raises
     ------
@@ -243,7 +244,9 @@ def weigh_fleet(
     pairs = _protocols(protocols)
     missing = [c for c in COLUMNS if c not in samples.columns and c != "study"]
     if missing:
-        raise ValueError(f"samples: the columns {', '.join(missing)} are missing (see bogie.fleet.sampling.COLUMNS)")
+        raise ValueError(
+            f"samples: the columns {', '.join(missing)} are missing (see bogie.fleet.sampling.sample.COLUMNS)"
+        )
     if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
         raise ValueError(f"chunk_rows = {chunk_rows!r}: must be a whole number >= 1 [-]")
     # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost

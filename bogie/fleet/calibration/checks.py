@@ -1,6 +1,6 @@
 """The checks of a calibration, and a whole calibration of an observed survey in one call (``docs/calibration.md``).
 
-:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration_fit.calibrate`) and checks: the calibrated fleet simulated
+:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration.fit.calibrate`) and checks: the calibrated fleet simulated
 directly, not through the table, under the survey's filters (``calibrated``); a fit on alternate records held
 against the other half (``held_out``); the ablation re-run on the calibrated fleet's steel groups. Its metrics are
 those of ``metrics/calibration.json`` (the DVC stage ``pipeline/calibrate.py`` writes them). :func:`write_csv_survey`
@@ -18,7 +18,10 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.calibration import (
+from bogie.fleet.calibration.attribution import attribution
+from bogie.fleet.calibration.fit import calibrate, priors_for
+from bogie.fleet.calibration.posterior import posterior
+from bogie.fleet.calibration.problem import (
     SIZES,
     CalibrationError,
     CalibrationSettings,
@@ -32,10 +35,7 @@ from bogie.fleet.calibration import (
     make_problem,
     observed_quantities,
 )
-from bogie.fleet.calibration_attribution import attribution
-from bogie.fleet.calibration_fit import calibrate, priors_for
-from bogie.fleet.calibration_posterior import posterior
-from bogie.fleet.calibration_table import (
+from bogie.fleet.calibration.table import (
     _quiet,
     _summary,
     bogie_tilts,
@@ -43,8 +43,8 @@ from bogie.fleet.calibration_table import (
     protocol_spec,
     weigh_readings,
 )
-from bogie.fleet.observed import by_size
-from bogie.fleet.protocol_settings import StaticProtocol
+from bogie.fleet.weighing.observed import by_size
+from bogie.fleet.weighing.settings import StaticProtocol
 from bogie.metrics import max_deviation
 from bogie.params import INHIBITORS
 from bogie.rounding import json_number
@@ -69,7 +69,7 @@ def simulate_fleet(
     ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``);
     ``weight_step_kg`` reads the loads at the observed file's resolution [kg] (None: as they are; the ablation's
     physics is read so); ``executor`` is where the weighings run
-    (:func:`bogie.fleet.calibration_table.weigh_readings`).
+    (:func:`bogie.fleet.calibration.table.weigh_readings`).
     """
     if variant not in ("baseline", *INHIBITORS, "all"):
         raise CalibrationError(f"variant = {variant!r}: must be baseline, all or one of {', '.join(INHIBITORS)}")
@@ -133,7 +133,7 @@ def frame_stats(frame: pd.DataFrame) -> dict[str, Any]:
 
 def frame_distance(frame: pd.DataFrame, obs: Mapping[str, np.ndarray], scales: Mapping[str, np.ndarray]) -> float:
     """The distance [-] of a directly simulated (unweighted) survey to observed quantities
-    (:func:`bogie.fleet.calibration.observed_quantities` per size) over their ``scales``."""
+    (:func:`bogie.fleet.calibration.problem.observed_quantities` per size) over their ``scales``."""
     q, w = {}, {}
     for size, n in SIZES.items():
         loads = frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy()
@@ -229,22 +229,22 @@ def calibrate_survey(
     Parameters
     ----------
     table
-        The calibration fleet's table (:func:`bogie.fleet.calibration.build_table`).
+        The calibration fleet's table (:func:`bogie.fleet.calibration.problem.build_table`).
     observed
-        The observed groups (:func:`bogie.fleet.calibration.observed_groups`).
+        The observed groups (:func:`bogie.fleet.calibration.problem.observed_groups`).
     settings
         The quantities fitted, their bounds, the optimiser's and the bootstrap's settings.
     base
-        Every quantity's value in the fleet (:func:`bogie.fleet.calibration.base_values`), kept if not fitted.
+        Every quantity's value in the fleet (:func:`bogie.fleet.calibration.problem.base_values`), kept if not fitted.
     min_load_kg
         Smallest group load kept [kg], the survey's own filter.
     executor
-        Where the direct simulations (the checks) are weighed (:func:`~bogie.fleet.calibration_table.weigh_readings`).
+        Where the direct simulations (the checks) are weighed (:func:`~bogie.fleet.calibration.table.weigh_readings`).
     progress
         Told the fit's generations, the resamples and the cost of an evaluation (None: nothing).
     static
         The static weighing's settings: with a WIM table, the calibrated fleet's inequality is attributed to its
-        causes (:func:`bogie.fleet.calibration_attribution.attribution`, the weighing without dynamics); None: not.
+        causes (:func:`bogie.fleet.calibration.attribution.attribution`, the weighing without dynamics); None: not.
 
     Returns
     -------
@@ -260,7 +260,7 @@ def calibrate_survey(
     Raises
     ------
     CalibrationError
-        If the arguments are not what :func:`bogie.fleet.calibration.make_problem` wants.
+        If the arguments are not what :func:`bogie.fleet.calibration.problem.make_problem` wants.
     """
     progress = progress or _quiet
     problem = make_problem(table, observed, settings.fit, base, min_load_kg)
@@ -357,7 +357,7 @@ def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
         return None
     return {
         "method": "random-walk Metropolis (adapted in burn-in) on the priors times a synthetic likelihood of the "
-        "survey's summaries over the table (bogie.fleet.calibration_posterior)",
+        "survey's summaries over the table (bogie.fleet.calibration.posterior)",
         "credible_level": level,
         "draws": len(post.draws),
         "acceptance": json_number(post.acceptance),

@@ -1,6 +1,6 @@
 """The runs table: one row per sampled bogie and protocol, every column's type and unit.
 
-A run row is the sample's columns (:data:`bogie.fleet.sampling.COLUMNS`; a runs dataset on disk carries ``study``
+A run row is the sample's columns (:data:`bogie.fleet.sampling.sample.COLUMNS`; a runs dataset on disk carries ``study``
 as its partition directory), the tilt in degrees, the protocol, ``status`` and ``message``, then the weighing's
 result (:data:`RESULT_COLUMNS`). A failed weighing (``status = "failed"``, the reason in ``message``) has every
 result column null (NaN in pandas floats, ``<NA>`` in the booleans): never a made-up number, so an unfiltered mean is
@@ -17,7 +17,7 @@ import pandas as pd
 
 from bogie.bogie_file import is_bogie_file
 from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES, PROTOCOLS, SUSPENSIONS
-from bogie.fleet.sampling import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS
+from bogie.fleet.sampling.sample import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS
 from bogie.presets import PRESETS
 from bogie.road import ISO8608_CLASSES
 

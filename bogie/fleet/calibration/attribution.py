@@ -31,9 +31,9 @@ from typing import Any
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.calibration import SIZES, CalibrationError, Mapper, Table
-from bogie.fleet.calibration_table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
-from bogie.fleet.protocol_settings import StaticProtocol
+from bogie.fleet.calibration.problem import SIZES, CalibrationError, Mapper, Table
+from bogie.fleet.calibration.table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
+from bogie.fleet.weighing.settings import StaticProtocol
 from bogie.intervals import percentile_interval
 from bogie.rounding import json_number
 from bogie.weighings.stats import at_resolution, group_inequality

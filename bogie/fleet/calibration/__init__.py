@@ -1,0 +1,28 @@
+"""Calibration to an observed survey (``docs/calibration.md``): the fleet quantities fitted to a survey's readings.
+
+- :mod:`.settings`: :class:`CalibrationSettings`, :class:`CalibrationError`, ``check_fit`` (what params.yaml's loader
+  reads, light on purpose);
+- :mod:`.problem`: the observed groups, the energy distance, the problem (this package's code before issue 42 made
+  it a folder);
+- :mod:`.table`: the calibration fleet, its common random numbers and its table of readings over any executor;
+- :mod:`.priors`, :mod:`.posterior`, :mod:`.fit`: the priors, the synthetic-likelihood posterior, differential
+  evolution and the bootstrap (:func:`calibrate`);
+- :mod:`.attribution`: what each cause explains;
+- :mod:`.checks`: the calibrated fleet simulated directly, the held-out half, the ablation, :func:`calibrate_survey`.
+
+Names load on first use (:mod:`bogie.lazy`).
+"""
+
+from bogie.lazy import lazy_names
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "settings"),
+        **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "problem"),
+        **dict.fromkeys(("Table", "base_values", "build_table"), "table"),
+        "calibrate": "fit",
+        **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "checks"),
+    },
+    former="problem",
+)

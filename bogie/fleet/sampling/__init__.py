@@ -1,0 +1,22 @@
+"""Sampling a fleet: what varies between the bogies and how, drawn from one seeded design.
+
+- :mod:`.sample`: :class:`Fleet`, :func:`sample_fleet`, :func:`design_bogie`, :func:`bogie_from_sample`, the sample
+  ``COLUMNS`` (this package's code before issue 42 made it a folder);
+- :mod:`.distributions`: the quantities' distributions and their inverse CDFs;
+- :mod:`.seeds`: every stream of the master seed (the road, the sensor, a suspension's draw, a design's);
+- :mod:`.tilted`: the effective payload fraction of a tilted trailer.
+
+Names load on first use (:mod:`bogie.lazy`).
+"""
+
+from bogie.lazy import lazy_names
+
+__getattr__, __dir__ = lazy_names(
+    __name__,
+    {
+        **dict.fromkeys(("COLUMNS", "FLEET_QUANTITIES", "Fleet", "FleetError", "bogie_from_sample", "design_bogie",
+                         "sample_fleet"), "sample"),
+        **dict.fromkeys(("design_seed", "road_seed", "sensor_seed", "suspension_draw"), "seeds"),
+    },
+    former="sample",
+)  # fmt: skip
