@@ -37,7 +37,6 @@ from bogie.rounding import json_number
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
 from pipeline.chunks import NotRunsDatasetError
 from pipeline.config import Config, load_config
-from pipeline.sample import fleet_model
 from pipeline.schema import read_runs_frame
 from pipeline.simulate import simulate_samples
 
@@ -67,7 +66,7 @@ def experiment(config: Config) -> DesignExperiment:
     """The experiment of params.yaml: :func:`bogie.fleet.design.experiment.design_experiment` of its fleet, ``design:``
     and
     master seed."""
-    return design_experiment(fleet_model(config), settings(config), config.seed)
+    return design_experiment(config.fleet_study, settings(config), config.seed)
 
 
 # ---- outputs ---------------------------------------------------------------------------------------------------
@@ -165,7 +164,7 @@ def analysed(config: Config, exp: DesignExperiment, runs: pd.DataFrame) -> tuple
     runs = experiment_runs(exp, runs)
     analysis = analyse_designs(runs, exp.designs, exp.tilts, spec.target_share, spec.confidence_level)
     text = guidance_sentences(analysis.designs, exp.tilts, spec.target_share)
-    return analysis, metrics(analysis, spec, exp.tilts, typical_design(fleet_model(config)), text)
+    return analysis, metrics(analysis, spec, exp.tilts, typical_design(config.fleet_study), text)
 
 
 def run(

@@ -23,11 +23,9 @@ import pandas as pd
 from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.sampling.sample import (
     COLUMNS,
-    FLEET_QUANTITIES,
     SCALAR_QUANTITIES,
     TYRE_WEAR_COLUMNS,
     VARIANTS,
-    Fleet,
     design_seed,
     road_seed,
     sensor_seed,
@@ -44,22 +42,9 @@ STUDIES: tuple[str, ...] = ("fleet", "sensitivity", "ablation")
 
 
 # ---- studies ---------------------------------------------------------------------------------------------------
-def fleet_model(config: Config) -> Fleet:
-    """The fleet params.yaml describes, as the library's :class:`bogie.fleet.Fleet` (SI)."""
-    fleet = config.fleet
-    return Fleet(
-        distributions={name: config.distributions[name] for name in FLEET_QUANTITIES},
-        axle_mix=fleet.axle_mix,
-        presets=fleet.presets,
-        legal_group_load=fleet.legal_group_load,
-        legal_axle_load=fleet.legal_axle_load,
-        suspension_mix=fleet.suspension_mix,
-    )
-
-
 def sample_fleet(config: Config) -> pd.DataFrame:
     """The fleet study of params.yaml: :func:`bogie.fleet.sample_fleet` of ``fleet.n_bogies`` bogies."""
-    return fleet_sample(fleet_model(config), config.fleet.n_bogies, config.seed, config.fleet.sampling)
+    return fleet_sample(config.fleet_study, config.fleet.n_bogies, config.seed, config.fleet.sampling)
 
 
 def sensitivity_problem(config: Config) -> dict[str, Any]:
@@ -131,7 +116,7 @@ def sample_sensitivity(config: Config) -> pd.DataFrame:
     values["road_seed"] = np.full(n, road_seed(config.seed, "sensitivity", 0), dtype=np.int64)
     values["sensor_seed"] = np.full(n, sensor_seed(config.seed, "sensitivity", 0), dtype=np.int64)
     groups = np.full(n, sens.group, dtype=object)
-    return study_frame(fleet_model(config), "sensitivity", groups, values, np.arange(n) // (n_groups + 2))
+    return study_frame(config.fleet_study, "sensitivity", groups, values, np.arange(n) // (n_groups + 2))
 
 
 def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:

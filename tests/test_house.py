@@ -36,6 +36,22 @@ def test_a_hand_made_tree_is_measured_as_counted_by_hand(tmp_path):
     assert m["circles"] == [["bogie.a", "bogie.b"]]
 
 
+def test_a_heavy_package_init_that_imports_back_is_a_circle(tmp_path):
+    # issue 42's move found it: bogie.steel.newmark's kernel imported the force from bogie.steel.nonlinear.force,
+    # which runs bogie/steel/nonlinear/__init__.py first, which imported bogie.steel.newmark: a circle of packages
+    bogie, room, other = tmp_path / "bogie", tmp_path / "bogie" / "room", tmp_path / "bogie" / "other"
+    for folder in (bogie, room, other):
+        folder.mkdir()
+    (bogie / "__init__.py").write_text("")
+    (room / "__init__.py").write_text("from bogie.other import kernels\n")  # heavy: imports the other room
+    (room / "force.py").write_text("x = 1\n")
+    (other / "__init__.py").write_text("")
+    (other / "kernels.py").write_text("from bogie.room import force\n")  # runs bogie/room/__init__.py first
+    assert house.measure(tmp_path)["circles"] == [["bogie.other.kernels", "bogie.room"]]
+    (room / "__init__.py").write_text("")  # a light package: no circle
+    assert house.measure(tmp_path)["circles"] == []
+
+
 def test_the_project_has_no_circle_of_imports_and_no_private_name_imported_across_packages():
     # issue 42 Must 4, held from here on (modules over 500 lines and functions over 60 are not yet: tools/house.py)
     m = house.measure()

@@ -20,9 +20,7 @@ import numpy as np
 from bogie.fleet.design.experiment import FLEET_SLOT, conditions, design_points, design_samples, typical_design
 from bogie.fleet.sampling.sample import bogie_from_sample
 from bogie.fleet.weighing.weigh import weigh
-from pipeline import design
 from pipeline.config import load_config
-from pipeline.sample import fleet_model
 
 BUSHES = (1.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)  # [N m/rad]
 
@@ -34,7 +32,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--tilt", type=float, default=0.75, help="nose-up chassis tilt [degree] (default 0.75)")
     args = parser.parse_args(argv)
     config = load_config(args.params)
-    fleet, spec = fleet_model(config), design.settings(config)
+    fleet, spec = config.fleet_study, config.design
+    if spec is None:
+        raise SystemExit(f"{args.params}: design is null: there is no design study to look into")
     designs = design_points(fleet, spec, config.seed)
     conds = conditions(fleet, spec.n_conditions, config.seed)
     samples = design_samples(fleet, designs, conds.iloc[: args.conditions], np.zeros(1))

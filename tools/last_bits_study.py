@@ -19,7 +19,6 @@ survey's flags (outside 5 %, over 10 %) flipped, and which bogies differ most wi
 from __future__ import annotations
 
 import argparse
-import copy
 import os
 import pickle
 import subprocess
@@ -38,18 +37,14 @@ def _weigh(n_bogies: int, ulp: bool, out: str) -> None:
     import numpy as np
     import pandas as pd
 
-    from pipeline.config import load_params, parse_config
-    from pipeline.sample import sample_fleet
-    from pipeline.simulate import run_chunk, study_protocols
+    from bogie.fleet import sample_fleet, weigh_fleet
+    from pipeline.config import load_config  # params.yaml's one reader; the study is bogie.fleet's
 
-    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["n_bogies"] = n_bogies
-    raw["ablation"]["n_bogies"] = min(raw["ablation"]["n_bogies"], n_bogies)
-    config = parse_config(raw)
-    fleet = sample_fleet(config)
+    config = load_config(ROOT / "params.yaml")
+    fleet = sample_fleet(config.fleet_study, n_bogies, config.seed, config.fleet.sampling)
     if ulp:
         fleet["chassis_tilt"] = np.nextafter(fleet["chassis_tilt"].to_numpy(), np.inf)
-    runs = run_chunk(fleet.drop(columns=["study"], errors="ignore"), study_protocols(config, "fleet"))
+    runs = weigh_fleet(fleet, {name: getattr(config.protocol, name) for name in config.protocol.run})
     pd.to_pickle(runs, out)
 
 

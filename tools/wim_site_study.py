@@ -17,7 +17,6 @@ configurations' difference, not another draw. The statistics are the survey's
 from __future__ import annotations
 
 import argparse
-import copy
 import dataclasses
 import difflib
 import sys
@@ -26,13 +25,13 @@ from pathlib import Path
 
 import pandas as pd
 
+from bogie.fleet import WimProtocol, sample_fleet
 from bogie.fleet.sampling.sample import bogie_from_sample
 from bogie.fleet.weighing.survey import readings
 from bogie.fleet.weighing.weigh import weigh
 from bogie.params import GRAVITY
 from bogie.weighings.stats import survey_statistics
-from pipeline.config import WimProtocol, load_params, parse_config
-from pipeline.sample import sample_fleet
+from pipeline.config import load_config  # params.yaml's one reader; the study is bogie.fleet's
 
 ROOT = Path(__file__).resolve().parents[1]
 DOC = ROOT / "docs" / "wim-site.md"
@@ -69,11 +68,8 @@ def configurations(default: WimProtocol) -> list[tuple[str, WimProtocol]]:
 
 def run(n_bogies: int) -> tuple[pd.DataFrame, float]:
     """The statistics table (one row per configuration and axle group) and the wall time [s]."""
-    raw = copy.deepcopy(load_params(ROOT / "params.yaml"))
-    raw["fleet"]["n_bogies"] = n_bogies
-    raw["ablation"]["n_bogies"] = min(raw["ablation"]["n_bogies"], n_bogies)
-    config = parse_config(raw)
-    fleet = sample_fleet(config).to_dict("records")
+    config = load_config(ROOT / "params.yaml")
+    fleet = sample_fleet(config.fleet_study, n_bogies, config.seed, config.fleet.sampling).to_dict("records")
     start = time.perf_counter()
     rows = []
     for label, spec in configurations(config.protocol.wim):
@@ -133,7 +129,7 @@ def main(argv: list[str] | None = None) -> int:
     before, rest = text.split(BEGIN, 1)
     _, after = rest.split(END, 1)
     new = f"{before}{BEGIN}\n{table}{END}{after}"
-    runs = len(configurations(parse_config(load_params(ROOT / "params.yaml")).protocol.wim)) * args.n_bogies
+    runs = len(configurations(load_config(ROOT / "params.yaml").protocol.wim)) * args.n_bogies
     print(f"wim_site_study: {runs} WIM runs in {elapsed:.0f} s ({1000 * elapsed / runs:.0f} ms a run, one process)")
     if args.check:
         if new != text:

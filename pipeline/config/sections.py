@@ -39,4 +39,15 @@ SurveyConfig = config_class(schema.Survey, "SurveyConfig")
 CalibrateConfig = config_class(schema.Calibrate, "CalibrateConfig")
 DesignConfig = config_class(schema.Design, "DesignConfig")
 #: the whole file; ``figure2`` (and the other sections of schema.OTHER_SECTIONS) are read by their own stages
-Config = config_class(schema.Params, "Config", skip=schema.OTHER_SECTIONS)
+Config = config_class(
+    schema.Params,
+    "Config",
+    skip=schema.OTHER_SECTIONS,
+    extra=(
+        (
+            "fleet_study",
+            "The fleet study's fleet, ``fleet:`` and ``distributions:`` together, as the library's "
+            ":class:`bogie.fleet.Fleet` (SI): what :func:`bogie.fleet.sample_fleet` samples.",
+        ),
+    ),
+)

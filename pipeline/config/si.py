@@ -121,11 +121,17 @@ def _value(value: Any, factor: float) -> Any:
 _CLASSES: dict[type[BaseModel], type] = {}
 
 
-def config_class(model: type[BaseModel], name: str | None = None, skip: tuple[str, ...] = ()) -> type:
+def config_class(
+    model: type[BaseModel],
+    name: str | None = None,
+    skip: tuple[str, ...] = (),
+    extra: tuple[tuple[str, str], ...] = (),
+) -> type:
     """The frozen dataclass a validated ``model`` converts to: one attribute per key, named and in the unit of the
     table above; an optional section (``None`` allowed) defaults to None. Made once per model; the model's
     ``library_class`` if it names one. ``name`` names the class (module
-    :mod:`pipeline.config.sections`); the keys in ``skip`` are left out (sections other stages read themselves)."""
+    :mod:`pipeline.config.sections`); the keys in ``skip`` are left out (sections other stages read themselves);
+    ``extra`` adds attributes (name, doc), default None, that the loader fills from several sections."""
     if model in _CLASSES:
         return _CLASSES[model]
     library = getattr(model, "library_class", None)
@@ -146,6 +152,9 @@ def config_class(model: type[BaseModel], name: str | None = None, skip: tuple[st
             what = f"[{unit}]"
         text = f"{info.description} " if info.description else ""
         lines.append(f"{attr}\n    {text}(params.yaml ``{key}``; {what}{'; None if not given' if optional else ''})")
+    for attr, text in extra:
+        fields.append((attr, Any, dataclasses.field(default=None)))
+        lines.append(f"{attr}\n    {text}")
     section = getattr(model, "__doc__", "") or ""
     doc = (
         f"{section.splitlines()[0] if section else model.__name__} In SI (:mod:`pipeline.config.si`), made from "

@@ -191,3 +191,25 @@ def test_calibrates_method_keys_are_every_calibration_setting_the_yaml_sets(raw)
             settings.posterior_draws, settings.seed) == (7, 3, 11, 0.8, 13, raw["seed"])  # fmt: skip
     # the library's range, the project's stricter bound beside it: popsize 2-200 (the issue's example)
     assert _bounds(schema.Calibrate.model_fields["popsize"]) == {"ge": 2, "le": 200}
+
+
+def test_the_fleet_sections_load_into_the_librarys_fleet_every_field_from_a_key(raw):
+    """``fleet:`` and ``distributions:`` together are the library's Fleet (config.fleet_study): each of its fields is
+    set from a key, each fleet key is a field of it or an argument of bogie.fleet.sample_fleet, and each distribution
+    it samples is the configuration's own object."""
+    import inspect
+
+    from bogie.fleet import Fleet, sample_fleet
+    from bogie.fleet.sampling.sample import FLEET_QUANTITIES
+
+    config = parse_config(raw)
+    fleet = config.fleet_study
+    assert isinstance(fleet, Fleet)
+    fields = {f.name for f in dataclasses.fields(Fleet)}
+    keys = {attribute(key, info)[0] for key, info in schema.Fleet.model_fields.items()}
+    arguments = set(inspect.signature(sample_fleet).parameters) - {"fleet", "seed"}
+    assert keys == (fields - {"distributions"}) | arguments, (keys, fields, arguments)
+    for name in fields - {"distributions"}:
+        assert getattr(fleet, name) == getattr(config.fleet, name), name
+    assert set(fleet.distributions) == set(FLEET_QUANTITIES) <= set(config.distributions)
+    assert all(fleet.distributions[q] is config.distributions[q] for q in FLEET_QUANTITIES)

@@ -22,7 +22,6 @@ from bogie.fleet.design import analysis as A
 from bogie.fleet.design import experiment as L
 from pipeline import design as D
 from pipeline.config import ConfigError, parse_config
-from pipeline.sample import fleet_model
 
 ROOT = Path(__file__).resolve().parents[2]
 
@@ -56,7 +55,7 @@ def test_tolerance_is_where_the_share_first_falls_below_the_target_on_each_side(
 def test_tilt_grid_steps_outward_from_level_and_keeps_the_ends():
     raw = raw_params(tilt_step_deg=0.75)
     config = parse_config(raw)
-    tilts = L.tilt_grid(fleet_model(config), config.design.tilt_step_deg)
+    tilts = L.tilt_grid(config.fleet_study, config.design.tilt_step_deg)
     np.testing.assert_allclose(tilts, [-2.0, -1.5, -0.75, 0.0, 0.75, 1.5, 2.0])
     raw["distributions"]["chassis_tilt_deg"] = {"kind": "uniform", "low": 0.5, "high": 2.0}
     # refused by the schema, before any stage runs (pipeline.config.rules)
