@@ -131,7 +131,8 @@ def config_class(
     table above; an optional section (``None`` allowed) defaults to None. Made once per model; the model's
     ``library_class`` if it names one. ``name`` names the class (module
     :mod:`pipeline.config.sections`); the keys in ``skip`` are left out (sections other stages read themselves);
-    ``extra`` adds attributes (name, doc), default None, that the loader fills from several sections."""
+    ``extra`` adds attributes (name, doc), default None, that the loader fills from several sections (marked
+    ``derived`` in their field's metadata: ``data/config.json`` leaves them out, they would repeat those sections)."""
     if model in _CLASSES:
         return _CLASSES[model]
     library = getattr(model, "library_class", None)
@@ -153,7 +154,7 @@ def config_class(
         text = f"{info.description} " if info.description else ""
         lines.append(f"{attr}\n    {text}(params.yaml ``{key}``; {what}{'; None if not given' if optional else ''})")
     for attr, text in extra:
-        fields.append((attr, Any, dataclasses.field(default=None)))
+        fields.append((attr, Any, dataclasses.field(default=None, metadata={"derived": True})))
         lines.append(f"{attr}\n    {text}")
     section = getattr(model, "__doc__", "") or ""
     doc = (

@@ -213,3 +213,6 @@ def test_the_fleet_sections_load_into_the_librarys_fleet_every_field_from_a_key(
         assert getattr(fleet, name) == getattr(config.fleet, name), name
     assert set(fleet.distributions) == set(FLEET_QUANTITIES) <= set(config.distributions)
     assert all(fleet.distributions[q] is config.distributions[q] for q in FLEET_QUANTITIES)
+    from pipeline.validate import as_json
+
+    assert "fleet_study" not in as_json(config)  # derived: data/config.json would repeat fleet: and distributions:
