@@ -2,8 +2,8 @@
 
 Four measurements, all in one process except the fresh-process ones (see ``bench/README.md``):
 
-1. ``bogie.steel.nonlinear.simulate`` of ``triaxle_stage1()`` (preset inhibitors) over an ISO 8608 class B road at 15
-   m/s for 20 s at dt = 1 ms: median of repeats after a warm-up (target under 50 ms), and the compiled kernel alone.
+1. ``bogie.steel.nonlinear.simulate`` of ``triaxle_stage1()`` (preset inhibitors) over an ISO 8608 class B road at
+   15 m/s for 20 s at dt = 1 ms: median of repeats after a warm-up (target under 50 ms), and the compiled kernel alone.
 2. The peer: ``scipy.integrate.solve_ivp`` (Radau and BDF) on the model's first-order form x = [u, v, s],
    du/dt = v, M dv/dt = -f(u, v, s, drive(t)), ds/dt = (s_rm(u, s) - s) / tau, where f is the *same compiled*
    internal force :func:`bogie.steel.force.core.force` the kernel uses and s_rm the plastic slip its return map
@@ -287,9 +287,9 @@ def main() -> None:
     kernel = call.run()
     if not np.array_equal(kernel.record[:, :n], result.wheel_loads):
         raise RuntimeError("the benchmark's kernel call differs from bogie.steel.nonlinear.simulate")
-    # the weighings' kernel (bogie.steel.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start at
-    # rest, no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it per
-    # row
+    # the weighings' kernel (bogie.steel.phases, docs/phases.md) on the same pass: fixed 1 ms steps, the same start
+    # at rest, no histories kept; its road is the profile's own grid (exact rates) where simulate's inputs sample it
+    # per row
     profile = ISO8608Profile(**ROAD)
     table = phases.RoadTable.from_profile(
         profile, bogie.axle_x[0] - bogie.axle_x[-1] - 0.01, SPEED * DURATION + 0.01, profile.grid_spacing
@@ -427,7 +427,7 @@ def main() -> None:
           f"{kernel.n_iterations / n_steps:.2f} Newton iterations per step")  # fmt: skip
     evals = phased.phases[0].force_evaluations / n_steps
     verdict = "met" if t_phases < 0.01 else "NOT met"
-    print(f"   bogie.steel.phases.run (the weighings' kernel, readings only)      {t_phases * 1e3:6.1f} ms "
+    print(f"   bogie.steel.phases.run (the weighings' kernel, readings only)       {t_phases * 1e3:6.1f} ms "
           f"({min(headline['phases']) * 1e3:.1f})  {t_phases / n_steps * 1e6:.2f} us per step, "
           f"{evals:.2f} force evaluations per step   target <= 10 ms: {verdict}")  # fmt: skip
     print(f"   wheel loads W / W_ref against the kernel at dt/{FULL_REFINEMENT}: simulate max {e_ours_full[0]:.2e} "

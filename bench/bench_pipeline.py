@@ -22,7 +22,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.sampling.sample import bogie_from_sample
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from pipeline.config import Config, load_config
 from pipeline.sample import sample_fleet, sample_studies
 from pipeline.simulate import simulate_samples, study_protocols

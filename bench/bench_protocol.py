@@ -7,7 +7,7 @@ before this branch's changes) extracted with ``git archive`` into a cache direct
 later runs so that its numba cache stays warm. Every worker samples the
 same :data:`N_BOGIES` fleet bogies (``params.yaml`` of this tree, ``fleet.n_bogies`` set to that), loads the
 compiled kernels with one untimed weighing per protocol, then times :data:`PASSES` passes of
-:func:`bogie.fleet.weighing.weigh.weigh` over the sample per protocol. Workers of the two trees alternate
+:func:`bogie.fleet.weighing.weigher.weigh` over the sample per protocol. Workers of the two trees alternate
 (:data:`ROUNDS` rounds, which goes first alternating) so that a burst of other work on the shared machine falls on
 both; the best pass of each protocol is kept. ``--reference HEAD`` with a clean tree times the same code twice: the
 ratio it prints is the bench's own scatter.
@@ -59,7 +59,7 @@ def worker(out: str, params: str, n_bogies: int, divisor: int, passes: int) -> N
 
     import bogie
     from bogie.fleet.sampling.sample import bogie_from_sample
-    from bogie.fleet.weighing.weigh import weigh
+    from bogie.fleet.weighing.weigher import weigh
     from pipeline.config import load_config
     from pipeline.sample import sample_fleet
 

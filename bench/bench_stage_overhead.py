@@ -2,7 +2,7 @@
 
 ``python -m bench.bench_stage_overhead [--base REV] [--repeats N]`` runs the default params.yaml's studies (15 608
 runs in chunks of ``execution.chunk_size``) through :func:`pipeline.simulate.simulate_samples` with
-:func:`bogie.fleet.weighing.weigh.weigh` replaced by a stub that returns a precomputed valid row, so that only the
+:func:`bogie.fleet.weighing.weigher.weigh` replaced by a stub that returns a precomputed valid row, so that only the
 stage's own work runs: planning and hashing the chunks, building each chunk's rows (``bogie_from_sample`` included),
 passing them between processes, writing and checking the part files, and verifying them on a rerun. Each measurement is
 a fresh process (the stub is installed in it and in its loky workers by a ``sitecustomize`` module), alternately for
@@ -48,8 +48,7 @@ import os
 if os.environ.get("BENCH_STUB_WEIGH"):
     import numpy as np
 
-    import bogie.fleet.weighing.protocols as protocol
-    import pipeline.simulate as simulate
+    import bogie.fleet.weighing.weigher as protocol
 
     _ROWS = {}
 
@@ -60,7 +59,7 @@ if os.environ.get("BENCH_STUB_WEIGH"):
             _ROWS[key] = {**protocol.result_row(name, key[1], loads, 0.001), "status": "ok", "message": "ok"}
         return dict(_ROWS[key])
 
-    protocol.weigh = simulate.weigh = _stub
+    protocol.weigh = _stub  # weigh_rows calls it from its own module
 """
 
 
@@ -137,7 +136,7 @@ def _child_startup() -> dict:
     """A fresh worker's imports and first weighings (real ones), beyond a second weighing of each kind [s]."""
     result = _child_import()
     from bogie.fleet.sampling.sample import bogie_from_sample
-    from bogie.fleet.weighing.weigh import weigh
+    from bogie.fleet.weighing.weigher import weigh
 
     config, samples, protocols = _child_samples()
     fleet = samples["fleet"]

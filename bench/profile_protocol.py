@@ -6,7 +6,7 @@ Measured on the first tandem and the first tri-axle bogie of a fixed fleet sampl
 1. **Work per phase** (counts from the kernel, exact): accepted and rejected steps, force evaluations (the 2n + 1
    of each tangent included), tangents formed, factorisations of the iteration matrix and steps whose first
    correction was accepted unchecked (``bogie.steel.phases.PhaseOutcome``), and the evaluations per step.
-2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigh.weigh``, the
+2. **Time** (compiled, warm cache, best of :data:`REPEATS`): the whole of ``bogie.fleet.weighing.weigher.weigh``, the
    compiled call (``bogie.steel.phases._core.run_phases``) within it, and so the Python around it (the road tables, the
    phases, the result row); the time per step and per force evaluation of the compiled call.
 3. **Unit costs** (compiled loops, no Python in between, best of 5): one force evaluation with the record (the
@@ -46,6 +46,7 @@ def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
     """Best-of-REPEATS time of ``weigh`` and of its compiled call [s], and the phases' outcomes."""
     from bogie.fleet.sampling.sample import bogie_from_sample
     from bogie.fleet.weighing import protocols as protocol
+    from bogie.fleet.weighing import weigher
     from bogie.steel import phases
     from bogie.steel.phases import _core as pc
 
@@ -70,7 +71,7 @@ def _timed(record: dict, name: str, spec) -> tuple[float, float, list]:
         for _ in range(REPEATS):
             inner["t"] = 0.0
             start = time.perf_counter()
-            protocol.weigh(bogie, record, name, spec)
+            weigher.weigh(bogie, record, name, spec)
             best_total = min(best_total, time.perf_counter() - start)
             best_kernel = min(best_kernel, inner["t"])
     finally:

@@ -2,7 +2,7 @@
 
 ``python -m bench.profile_stage [--fraction F]`` weighs the first fraction ``F`` (default 0.1) of each study of this
 checkout's ``data/samples`` (run ``make repro`` or ``dvc repro sample`` first) by the study's protocols, serially in
-one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigh.weigh`, the road tables' cache emptied
+one process, as a chunk of the stage does (:func:`bogie.fleet.weighing.weigher.weigh`, the road tables' cache emptied
 first), after an untimed warm-up that loads the kernels. For each (study, protocol, group) it prints the runs, the time
 per run, the compiled call's share (``bogie.steel.phases._core.run_phases``, timed around each call), the Python around
 it (road tables, phases, packing, result row), ``bogie_from_sample`` per run, the step attempts per run (accepted
@@ -37,6 +37,7 @@ def main(argv: list[str] | None = None) -> None:
 
     from bogie.fleet.sampling.sample import bogie_from_sample
     from bogie.fleet.weighing import protocols as protocol
+    from bogie.fleet.weighing import weigher
     from bogie.steel.phases import _core as pc
     from pipeline.config import load_config
     from pipeline.simulate import study_protocols
@@ -59,7 +60,7 @@ def main(argv: list[str] | None = None) -> None:
         for record in table.head(WARM_SAMPLES).to_dict("records"):
             bogie = bogie_from_sample(record)
             for name, spec in study_protocols(config, study):
-                protocol.weigh(bogie, record, name, spec)
+                weigher.weigh(bogie, record, name, spec)
     protocol._static_table.cache_clear()
     protocol._wim_table.cache_clear()
     load_start = os.getloadavg()
@@ -74,7 +75,7 @@ def main(argv: list[str] | None = None) -> None:
             for name, spec in protocols:
                 call["time"], call["attempts"] = 0.0, 0
                 start = time.perf_counter()
-                protocol.weigh(bogie, record, name, spec)
+                weigher.weigh(bogie, record, name, spec)
                 row = found[(study, name, str(record["group"]))]
                 row[0] += 1
                 row[1] += time.perf_counter() - start

@@ -33,7 +33,7 @@ MOVED: dict[str, str] = {
         ("protocol_settings", "weighing.settings"), ("protocols", "weighing.protocols"), ("runs", "weighing.runs"),
         ("survey", "weighing.survey"), ("observed", "weighing.observed"),
         ("calibration_settings", "calibration.settings"), ("calibration_table", "calibration.table"),
-        ("calibration_fit", "calibration.fit"), ("calibration_posterior", "calibration.posterior"),
+        ("calibration_fit", "calibration.fitting"), ("calibration_posterior", "calibration.posterior"),
         ("priors", "calibration.priors"), ("calibration_attribution", "calibration.attribution"),
         ("calibration_checks", "calibration.checks"), ("design_settings", "design.settings"),
         ("design_analysis", "design.analysis"), ("design_table", "design.table"),
@@ -62,16 +62,29 @@ class _AliasLoader(importlib.abc.Loader):
 
 
 class MovedFinder(importlib.abc.MetaPathFinder):
-    """Finds the old paths of :data:`MOVED`, and nothing else."""
+    """Finds the old paths of :data:`MOVED` and of the modules inside them, and nothing else."""
 
     def find_spec(self, fullname: str, path: object, target: object = None) -> importlib.machinery.ModuleSpec | None:
-        new = MOVED.get(fullname)
+        new = moved_to(fullname)
         if new is None:
             return None
         return importlib.machinery.ModuleSpec(fullname, _AliasLoader(new))
 
 
+def moved_to(fullname: str) -> str | None:
+    """The new path of ``fullname``: a moved module's, or a module inside a moved package (``bogie.fe.frame`` is
+    ``bogie.steel.fe.frame``, never a second copy of its file); None if it did not move."""
+    if fullname in MOVED:
+        return MOVED[fullname]
+    for old, new in MOVED.items():
+        if fullname.startswith(old + "."):
+            return new + fullname[len(old) :]
+    return None
+
+
 def install() -> None:
-    """Put :class:`MovedFinder` on ``sys.meta_path`` once (after the standard finders: a real module wins)."""
+    """Put :class:`MovedFinder` first on ``sys.meta_path``, once. First: an old package's ``__path__`` is the new
+    folder, so the standard finder would load ``bogie.fe.frame`` from it as a second copy of ``bogie.steel.fe.frame``.
+    It answers for the old paths only, and no file is left at one (``tests/test_moved.py``)."""
     if not any(isinstance(finder, MovedFinder) for finder in sys.meta_path):
-        sys.meta_path.append(MovedFinder())
+        sys.meta_path.insert(0, MovedFinder())

@@ -1,7 +1,7 @@
 """Small dense LU factorisation with partial pivoting, compiled (numba), for the Newton iterations.
 
 The iteration matrices of the time-stepping kernel (:mod:`bogie.steel.newmark`) and of the static equilibrium
-(:func:`bogie.steel.force.equilibrium`) have 4 to 10 rows; factoring them in place in compiled code, without the
+(:func:`bogie.steel.nonlinear.equilibrium`) have 4 to 10 rows; factoring them in place in compiled code, without the
 allocation and dispatch of ``numpy.linalg``, keeps a step's cost at a few microseconds. :func:`invert` is for a
 matrix that is solved with many more times than it is formed (:mod:`bogie.steel.phases._core` keeps its iteration
 matrices over many steps): a solve with the inverse is a matrix-vector product, with no pivoting or division.

@@ -4,7 +4,7 @@
 distribution's centre and spread, the air share, the WIM site's roughness, the sensor's error) so that the
 simulated readings' distributions of each axle position's load share and of the spread match the observed survey's
 under the same filters (``observed:``). The method and its checks are the library's, with plain arguments:
-:mod:`bogie.fleet.calibration.problem` (the calibration fleet's table of readings, the distance, the fit, the bootstrap;
+:mod:`bogie.fleet.calibration` (the calibration fleet's table of readings, the distance, the fit, the bootstrap;
 ``docs/calibration.md``) and :mod:`bogie.fleet.calibration.checks` (the calibrated fleet simulated directly, the
 held-out half, the ablation). This stage reads params.yaml, turns it into those arguments (the calibration fleet is
 the first ``calibrate.n_bogies`` bogies of the fleet study), weighs on the pipeline's one executor
@@ -85,7 +85,7 @@ def _tilt_grid(config: Config) -> np.ndarray:
 
 
 def _fleet(config: Config) -> dict[str, Any]:
-    """:func:`bogie.fleet.calibration.problem.crn_table`'s arguments from params.yaml."""
+    """:func:`bogie.fleet.calibration.table.crn_table`'s arguments from params.yaml."""
     cal = config.calibrate
     settings: StaticProtocol | WimProtocol = config.protocol.static if cal.protocol == "static" else config.protocol.wim
     return {

@@ -33,7 +33,7 @@ import scipy
 from bogie.bogie_file import base_fields
 from bogie.digest import numerics_digest
 from bogie.fleet.sampling.sample import COLUMNS
-from bogie.fleet.weighing.weigh import Protocols
+from bogie.fleet.weighing.weigher import Protocols
 from bogie.numba_cache import hash_sources
 from bogie.numerics import compile_target
 from bogie.presets import PRESETS

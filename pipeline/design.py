@@ -63,9 +63,8 @@ def settings(config: Config) -> DesignSettings:
 
 
 def experiment(config: Config) -> DesignExperiment:
-    """The experiment of params.yaml: :func:`bogie.fleet.design.experiment.design_experiment` of its fleet, ``design:``
-    and
-    master seed."""
+    """The experiment of params.yaml: :func:`bogie.fleet.design.experiment.design_experiment` of its fleet,
+    ``design:`` and master seed."""
     return design_experiment(config.fleet_study, settings(config), config.seed)
 
 

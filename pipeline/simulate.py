@@ -45,7 +45,7 @@ import pyarrow as pa
 from joblib import Parallel, delayed, parallel_config
 
 from bogie.fleet.sampling.sample import COLUMNS
-from bogie.fleet.weighing.weigh import weigh_rows
+from bogie.fleet.weighing.weigher import weigh_rows
 from pipeline.atomic import StageError, run_stage, stage_inputs
 from pipeline.chunks import (
     Chunk,

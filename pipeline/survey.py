@@ -2,8 +2,8 @@
 
 ``python -m pipeline.survey`` reads the fleet study's runs (``data/runs/study=fleet``) and tabulates, per protocol
 (static weighbridge, weigh-in-motion) and axle group (tandem, tri-axle), what a road authority's survey of that
-fleet would find (:func:`bogie.fleet.weighing.survey.survey`, every statistic a plain function of a runs DataFrame), and
-the design guidance (the share within 5 % binned by the design parameters, with Wilson intervals:
+fleet would find (:func:`bogie.fleet.weighing.survey.survey_tables`, every statistic a plain function of a runs
+DataFrame), and the design guidance (the share within 5 % binned by the design parameters, with Wilson intervals:
 :mod:`bogie.fleet.design.table`; the report draws it). This module reads, calls and writes. Definitions, units and
 file layout: ``docs/outputs.md``.
 

@@ -1,5 +1,4 @@
-"""bogie.fleet.calibration.problem with plain arguments (issue 29): known fleet values recovered, the table, bad
-arguments.
+"""bogie.fleet.calibration with plain arguments (issue 29): known fleet values recovered, the table, bad arguments.
 
 The recovery test needs no simulation: the calibration fleet's table holds readings that are a known function of the
 tilt (a steel group's outer axles share its load 1 -+ 0.02 per degree of tilt, an air group's axles equally), and the
@@ -18,7 +17,7 @@ from _fleets import DISTS, fleet
 
 import bogie.fleet as bf
 from bogie.fleet.calibration import checks as K
-from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import problem as L
 from bogie.weighings.survey import observed_survey
 

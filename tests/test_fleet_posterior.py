@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 from test_fleet_tilted import BUSH, FIT, RADIUS, TILT, TRUTH, radius_survey, radius_table
 
-from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import posterior as P
 from bogie.fleet.calibration import problem as L
 from bogie.fleet.calibration.priors import Prior, default_priors, log_prior

@@ -13,7 +13,7 @@ import numpy as np
 import pandas as pd
 import pytest
 
-from bogie.fleet.calibration import fit as F
+from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import problem as L
 from bogie.fleet.calibration import table as T
 from bogie.fleet.sampling.distributions import LogUniform, TruncNormal, Uniform

@@ -23,6 +23,8 @@ assert simulate is new.simulate
 assert sys.modules["bogie.nonlinear"] is new
 assert bogie.static is sys.modules["bogie.steel.static"]
 assert phases is sys.modules["bogie.steel.phases"]
+import bogie.fe.frame, bogie.steel.fe.frame  # a module inside a moved package: the one module, not a second copy
+assert sys.modules["bogie.fe.frame"] is sys.modules["bogie.steel.fe.frame"]
 messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
 assert any(m.startswith("bogie.nonlinear moved to bogie.steel.nonlinear") for m in messages), messages
 assert any(m.startswith("bogie.static moved to bogie.steel.static") for m in messages), messages
@@ -60,16 +62,16 @@ with warnings.catch_warnings(record=True) as caught:
     from bogie.fleet.sampling import sample_fleet, road_seed
     from bogie.fleet.design import study_designs, FACTORS
     from bogie.fleet.weighing import weigh_fleet, Protocols
-from bogie.fleet.calibration.fit import calibrate as new
+from bogie.fleet.calibration.fitting import calibrate as new
 from bogie.fleet.calibration.problem import observed_groups as groups
 from bogie.fleet.sampling.sample import sample_fleet as sample
 from bogie.fleet.design.experiment import FACTORS as factors
-from bogie.fleet.weighing.weigh import Protocols as protocols
+from bogie.fleet.weighing.weigher import Protocols as protocols
 assert calibrate is new and calibrate2 is new and observed_groups is groups and sample_fleet is sample
 assert FACTORS is factors and Protocols is protocols
 messages = [str(w.message) for w in caught if w.category is DeprecationWarning]
-assert messages == ["bogie.fleet.calibration_fit moved to bogie.fleet.calibration.fit (issue 42); the old path works "
-                    "until the next release"], messages
+assert messages == ["bogie.fleet.calibration_fit moved to bogie.fleet.calibration.fitting (issue 42); the old path "
+                    "works until the next release"], messages
 import bogie.fleet.calibration as room
 try:
     room.no_such_name

@@ -8,7 +8,7 @@ from hypothesis import HealthCheck, given, settings
 from hypothesis import strategies as st
 
 from bogie.fleet.sampling.sample import design_bogie
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from pipeline.config import StaticProtocol, WimProtocol
 
 STATIC = StaticProtocol(load_time=1.0, approach_length=3.0, crawl_speed=1.4, settle_time=1.5, dt=0.001)

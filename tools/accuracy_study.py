@@ -28,7 +28,7 @@ sys.path.insert(0, str(ROOT))
 
 from bogie.fleet import sample_fleet  # noqa: E402
 from bogie.fleet.sampling.sample import bogie_from_sample  # noqa: E402
-from bogie.fleet.weighing.weigh import protocols as protocol  # noqa: E402
+from bogie.fleet.weighing.weigher import protocols as protocol  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
 from pipeline.sample import sample_sensitivity  # noqa: E402 - the Saltelli design is the pipeline's (SALib)
 

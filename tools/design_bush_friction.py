@@ -19,7 +19,7 @@ import numpy as np
 
 from bogie.fleet.design.experiment import FLEET_SLOT, conditions, design_points, design_samples, typical_design
 from bogie.fleet.sampling.sample import bogie_from_sample
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from pipeline.config import load_config
 
 BUSHES = (1.0, 30.0, 100.0, 300.0, 1000.0, 3000.0)  # [N m/rad]

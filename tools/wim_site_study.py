@@ -28,7 +28,7 @@ import pandas as pd
 from bogie.fleet import WimProtocol, sample_fleet
 from bogie.fleet.sampling.sample import bogie_from_sample
 from bogie.fleet.weighing.survey import readings
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from bogie.params import GRAVITY
 from bogie.weighings.stats import survey_statistics
 from pipeline.config import load_config  # params.yaml's one reader; the study is bogie.fleet's

@@ -22,7 +22,7 @@ Every quantity is SI unless its name says otherwise (``_kg``, ``_t``, ``_deg``, 
 same table: whatever the executor, the number of workers or the CPU.
 
 The names below, and each room's, are loaded on first use (:mod:`bogie.lazy`), so that a module importing one
-submodule (the simulate stage imports :mod:`.weighing.weigh`) neither loads nor depends on the others: the
+submodule (the simulate stage imports :mod:`.weighing.weigher`) neither loads nor depends on the others: the
 pipeline's code dependencies and the simulate stage's code hash follow imports (:mod:`pipeline.deps`).
 """
 
@@ -47,7 +47,7 @@ _EXPORTS: dict[str, str] = {
     **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "calibration.problem"),
     **dict.fromkeys(("Table", "base_values", "build_table"), "calibration.table"),
     **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "calibration.settings"),
-    "calibrate": "calibration.fit",
+    "calibrate": "calibration.fitting",
     **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "calibration.checks"),
     **dict.fromkeys(("compare", "simulated_readings"), "weighing.observed"),
     **dict.fromkeys(("StaticProtocol", "WimProtocol"), "weighing.settings"),
@@ -56,7 +56,7 @@ _EXPORTS: dict[str, str] = {
         "sampling.sample",
     ),
     "survey_tables": "weighing.survey",
-    **dict.fromkeys(("weigh", "weigh_fleet"), "weighing.weigh"),
+    **dict.fromkeys(("weigh", "weigh_fleet"), "weighing.weigher"),
 }  # fmt: skip
 #: a public name defined outside the package: the observed survey of a file (bogie.weighings.survey)
 _EXPORTS["observed_survey"] = "bogie.weighings.survey"

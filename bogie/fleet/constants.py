@@ -36,7 +36,7 @@ PROTOCOLS: tuple[str, ...] = ("static", "wim")
 #: WIM readings, a weighbridge file's are static ones
 SURVEY_PROTOCOLS: dict[str, str] = {"wim": "wim", "weighbridge": "static"}
 
-#: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration.problem`, ``docs/calibration.md``), each
+#: the fleet quantities a calibration can fit (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``), each
 #: with its physical range and unit
 CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "chassis_tilt_mean_deg": (-5.0, 5.0, "degree"),  # centre (parent mean) of distributions.chassis_tilt_deg

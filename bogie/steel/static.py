@@ -211,7 +211,7 @@ def tilted_axle_loads(bogie: Bogie, chassis_tilt: float | None = None) -> NDArra
     the moments about the king pin give, ``sum_i W_i x_i = m g x_cg`` (as :func:`bogie.params.design_spring_loads`
     does for the level design position); each tyre carries its spring's load and the axle's weight. The springs'
     loads are linear in the chassis deflection, so two solves give it exactly. Friction, bump stops and the
-    non-linear geometry are left out (:func:`bogie.steel.force.equilibrium` has them); level, unworn and with a
+    non-linear geometry are left out (:func:`bogie.steel.nonlinear.equilibrium` has them); level, unworn and with a
     moment-free bush these are the design loads (:func:`bogie.steel.force.pack.design_wheel_loads`).
 
     Parameters

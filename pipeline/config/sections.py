@@ -47,7 +47,8 @@ Config = config_class(
         (
             "fleet_study",
             "The fleet study's fleet, ``fleet:`` and ``distributions:`` together, as the library's "
-            ":class:`bogie.fleet.Fleet` (SI): what :func:`bogie.fleet.sample_fleet` samples.",
+            ":class:`bogie.fleet.Fleet` (SI): what :func:`bogie.fleet.sample_fleet` samples. Made when params.yaml is "
+            "loaded: a configuration changed with ``dataclasses.replace`` keeps the fleet it was loaded with.",
         ),
     ),
 )

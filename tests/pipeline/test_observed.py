@@ -19,7 +19,7 @@ import pytest
 import yaml
 from _flips import PLACES, flip
 
-from bogie.fleet.weighing.weigh import result_row
+from bogie.fleet.weighing.weigher import result_row
 from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
 from bogie.weighings.groups import POSITIONS

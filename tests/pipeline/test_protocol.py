@@ -8,7 +8,7 @@ import numpy as np
 from bogie import metrics
 from bogie.fleet.constants import MAX_AXLES
 from bogie.fleet.sampling.sample import bogie_from_sample
-from bogie.fleet.weighing.weigh import Outcome, result_rows, weigh
+from bogie.fleet.weighing.weigher import Outcome, result_rows, weigh
 from bogie.params import NO_STOP
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet

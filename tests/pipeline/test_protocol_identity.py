@@ -23,7 +23,7 @@ import pytest
 from _fingerprint import describe, fingerprint
 
 from bogie.fleet.sampling.sample import bogie_from_sample
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from pipeline.config import load_config
 from pipeline.sample import sample_fleet
 

@@ -8,7 +8,7 @@ import pytest
 
 from bogie.fleet.sampling.sample import bogie_from_sample
 from bogie.fleet.weighing.protocols import wim_pass
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from bogie.road.wim import sensor_factors
 from bogie.steel import nonlinear
 from pipeline.config import load_config

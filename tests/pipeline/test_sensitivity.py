@@ -14,7 +14,7 @@ from SALib.sample import sobol as sobol_sample
 from SALib.test_functions import Ishigami
 
 from bogie.fleet.sampling.sample import VARIANTS
-from bogie.fleet.weighing.weigh import result_row
+from bogie.fleet.weighing.weigher import result_row
 from pipeline.ablation import SensitivityDataError, ablation_effects, ablation_pairs
 from pipeline.config import load_params, parse_config
 from pipeline.sample import sample_studies, sensitivity_problem

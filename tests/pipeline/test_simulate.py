@@ -533,13 +533,13 @@ def test_numbas_cache_is_found_where_its_locator_puts_a_modules_index(tmp_path):
     sub = tmp_path / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"
     assert not is_cached(_phases_core.__file__, tmp_path)
     sub.mkdir()
-    (sub / "_phases_step.advance-3.py311.nbi").write_text("")  # another module's functions: not it
-    (sub / "_phases_core_x.run-1.py311.nbi").write_text("")
+    (sub / "_step.advance-3.py311.nbi").write_text("")  # another module's functions: not it
+    (sub / "_core_x.run-1.py311.nbi").write_text("")
     assert not is_cached(_phases_core.__file__, tmp_path)
-    (sub / "_phases_core._work_records-174.py311.nbi").write_text("")  # a helper of the module only
+    (sub / "_core._work_records-174.py311.nbi").write_text("")  # a helper of the module only
     assert is_cached(_phases_core.__file__, tmp_path)
     assert not is_cached(_phases_core.__file__, tmp_path, function="run_phases")
-    (sub / "_phases_core.run_phases-512.py311.nbi").write_text("")
+    (sub / "_core.run_phases-512.py311.nbi").write_text("")
     assert is_cached(_phases_core.__file__, tmp_path, function="run_phases")
     (tmp_path / "elsewhere_0123").mkdir()  # another clone's subdirectory does not count for this one
     assert not is_cached(_phases_core.__file__, tmp_path / "elsewhere_0123")

@@ -28,7 +28,7 @@ from bogie.fleet.weighing.survey import (
     wear_table,
     wim_class,
 )
-from bogie.fleet.weighing.weigh import result_row
+from bogie.fleet.weighing.weigher import result_row
 from bogie.params import GRAVITY
 from pipeline.config import load_params, parse_config
 from pipeline.sample import sample_studies, write_parquet_atomic

@@ -5,7 +5,7 @@
 - :mod:`.problem`: the observed groups, the energy distance, the problem (this package's code before issue 42 made
   it a folder);
 - :mod:`.table`: the calibration fleet, its common random numbers and its table of readings over any executor;
-- :mod:`.priors`, :mod:`.posterior`, :mod:`.fit`: the priors, the synthetic-likelihood posterior, differential
+- :mod:`.priors`, :mod:`.posterior`, :mod:`.fitting`: the priors, the synthetic-likelihood posterior, differential
   evolution and the bootstrap (:func:`calibrate`);
 - :mod:`.attribution`: what each cause explains;
 - :mod:`.checks`: the calibrated fleet simulated directly, the held-out half, the ablation, :func:`calibrate_survey`.
@@ -21,7 +21,7 @@ __getattr__, __dir__ = lazy_names(
         **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "settings"),
         **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "problem"),
         **dict.fromkeys(("Table", "base_values", "build_table"), "table"),
-        "calibrate": "fit",
+        "calibrate": "fitting",
         **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "checks"),
     },
     former="problem",

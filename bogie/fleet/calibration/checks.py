@@ -1,7 +1,7 @@
 """The checks of a calibration, and a whole calibration of an observed survey in one call (``docs/calibration.md``).
 
-:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration.fit.calibrate`) and checks: the calibrated fleet simulated
-directly, not through the table, under the survey's filters (``calibrated``); a fit on alternate records held
+:func:`calibrate_survey` fits (:func:`bogie.fleet.calibration.fitting.calibrate`) and checks: the calibrated fleet
+simulated directly, not through the table, under the survey's filters (``calibrated``); a fit on alternate records held
 against the other half (``held_out``); the ablation re-run on the calibrated fleet's steel groups. Its metrics are
 those of ``metrics/calibration.json`` (the DVC stage ``pipeline/calibrate.py`` writes them). :func:`write_csv_survey`
 writes simulated groups as a survey file, a synthetic survey to calibrate to. Loads in kg.
@@ -19,7 +19,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.attribution import attribution
-from bogie.fleet.calibration.fit import calibrate, priors_for
+from bogie.fleet.calibration.fitting import calibrate, priors_for
 from bogie.fleet.calibration.posterior import posterior
 from bogie.fleet.calibration.problem import (
     SIZES,

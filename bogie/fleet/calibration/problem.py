@@ -14,7 +14,7 @@ error [%]. In short:
 3. **The distance** (:func:`distance`): over laden tandem and tri-axle groups, the sum over each axle position's
    load share and the spread [%] of the energy distance between the observed and the simulated distribution, each
    over the observed quantity's standard deviation.
-4. **The fit** (:func:`fit`; :func:`bogie.fleet.calibration.fit.calibrate`): scipy's seeded
+4. **The fit** (:func:`fit`; :func:`bogie.fleet.calibration.fitting.calibrate`): scipy's seeded
    ``differential_evolution``; intervals from a bootstrap of the observed records and of the calibration bogies
    together; a fit piled against a bound flagged; trade-offs, the valley and the profiles.
 

@@ -1,4 +1,4 @@
-"""The calibration fleet and its table of readings (:mod:`bogie.fleet.calibration.problem`, ``docs/calibration.md``).
+"""The calibration fleet and its table of readings (:mod:`bogie.fleet.calibration`, ``docs/calibration.md``).
 
 The one simulation a calibration needs: every calibration bogie weighed, error free, as its steel group and as the
 air-sprung group on the same trailer, at every tilt of a grid and (WIM) every site roughness (:func:`build_table`);
@@ -27,7 +27,7 @@ from bogie.fleet.sampling.distributions import Distribution, TruncNormal, trunca
 from bogie.fleet.sampling.sample import bogie_from_sample, suspension_draw
 from bogie.fleet.sampling.tilted import Tilted
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
-from bogie.fleet.weighing.weigh import weigh
+from bogie.fleet.weighing.weigher import weigh
 from bogie.group_names import GROUP_AXLES
 from bogie.params import GRAVITY
 from bogie.road import wim
@@ -373,9 +373,8 @@ def steel_weights(table: Table, values: Mapping[str, float]) -> np.ndarray:
 
 def moved_samples(table: Table, values: Mapping[str, float]) -> pd.DataFrame:
     """The calibration bogies' samples in a fleet whose inhibitor distributions have the means of ``values``: each
-    sampled value moved to its rank under the moved distribution (:meth:`bogie.fleet.sampling.tilted.Tilted.moved`), for
-    a
-    direct simulation. The table's own samples when no mean moves."""
+    sampled value moved to its rank under the moved distribution (:meth:`bogie.fleet.sampling.tilted.Tilted.moved`),
+    for a direct simulation. The table's own samples when no mean moves."""
     tilts = _tilts_of(table, values)
     if not tilts:
         return table.samples

@@ -58,7 +58,7 @@ from bogie.fleet.sampling.sample import (
     study_frame,
 )
 from bogie.fleet.weighing.settings import StaticProtocol
-from bogie.fleet.weighing.weigh import CHUNK_ROWS, weigh_fleet
+from bogie.fleet.weighing.weigher import CHUNK_ROWS, weigh_fleet
 from bogie.settings import check_value
 
 __all__ = [

@@ -4,7 +4,7 @@ survey of the runs.
 - :mod:`.settings`: :class:`StaticProtocol`, :class:`WimProtocol`, their settings declared with :mod:`bogie.settings`;
 - :mod:`.protocols`: how one bogie is weighed (the static weighbridge, the WIM pass over its site and sensor; a steel
   group as :mod:`bogie.steel.phases`, an air-sprung one through :mod:`bogie.air.dynamics`);
-- :mod:`.weigh`: :func:`weigh_fleet` over any executor, :func:`weigh_rows`, a chunk's result columns (this package's
+- :mod:`.weigher`: :func:`weigh_fleet` over any executor, :func:`weigh_rows`, a chunk's result columns (this package's
   code before issue 42 made it a folder);
 - :mod:`.runs`: the runs table's columns, dtypes, units, categories and null rule;
 - :mod:`.survey`: :func:`survey_tables`, the roadside-survey statistics of a runs table;
@@ -19,9 +19,9 @@ __getattr__, __dir__ = lazy_names(
     __name__,
     {
         **dict.fromkeys(("StaticProtocol", "WimProtocol"), "settings"),
-        **dict.fromkeys(("weigh", "weigh_fleet", "weigh_rows"), "weigh"),
+        **dict.fromkeys(("weigh", "weigh_fleet", "weigh_rows"), "weigher"),
         "survey_tables": "survey",
         **dict.fromkeys(("compare", "simulated_readings"), "observed"),
     },
-    former="weigh",
+    former="weigher",
 )

@@ -8,7 +8,7 @@ equations of motion are M a + f = 0. Its tangent K_T = df/du is formed by forwar
 algorithmic force (the friction return map included), which is the consistent tangent of the discrete problem;
 C_T = df/dv is exact.
 
-Packed parameters (built by :func:`bogie.steel.force.pack`); :mod:`bogie.steel.force.layout` is the one
+Packed parameters (built by :func:`bogie.steel.force.pack.pack`); :mod:`bogie.steel.force.layout` is the one
 definition of their layout (every name of it importable from here, as when it was part of this module):
 
 * ``data_i = [n, pad_body_0 .. pad_body_{2n-1}]``: the body carrying contact e (-1 chassis, j equaliser j);

@@ -1,5 +1,5 @@
 """The compiled static equilibrium of the non-linear model (numba): bogie's one Newton iteration on the force
-without inertia (issue 29: it was written twice, in Python for :func:`bogie.steel.force.equilibrium` and compiled
+without inertia (issue 29: it was written twice, in Python for :func:`bogie.steel.nonlinear.equilibrium` and compiled
 for the start of :func:`bogie.steel.phases._core.run_phases`).
 
 :func:`newton` solves f(u) = 0 for the force of :func:`bogie.steel.force.core.force` at one drive row from a given

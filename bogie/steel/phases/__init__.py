@@ -309,7 +309,7 @@ def run(
         The phases, at least one.
     initial
         The state to start from; None: at rest, in the static equilibrium at the first phase's start with the
-        friction relaxed (:func:`bogie.steel.force.equilibrium`; its continuation from the design state if Newton
+        friction relaxed (:func:`bogie.steel.nonlinear.equilibrium`; its continuation from the design state if Newton
         alone does not reach one).
     history
         Also return the wheel loads and chassis pitch at every accepted step (for plots and checks; the weighings
@@ -323,8 +323,8 @@ def run(
     -------
     PhasesRun
         "failed" with the solver's message (the phase, its time and the residual) if a step could not be solved;
-        never NaN. Raises what :func:`bogie.steel.force.equilibrium` raises if there is no equilibrium to start
-        from.
+        never NaN. Raises what :func:`bogie.steel.nonlinear.equilibrium` raises if there is no equilibrium to
+        start from.
     """
     phases = list(phases)
     if not phases:
@@ -403,7 +403,7 @@ def _run_kernel(
 
 
 def _continued_start(bogie: Bogie, first: Phase, c: nl.Constants) -> nl.State:
-    """The state at rest at the first phase's start by :func:`bogie.steel.force.equilibrium` (its continuation from
+    """The state at rest at the first phase's start by :func:`bogie.steel.nonlinear.equilibrium` (its continuation from
     the design state), with the acceleration consistent with its forces."""
     n = bogie.n_axles
     ndof = 2 * n

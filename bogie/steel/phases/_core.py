@@ -213,7 +213,7 @@ def run_phases(
     """Run ``phases`` in order from (u, v, a, hist), or with ``at_rest`` from the static equilibrium at the first
     phase's start with the friction relaxed (written into u, hist; v = a = 0 there, then a from M a = -f).
 
-    ``mass`` is the mass matrix, diagonal (:func:`bogie.steel.force.pack` makes it so). ``readings`` (n_phases,
+    ``mass`` is the mass matrix, diagonal (:func:`bogie.steel.force.pack.pack` makes it so). ``readings`` (n_phases,
     2 n_axles) receives each phase's reading (mean tyre loads, or the sensor's integrals of
     F o and o), ``on_stop`` whether an equaliser bore on its stop in the phase's window, ``stats`` the phase's
     :data:`STAT_COLUMNS`, ``trace`` the rows of :func:`_trace` at the start and after every accepted step while

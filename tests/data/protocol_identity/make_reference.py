@@ -18,7 +18,7 @@ sys.path.insert(0, str(ROOT / "tests"))
 from _fingerprint import fingerprint  # noqa: E402
 
 from bogie.fleet.sampling.sample import bogie_from_sample  # noqa: E402
-from bogie.fleet.weighing.weigh import weigh  # noqa: E402
+from bogie.fleet.weighing.weigher import weigh  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
 from pipeline.sample import sample_fleet  # noqa: E402
 
