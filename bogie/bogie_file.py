@@ -189,6 +189,21 @@ def read_bogie_text(text: str, source: str = "<bogie file>") -> Bogie:
         ``base`` (all named), values of the wrong type or out of range (all named, with range and unit), or a
         bogie whose fields do not fit together (the chain does not close, say).
     """
+    data = _read_mapping(text, source)
+    base = _base_fields_of(data, source)
+    n = _axle_count(data, base, source)
+    fields = _file_fields(data, base, n, source)
+    try:
+        return Bogie(**fields)
+    except ValueError as exc:
+        named = [f"{f} is {k.key} [{k.unit}]" for f, k in FILE_KEYS.items() if f in str(exc)]
+        raise BogieFileError(
+            f"{source}: the bogie does not hold together: {exc} (SI units; in this file {'; '.join(named)})"
+        ) from None
+
+
+def _read_mapping(text: str, source: str) -> dict:
+    """The bogie file's YAML mapping; :class:`BogieFileError` for bad YAML, another document or unknown keys."""
     try:
         data = read_yaml(text, source)  # a key given twice, deep nesting, alias bombs and huge integers refused
     except yaml.YAMLError as exc:
@@ -207,21 +222,27 @@ def read_bogie_text(text: str, source: str = "<bogie file>") -> Bogie:
             f"{source}: unknown keys {', '.join(hints)}; a bogie file's keys are {BASE_KEY} and "
             f"{', '.join(_FIELD_OF_KEY)} (units in the suffix, docs/bogie-file.md)"
         )
-    base: dict[str, Any] | None = None
+    return data
+
+
+def _base_fields_of(data: dict, source: str) -> dict[str, Any] | None:
+    """The fields of the file's ``base`` preset, or None without one (then every key must be given)."""
     if BASE_KEY in data:
         name = data[BASE_KEY]
         if not isinstance(name, str) or name not in PRESETS:
             raise BogieFileError(f"{source}: {BASE_KEY} = {name!r}: must be a preset name, one of {', '.join(PRESETS)}")
-        base = preset_fields(name)
-    else:
-        missing = [k.key for k in FILE_KEYS.values() if k.key not in data]
-        if missing:
-            raise BogieFileError(
-                f"{source}: missing keys {', '.join(missing)}: without '{BASE_KEY}: <preset>' every key must be given "
-                f"(presets: {', '.join(PRESETS)})"
-            )
-    problems: list[str] = []
-    fields: dict[str, Any] = {}
+        return preset_fields(name)
+    missing = [k.key for k in FILE_KEYS.values() if k.key not in data]
+    if missing:
+        raise BogieFileError(
+            f"{source}: missing keys {', '.join(missing)}: without '{BASE_KEY}: <preset>' every key must be given "
+            f"(presets: {', '.join(PRESETS)})"
+        )
+    return None
+
+
+def _axle_count(data: dict, base: dict[str, Any] | None, source: str) -> int:
+    """The file's number of axles; with another count than its base's, every per-axle and per-equaliser key given."""
     axle_key = FILE_KEYS["axle_x"].key
     if axle_key in data:
         raw = data[axle_key]
@@ -239,6 +260,13 @@ def read_bogie_text(text: str, source: str = "<bogie file>") -> Bogie:
                 f"{source}: {axle_key} gives {n} axles but {BASE_KEY} {data[BASE_KEY]} has {len(base['axle_x'])}: "
                 f"give {', '.join(lacking)} too (one value per axle, or per equaliser)"
             )
+    return n
+
+
+def _file_fields(data: dict, base: dict[str, Any] | None, n: int, source: str) -> dict[str, Any]:
+    """Every Bogie field in SI units, from the file or its base; all bad values named in one :class:`BogieFileError`."""
+    problems: list[str] = []
+    fields: dict[str, Any] = {}
     for field, key in FILE_KEYS.items():
         if key.key not in data:
             fields[field] = base[field] if base is not None else None
@@ -250,13 +278,7 @@ def read_bogie_text(text: str, source: str = "<bogie file>") -> Bogie:
             fields[field] = _scalar(field, data[key.key], problems)
     if problems:
         raise BogieFileError(f"{source}: {'; '.join(problems)}")
-    try:
-        return Bogie(**fields)
-    except ValueError as exc:
-        named = [f"{f} is {k.key} [{k.unit}]" for f, k in FILE_KEYS.items() if f in str(exc)]
-        raise BogieFileError(
-            f"{source}: the bogie does not hold together: {exc} (SI units; in this file {'; '.join(named)})"
-        ) from None
+    return fields
 
 
 def load_bogie(path: str | os.PathLike[str]) -> Bogie:

@@ -255,6 +255,15 @@ def build_parser() -> argparse.ArgumentParser:
     )
     parser.add_argument("--version", action="version", version=f"bogie {_version()}")
     sub = parser.add_subparsers(dest="command", required=True)
+    _add_figure2(sub)
+    _add_case(sub)
+    _add_weighings(sub)
+    _add_design(sub)
+    return parser
+
+
+def _add_figure2(sub) -> None:
+    """The ``figure2`` subcommand."""
     fig2 = sub.add_parser("figure2", help="the reference's Figure 2: p against q for chassis slopes 0-2 degrees")
     fig2.add_argument("--out", required=True, help="output file; the format follows the suffix (.png, .pdf, .svg)")
     fig2.add_argument("--q-max", type=float, default=20.0, help="largest q on the axis [-] (default 20)")
@@ -263,11 +272,19 @@ def build_parser() -> argparse.ArgumentParser:
         "--fe", action="store_true", help="overlay the Stage 1 finite element points at q = 4.3 (bogie.steel.fe)"
     )
     fig2.set_defaults(func=_cmd_figure2, parser=fig2)
+
+
+def _add_case(sub) -> None:
+    """The ``case`` subcommand."""
     case = sub.add_parser("case", help="run one of the reference's named runs (L01-L07, N01-N29); 'list' lists them")
     case.add_argument("name", help="run name, e.g. L01, or 'list' for every name with a one-line description")
     case.add_argument("--plot", help="write the histories (as the reference's Figures 5-12) to this image file")
     case.add_argument("--csv", help="write the histories to this CSV file")
     case.set_defaults(func=_cmd_case, parser=case)
+
+
+def _add_weighings(sub) -> None:
+    """The ``weighings`` subcommand and its filters."""
     from bogie.weighings.formats import FORMATS
 
     weigh = sub.add_parser(
@@ -317,6 +334,10 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
     weigh.set_defaults(func=_cmd_weighings, parser=weigh)
+
+
+def _add_design(sub) -> None:
+    """The ``design`` subcommand and its ``show``."""
     design = sub.add_parser("design", help="a bogie of your own: 'show' draws it and prints its static axle loads")
     design_sub = design.add_subparsers(dest="design_command", required=True)
     show = design_sub.add_parser(
@@ -332,7 +353,6 @@ def build_parser() -> argparse.ArgumentParser:
     )  # fmt: skip
     show.add_argument("--out", help="write the side view to this image file (.png, .pdf, .svg)")
     show.set_defaults(func=_cmd_design_show, parser=show)
-    return parser
 
 
 def main(argv: Sequence[str] | None = None) -> int:

@@ -14,22 +14,22 @@ import numpy as np
 
 __all__ = ["percentile_interval", "wilson_interval"]
 
-#: the normal quantiles of the common levels, scipy.special.ndtri(0.5 + confidence / 2)'s bits (``tests/
+#: the normal quantiles of the common levels, scipy.special.ndtri(0.5 + confidence_level / 2)'s bits (``tests/
 #: test_intervals.py`` holds them equal), so that a command that needs one interval does not import scipy.special
 #: (0.26 s of ``bogie weighings``' 3.7 s on a year of records, issue 41 Must 4); any other level asks scipy
 _Z = {0.9: 1.6448536269514722, 0.95: 1.959963984540054, 0.99: 2.5758293035489004}
 
 
-def _z(confidence: float) -> float:
+def _z(confidence_level: float) -> float:
     """scipy.special.ndtri(0.5 + 0.5 confidence): the two-sided normal quantile of ``confidence``."""
-    if confidence in _Z:
-        return _Z[confidence]
+    if confidence_level in _Z:
+        return _Z[confidence_level]
     from scipy.special import ndtri
 
-    return float(ndtri(0.5 + 0.5 * confidence))
+    return float(ndtri(0.5 + 0.5 * confidence_level))
 
 
-def wilson_interval(k: np.ndarray, n: np.ndarray, confidence: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
+def wilson_interval(k: np.ndarray, n: np.ndarray, confidence_level: float = 0.95) -> tuple[np.ndarray, np.ndarray]:
     """Wilson score interval of each proportion ``k / n``; NaN where ``n`` is 0.
 
     The interval of :meth:`scipy.stats.binomtest(k, n).proportion_ci(method="wilson")
@@ -44,7 +44,7 @@ def wilson_interval(k: np.ndarray, n: np.ndarray, confidence: float = 0.95) -> t
     """
     k, n = np.asarray(k), np.asarray(n)
     low, high = np.full(k.shape, np.nan), np.full(k.shape, np.nan)
-    z = _z(confidence)
+    z = _z(confidence_level)
     for i in np.flatnonzero(n > 0):
         ki, ni = int(round(float(k.flat[i]))), int(n.flat[i])
         p = ki / ni

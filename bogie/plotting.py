@@ -207,8 +207,6 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
     title
         The figure's title.
     """
-    from matplotlib.patches import Circle, FancyArrowPatch
-
     n = bogie.n_axles
     x = np.asarray(bogie.axle_x)
     loads = np.asarray(loads, dtype=float)
@@ -222,10 +220,26 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
 
     fig = new_figure(7.6, 4.6)
     ax = fig.add_subplot()
-    steel, spring_colour, load_colour = "0.25", "tab:blue", "tab:red"
-    front, rear = bogie.front_hanger_x, bogie.rear_hanger_x
-    x0, x1 = front - 0.45, rear + 0.45
+    x0, x1 = bogie.front_hanger_x - 0.45, bogie.rear_hanger_x + 0.45
     z_chassis = z_pad0 + max(bogie.pad_drop, 0.12)
+    _side_view_frame(ax, bogie, chassis_tilt, pad, (x0, x1), z_chassis, slope)
+    for i in range(n):
+        _side_view_axle(ax, bogie, i, x, radius, loads, pad)
+    _side_view_spacings(ax, x, n)
+    _side_view_finish(fig, ax, (x0, x1), z_chassis, title)
+    return fig
+
+
+#: the side view's colours: steel, leaf springs, tyre loads
+_SIDE_STEEL, _SIDE_SPRING, _SIDE_LOAD = "0.25", "tab:blue", "tab:red"
+
+
+def _side_view_frame(ax, bogie, chassis_tilt: float, pad, span, z_chassis: float, slope: float) -> None:
+    """The road, the tilted chassis, the hangers and each equaliser (bracket, arms, pivot) of the side view."""
+    from matplotlib.patches import Circle
+
+    centre = bogie.bogie_centre_x
+    x0, x1 = span
     ax.plot([x0 - 0.3, x1 + 0.3], [0.0, 0.0], color="0.5", lw=1.0)  # the road
     ax.fill_between([x0 - 0.3, x1 + 0.3], -0.06, 0.0, color="0.88", lw=0)
     chassis_x = np.array([x0, x1])
@@ -233,51 +247,66 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
     ax.fill_between(chassis_x, chassis_z, chassis_z + 0.09, color="0.55", lw=0)
     ax.text(x0 + 0.05, chassis_z[0] + 0.13, f"chassis, tilted {math.degrees(chassis_tilt):+.2f}° (nose up +)",
             fontsize=8, va="bottom")  # fmt: skip
-    for hx in (front, rear):  # the hangers: brackets from the chassis down to the outer pads
-        ax.plot([hx, hx], [pad(hx), z_chassis - (hx - centre) * slope], color=steel, lw=2.5, solid_capstyle="butt")
-    pivots = bogie.equaliser_pivot_x
-    for j, px in enumerate(pivots):
+    for hx in (bogie.front_hanger_x, bogie.rear_hanger_x):  # the hangers: brackets from the chassis to the outer pads
+        ax.plot([hx, hx], [pad(hx), z_chassis - (hx - centre) * slope], color=_SIDE_STEEL, lw=2.5,
+                solid_capstyle="butt")  # fmt: skip
+    for j, px in enumerate(bogie.equaliser_pivot_x):
         tip_f, tip_r = px - bogie.equaliser_front_arm[j], px + bogie.equaliser_rear_arm[j]
         z_pivot = pad(px) + 0.5 * (bogie.equaliser_front_tip_drop + bogie.equaliser_rear_tip_drop) + 0.03
-        ax.plot([px, px], [z_pivot, z_chassis - (px - centre) * slope], color=steel, lw=2.5, solid_capstyle="butt")
+        ax.plot([px, px], [z_pivot, z_chassis - (px - centre) * slope], color=_SIDE_STEEL, lw=2.5,
+                solid_capstyle="butt")  # fmt: skip
         ax.plot([tip_f, px, tip_r], [pad(tip_f), z_pivot, pad(tip_r)], color="tab:orange", lw=3.0,
                 solid_capstyle="round", zorder=4)  # fmt: skip
         ax.add_patch(Circle((px, z_pivot), 0.025, facecolor="white", edgecolor="k", lw=1.0, zorder=5))
-    for i in range(n):
-        ends = (x[i] - bogie.spring_front_half_length[i], x[i] + bogie.spring_rear_half_length[i])
-        seat = radius[i] + _SEAT_RISE
-        # an arched leaf: a parabola through its front pad, its seat on the axle and its rear pad, three leaves deep
-        fit = np.polyfit(  # numerics-ok: the leaf drawn in a figure, no number out
-            [ends[0], x[i], ends[1]], [pad(ends[0]), seat, pad(ends[1])], 2
-        )
-        xs = np.linspace(ends[0], ends[1], 60)
-        for k, depth in enumerate((0.0, 0.018, 0.036)):
-            cut = xs[np.abs(xs - x[i]) <= (1.0 - 0.25 * k) * max(x[i] - ends[0], ends[1] - x[i])]
-            ax.plot(cut, np.polyval(fit, cut) - depth, color=spring_colour, lw=1.6, zorder=3)
-        ax.plot([x[i], x[i]], [radius[i], seat - 0.036], color=steel, lw=4.0, zorder=3)  # the U-bolted seat
-        # the tyre as an outline, so that the suspension behind it shows
-        ax.add_patch(Circle((x[i], radius[i]), radius[i], facecolor="0.93", edgecolor="0.2", lw=2.2, zorder=1))
-        ax.add_patch(Circle((x[i], radius[i]), 0.55 * radius[i], facecolor="none", edgecolor="0.55", lw=0.8, zorder=1))
-        ax.add_patch(Circle((x[i], radius[i]), 0.05, facecolor="white", edgecolor="k", zorder=3))
-        ax.add_patch(FancyArrowPatch((x[i], -0.42), (x[i], -0.07), arrowstyle="-|>", mutation_scale=12,
-                                     color=load_colour, lw=1.6))  # fmt: skip
-        share = loads[i] / loads.sum() * 100.0
-        ax.text(x[i], -0.47, f"axle {i + 1}\n{loads[i] / 1e3:.1f} kN\n{share:.1f} %", ha="center", va="top",
-                fontsize=8.5, color=load_colour)  # fmt: skip
+
+
+def _side_view_axle(ax, bogie, i: int, x, radius, loads, pad) -> None:
+    """Axle ``i`` of the side view: its arched leaf spring and seat, its tyre, and its load arrow and label."""
+    from matplotlib.patches import Circle, FancyArrowPatch
+
+    ends = (x[i] - bogie.spring_front_half_length[i], x[i] + bogie.spring_rear_half_length[i])
+    seat = radius[i] + _SEAT_RISE
+    # an arched leaf: a parabola through its front pad, its seat on the axle and its rear pad, three leaves deep
+    fit = np.polyfit(  # numerics-ok: the leaf drawn in a figure, no number out
+        [ends[0], x[i], ends[1]], [pad(ends[0]), seat, pad(ends[1])], 2
+    )
+    xs = np.linspace(ends[0], ends[1], 60)
+    for k, depth in enumerate((0.0, 0.018, 0.036)):
+        cut = xs[np.abs(xs - x[i]) <= (1.0 - 0.25 * k) * max(x[i] - ends[0], ends[1] - x[i])]
+        ax.plot(cut, np.polyval(fit, cut) - depth, color=_SIDE_SPRING, lw=1.6, zorder=3)
+    ax.plot([x[i], x[i]], [radius[i], seat - 0.036], color=_SIDE_STEEL, lw=4.0, zorder=3)  # the U-bolted seat
+    # the tyre as an outline, so that the suspension behind it shows
+    ax.add_patch(Circle((x[i], radius[i]), radius[i], facecolor="0.93", edgecolor="0.2", lw=2.2, zorder=1))
+    ax.add_patch(Circle((x[i], radius[i]), 0.55 * radius[i], facecolor="none", edgecolor="0.55", lw=0.8, zorder=1))
+    ax.add_patch(Circle((x[i], radius[i]), 0.05, facecolor="white", edgecolor="k", zorder=3))
+    ax.add_patch(FancyArrowPatch((x[i], -0.42), (x[i], -0.07), arrowstyle="-|>", mutation_scale=12,
+                                 color=_SIDE_LOAD, lw=1.6))  # fmt: skip
+    share = loads[i] / loads.sum() * 100.0
+    ax.text(x[i], -0.47, f"axle {i + 1}\n{loads[i] / 1e3:.1f} kN\n{share:.1f} %", ha="center", va="top",
+            fontsize=8.5, color=_SIDE_LOAD)  # fmt: skip
+
+
+def _side_view_spacings(ax, x, n: int) -> None:
+    """The axle spacings of the side view, dimensioned under the loads [mm]."""
     z_dim = -1.0
-    for i in range(n - 1):  # axle spacings, dimensioned under the loads
+    for i in range(n - 1):
         mid = 0.5 * (x[i] + x[i + 1])
         ax.annotate("", (x[i], z_dim), (x[i + 1], z_dim), arrowprops={"arrowstyle": "<->", "lw": 0.8, "color": "0.3"})
         ax.text(mid, z_dim + 0.03, f"{(x[i + 1] - x[i]) * 1e3:.0f} mm", ha="center", va="bottom", fontsize=7.5,
                 color="0.3")  # fmt: skip
     for xi in x:
         ax.plot([xi, xi], [z_dim - 0.05, z_dim + 0.05], color="0.3", lw=0.8)
+
+
+def _side_view_finish(fig, ax, span, z_chassis: float, title: str) -> None:
+    """The side view's legend, limits (to scale), labels, title and grid."""
     from matplotlib.lines import Line2D
 
-    handles = [Line2D([], [], color=spring_colour, lw=1.6, label="leaf spring"),
+    x0, x1 = span
+    handles = [Line2D([], [], color=_SIDE_SPRING, lw=1.6, label="leaf spring"),
                Line2D([], [], color="tab:orange", lw=3.0, label="equaliser (pivot o)"),
-               Line2D([], [], color=steel, lw=2.5, label="hanger, bracket, seat"),
-               Line2D([], [], color=load_colour, lw=1.6, marker="^", label="tyre load, share of side")]  # fmt: skip
+               Line2D([], [], color=_SIDE_STEEL, lw=2.5, label="hanger, bracket, seat"),
+               Line2D([], [], color=_SIDE_LOAD, lw=1.6, marker="^", label="tyre load, share of side")]  # fmt: skip
     fig.legend(handles=handles, loc="outside lower center", ncols=4, fontsize=7.5, frameon=False)
     ax.set_aspect("equal")
     ax.set_xlim(x0 - 0.3, x1 + 0.3)
@@ -287,4 +316,3 @@ def bogie_side_view(bogie, loads: Sequence[float], chassis_tilt: float, title: s
     ax.set_title(title, fontsize=10)
     ax.grid(True, color="0.92", lw=0.6)
     ax.set_axisbelow(True)
-    return fig

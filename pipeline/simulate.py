@@ -300,26 +300,41 @@ def simulate_samples(
         claim_runs_dir(out, log)
         pending, done, removed, failed_done = reconcile(chunks, out, log)
         total = sum(c.n_runs for c in pending)
-        log(
-            f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
-            f"{len(pending)} to run ({total} runs) on {execution.backend}"
-            + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
-        )
+        log(_plan_line(chunks, done, pending, total, execution))
         if execution.backend == "loky" and pending:
             execution = dataclasses.replace(execution, n_jobs=worker_count(execution.n_jobs, log, "simulate"))
         failed = failed_done + _run_pending(pending, execution, total, log, stage)
-    summary = Summary(
+    summary = _summary(chunks, pending, done, removed, failed, total, time.perf_counter() - start, compiling)
+    log(summary.line())
+    return summary
+
+
+def _summary(
+    chunks: Sequence[Chunk], pending: Sequence[Chunk], done: Sequence[Chunk], removed: Sequence[Path], failed: int,
+    total: int, wall_time: float, compiling: float,
+) -> Summary:  # fmt: skip
+    """The :class:`Summary` of one :func:`simulate_samples` invocation; ``wall_time`` and ``compiling`` in s."""
+    return Summary(
         runs=sum(c.n_runs for c in chunks),
         failed=failed,
         computed_runs=total,
         computed_chunks=len(pending),
         skipped_chunks=len(done),
         removed_files=len(removed),
-        wall_time=time.perf_counter() - start,
+        wall_time=wall_time,
         compile_time=compiling,
     )
-    log(summary.line())
-    return summary
+
+
+def _plan_line(
+    chunks: Sequence[Chunk], done: Sequence[Chunk], pending: Sequence[Chunk], total: int, execution: ExecutionConfig
+) -> str:
+    """The line :func:`simulate_samples` logs before it runs: the chunks up to date, those to run, and where."""
+    return (
+        f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
+        f"{len(pending)} to run ({total} runs) on {execution.backend}"
+        + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
+    )
 
 
 #: samples weighed in the main process to compile the kernels before the workers start, at most [-]

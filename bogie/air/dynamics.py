@@ -259,16 +259,23 @@ def simulate(
     """
     if method not in METHODS:
         raise ValueError(f"method = {method!r} is not one of the allowed values {', '.join(map(repr, METHODS))}")
-    n = bogie.n_axles
     drive = _Drive(inputs, bogie)
     if initial is None:
         initial = air_static.equilibrium(
             bogie, inputs.load_factor[0], float(inputs.kingpin_rise[0]), inputs.road_height[0]
         )
     y0 = np.concatenate([initial.u, initial.v, initial.gas_mass, np.zeros(len(WORK_TERMS))])
-    w_d = bogie.design_bag_load
     if method == "rk4":
         return _simulate_rk4(bogie, inputs, drive, y0, valve)
+    return _simulate_lsoda(bogie, inputs, drive, y0, valve, rtol)
+
+
+def _simulate_lsoda(
+    bogie: air.AirBogie, inputs: Inputs, drive: _Drive, y0: NDArray[np.float64], valve: bool, rtol: float
+):
+    """:func:`simulate` by scipy's LSODA (the reference), its history read back through :func:`_forces`."""
+    n = bogie.n_axles
+    w_d = bogie.design_bag_load
     atol = np.concatenate([
         [1e-9], np.full(n, 1e-9), [1e-8], np.full(n, 1e-8), np.full(n, 1e-10 * bogie.design_gas_mass),
         np.full(len(WORK_TERMS), 1e-9 * w_d),

@@ -186,42 +186,69 @@ def design_savings(
             other = both[(both["group"].astype(str) == group) & (both["scenario"] == scenario)].set_index("condition")
             if base.empty or other.empty:
                 continue
-            common = base.index.intersection(other.index)
-            good = [c for c in common if base.at[c, "status"] == "ok" and other.at[c, "status"] == "ok"]
-            row: dict = {"group": group, "scenario": scenario, "n_conditions": len(good),
-                         "n_failed": len(common) - len(good)}  # fmt: skip
-            if not good:
-                rows.append(row)
-                continue
-            a, b = base.loc[good], other.loc[good]
-            n = a["n_axles"].to_numpy(dtype=np.int64)
-            la = a[axle_columns(int(n.max()))].to_numpy(dtype=float) / GRAVITY
-            lb = b[axle_columns(int(n.max()))].to_numpy(dtype=float) / GRAVITY
-            rng = np.random.default_rng(stream)
-            draws = rng.integers(0, len(good), (resamples, len(good))) if resamples else None
-            for name, k in exponents.items():
-                wa, wb = (group_wear(x, n, float(k), STANDARD_AXLE_KG) for x in (la, lb))
-
-                def share(w, idx=slice(None)):
-                    return w["damage"][idx].sum(axis=-1) / w["damage_equal"][idx].sum(axis=-1) - 1.0
-
-                row[f"extra_wear_{name}_typical"], row[f"extra_wear_{name}"] = share(wa), share(wb)
-                row[f"saved_wear_{name}"] = share(wa) - share(wb)
-                if draws is not None:
-                    saved = share(wa, draws) - share(wb, draws)
-                    low, high = percentile_interval(saved, confidence)
-                    row[f"saved_wear_{name}_low"], row[f"saved_wear_{name}_high"] = low, high
-            legal = legal_group.get(group, math.nan)
-            ha = hidden_overloads(la, n, legal, legal_axle)["hidden"].astype(float)
-            hb = hidden_overloads(lb, n, legal, legal_axle)["hidden"].astype(float)
-            row["share_hidden_overload_typical"], row["share_hidden_overload"] = ha.mean(), hb.mean()
-            row["saved_hidden_overload"] = ha.mean() - hb.mean()
-            if draws is not None:
-                saved = ha[draws].mean(axis=1) - hb[draws].mean(axis=1)
-                row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = percentile_interval(
-                    saved, confidence
+            rows.append(
+                _paired_row(
+                    group, scenario, base, other, stream, legal_group, legal_axle, exponents, resamples, confidence
                 )
-            held = np.abs(b["held_tilt_deg"].to_numpy(dtype=float))
-            row["held_tilt_deg_max"] = float(np.nanmax(held)) if scenario == "tilt_held" else math.nan
-            rows.append(row)
+            )
     return pd.DataFrame(rows)
+
+
+def _paired_row(
+    group: str, scenario: str, base: pd.DataFrame, other: pd.DataFrame, stream: np.random.SeedSequence,
+    legal_group: Mapping[str, float], legal_axle: float, exponents: Mapping[str, float], resamples: int,
+    confidence: float,
+) -> dict:  # fmt: skip
+    """One row of :func:`design_savings`: the scenario's runs ``other`` against the baseline's ``base`` by condition."""
+    common = base.index.intersection(other.index)
+    good = [c for c in common if base.at[c, "status"] == "ok" and other.at[c, "status"] == "ok"]
+    row: dict = {"group": group, "scenario": scenario, "n_conditions": len(good),
+                 "n_failed": len(common) - len(good)}  # fmt: skip
+    if not good:
+        return row
+    a, b = base.loc[good], other.loc[good]
+    n = a["n_axles"].to_numpy(dtype=np.int64)
+    la = a[axle_columns(int(n.max()))].to_numpy(dtype=float) / GRAVITY
+    lb = b[axle_columns(int(n.max()))].to_numpy(dtype=float) / GRAVITY
+    rng = np.random.default_rng(stream)
+    draws = rng.integers(0, len(good), (resamples, len(good))) if resamples else None
+    _wear_savings(row, la, lb, n, exponents, draws, confidence)
+    legal = legal_group.get(group, math.nan)
+    _overload_savings(row, la, lb, n, legal, legal_axle, draws, confidence)
+    held = np.abs(b["held_tilt_deg"].to_numpy(dtype=float))
+    row["held_tilt_deg_max"] = float(np.nanmax(held)) if scenario == "tilt_held" else math.nan
+    return row
+
+
+def _extra_wear(wear: Mapping[str, np.ndarray], idx=slice(None)) -> np.ndarray:
+    """The extra wear sum D / sum D_eq - 1 over the rows ``idx`` of ``wear`` (:func:`group_wear`) [-]."""
+    return wear["damage"][idx].sum(axis=-1) / wear["damage_equal"][idx].sum(axis=-1) - 1.0
+
+
+def _wear_savings(
+    row: dict, la: np.ndarray, lb: np.ndarray, n: np.ndarray, exponents: Mapping[str, float],
+    draws: np.ndarray | None, confidence: float,
+) -> None:  # fmt: skip
+    """Add to ``row`` the extra wear of the loads ``la`` (baseline) and ``lb`` (scenario) [kg] and what is saved."""
+    for name, k in exponents.items():
+        wa, wb = (group_wear(x, n, float(k), STANDARD_AXLE_KG) for x in (la, lb))
+        row[f"extra_wear_{name}_typical"], row[f"extra_wear_{name}"] = _extra_wear(wa), _extra_wear(wb)
+        row[f"saved_wear_{name}"] = _extra_wear(wa) - _extra_wear(wb)
+        if draws is not None:
+            saved = _extra_wear(wa, draws) - _extra_wear(wb, draws)
+            low, high = percentile_interval(saved, confidence)
+            row[f"saved_wear_{name}_low"], row[f"saved_wear_{name}_high"] = low, high
+
+
+def _overload_savings(
+    row: dict, la: np.ndarray, lb: np.ndarray, n: np.ndarray, legal: float, legal_axle: float,
+    draws: np.ndarray | None, confidence: float,
+) -> None:  # fmt: skip
+    """Add to ``row`` the share of hidden overloads of the loads ``la`` and ``lb`` [kg] and what is saved [-]."""
+    ha = hidden_overloads(la, n, legal, legal_axle)["hidden"].astype(float)
+    hb = hidden_overloads(lb, n, legal, legal_axle)["hidden"].astype(float)
+    row["share_hidden_overload_typical"], row["share_hidden_overload"] = ha.mean(), hb.mean()
+    row["saved_hidden_overload"] = ha.mean() - hb.mean()
+    if draws is not None:
+        saved = ha[draws].mean(axis=1) - hb[draws].mean(axis=1)
+        row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = percentile_interval(saved, confidence)

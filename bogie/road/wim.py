@@ -167,6 +167,20 @@ def sensor_reading(
     inside = t[lo:hi]
     t, f = t[max(lo - 1, 0) : hi + 1], np.ascontiguousarray(f[max(lo - 1, 0) : hi + 1])
     knots = np.unique(np.concatenate([inside, t_centre + np.array([-half, -flat, flat, half])]))
+    return _weighted_mean(t, f, knots, t_centre, speed, sensor_length, contact_length)
+
+
+def _weighted_mean(
+    t: NDArray[np.float64],
+    f: NDArray[np.float64],
+    knots: NDArray[np.float64],
+    t_centre: float,
+    speed: float,
+    sensor_length: float,
+    contact_length: float,
+) -> float:
+    """int F(t) o(t) dt / int o(t) dt of :func:`sensor_reading` by Simpson's rule between the ``knots`` [s] (exact:
+    F linear between the samples ``t``, ``f``, the overlap o linear between the knots)."""
     mid = 0.5 * (knots[:-1] + knots[1:])
     width = np.diff(knots)
 

@@ -184,12 +184,10 @@ def split_dummies(lines: _Lines, layout: TmgLayout) -> tuple[np.ndarray, dict[st
     return np.flatnonzero(~drop), {k: v for k, v in counts.items() if v}
 
 
-def parse_tmg(lines: _Lines, layout: TmgLayout) -> dict:
-    """Every (non-dummy) record of ``lines`` in ``layout``: the readers' common parsed form (columns, loads,
-    spacings, reasons, time stamp fields) and the TMG columns (``station``, ``vehicle_class``)."""
+def _header_fields(lines: _Lines, layout: TmgLayout, reasons: _Reasons, length: np.ndarray) -> tuple[dict, np.ndarray]:
+    """Check each record's length, its leading ``W`` and its numeric header fields, flagging the bad ones in
+    ``reasons``: the fields' values (``raw``, by name; 0 where not read) and whether the gross weight is missing."""
     m = len(lines)
-    reasons = _Reasons(m)
-    length = _lengths(lines)
     reasons.flag(length < layout.fixed_width, SHORT_HEADER)
     alive = np.flatnonzero(reasons.ok)
     bad = np.zeros(m, bool)
@@ -208,7 +206,14 @@ def parse_tmg(lines: _Lines, layout: TmgLayout) -> dict:
         bad = np.zeros(m, bool)
         bad[alive[~ok]] = True
         reasons.flag(bad, NON_NUMERIC)
-    # the vehicle class: a number 1-15 (a dummy code here is a dummy with axles)
+    return raw, gross_missing
+
+
+def _class_and_station(lines: _Lines, layout: TmgLayout, reasons: _Reasons) -> np.ndarray:
+    """Check each good record's vehicle class (a number 1-15; a dummy code here is a dummy with axles) and its
+    station (alphanumeric or spaces, right-justified), flagging the bad ones in ``reasons``: the vehicle classes
+    (0 where not read)."""
+    m = len(lines)
     alive = np.flatnonzero(reasons.ok)
     cls, ok, _ = _number(lines, alive, layout.vehicle_class)
     vehicle_class = np.zeros(m, np.int64)
@@ -228,12 +233,15 @@ def parse_tmg(lines: _Lines, layout: TmgLayout) -> dict:
     bad = np.zeros(m, bool)
     bad[alive] = ~(alnum | (station_raw == 32)).all(axis=1) | (station_raw == 32).all(axis=1)
     reasons.flag(bad, "station ID not letters and digits")
-    n = raw["n_axles"]
-    reasons.flag(n == 0, "no axles")
-    reasons.flag((n < 2) | (n > TMG_MAX_AXLES), f"implausible number of axles (allowed 2-{TMG_MAX_AXLES})")
-    reasons.flag(length < layout.axle_start + layout.stride * (n - 1) + layout.weight_width, TOO_SHORT)
-    reasons.flag((raw["direction"] < 1) | (raw["direction"] > 8), "direction not 1-8 (the guide's compass codes)")
-    # axles
+    return vehicle_class
+
+
+def _axle_fields(
+    lines: _Lines, layout: TmgLayout, reasons: _Reasons, length: np.ndarray, n: np.ndarray
+) -> tuple[np.ndarray, np.ndarray]:
+    """Read each good record's axle weights and spacings (in the layout's units; -1 where not read), flagging in
+    ``reasons`` a missing or non-numeric one within the stated ``n`` axles and a record too short for a spacing."""
+    m = len(lines)
     alive_mask = reasons.ok
     width = int(n[alive_mask].max()) if alive_mask.any() else 2
     weights = np.full((m, width), -1, np.int64)
@@ -260,16 +268,39 @@ def parse_tmg(lines: _Lines, layout: TmgLayout) -> dict:
     for k in range(max(width - 1, 0)):
         short_gap |= reasons.ok & (n > k + 1) & (spacings[:, k] < 0)
     reasons.flag(short_gap, TOO_SHORT)
+    return weights, spacings
+
+
+def _station_ids(lines: _Lines, layout: TmgLayout, reasons: _Reasons, state: np.ndarray) -> np.ndarray:
+    """Each good record's ``station`` column, ``SS-XXXXXX`` (the state's FIPS code and the station ID); '' for a
+    bad one."""
+    alive = np.flatnonzero(reasons.ok)
+    station = np.full(len(lines), "", dtype=object)
+    fields = _bytes(lines, alive, *layout.station)
+    station[alive] = [f"{s:02d}-{bytes(r).decode('ascii').strip()}" for s, r in zip(state[alive], fields)]
+    return station
+
+
+def parse_tmg(lines: _Lines, layout: TmgLayout) -> dict:
+    """Every (non-dummy) record of ``lines`` in ``layout``: the readers' common parsed form (columns, loads,
+    spacings, reasons, time stamp fields) and the TMG columns (``station``, ``vehicle_class``)."""
+    m = len(lines)
+    reasons = _Reasons(m)
+    length = _lengths(lines)
+    raw, gross_missing = _header_fields(lines, layout, reasons, length)
+    vehicle_class = _class_and_station(lines, layout, reasons)
+    n = raw["n_axles"]
+    reasons.flag(n == 0, "no axles")
+    reasons.flag((n < 2) | (n > TMG_MAX_AXLES), f"implausible number of axles (allowed 2-{TMG_MAX_AXLES})")
+    reasons.flag(length < layout.axle_start + layout.stride * (n - 1) + layout.weight_width, TOO_SHORT)
+    reasons.flag((raw["direction"] < 1) | (raw["direction"] > 8), "direction not 1-8 (the guide's compass codes)")
+    weights, spacings = _axle_fields(lines, layout, reasons, length, n)
     year = raw["year"]
     if layout.year_digits == 2:
         year = year + np.where(year >= TWO_DIGIT_PIVOT, 1900, 2000)
     zero = np.zeros(m, np.int64)
     _check_calendar(reasons, year, raw["month"], raw["day"], raw["hour"], zero, zero)
-    alive = np.flatnonzero(reasons.ok)
-    station = np.full(m, "", dtype=object)
-    state = raw["state"]
-    fields = _bytes(lines, alive, *layout.station)
-    station[alive] = [f"{s:02d}-{bytes(r).decode('ascii').strip()}" for s, r in zip(state[alive], fields)]
+    station = _station_ids(lines, layout, reasons, raw["state"])
     loads = np.where(weights >= 0, weights * layout.weight_unit_kg, np.nan)
     spaced = np.where(spacings >= 0, spacings * layout.spacing_unit_m, np.nan)
     nan = np.full(m, np.nan)

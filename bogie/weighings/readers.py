@@ -398,10 +398,7 @@ def stream_weighings(
     path = Path(path)
     first_block = next(blocks(path, max_bytes, chunk_bytes))[0]
     if fmt == "auto":
-        head = _head(first_block, SNIFF_LINES)
-        if not head.strip():
-            raise ValueError(f"{path}: no records: format auto found an empty file")
-        fmt = _detect(head, str(path))
+        fmt = _auto_format(path, first_block)
     name = _format_name(fmt)
     resolution_kg = check_resolution_kg(resolution_kg, _unit_kg(fmt))
     gross_kg = resolution_kg
@@ -427,6 +424,15 @@ def stream_weighings(
             f"({result.reasons()}); first line {_shown(first)}" + _sniff(first_block, fmt)
         )
     return result
+
+
+def _auto_format(path: Path, first_block: bytes) -> str:
+    """The format of the file at ``path`` read with format ``auto``, from its first block (a ValueError for an
+    empty file)."""
+    head = _head(first_block, SNIFF_LINES)
+    if not head.strip():
+        raise ValueError(f"{path}: no records: format auto found an empty file")
+    return _detect(head, str(path))
 
 
 def _pass(

@@ -3,6 +3,17 @@
 :func:`observed_survey` is what ``bogie weighings`` prints; its statistics are those of
 :func:`bogie.weighings.stats.survey_statistics`, the function the pipeline's survey stage applies to the simulated
 fleet.
+
+**Memory** (:func:`observed_survey`'s ``keep_groups``). True (default): ``groups`` holds every kept group with all
+its columns, in memory. False: ``groups`` is empty (``n_kept`` still counts every kept group); the tandems and
+tri-axles are written to a temporary directory as they are made (:class:`bogie.weighings._spill.GroupSpill`, 29
+bytes a group, removed at the end) and the statistics, road figures and stations computed from there, the same
+figures, so that memory does not depend on the file's length (``bogie weighings``, the pipeline's observed stage).
+
+**The sink** (:func:`observed_survey`'s ``sink``): None, or an object with ``start()`` and ``write(groups)``: given
+each chunk's kept groups (every size, all columns) as they are made, after a ``start()`` before every pass over the
+file (the pipeline's observed stage writes its groups file so). ``write`` runs on the reader's second thread (one
+call at a time, in file order; :func:`bogie.weighings.readers.stream_weighings`), ``start`` on the calling thread.
 """
 
 from __future__ import annotations
@@ -135,10 +146,8 @@ def observed_survey(
         Smallest group load kept [t].
     group_spacing_m
         Largest spacing of two axles of one group [m].
-    position
-        ``all``, ``steer``, ``drive`` or ``trailer``.
-    speed_kmh
-        (lowest, highest) speed kept [km/h]; None keeps every speed.
+    position, speed_kmh
+        ``all``, ``steer``, ``drive`` or ``trailer``; (lowest, highest) speed kept [km/h], None keeping every speed.
     legal_group_kg, legal_axle_kg
         Legal load of each group size and of one axle, for the hidden overloads [kg]; None: Directive 96/53/EC's
         (:data:`bogie.weighings.wear.EU_LEGAL_GROUP_KG`, 10 t an axle).
@@ -151,17 +160,10 @@ def observed_survey(
     chunk_bytes
         Bytes of records read at a time (:func:`bogie.weighings.readers.stream_weighings`): the file is streamed,
         and the statistics do not depend on it.
-    keep_groups
-        True (default): ``groups`` holds every kept group with all its columns, in memory. False: ``groups`` is
-        empty (``n_kept`` still counts every kept group); the tandems and tri-axles are written to a temporary
-        directory as they are made (:class:`bogie.weighings._spill.GroupSpill`, 29 bytes a group, removed at the
-        end) and the statistics, road figures and stations computed from there, the same figures, so that memory
-        does not depend on the file's length (``bogie weighings``, the pipeline's observed stage).
-    sink
-        None, or an object with ``start()`` and ``write(groups)``: given each chunk's kept groups (every size, all
-        columns) as they are made, after a ``start()`` before every pass over the file (the pipeline's observed
-        stage writes its groups file so). ``write`` runs on the reader's second thread (one call at a time, in file
-        order; :func:`bogie.weighings.readers.stream_weighings`), ``start`` on the calling thread.
+    keep_groups, sink
+        True (default): ``groups`` holds every kept group in memory; False: they are spilled to disk, in bounded
+        memory (the module docstring, "Memory"). None, or an object with ``start()`` and ``write(groups)`` given
+        each chunk's kept groups (the module docstring, "The sink").
 
     Raises
     ------
@@ -174,25 +176,49 @@ def observed_survey(
         # the groups held in memory: a file past MAX_FILE_BYTES refused; spilled to disk: any length
         cap = _records.MAX_FILE_BYTES if keep_groups else None
         read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap)
-        if keep_groups:
-            groups, surveyed = tally.groups(), tally.surveyed()
-            statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
-            road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
-            stations = tally.stations(surveyed)
-        else:  # from the groups spilled to disk, in bounded memory
-            groups = pd.DataFrame(columns=list(_COMPACT[:-1]))
-            spill = tally.spill
-            if spill.count:  # two independent reads of the spill: the wear on a second thread (compiled, no GIL)
-                with ThreadPoolExecutor(1) as pool:
-                    wear = pool.submit(spilled_wear, spill, legal, legal_axle_kg)
-                    statistics = spilled_statistics(spill)
-                    road = wear.result()
-            else:
-                statistics, road = pd.DataFrame(columns=["group"]), pd.DataFrame(columns=["group"])
-            stations = tally.spilled_stations()
+        groups, statistics, road, stations = _survey_tables(tally, legal, legal_axle_kg)
     finally:
         tally.close()
-    settings = {
+    settings = _settings(path, fmt, read, tally, legal, legal_group_kg, legal_axle_kg)
+    return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
+
+
+def _survey_tables(tally: _Tally, legal: dict[str, float], legal_axle_kg: float) -> tuple:
+    """The groups, statistics, road figures and stations of a read file's ``tally``: from the groups held in memory,
+    or (``keep_groups`` False) from those spilled to disk, in bounded memory."""
+    if tally.keep_groups:
+        groups, surveyed = tally.groups(), tally.surveyed()
+        statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
+        road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
+        stations = tally.stations(surveyed)
+    else:  # from the groups spilled to disk, in bounded memory
+        groups = pd.DataFrame(columns=list(_COMPACT[:-1]))
+        spill = tally.spill
+        if spill.count:  # two independent reads of the spill: the wear on a second thread (compiled, no GIL)
+            with ThreadPoolExecutor(1) as pool:
+                wear = pool.submit(spilled_wear, spill, legal, legal_axle_kg)
+                statistics = spilled_statistics(spill)
+                road = wear.result()
+        else:
+            statistics, road = pd.DataFrame(columns=["group"]), pd.DataFrame(columns=["group"])
+        stations = tally.spilled_stations()
+    return groups, statistics, road, stations
+
+
+def _settings(
+    path: str | Path,
+    fmt: str,
+    read: ReadResult,
+    tally: _Tally,
+    legal: dict[str, float],
+    legal_group_kg: dict[str, float] | None,
+    legal_axle_kg: float,
+) -> dict[str, Any]:
+    """What the survey was computed with (:attr:`ObservedSurvey.settings`): the file, its format, the resolution's
+    source, the filters and grouping rule of ``tally``, the legal loads and the damage exponents."""
+    min_group_load_t, position, speed_kmh = tally.filters
+    group_spacing_m, grouping = tally.grouping
+    return {
         "file": str(path), "format": read.format, "format_asked": fmt,
         "resolution": read.describe_resolution(),
         "filters": {"min_group_load_t": min_group_load_t, "position": position,
@@ -206,7 +232,6 @@ def observed_survey(
         },
         "damage_exponents": dict(DAMAGE_EXPONENTS),
     }  # fmt: skip
-    return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
 
 
 class _Tally:

@@ -29,7 +29,7 @@ from __future__ import annotations
 
 import math
 import statistics
-from collections.abc import Iterable, Mapping, Sequence
+from collections.abc import Callable, Iterable, Mapping, Sequence
 
 import numpy as np
 import pandas as pd
@@ -208,6 +208,15 @@ def wear_statistics(
         within their legal load with an axle over the axle's) with ``_low`` and ``_high``, ``share_group_over``.
     """
     keys = [by] if isinstance(by, str) else list(by)
+    width = _checked_width(groups, confidence, resamples)
+    ok, cell_arrays = _cell_source(groups, width, legal_group, unit_per_kg)
+    figures = (exponents, legal_axle, resamples, confidence, bootstrap_max_groups)
+    return pd.DataFrame(_cell_rows(groups, keys, ok, cell_arrays, seed, figures))
+
+
+def _checked_width(groups: pd.DataFrame, confidence: float, resamples: int) -> int:
+    """The axle columns of :func:`wear_statistics`' ``groups`` [-], once its ``confidence``, ``resamples`` and
+    columns are checked (a ValueError naming what is wrong)."""
     if not 0.0 < confidence < 1.0:
         raise ValueError(f"confidence = {confidence!r}: must lie in (0, 1) [-]")
     if resamples < 0:
@@ -217,6 +226,14 @@ def wear_statistics(
         raise ValueError(
             f"groups has columns {list(groups.columns)}: needs group, n_axles and axle_load_1, axle_load_2, ..."
         )
+    return width
+
+
+def _cell_source(
+    groups: pd.DataFrame, width: int, legal_group: Mapping[str, float], unit_per_kg: float
+) -> tuple[np.ndarray, Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    """Whether each row of ``groups`` is used (its ``status`` ``"ok"``, or no ``status`` column), and the function
+    giving the (loads [kg], axles, legal group load [kg]) of the rows of a cell."""
     ok = groups["status"].astype(str).eq("ok").to_numpy() if "status" in groups.columns else np.ones(len(groups), bool)
     columns = [groups[c].to_numpy() for c in axle_columns(width)]  # as stored (float32 where exact), no copy
     n_all = groups["n_axles"].to_numpy()
@@ -228,6 +245,16 @@ def wear_statistics(
         loads = np.nan_to_num(np.column_stack([c[rows] for c in columns]).astype(float), nan=0.0) / unit_per_kg
         return loads, n_all[rows].astype(np.int64), legal_all[rows]
 
+    return ok, cell_arrays
+
+
+def _cell_rows(
+    groups: pd.DataFrame, keys: list, ok: np.ndarray, cell_arrays: Callable, seed: int, figures: tuple
+) -> list[dict]:
+    """:func:`wear_statistics`' rows, one per cell of ``groups`` by ``keys`` (sorted), each cell's bootstrap drawn
+    from its own child stream of ``seed``; ``figures``: (exponents, legal_axle, resamples, confidence,
+    bootstrap_max_groups)."""
+    exponents, legal_axle, resamples, confidence, bootstrap_max_groups = figures
     root = np.random.SeedSequence(seed)
     rows = []
     cells = groups.groupby(keys, observed=True, sort=True).indices
@@ -244,7 +271,7 @@ def wear_statistics(
         else:
             row.update(_small_cell(*cell_arrays(index), stream, exponents, legal_axle, resamples, confidence))
         rows.append(row)
-    return pd.DataFrame(rows)
+    return rows
 
 
 def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.SeedSequence,

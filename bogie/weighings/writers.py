@@ -6,6 +6,27 @@ back gives the table again, rounded to the format's resolution. Everything is ch
 and the file is written atomically (a temporary file in the same folder, then ``os.replace``): an error leaves no
 file, partial or temporary. The rules (rounding, defaults of absent columns, errors) are in ``docs/weighings.md``,
 section "Writing records".
+
+**Per format** (:func:`write_weighings`):
+
+- *Axles*: ``n_axles`` from 2 to the format's limit: CSV 20, CASTOR 9, BeDIT 20, DITIS 20, MON 99.
+- *Times* are rounded to the format's resolution: MON 1 ms; CASTOR, BeDIT, DITIS 0.01 s.
+- *Columns of some formats*: the fixed-width formats also need ``direction`` (1 or 2). Optional, with the value
+  written where the column is absent or NaN: ``n_groups`` (MON only) -> counted: 1 + the spacings as written wider
+  than ``GROUP_SPACING_M`` (2.0 m; the rule of ``groups.axle_groups``); ``axle_width_1..n`` [m] (DITIS only) -> 0,
+  which this project takes as "not given" (an assumption: the reference has no missing value). CSV writes only its
+  layout's columns: ``speed`` NaN and ``lane`` -1 or NaN are written blank.
+- *Fixed-width records*: every field zero-padded, right-aligned at its offset; one record a line ending in ``\\n``,
+  ASCII; each line ends with its last axle's fields and the (unused) spacing slot after the last axle, written as
+  zeros. MON's direction is written ``direction - 1`` (zero-based), BeDIT's too, CASTOR's and DITIS's as 1 or 2.
+- *CSV*: header ``timestamp,speed_kmh,lane,n_axles,axle_load_1..N,spacing_1..N-1`` (N the table's largest axle
+  count, 1-based), ``timestamp`` ISO 8601 without zone (``Timestamp.isoformat()``), numbers as ``repr(float)`` (the
+  shortest text that reads back to the same float), speed in km/h (``speed * 3.6``), cells past a vehicle's axles
+  blank.
+- *TMG* (``tmg2001``, ``tmg2013``): needs ``station`` ('SS-XXXXXX': state FIPS code and station ID),
+  ``vehicle_class`` (1-15), ``lane`` (0-9) and ``direction`` (1-8, the guide's compass codes); the time is written
+  as the beginning of its hour, no speed or length, the open field blank, numbers right-justified with leading
+  blanks, the record ending with the last axle's weight.
 """
 
 from __future__ import annotations
@@ -339,13 +360,28 @@ def _write_atomically(path: Path, data: bytes) -> None:
         raise
 
 
+def _format_lines(vehicles: pd.DataFrame, fmt: str) -> tuple[list[str], int]:
+    """The lines of the file of ``vehicles`` (index reset) in format ``fmt``, and how many are records."""
+    if fmt == "csv":
+        lines = _csv_lines(vehicles)
+        count = len(lines) - 1
+    elif fmt in TMG_LAYOUTS:
+        lines = _tmg_lines(vehicles, fmt)
+        count = len(lines)
+    else:
+        _check_contiguous(LAYOUTS[fmt])
+        lines = _fixed_lines(vehicles, fmt)
+        count = len(lines)
+    return lines, count
+
+
 def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
     """Write a vehicle table as a file of weighings in format ``fmt`` (the inverse of ``read_weighings``).
 
     Every value is converted from SI to its field's unit (divided by the field's scale), rounded to the nearest
     integer, a half away from zero (after rounding the quotient to 6 decimals, so that 0.45 m is 4.5 dm, not
     4.4999999999999991), and checked against the field's range 0 to 10**width - 1. Times are rounded to the
-    format's resolution (MON 1 ms; CASTOR, BeDIT, DITIS 0.01 s; a half to the later time), the date carried
+    format's resolution (a half to the later time; per format in the module docstring), the date carried
     (23:59:59.996 on 31 December is 00:00:00.00 on 1 January). The whole table is checked before anything is
     written; the file is written atomically (a temporary file in the same folder, then ``os.replace``), so an
     error leaves neither a partial file nor a temporary one. The same table gives the same bytes every time.
@@ -355,25 +391,19 @@ def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
     vehicles
         The vehicle table of :func:`bogie.weighings.readers.read_weighings` (any index; row numbers in messages
         are 0-based positions, ``vehicles.iloc[row]``). Required: ``timestamp`` (no time zone; local time),
-        ``speed`` [m/s], ``lane`` (1-based), ``n_axles`` (2 to the format's limit: CSV 20, CASTOR 9, BeDIT 20,
-        DITIS 20, MON 99), ``axle_load_1..n`` [kg] and ``spacing_1..n-1`` [m] (1-based, front first; cells
-        past a row's axles are ignored); fixed-width formats also ``direction`` (1 or 2). Optional, with the
-        value written where the column is absent or NaN: ``gross_weight`` [kg] -> the sum of the axle loads as
-        written (the rounded loads, in the field's unit); ``length`` [m] -> 0 (the reader's "not given");
-        ``transverse_position`` [m] -> 0; ``head`` (an integer, or a string of digits) -> 0, also for '' (the
-        CSV reader's head); ``n_groups`` (MON only) -> counted: 1 + the spacings as written wider than
-        ``GROUP_SPACING_M`` (2.0 m; the rule of ``groups.axle_groups``); ``axle_width_1..n`` [m] (DITIS only)
-        -> 0, which this project takes as "not given" (an assumption: the reference has no missing value).
-        CSV writes only its layout's columns: ``speed`` NaN and ``lane`` -1 or NaN are written blank.
+        ``speed`` [m/s], ``lane`` (1-based), ``n_axles`` (2 to the format's limit), ``axle_load_1..n`` [kg] and
+        ``spacing_1..n-1`` [m] (1-based, front first; cells past a row's axles are ignored), and the format's own
+        columns (the module docstring, "Per format"). Optional, with the value written where the column is absent
+        or NaN: ``gross_weight`` [kg] -> the sum of the axle loads as written (the rounded loads, in the field's
+        unit); ``length`` [m] -> 0 (the reader's "not given"); ``transverse_position`` [m] -> 0; ``head`` (an
+        integer, or a string of digits) -> 0, also for '' (the CSV reader's head); MON's ``n_groups`` and DITIS's
+        ``axle_width_1..n`` (the module docstring).
     path
         The file to write, replaced if it exists. A name ending in ``.gz`` is written gzip-compressed, with
         modification time 0 and no file name in the gzip header (byte-reproducible).
     fmt
         ``csv``, ``mon``, ``castor``, ``bedit``, ``ditis``, ``tmg2001`` or ``tmg2013`` (layouts in
-        ``docs/weighings.md``). The TMG editions need ``station`` ('SS-XXXXXX': state FIPS code and station ID),
-        ``vehicle_class`` (1-15), ``lane`` (0-9) and ``direction`` (1-8, the guide's compass codes); the time is
-        written as the beginning of its hour, no speed or length, the open field blank, numbers right-justified
-        with leading blanks, the record ending with the last axle's weight.
+        ``docs/weighings.md``; what each needs and how it is written: the module docstring, "Per format").
 
     Returns
     -------
@@ -390,32 +420,12 @@ def write_weighings(vehicles: pd.DataFrame, path: str | Path, fmt: str) -> int:
         offending row (and how many rows, with the first few), the value, the allowed range and the unit.
     OSError
         If the file cannot be written.
-
-    Notes
-    -----
-    Fixed-width records: every field zero-padded, right-aligned at its offset; one record a line ending in
-    ``\\n``, ASCII; each line ends with its last axle's fields and the (unused) spacing slot after the last
-    axle, written as zeros. MON's direction is written ``direction - 1`` (zero-based), BeDIT's too, CASTOR's and
-    DITIS's as 1 or 2. CSV: header ``timestamp,speed_kmh,lane,n_axles,axle_load_1..N,spacing_1..N-1`` (N the
-    table's largest axle count, 1-based), ``timestamp`` ISO 8601 without zone (``Timestamp.isoformat()``),
-    numbers as ``repr(float)`` (the shortest text that reads back to the same float), speed in km/h
-    (``speed * 3.6``), cells past a vehicle's axles blank.
     """
     if fmt not in FORMATS:
         raise ValueError(f"format {fmt!r} unknown; allowed: {', '.join(FORMATS)}")
     if not isinstance(vehicles, pd.DataFrame):
         raise TypeError(f"vehicles: expected a pandas DataFrame, got {type(vehicles).__name__}")
-    vehicles = vehicles.reset_index(drop=True)
-    if fmt == "csv":
-        lines = _csv_lines(vehicles)
-        count = len(lines) - 1
-    elif fmt in TMG_LAYOUTS:
-        lines = _tmg_lines(vehicles, fmt)
-        count = len(lines)
-    else:
-        _check_contiguous(LAYOUTS[fmt])
-        lines = _fixed_lines(vehicles, fmt)
-        count = len(lines)
+    lines, count = _format_lines(vehicles.reset_index(drop=True), fmt)
     data = "".join(line + "\n" for line in lines).encode("ascii")
     path = Path(path)
     if path.name.lower().endswith(".gz"):

@@ -170,6 +170,23 @@ def read_tables(directory: str | Path, required: Sequence[str]) -> dict[str, pd.
     return {f.name: read[f.suffix](f) for f in sorted(directory.iterdir()) if f.suffix in read}
 
 
+def _read_runs(runs: str | Path) -> tuple[pd.DataFrame, pd.DataFrame]:
+    """Every run's status (each part file verified) and the fleet's good readings with their inequality.
+
+    Raises
+    ------
+    RunsError
+        If ``runs`` holds no runs or a part file is not what the simulate stage writes.
+    """
+    if not any(Path(runs).glob("study=*/*.parquet")):
+        raise RunsError(f"{runs}/ holds no runs; run the simulate stage first")
+    try:  # every part file verified, as every stage reads them
+        every = read_runs_frame(runs, columns=[c for c in STATUS_COLUMNS if c != "study"])[STATUS_COLUMNS]
+    except SchemaError as exc:
+        raise RunsError(str(exc)) from None
+    return every, inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
+
+
 def read_inputs(
     params: str | Path,
     samples: str | Path,
@@ -199,13 +216,7 @@ def read_inputs(
         "code_sha256": code_digest(),
         "params_sha256": hashlib.sha256(params.read_bytes()).hexdigest(),
     }
-    if not any(Path(runs).glob("study=*/*.parquet")):
-        raise RunsError(f"{runs}/ holds no runs; run the simulate stage first")
-    try:  # every part file verified, as every stage reads them
-        every = read_runs_frame(runs, columns=[c for c in STATUS_COLUMNS if c != "study"])[STATUS_COLUMNS]
-    except SchemaError as exc:
-        raise RunsError(str(exc)) from None
-    ok = inequality_columns(readings(read_runs(runs, "fleet", REQUIRED_COLUMNS)))
+    every, ok = _read_runs(runs)
     metrics_dir = Path(metrics_dir)
     observed_dir = Path(survey_dir).with_name("observed") if observed_dir is None else observed_dir
     calibration_dir = Path(survey_dir).with_name("calibration") if calibration_dir is None else calibration_dir

@@ -97,7 +97,7 @@ def _statistics(loads: np.ndarray, n: int) -> np.ndarray:
 def attribution(
     table: Table, values: Mapping[str, float], min_load_kg: float, static: StaticProtocol,
     weight_step_kg: float | None = None, executor: Executor | Mapper | None = None, seed: int = 0,
-    resamples: int = 200, level: float = 0.9,
+    resamples: int = 200, confidence_level: float = 0.9,
 ) -> tuple[pd.DataFrame, dict[str, Any]]:  # fmt: skip
     """The attribution of the calibrated fleet's WIM inequality to its causes.
 
@@ -113,8 +113,8 @@ def attribution(
         The observed file's resolution [kg] (None: whole numbers as they are).
     executor
         Where the weighings run.
-    seed, resamples, level
-        The paired bootstrap's seed, resamples (>= 2) and the intervals' level.
+    seed, resamples, confidence_level
+        The paired bootstrap's seed, resamples (>= 2) and the intervals' confidence level (0, 1).
 
     Returns
     -------
@@ -145,17 +145,17 @@ def attribution(
                 rows.append({"scenario": name, "group": size, "suspension": kind, "n_groups": int(ok.sum()),
                              **dict(zip(STATISTICS, means[name]))})  # fmt: skip
             metrics[f"{size}/{kind}"] = _metrics_of(per, means, int(ok.sum()), int((laden & ~ok).sum()), rng,
-                                                    resamples, level)  # fmt: skip
+                                                    resamples, confidence_level)  # fmt: skip
     return pd.DataFrame(rows, columns=["scenario", "group", "suspension", "n_groups", *STATISTICS]), metrics
 
 
-def _share(diff: np.ndarray, boot: np.ndarray, level: float) -> dict[str, float | None]:
+def _share(diff: np.ndarray, boot: np.ndarray, confidence_level: float) -> dict[str, float | None]:
     """A cause's share of one statistic: the mean paired difference and its percentile interval, for JSON."""
-    low, high = percentile_interval(boot, level)
+    low, high = percentile_interval(boot, confidence_level)
     return {"value": json_number(diff.mean()), "low": json_number(low), "high": json_number(high)}
 
 
-def _metrics_of(per, means, n_groups, dropped, rng, resamples, level) -> dict[str, Any]:
+def _metrics_of(per, means, n_groups, dropped, rng, resamples, confidence_level) -> dict[str, Any]:
     k = len(per["as_observed"])
     idx = rng.integers(0, k, size=(max(resamples, 2), k))
     causes = {}
@@ -163,7 +163,7 @@ def _metrics_of(per, means, n_groups, dropped, rng, resamples, level) -> dict[st
         diff = per["as_observed"] - per[scenario]  # paired: the same groups
         boot = diff[idx].mean(axis=1)  # (resamples, statistics)
         causes[cause] = {
-            s: _share(diff[:, j], boot[:, j], level)
+            s: _share(diff[:, j], boot[:, j], confidence_level)
             for j, s in enumerate(STATISTICS)
         }  # fmt: skip
     return {

@@ -273,12 +273,27 @@ def calibrate_survey(
     metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
     by_cause = None
     if static is not None and table.protocol == "wim":
-        progress("calibrate: attribution, the calibrated fleet weighed four ways")
-        by_cause, metrics["attribution"] = attribution(
-            table, result.values, min_load_kg, static, step, executor, settings.seed,
-            max(settings.bootstrap_resamples, 200), settings.confidence_level,
-        )  # fmt: skip
+        by_cause = _attribute(table, result.values, min_load_kg, static, step, executor, settings, progress, metrics)
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
+    return metrics, _tables(result, direct, abl, by_cause)
+
+
+def _attribute(
+    table: Table, values: Mapping[str, float], min_load_kg: float, static: StaticProtocol, step: float | None,
+    executor: Executor | Mapper | None, settings: CalibrationSettings, progress: Callable[[str], None],
+    metrics: dict[str, Any],
+) -> pd.DataFrame:  # fmt: skip
+    """The calibrated fleet's inequality by cause (:func:`attribution`); its metrics go to metrics["attribution"]."""
+    progress("calibrate: attribution, the calibrated fleet weighed four ways")
+    by_cause, metrics["attribution"] = attribution(
+        table, values, min_load_kg, static, step, executor, settings.seed,
+        max(settings.bootstrap_resamples, 200), settings.confidence_level,
+    )  # fmt: skip
+    return by_cause
+
+
+def _tables(result: Any, direct: pd.DataFrame, abl: pd.DataFrame, by_cause: pd.DataFrame | None) -> dict:
+    """The tables of :func:`calibrate_survey` by name, ``posterior`` and ``attribution`` only when there are some."""
     tables = {
         "bootstrap": result.bootstrap, "valley": result.valley, "profiles": result.profiles, "calibrated": direct,
         "ablation": abl,
@@ -287,7 +302,7 @@ def calibrate_survey(
         tables["posterior"] = result.posterior.draws
     if by_cause is not None:
         tables["attribution"] = by_cause
-    return metrics, tables
+    return tables
 
 
 def _metrics(

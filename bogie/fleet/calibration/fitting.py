@@ -116,12 +116,14 @@ def bound_finding(value: float, bounds: Sequence[float], refits: Sequence[float]
     return {"bound": side, "value": float(value), "limit": float(limit), "share_of_refits": shares.get(side)}
 
 
-def _intervals(problem: Problem, best: np.ndarray, boot: pd.DataFrame, level: float) -> dict[str, dict[str, Any]]:
+def _intervals(
+    problem: Problem, best: np.ndarray, boot: pd.DataFrame, confidence_level: float
+) -> dict[str, dict[str, Any]]:
     fitted = {}
     for i, q in enumerate(problem.fitted):
         entry = {"value": float(best[i]), "low": None, "high": None, "bounds": list(problem.bounds[i])}
         if len(boot) >= 2:
-            entry["low"], entry["high"] = (float(e) for e in percentile_interval(boot[q], level))
+            entry["low"], entry["high"] = (float(e) for e in percentile_interval(boot[q], confidence_level))
             # a basic interval must hold the estimate: the fit on all the data is one of the bootstrap's worlds
             entry["low"], entry["high"] = min(entry["low"], entry["value"]), max(entry["high"], entry["value"])
         refits = boot[q].to_numpy(dtype=float) if q in boot else np.zeros(0)

@@ -134,10 +134,10 @@ def _log_post(like, priors, problem, theta) -> tuple[float, float]:
 
 
 def posterior(
-    problem: Problem, priors: Mapping[str, Prior], best: np.ndarray, draws: int, seed: int, level: float
+    problem: Problem, priors: Mapping[str, Prior], best: np.ndarray, draws: int, seed: int, confidence_level: float
 ) -> Posterior:
     """Sample the posterior of ``problem``'s fitted quantities: ``draws`` Metropolis steps from ``best``, the first
-    quarter adapting the proposal and dropped; credible intervals at ``level``."""
+    quarter adapting the proposal and dropped; credible intervals at ``confidence_level``."""
     like = synthetic_likelihood(problem, best, seed)
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
     d = len(best)
@@ -170,7 +170,7 @@ def posterior(
         margin = AT_BOUND * (hi - lo)
         share_low, share_high = float(np.mean(x <= lo + margin)), float(np.mean(x >= hi - margin))
         piled = "low" if share_low >= PILED else "high" if share_high >= PILED else None
-        low, high = percentile_interval(x, level)
+        low, high = percentile_interval(x, confidence_level)
         summary[q] = {
             "median": float(np.median(x)), "low": float(low), "high": float(high),
             "share_at_low": share_low, "share_at_high": share_high,

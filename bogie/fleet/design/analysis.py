@@ -124,9 +124,9 @@ def pareto_front(share: np.ndarray, distance: np.ndarray) -> np.ndarray:
 
 
 # ---- the analysis ----------------------------------------------------------------------------------------------
-def _arguments(runs: pd.DataFrame, designs: pd.DataFrame, tilts: Any, target: Any, confidence: Any) -> np.ndarray:
+def _arguments(runs: pd.DataFrame, designs: pd.DataFrame, tilts: Any, target: Any, confidence_level: Any) -> np.ndarray:
     """Refuse what the analysis cannot read, naming it; the tilt grid as floats [degree]."""
-    for name, value in (("target_share", target), ("confidence_level", confidence)):
+    for name, value in (("target_share", target), ("confidence_level", confidence_level)):
         number = not isinstance(value, bool) and isinstance(value, (int, float, np.floating))
         if not (number and 0.0 < value < 1.0):
             raise DesignError(f"{name} = {value!r}: must lie in (0, 1) [-]")
@@ -175,7 +175,7 @@ def _checks(d: Any, fleet: pd.DataFrame, loads: np.ndarray, complete: np.ndarray
 
 
 def _one_design(
-    d: Any, mine: pd.DataFrame, tilts: np.ndarray, fine: np.ndarray, target: float, confidence: float
+    d: Any, mine: pd.DataFrame, tilts: np.ndarray, fine: np.ndarray, target: float, confidence_level: float
 ) -> tuple[dict[str, Any], pd.DataFrame, list[dict]]:
     """One design's row of the table, its share curve and its interpolation check, from its runs ``mine``."""
     n_ax = GROUP_AXLES[d.group]
@@ -184,7 +184,7 @@ def _one_design(
     n = len(fleet)
     k5 = int((~fleet["outside_5pct"].astype(bool)).sum())
     k10 = int((~fleet["over_10pct"].astype(bool)).sum())
-    (lo5, lo10), (hi5, hi10) = wilson_interval(np.array([k5, k10]), np.array([n, n]), confidence)
+    (lo5, lo10), (hi5, hi10) = wilson_interval(np.array([k5, k10]), np.array([n, n]), confidence_level)
     # the tilt grid: a condition with a failed grid run leaves the curve
     loads = _grid_loads(mine, len(tilts), n_ax)
     complete = ~np.isnan(loads).any(axis=(1, 2))

@@ -120,7 +120,21 @@ def simulated_readings(
     light = usable & (group_load < min_group_load)
     by_position = usable & ~light & (position not in SIMULATED_POSITIONS)
     kept = usable & ~light & ~by_position
-    protocol = runs["protocol"].astype(str)
+    counts = _protocol_counts(runs["protocol"].astype(str), failed, airborne, light, by_position, kept)
+    frame = runs.loc[kept, list(READING_RUN_COLUMNS[:4])].astype({"group": str, "protocol": str})
+    kept_rows = np.asarray(kept, dtype=bool)
+    frame["group_load"] = group_load[kept_rows]
+    for i in range(_AXLES):
+        frame[f"axle_load_{i + 1}"] = loads[kept_rows, i]
+    frame = frame.sort_values(["protocol", "sample_id"], kind="stable")
+    return with_inequality(frame)[list(SIMULATED_COLUMNS)], counts
+
+
+def _protocol_counts(
+    protocol: pd.Series, failed: pd.Series, airborne: pd.Series, light: pd.Series, by_position: pd.Series,
+    kept: pd.Series,
+) -> dict[str, dict[str, int]]:  # fmt: skip
+    """The counts of :func:`simulated_readings` per protocol, from each run's protocol and boolean masks."""
     counts = {}
     for name in sorted(set(protocol)):
         sel = protocol == name
@@ -129,13 +143,7 @@ def simulated_readings(
             "n_light": int((sel & light).sum()), "n_position": int((sel & by_position).sum()),
             "n_kept": int((sel & kept).sum()),
         }  # fmt: skip
-    frame = runs.loc[kept, list(READING_RUN_COLUMNS[:4])].astype({"group": str, "protocol": str})
-    kept_rows = np.asarray(kept, dtype=bool)
-    frame["group_load"] = group_load[kept_rows]
-    for i in range(_AXLES):
-        frame[f"axle_load_{i + 1}"] = loads[kept_rows, i]
-    frame = frame.sort_values(["protocol", "sample_id"], kind="stable")
-    return with_inequality(frame)[list(SIMULATED_COLUMNS)], counts
+    return counts
 
 
 def by_size(stats: pd.DataFrame) -> dict[str, dict]:

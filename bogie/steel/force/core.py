@@ -27,15 +27,14 @@ Each axle's x is not a freedom: it follows from the axle's radius rod, pinned at
 and the axle's vertical freedom.
 
 The force is split by physics into small compiled helpers (body points, radius rods, rolling contact points, in
-:mod:`bogie.steel.force.geometry`; the springs with their end friction's return map, pad moments, tyre loads,
-bushes, bump stops, the record, here); when they were split from a former single routine they kept its arithmetic in the
-same order, so results were bit-identical to it (the radius rods and the equaliser stops, added later, changed the
-physics). The helpers are inlined into :func:`_internal` at numba IR level (``inline="always"``): as separate calls
-they doubled the cost of a force evaluation. The helpers used inside loops take and return scalars, and the short
-loops over pivots, contacts and tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work``
-buffer (:data:`WORK`), not views, and it is compiled without reference counting (``_nrt=False``), so an evaluation
-creates no array object and touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle,
-``bench/README.md``).
+:mod:`bogie.steel.force.geometry`; the springs with their end friction's return map, pad moments, tyre loads, bushes,
+bump stops, the record, here); when they were split from a former single routine they kept its arithmetic in the same
+order, so results were bit-identical to it (the radius rods and the equaliser stops, added later, changed the physics).
+The helpers are inlined into :func:`_internal` at numba IR level (``inline="always"``): as separate calls they doubled
+the cost of a force evaluation. The helpers used inside loops take and return scalars, and the short loops over pivots,
+contacts and tyres stay in :func:`_internal`. Its scratch arrays are offsets into one ``work`` buffer (:data:`WORK`),
+not views, and it is compiled without reference counting (``_nrt=False``), so an evaluation creates no array object and
+touches no reference count (issue 15: 0.40 -> 0.36 us for the tri-axle, ``bench/README.md``).
 
 Library sin, cos and atan2 calls were most of an evaluation's cost, so the same quantities are computed another
 way. The springs never form the leaf end angles (:func:`_rolled_contacts`): their sines and cosines come from the

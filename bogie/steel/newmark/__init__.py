@@ -286,10 +286,8 @@ def integrate_linear(
         Loads, an array (n_steps + 1, n_dof) at t = k dt, or a callable of t [s] returning n_dof loads.
     u0, v0
         Initial displacements and velocities.
-    dt
-        Time step [s].
-    n_steps
-        Number of steps.
+    dt, n_steps
+        Time step [s] and number of steps.
     beta, gamma
         Newmark parameters; the default (1/4, 1/2) is the unconditionally stable average-acceleration rule.
     rho_inf
