@@ -97,7 +97,7 @@ def main() -> None:
 
     def peer(theta):
         values = L._values(theta, problem.fitted, problem.base)
-        sim = L.simulated(problem.table, values, problem.min_load_kg, None, problem.weight_step_kg)
+        sim = L.simulated(problem.table, values, problem.min_group_load_kg, None, problem.weight_step_kg)
         return scipy_distance(problem.obs, problem.unit_weights(), sim, problem.scales)
 
     rng = np.random.default_rng(7)

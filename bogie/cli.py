@@ -169,7 +169,8 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     from bogie.weighings.survey import observed_survey
 
     try:
-        survey = observed_survey(args.path, args.format, args.min_group_load_t, args.group_spacing_m, args.position,
+        survey = observed_survey(args.path, args.format, min_group_load_kg=1000.0 * args.min_group_load_t,
+                                 group_spacing_m=args.group_spacing_m, position=args.position,
                                  legal_group_kg=_legal_groups(args), legal_axle_kg=args.legal_axle_kg,
                                  resolution_kg=args.resolution_kg, grouping=args.grouping,
                                  keep_groups=False)  # fmt: skip

@@ -137,8 +137,8 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
         If too few groups of either size pass the filters (:func:`bogie.fleet.calibration.problem.observed_groups`).
     """
     obs = config.observed
-    survey = observed_survey(path, obs.format, obs.min_group_load / 1000.0, obs.group_spacing, obs.position,
-                             resolution_kg=obs.resolution_kg)  # fmt: skip
+    survey = observed_survey(path, obs.format, min_group_load_kg=obs.min_group_load, group_spacing_m=obs.group_spacing,
+                             position=obs.position, resolution_kg=obs.resolution_kg)  # fmt: skip
     try:
         return calibration.observed_groups(survey), survey.groups
     except CalibrationError as exc:

@@ -154,9 +154,9 @@ def observed_table(
     survey = observed_survey(
         path,
         observed.format,
-        observed.min_group_load / 1000.0,
-        observed.group_spacing,
-        observed.position,
+        min_group_load_kg=observed.min_group_load,
+        group_spacing_m=observed.group_spacing,
+        position=observed.position,
         resolution_kg=observed.resolution_kg,
         keep_groups=False,
         sink=groups,

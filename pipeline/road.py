@@ -55,7 +55,7 @@ def observed_wear(groups: pd.DataFrame, legal_group: Mapping[str, float], legal_
         return pd.DataFrame()
     surveyed = surveyed.assign(group=surveyed["group"].astype(str), position=surveyed["position"].astype(str))
     return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES,
-                           confidence=CONFIDENCE, seed=seed)  # fmt: skip
+                           confidence_level=CONFIDENCE, seed=seed)  # fmt: skip
 
 
 def road_metrics(
@@ -126,13 +126,13 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         rerun = "delete it and rerun the observed stage"
         groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
-    simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence=CONFIDENCE,
+    simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence_level=CONFIDENCE,
                            seed=config.seed)  # fmt: skip
     observed = observed_wear(groups, legal_group, legal_axle, config.seed)
     if design is None:
         savings, note = pd.DataFrame(), "design is null in params.yaml: no design experiment to compare designs over"
     else:
-        savings = design_savings(*design, legal_group, legal_axle, resamples=RESAMPLES, confidence=CONFIDENCE,
+        savings = design_savings(*design, legal_group, legal_axle, resamples=RESAMPLES, confidence_level=CONFIDENCE,
                                  seed=config.seed)  # fmt: skip
         note = None
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)

@@ -120,7 +120,7 @@ def test_the_simulated_readings_count_every_run_left_out_and_keep_the_rest():
     samples.loc[2, "friction_coefficient"] = -0.5  # one bogie fails under both protocols
     runs = bf.weigh_fleet(samples, {"static": STATIC, "wim": WIM})
     light = float(runs.loc[runs["status"] == "ok", "group_load"].min()) / GRAVITY + 1.0  # the lightest reading goes
-    readings, counts = simulated_readings(runs, min_group_load=light, position="all")
+    readings, counts = simulated_readings(runs, min_group_load_kg=light, position="all")
     total = {k: sum(c[k] for c in counts.values()) for k in ("n_runs", "n_failed", "n_light", "n_kept")}
     assert total["n_runs"] == 8 and total["n_failed"] == 2 and total["n_light"] == 1
     assert total["n_kept"] == len(readings) == 8 - 2 - 1 - sum(c["n_airborne"] for c in counts.values())

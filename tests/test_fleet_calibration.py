@@ -175,8 +175,10 @@ def crn(protocol="static", spec=STATIC, tilts=GRID, levels=()):
     return L.crn_table(analytic_table(5).samples, TILT, 1, protocol, spec, tilts, levels)
 
 
-def problem(fit=FIT, min_load_kg=0.0):
-    return L.make_problem(analytic_table(5), synthetic_observed(20), fit, L.base_values(TILT, 0.0, None), min_load_kg)
+def problem(fit=FIT, min_group_load_kg=0.0):
+    return L.make_problem(
+        analytic_table(5), synthetic_observed(20), fit, L.base_values(TILT, 0.0, None), min_group_load_kg
+    )
 
 
 @pytest.mark.parametrize(
@@ -193,7 +195,7 @@ def problem(fit=FIT, min_load_kg=0.0):
         (lambda: crn("dynamic"), ["protocol = 'dynamic'", "static, wim"]),
         (lambda: crn("wim"), ["settings", "WimProtocol"]),
         (lambda: problem({"sensor_error_pct": (0.0, 5.0)}), ["sensor_error_pct", "WIM protocol", "static"]),
-        (lambda: problem(min_load_kg=-1.0), ["min_load_kg = -1.0", ">= 0", "[kg]"]),
+        (lambda: problem(min_group_load_kg=-1.0), ["min_group_load_kg = -1.0", ">= 0", "[kg]"]),
     ],
 )
 def test_bad_arguments_are_refused_naming_the_argument_its_value_and_unit(make, words):

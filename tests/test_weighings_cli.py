@@ -16,7 +16,7 @@ def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert set(out) == {"settings", "records", "positions", "groups", "road"}
     settings = out["settings"]
     assert (settings["format"], settings["format_asked"]) == ("mon", "mon")
-    assert settings["filters"] == {"min_group_load_t": 15.0, "position": "all", "speed_kmh": None}
+    assert settings["filters"] == {"min_group_load_kg": 15000.0, "position": "all", "speed_kmh": None}
     assert settings["grouping"] == "spacing: consecutive axles at most 2 m apart"
     assert settings["legal_loads_kg"]["tandem"] == 18_000.0 and settings["legal_loads_kg"]["axle"] == 10_000.0
     assert settings["damage_exponents"] == {"overall": 4, "asphalt": 5, "subgrade": 7, "cemented": 12}

@@ -70,21 +70,21 @@ def test_every_group_after_the_second_is_a_trailer_group_a_b_doubles_lead_traile
 
 
 def test_filters_on_group_load_position_and_speed(groups):
-    laden = filter_groups(groups, min_group_load_t=15)
+    laden = filter_groups(groups, min_group_load_kg=15_000)
     # >= 15 000 kg: A's and C's tri-axles (24 t), B's and C's tandems (18 t); D's tri-axle (6 t) left out
     assert laden[["line", "group"]].values.tolist() == [[1, "triaxle"], [2, "tandem"], [4, "tandem"],
                                                         [4, "triaxle"]]  # fmt: skip
-    assert filter_groups(groups, 15, "trailer")["line"].tolist() == [1, 4]
-    assert filter_groups(groups, 15, "drive")["group"].tolist() == ["tandem", "tandem"]
+    assert filter_groups(groups, min_group_load_kg=15_000, position="trailer")["line"].tolist() == [1, 4]
+    assert filter_groups(groups, min_group_load_kg=15_000, position="drive")["group"].tolist() == ["tandem", "tandem"]
     # MON speeds 82.08, 74.88, 87.84, 90, 100.08 km/h: 80-90 keeps A, C and D
     assert sorted(set(filter_groups(groups, speed_kmh=(80, 90))["line"])) == [1, 4, 6]
 
 
 @pytest.mark.parametrize(
     ("kwargs", "message"),
-    [({"min_group_load_t": -1.0}, r"min_group_load_t = -1.0 t outside the allowed range \[0, 100\] t"),
+    [({"min_group_load_kg": -1.0}, r"min_group_load_kg = -1.0: must be a finite number in \[0, 100000\] \[kg\]"),
      ({"position": "front"}, r"position = 'front' unknown; allowed: all, steer, drive, trailer"),
-     ({"speed_kmh": (90, 80)}, r"speed_kmh highest = 80 km/h outside the allowed range \[90, 160\] km/h")],
+     ({"speed_kmh": (90, 80)}, r"speed_kmh highest = 80: must be a finite number in \[90, 160\] \[km/h\]")],
 )  # fmt: skip
 def test_bad_filters_are_refused_naming_the_parameter_value_range_and_unit(groups, kwargs, message):
     with pytest.raises(ValueError, match=message):
@@ -92,12 +92,12 @@ def test_bad_filters_are_refused_naming_the_parameter_value_range_and_unit(group
 
 
 def test_a_group_spacing_out_of_range_is_refused():
-    with pytest.raises(ValueError, match=r"group_spacing_m = 0.0 m outside the allowed range \(0, 5\] m"):
+    with pytest.raises(ValueError, match=r"group_spacing_m = 0.0: must be a finite number in \(0, 5\] \[m\]"):
         axle_groups(pd.DataFrame(), 0.0)
 
 
 def test_observed_survey_statistics_by_hand():
-    survey = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15)
+    survey = observed_survey(DATA / "site.csv", "csv", min_group_load_kg=15_000)
     out = survey.to_dict()
     assert out["records"].pop("resolution")["source"] == "detected"
     assert out["records"] == {"read": 5, "skipped": 4, "weight_step_kg": 100.0}  # every load a whole 100 kg
@@ -124,11 +124,11 @@ def test_observed_survey_statistics_by_hand():
 
 
 def test_every_format_gives_the_same_survey_of_the_same_vehicles():
-    ref = observed_survey(DATA / "site.csv", "csv", min_group_load_t=15).to_dict()
+    ref = observed_survey(DATA / "site.csv", "csv", min_group_load_kg=15_000).to_dict()
     assert ref["records"].pop("resolution")["unit_kg"] == 1.0
     assert ref.pop("settings")["format"] == "csv"
     for fmt in ("mon", "castor", "bedit", "ditis"):
-        out = observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_t=15).to_dict()
+        out = observed_survey(DATA / f"site.{fmt}", fmt, min_group_load_kg=15_000).to_dict()
         # the same 100 kg, detected in kilograms (CSV, MON) or the kg/100 formats' own unit
         resolution = out["records"].pop("resolution")
         assert out.pop("settings")["format"] == fmt
@@ -139,13 +139,13 @@ def test_every_format_gives_the_same_survey_of_the_same_vehicles():
 
 
 def test_a_filter_that_leaves_no_tandem_gives_an_empty_entry_not_an_error():
-    out = observed_survey(DATA / "site.mon", "mon", min_group_load_t=15, position="trailer").to_dict()
+    out = observed_survey(DATA / "site.mon", "mon", min_group_load_kg=15_000, position="trailer").to_dict()
     assert out["groups"]["tandem"] == {
         "n_groups": 0, "mean_spread_kg": None, "median_spread_pct": None, "share_outside_5pct": None,
         "share_over_10pct": None, "load_share_quantiles": {},
     }  # fmt: skip
     assert out["groups"]["triaxle"]["n_groups"] == 2
-    none = observed_survey(DATA / "site.mon", "mon", min_group_load_t=99).to_dict()
+    none = observed_survey(DATA / "site.mon", "mon", min_group_load_kg=99_000).to_dict()
     assert none["groups"]["triaxle"]["n_groups"] == 0
 
 

@@ -193,9 +193,9 @@ def test_a_sink_gets_every_kept_group_once_and_afresh_on_a_second_pass(tmp_path)
     vehicles.loc[later, "gross_weight"] += 10.0
     path = tmp_path / "site.mon"
     write_weighings(vehicles, path, "mon")
-    whole = observed_survey(path, "mon", min_group_load_t=10, chunk_bytes=WHOLE)
+    whole = observed_survey(path, "mon", min_group_load_kg=10_000, chunk_bytes=WHOLE)
     sink = Sink()
-    streamed = observed_survey(path, "mon", min_group_load_t=10, chunk_bytes=4_096, keep_groups=False, sink=sink)
+    streamed = observed_survey(path, "mon", min_group_load_kg=10_000, chunk_bytes=4_096, keep_groups=False, sink=sink)
     assert sink.starts == 2 and len(sink.parts) > 1  # read again with the file's resolution
     assert pd.concat(sink.parts, ignore_index=True).equals(whole.groups)
     assert streamed.to_dict() == whole.to_dict()

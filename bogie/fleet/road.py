@@ -41,10 +41,10 @@ def fleet_wear(
     runs: pd.DataFrame,
     legal_group: Mapping[str, float],
     legal_axle: float,
-    min_group_load: float,
+    min_group_load_kg: float,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
     resamples: int = 1000,
-    confidence: float = 0.95,
+    confidence_level: float = 0.95,
     seed: int = 0,
 ) -> pd.DataFrame:
     """The extra wear and hidden overloads of a fleet's laden groups, per protocol, size and suspension.
@@ -56,9 +56,9 @@ def fleet_wear(
         out and counted in ``n_failed`` of its cell.
     legal_group, legal_axle
         Legal load of each group size and of one axle [kg].
-    min_group_load
+    min_group_load_kg
         Smallest group load of a laden group [kg]; lighter succeeded readings are left out (not counted).
-    exponents, resamples, confidence, seed
+    exponents, resamples, confidence_level, seed
         As :func:`bogie.weighings.wear.wear_statistics`.
 
     Returns
@@ -67,13 +67,13 @@ def fleet_wear(
         :func:`~bogie.weighings.wear.wear_statistics`'s table by ``protocol``, ``group``, ``suspension``.
     """
     ok = runs["status"].astype(str).eq("ok")
-    laden = runs["group_load"].astype(float) / GRAVITY >= min_group_load
+    laden = runs["group_load"].astype(float) / GRAVITY >= min_group_load_kg
     kept = runs[~ok | laden].copy()
     for column in ("protocol", "group", "suspension"):
         kept[column] = kept[column].astype(str)
     return wear_statistics(
         kept, legal_group, legal_axle, by=["protocol", "group", "suspension"], unit_per_kg=GRAVITY,
-        exponents=exponents, resamples=resamples, confidence=confidence, seed=seed,
+        exponents=exponents, resamples=resamples, confidence_level=confidence_level, seed=seed,
     )  # fmt: skip
 
 
@@ -153,7 +153,7 @@ def design_savings(
     legal_axle: float,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
     resamples: int = 1000,
-    confidence: float = 0.95,
+    confidence_level: float = 0.95,
     seed: int = 0,
 ) -> pd.DataFrame:
     """What each way of acting saves against today's typical design, paired condition by condition.
@@ -164,7 +164,7 @@ def design_savings(
         As :func:`scenario_runs`.
     legal_group, legal_axle
         Legal load of each group size and of one axle [kg].
-    exponents, resamples, confidence, seed
+    exponents, resamples, confidence_level, seed
         As :func:`bogie.weighings.wear.wear_statistics`; the bootstrap resamples the conditions.
 
     Returns
@@ -188,7 +188,16 @@ def design_savings(
                 continue
             rows.append(
                 _paired_row(
-                    group, scenario, base, other, stream, legal_group, legal_axle, exponents, resamples, confidence
+                    group,
+                    scenario,
+                    base,
+                    other,
+                    stream,
+                    legal_group,
+                    legal_axle,
+                    exponents,
+                    resamples,
+                    confidence_level,
                 )
             )
     return pd.DataFrame(rows)
@@ -197,7 +206,7 @@ def design_savings(
 def _paired_row(
     group: str, scenario: str, base: pd.DataFrame, other: pd.DataFrame, stream: np.random.SeedSequence,
     legal_group: Mapping[str, float], legal_axle: float, exponents: Mapping[str, float], resamples: int,
-    confidence: float,
+    confidence_level: float,
 ) -> dict:  # fmt: skip
     """One row of :func:`design_savings`: the scenario's runs ``other`` against the baseline's ``base`` by condition."""
     common = base.index.intersection(other.index)
@@ -212,9 +221,9 @@ def _paired_row(
     lb = b[axle_columns(int(n.max()))].to_numpy(dtype=float) / GRAVITY
     rng = np.random.default_rng(stream)
     draws = rng.integers(0, len(good), (resamples, len(good))) if resamples else None
-    _wear_savings(row, la, lb, n, exponents, draws, confidence)
+    _wear_savings(row, la, lb, n, exponents, draws, confidence_level)
     legal = legal_group.get(group, math.nan)
-    _overload_savings(row, la, lb, n, legal, legal_axle, draws, confidence)
+    _overload_savings(row, la, lb, n, legal, legal_axle, draws, confidence_level)
     held = np.abs(b["held_tilt_deg"].to_numpy(dtype=float))
     row["held_tilt_deg_max"] = float(np.nanmax(held)) if scenario == "tilt_held" else math.nan
     return row
@@ -227,7 +236,7 @@ def _extra_wear(wear: Mapping[str, np.ndarray], idx=slice(None)) -> np.ndarray:
 
 def _wear_savings(
     row: dict, la: np.ndarray, lb: np.ndarray, n: np.ndarray, exponents: Mapping[str, float],
-    draws: np.ndarray | None, confidence: float,
+    draws: np.ndarray | None, confidence_level: float,
 ) -> None:  # fmt: skip
     """Add to ``row`` the extra wear of the loads ``la`` (baseline) and ``lb`` (scenario) [kg] and what is saved."""
     for name, k in exponents.items():
@@ -236,13 +245,13 @@ def _wear_savings(
         row[f"saved_wear_{name}"] = _extra_wear(wa) - _extra_wear(wb)
         if draws is not None:
             saved = _extra_wear(wa, draws) - _extra_wear(wb, draws)
-            low, high = percentile_interval(saved, confidence)
+            low, high = percentile_interval(saved, confidence_level)
             row[f"saved_wear_{name}_low"], row[f"saved_wear_{name}_high"] = low, high
 
 
 def _overload_savings(
     row: dict, la: np.ndarray, lb: np.ndarray, n: np.ndarray, legal: float, legal_axle: float,
-    draws: np.ndarray | None, confidence: float,
+    draws: np.ndarray | None, confidence_level: float,
 ) -> None:  # fmt: skip
     """Add to ``row`` the share of hidden overloads of the loads ``la`` and ``lb`` [kg] and what is saved [-]."""
     ha = hidden_overloads(la, n, legal, legal_axle)["hidden"].astype(float)
@@ -251,4 +260,6 @@ def _overload_savings(
     row["saved_hidden_overload"] = ha.mean() - hb.mean()
     if draws is not None:
         saved = ha[draws].mean(axis=1) - hb[draws].mean(axis=1)
-        row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = percentile_interval(saved, confidence)
+        row["saved_hidden_overload_low"], row["saved_hidden_overload_high"] = percentile_interval(
+            saved, confidence_level
+        )

@@ -318,7 +318,7 @@ def spilled_wear(
     legal_axle: float,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
     resamples: int = 1000,
-    confidence: float = 0.95,
+    confidence_level: float = 0.95,
     seed: int = 0,
     bootstrap_max_groups: int = BOOTSTRAP_MAX_GROUPS,
 ) -> pd.DataFrame:
@@ -328,7 +328,7 @@ def spilled_wear(
     count = spill.sizes
     present = [c for c in range(2) if count[c]]
     legal = {c: float(legal_group.get(SPILLED[c], math.nan)) for c in present}
-    large = {c: _LargeCell(exponents, legal_axle, confidence) for c in present
+    large = {c: _LargeCell(exponents, legal_axle, confidence_level) for c in present
              if resamples and count[c] > bootstrap_max_groups}  # fmt: skip
     small: dict[int, list] = {c: [] for c in present if c not in large}
     for size, _station, loads in spill.blocks():  # one pass: each size's groups in file order
@@ -348,6 +348,6 @@ def spilled_wear(
             row.update(large[c].figures())
         else:
             loads, n, legal_of = (np.concatenate(p) for p in zip(*small[c]))
-            row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence))
+            row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence_level))
         rows.append(row)
     return pd.DataFrame(rows)

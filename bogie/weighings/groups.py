@@ -18,6 +18,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.group_names import GROUP_OF_AXLES
+from bogie.settings import check_value
 from bogie.weighings._groups_core import split_groups
 from bogie.weighings._records import REL_TOL
 
@@ -46,13 +47,6 @@ GROUP_TABLE_COLUMNS: tuple[str, ...] = (
     "position", "group_load", *(f"axle_load_{i + 1}" for i in range(_GROUP_COLUMNS)),
     *(f"spacing_{i + 1}" for i in range(_GROUP_COLUMNS - 1)),
 )  # fmt: skip
-
-
-def _check(name: str, value: float, low: float, high: float, unit: str, low_open: bool = False) -> None:
-    bad = not (low < value <= high if low_open else low <= value <= high) or not np.isfinite(value)
-    if bad:
-        bracket = "(" if low_open else "["
-        raise ValueError(f"{name} = {value!r} {unit} outside the allowed range {bracket}{low:g}, {high:g}] {unit}")
 
 
 def grouping_rule(rule: str, group_spacing_m: float = GROUP_SPACING_M) -> str:
@@ -92,7 +86,7 @@ def axle_groups(
         ``group_load`` [kg], ``axle_load_1..3`` [kg] (front first; NaN past the group's axles or for a group of
         more than three) and ``spacing_1..2`` [m].
     """
-    _check("group_spacing_m", group_spacing_m, 0.0, 5.0, "m", low_open=True)
+    check_value("group_spacing_m", group_spacing_m, "m", low=0.0, high=5.0, low_open=True)
     if rule not in GROUPING_RULES:
         raise ValueError(f"rule = {rule!r} unknown; allowed: {', '.join(GROUPING_RULES)}")
     columns = list(GROUP_TABLE_COLUMNS)
@@ -134,7 +128,8 @@ def _labels(codes: np.ndarray, labels: Sequence[str]) -> pd.Series:
 
 def filter_groups(
     groups: pd.DataFrame,
-    min_group_load_t: float = 0.0,
+    *,
+    min_group_load_kg: float = 0.0,
     position: str = "all",
     speed_kmh: Sequence[float] | None = None,
 ) -> pd.DataFrame:
@@ -144,24 +139,25 @@ def filter_groups(
     ----------
     groups
         The table of :func:`axle_groups`.
-    min_group_load_t
-        Smallest group load kept, in [0, 100] [t]: laden groups only (e.g. 15 t for tri-axles).
+    min_group_load_kg
+        Smallest group load kept, in [0, 100 000] [kg]: laden groups only (e.g. 15 000 kg for tri-axles). The
+        filters are keywords only (issue 42 made the load kilograms, as the records hold it; it was tonnes).
     position
         ``all``, ``steer``, ``drive`` or ``trailer``.
     speed_kmh
         (lowest, highest) speed kept, inclusive, 0 <= lowest <= highest <= 160 [km/h]; None keeps every speed,
         a range drops groups of unknown speed.
     """
-    _check("min_group_load_t", min_group_load_t, 0.0, 100.0, "t")
+    check_value("min_group_load_kg", min_group_load_kg, "kg", low=0.0, high=100_000.0)
     if position not in POSITIONS:
         raise ValueError(f"position = {position!r} unknown; allowed: {', '.join(POSITIONS)}")
-    keep = groups["group_load"].to_numpy() >= 1000.0 * min_group_load_t
+    keep = groups["group_load"].to_numpy() >= min_group_load_kg
     if position != "all":
         keep &= (groups["position"] == position).to_numpy(dtype=bool)
     if speed_kmh is not None:
         low, high = speed_kmh
-        _check("speed_kmh lowest", low, 0.0, 160.0, "km/h")
-        _check("speed_kmh highest", high, low, 160.0, "km/h")
+        check_value("speed_kmh lowest", low, "km/h", low=0.0, high=160.0)
+        check_value("speed_kmh highest", high, "km/h", low=low, high=160.0)
         speed = 3.6 * groups["speed"].to_numpy(dtype=float)
         # 1e-9 km/h: a speed read in km/h comes back from m/s a rounding error off, and the bounds are inclusive
         keep &= (speed >= low - 1e-9) & (speed <= high + 1e-9)

@@ -124,7 +124,8 @@ class ObservedSurvey:
 def observed_survey(
     path: str | Path,
     fmt: str,
-    min_group_load_t: float = 0.0,
+    *,
+    min_group_load_kg: float = 0.0,
     group_spacing_m: float = GROUP_SPACING_M,
     position: str = "all",
     speed_kmh: Sequence[float] | None = None,
@@ -142,10 +143,8 @@ def observed_survey(
     ----------
     path, fmt
         The file and its format (:func:`bogie.weighings.readers.read_weighings`).
-    min_group_load_t
-        Smallest group load kept [t].
-    group_spacing_m
-        Largest spacing of two axles of one group [m].
+    min_group_load_kg, group_spacing_m
+        Smallest group load kept [kg]; largest spacing of two axles of one group [m]. Keywords only (issue 42).
     position, speed_kmh
         ``all``, ``steer``, ``drive`` or ``trailer``; (lowest, highest) speed kept [km/h], None keeping every speed.
     legal_group_kg, legal_axle_kg
@@ -170,7 +169,7 @@ def observed_survey(
     ValueError
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
-    tally = _Tally(min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
+    tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
     legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
     try:
         # the groups held in memory: a file past MAX_FILE_BYTES refused; spilled to disk: any length
@@ -216,12 +215,12 @@ def _settings(
 ) -> dict[str, Any]:
     """What the survey was computed with (:attr:`ObservedSurvey.settings`): the file, its format, the resolution's
     source, the filters and grouping rule of ``tally``, the legal loads and the damage exponents."""
-    min_group_load_t, position, speed_kmh = tally.filters
+    min_group_load_kg, position, speed_kmh = tally.filters
     group_spacing_m, grouping = tally.grouping
     return {
         "file": str(path), "format": read.format, "format_asked": fmt,
         "resolution": read.describe_resolution(),
-        "filters": {"min_group_load_t": min_group_load_t, "position": position,
+        "filters": {"min_group_load_kg": min_group_load_kg, "position": position,
                     "speed_kmh": None if speed_kmh is None else [float(v) for v in speed_kmh]},
         "grouping": grouping_rule(grouping, group_spacing_m),
         "legal_loads_kg": {
@@ -239,8 +238,8 @@ class _Tally:
     ``keep_groups`` False, the surveyed sizes' axles, loads and station written to a spill on disk), and the
     stations."""
 
-    def __init__(self, min_group_load_t, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink) -> None:
-        self.filters = (min_group_load_t, position, speed_kmh)
+    def __init__(self, min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink) -> None:
+        self.filters = (min_group_load_kg, position, speed_kmh)
         self.grouping = (group_spacing_m, grouping)
         self.keep_groups = keep_groups
         self.sink = sink
@@ -281,7 +280,8 @@ class _Tally:
             at = index == k
             for label, mask in sizes.items():
                 self.positions[where][label] += int((at & mask).sum())
-        groups = filter_groups(every, *self.filters)
+        min_group_load_kg, position, speed_kmh = self.filters
+        groups = filter_groups(every, min_group_load_kg=min_group_load_kg, position=position, speed_kmh=speed_kmh)
         self.n_kept += len(groups)
         if self.sink is not None:
             self.sink.write(groups)

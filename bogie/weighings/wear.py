@@ -166,7 +166,7 @@ def wear_statistics(
     unit_per_kg: float = 1.0,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
     resamples: int = 1000,
-    confidence: float = 0.95,
+    confidence_level: float = 0.95,
     seed: int = 0,
     bootstrap_max_groups: int = BOOTSTRAP_MAX_GROUPS,
 ) -> pd.DataFrame:
@@ -190,7 +190,7 @@ def wear_statistics(
         Name -> damage exponent k (:data:`DAMAGE_EXPONENTS`).
     resamples
         Bootstrap resamples of the groups within each cell for the wear intervals (0: none) [-].
-    confidence
+    confidence_level
         Level of the intervals (percentile bootstrap; Wilson's for the overload share) [-].
     seed
         Seed of the bootstrap (numpy's default generator; each cell draws from its own child stream) [-].
@@ -208,17 +208,17 @@ def wear_statistics(
         within their legal load with an axle over the axle's) with ``_low`` and ``_high``, ``share_group_over``.
     """
     keys = [by] if isinstance(by, str) else list(by)
-    width = _checked_width(groups, confidence, resamples)
+    width = _checked_width(groups, confidence_level, resamples)
     ok, cell_arrays = _cell_source(groups, width, legal_group, unit_per_kg)
-    figures = (exponents, legal_axle, resamples, confidence, bootstrap_max_groups)
+    figures = (exponents, legal_axle, resamples, confidence_level, bootstrap_max_groups)
     return pd.DataFrame(_cell_rows(groups, keys, ok, cell_arrays, seed, figures))
 
 
-def _checked_width(groups: pd.DataFrame, confidence: float, resamples: int) -> int:
-    """The axle columns of :func:`wear_statistics`' ``groups`` [-], once its ``confidence``, ``resamples`` and
+def _checked_width(groups: pd.DataFrame, confidence_level: float, resamples: int) -> int:
+    """The axle columns of :func:`wear_statistics`' ``groups`` [-], once its ``confidence_level``, ``resamples`` and
     columns are checked (a ValueError naming what is wrong)."""
-    if not 0.0 < confidence < 1.0:
-        raise ValueError(f"confidence = {confidence!r}: must lie in (0, 1) [-]")
+    if not 0.0 < confidence_level < 1.0:
+        raise ValueError(f"confidence_level = {confidence_level!r}: must lie in (0, 1) [-]")
     if resamples < 0:
         raise ValueError(f"resamples = {resamples!r}: must be 0 or more [-]")
     width = _width(groups)
@@ -252,9 +252,9 @@ def _cell_rows(
     groups: pd.DataFrame, keys: list, ok: np.ndarray, cell_arrays: Callable, seed: int, figures: tuple
 ) -> list[dict]:
     """:func:`wear_statistics`' rows, one per cell of ``groups`` by ``keys`` (sorted), each cell's bootstrap drawn
-    from its own child stream of ``seed``; ``figures``: (exponents, legal_axle, resamples, confidence,
+    from its own child stream of ``seed``; ``figures``: (exponents, legal_axle, resamples, confidence_level,
     bootstrap_max_groups)."""
-    exponents, legal_axle, resamples, confidence, bootstrap_max_groups = figures
+    exponents, legal_axle, resamples, confidence_level, bootstrap_max_groups = figures
     root = np.random.SeedSequence(seed)
     rows = []
     cells = groups.groupby(keys, observed=True, sort=True).indices
@@ -267,16 +267,16 @@ def _cell_rows(
         row["n_failed"] = int(len(rows_all) - len(index))
         if resamples and len(index) > bootstrap_max_groups:
             blocks = (cell_arrays(index[start : start + WEAR_BLOCK]) for start in range(0, len(index), WEAR_BLOCK))
-            row.update(_large_cell(blocks, exponents, legal_axle, confidence))
+            row.update(_large_cell(blocks, exponents, legal_axle, confidence_level))
         else:
-            row.update(_small_cell(*cell_arrays(index), stream, exponents, legal_axle, resamples, confidence))
+            row.update(_small_cell(*cell_arrays(index), stream, exponents, legal_axle, resamples, confidence_level))
         rows.append(row)
     return rows
 
 
 def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.SeedSequence,
                 exponents: Mapping[str, float], legal_axle: float, resamples: int,
-                confidence: float) -> dict[str, float]:  # fmt: skip
+                confidence_level: float) -> dict[str, float]:  # fmt: skip
     """The figures of a cell of :data:`BOOTSTRAP_MAX_GROUPS` groups or fewer (or of any size without resamples):
     the extra wear with its percentile bootstrap intervals (drawn from ``stream``), and the hidden overloads."""
     m = len(n)
@@ -305,9 +305,11 @@ def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.Se
         row[f"extra_wear_{name}"], row[f"extra_sa_per_1000_{name}"] = share, per_1000
         if boot is not None:
             shares, extra = np.concatenate(boot[name][0]), np.concatenate(boot[name][1])
-            row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = percentile_interval(shares, confidence)
+            row[f"extra_wear_{name}_low"], row[f"extra_wear_{name}_high"] = percentile_interval(
+                shares, confidence_level
+            )
             row[f"extra_sa_per_1000_{name}_low"], row[f"extra_sa_per_1000_{name}_high"] = percentile_interval(
-                extra, confidence
+                extra, confidence_level
             )
         else:
             for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
@@ -315,14 +317,14 @@ def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.Se
     known = np.isfinite(legal)
     over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
     row.update(_overload_figures(int(over["hidden"].sum()), int(over["group_over"].sum()), int(known.sum()),
-                                 confidence))  # fmt: skip
+                                 confidence_level))  # fmt: skip
     return row
 
 
-def _overload_figures(hidden: int, group_over: int, judged: int, confidence: float) -> dict[str, float]:
+def _overload_figures(hidden: int, group_over: int, judged: int, confidence_level: float) -> dict[str, float]:
     """The hidden overloads' count, share and Wilson interval, and the share of groups over their legal load, of
     ``judged`` groups (those of a size with a legal load)."""
-    (low,), (high,) = wilson_interval(np.array([hidden]), np.array([judged]), confidence)
+    (low,), (high,) = wilson_interval(np.array([hidden]), np.array([judged]), confidence_level)
     return {
         "n_hidden": hidden, "share_hidden_overload": hidden / judged if judged else math.nan,
         "share_hidden_overload_low": float(low), "share_hidden_overload_high": float(high),
@@ -363,7 +365,7 @@ WEAR_BLOCK = 1 << 18
 
 
 def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: Mapping[str, float],
-                legal_axle: float, confidence: float) -> dict[str, float]:  # fmt: skip
+                legal_axle: float, confidence_level: float) -> dict[str, float]:  # fmt: skip
     """The figures of a cell of more than :data:`BOOTSTRAP_MAX_GROUPS` groups, from its ``blocks`` of (loads [kg],
     axles, legal group load [kg]) in order, in bounded memory:
     the extra wear R = sum D / sum E - 1 and 1000 mean(D - E), with the delta method's normal intervals
@@ -371,7 +373,7 @@ def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: M
     error is sd(D - (R + 1) E) / (sqrt(m) mean E), Cochran, Sampling Techniques, 3rd ed. 1977, section 6.3, the
     ratio estimator; the mean's is sd(D - E) / sqrt(m)), and the hidden overloads. The moments are Welford's, one
     group at a time in a compiled loop (:func:`_wear_moments`)."""
-    cell = _LargeCell(exponents, legal_axle, confidence)
+    cell = _LargeCell(exponents, legal_axle, confidence_level)
     for loads, n, legal in blocks:
         cell.add(loads, n, legal)
     return cell.figures()
@@ -380,12 +382,12 @@ def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: M
 class _LargeCell:
     """:func:`_large_cell`'s sums, a block at a time (:meth:`add`), and its figures (:meth:`figures`)."""
 
-    def __init__(self, exponents: Mapping[str, float], legal_axle: float, confidence: float) -> None:
+    def __init__(self, exponents: Mapping[str, float], legal_axle: float, confidence_level: float) -> None:
         self.names = list(exponents)
         self.ks = np.array([float(exponents[name]) for name in self.names])
         self.moments = np.zeros((len(self.names), 6))
         self.hidden = self.group_over = self.judged = 0
-        self.legal_axle, self.confidence = legal_axle, confidence
+        self.legal_axle, self.confidence_level = legal_axle, confidence_level
 
     def add(self, loads: NDArray, n: NDArray, legal: NDArray) -> None:
         """Add the groups of a block, in order: loads [kg], axles, legal group load [kg]."""
@@ -397,7 +399,7 @@ class _LargeCell:
         self.judged += int(known.sum())
 
     def figures(self) -> dict[str, float]:
-        z = statistics.NormalDist().inv_cdf(0.5 + self.confidence / 2.0)
+        z = statistics.NormalDist().inv_cdf(0.5 + self.confidence_level / 2.0)
         out: dict[str, float] = {}
         for j, name in enumerate(self.names):
             count, mean_d, mean_e, m2_d, m2_e, c_de = self.moments[j]
@@ -413,7 +415,7 @@ class _LargeCell:
             out[f"extra_wear_{name}_high"] = share + z * se_ratio
             out[f"extra_sa_per_1000_{name}_low"] = mean - z * se_mean
             out[f"extra_sa_per_1000_{name}_high"] = mean + z * se_mean
-        out.update(_overload_figures(self.hidden, self.group_over, self.judged, self.confidence))
+        out.update(_overload_figures(self.hidden, self.group_over, self.judged, self.confidence_level))
         return out
 
 

@@ -95,7 +95,7 @@ def _statistics(loads: np.ndarray, n: int) -> np.ndarray:
 
 
 def attribution(
-    table: Table, values: Mapping[str, float], min_load_kg: float, static: StaticProtocol,
+    table: Table, values: Mapping[str, float], min_group_load_kg: float, static: StaticProtocol,
     weight_step_kg: float | None = None, executor: Executor | Mapper | None = None, seed: int = 0,
     resamples: int = 200, confidence_level: float = 0.9,
 ) -> tuple[pd.DataFrame, dict[str, Any]]:  # fmt: skip
@@ -105,7 +105,7 @@ def attribution(
     ----------
     table, values
         The calibration's table (a WIM one) and the calibrated fleet's values (every quantity).
-    min_load_kg
+    min_group_load_kg
         The survey's smallest group load [kg], applied to the ``as_observed`` readings.
     static
         The static weighing's settings: the readings without dynamics.
@@ -132,7 +132,7 @@ def attribution(
         for kind in ("steel", "air"):
             sel = (table.size == size) & (kinds == kind)
             obs = loads["as_observed"][sel, :n]
-            laden = np.all(np.isfinite(obs) & (obs > 0.0), axis=1) & (np.nansum(obs, axis=1) >= min_load_kg)
+            laden = np.all(np.isfinite(obs) & (obs > 0.0), axis=1) & (np.nansum(obs, axis=1) >= min_group_load_kg)
             ok = laden.copy()
             for name in SCENARIOS:
                 w = loads[name][sel, :n]

@@ -101,14 +101,14 @@ def simulate_fleet(
     return frame
 
 
-def filtered(frame: pd.DataFrame, min_load_kg: float) -> pd.DataFrame:
-    """The groups a survey keeps: weighed, every wheel on the road, laden (at least ``min_load_kg`` [kg])."""
+def filtered(frame: pd.DataFrame, min_group_load_kg: float) -> pd.DataFrame:
+    """The groups a survey keeps: weighed, every wheel on the road, laden (at least ``min_group_load_kg`` [kg])."""
     n = frame["n_axles"].to_numpy()
     loads = frame[[f"axle_load_{i + 1}" for i in range(3)]].to_numpy()
     present = np.arange(3)[None, :] < n[:, None]
     ok = np.all(np.where(present, np.isfinite(loads) & (loads > 0.0), True), axis=1)
     total = np.nansum(np.where(present, loads, 0.0), axis=1)
-    return frame[ok & (total >= min_load_kg)].reset_index(drop=True)
+    return frame[ok & (total >= min_group_load_kg)].reset_index(drop=True)
 
 
 def groups_stats(loads_by_size: Mapping[str, np.ndarray]) -> dict[str, Any]:
@@ -152,14 +152,14 @@ def observed_distance(
 
 
 def ablation(
-    table: Table, values: Mapping[str, float], min_load_kg: float, executor: Executor | Mapper | None = None
+    table: Table, values: Mapping[str, float], min_group_load_kg: float, executor: Executor | Mapper | None = None
 ) -> pd.DataFrame:
-    """The calibrated fleet's steel groups with each inhibitor removed, groups of at least ``min_load_kg`` [kg]: per
-    variant and size, ``n_groups``, the mean max deviation [%], the share outside 5 % [-] and the points [%] the
-    variant buys against the baseline."""
+    """The calibrated fleet's steel groups with each inhibitor removed, groups of at least ``min_group_load_kg``
+    [kg]: per variant and size, ``n_groups``, the mean max deviation [%], the share outside 5 % [-] and the points
+    [%] the variant buys against the baseline."""
     rows = []
     for variant in ("baseline", *INHIBITORS, "all"):
-        frame = filtered(simulate_fleet(table, values, variant, steel_only=True, executor=executor), min_load_kg)
+        frame = filtered(simulate_fleet(table, values, variant, steel_only=True, executor=executor), min_group_load_kg)
         for size, n in SIZES.items():
             loads = frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(n)]].to_numpy()
             if len(loads) == 0:
@@ -184,8 +184,9 @@ def ablation(
 
 # ---- held out, and the whole calibration of a survey ---------------------------------------------------------------
 def held_out(
-    table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float], min_load_kg: float,
-    executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None,
+    table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float],
+    min_group_load_kg: float, executor: Executor | Mapper | None = None,
+    progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:  # fmt: skip
     """A fit on the even records, the odd ones held against the fleet it calibrates (values rounded for a metrics
     file): the half's fitted values, its distance, the held-out distance of the odd half to the fleet simulated
@@ -194,12 +195,14 @@ def held_out(
     even, odd = observed.half(0), observed.half(1)
     held: dict[str, Any] = {"fit_on": "even records", "held_out": "odd records"}
     try:
-        half = make_problem(table, even, settings.fit, base, min_load_kg)
+        half = make_problem(table, even, settings.fit, base, min_group_load_kg)
         theta, d_half, _ = fit(half, settings.seed, settings.maxiter, settings.popsize, progress=progress,
                                label="half fit")  # fmt: skip
         values_half = _values(theta, half.fitted, half.base)
         step = observed.weight_step_kg
-        direct_half = filtered(simulate_fleet(table, values_half, weight_step_kg=step, executor=executor), min_load_kg)
+        direct_half = filtered(
+            simulate_fleet(table, values_half, weight_step_kg=step, executor=executor), min_group_load_kg
+        )
         odd_q = {k: observed_quantities(v) for k, v in odd.loads.items() if k in half.obs and len(v)}
         held.update(
             fitted={q: json_number(values_half[q]) for q in half.fitted},
@@ -221,7 +224,7 @@ def held_out(
 
 def calibrate_survey(
     table: Table, observed: Observed, settings: CalibrationSettings, base: Mapping[str, float],
-    min_load_kg: float = 0.0, executor: Executor | Mapper | None = None,
+    min_group_load_kg: float = 0.0, executor: Executor | Mapper | None = None,
     progress: Callable[[str], None] | None = None, static: StaticProtocol | None = None,
 ) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:  # fmt: skip
     """The whole calibration of an observed survey: the fit, its intervals and trade-offs, and its checks.
@@ -236,7 +239,7 @@ def calibrate_survey(
         The quantities fitted, their bounds, the optimiser's and the bootstrap's settings.
     base
         Every quantity's value in the fleet (:func:`bogie.fleet.calibration.problem.base_values`), kept if not fitted.
-    min_load_kg
+    min_group_load_kg
         Smallest group load kept [kg], the survey's own filter.
     executor
         Where the direct simulations (the checks) are weighed (:func:`~bogie.fleet.calibration.table.weigh_readings`).
@@ -263,30 +266,32 @@ def calibrate_survey(
         If the arguments are not what :func:`bogie.fleet.calibration.problem.make_problem` wants.
     """
     progress = progress or _quiet
-    problem = make_problem(table, observed, settings.fit, base, min_load_kg)
+    problem = make_problem(table, observed, settings.fit, base, min_group_load_kg)
     result = calibrate(problem, settings, progress)
     step = observed.weight_step_kg
-    direct = filtered(simulate_fleet(table, result.values, weight_step_kg=step, executor=executor), min_load_kg)
-    held = held_out(table, observed, settings, base, min_load_kg, executor, progress)
-    abl = ablation(table, result.values, min_load_kg, executor)
+    direct = filtered(simulate_fleet(table, result.values, weight_step_kg=step, executor=executor), min_group_load_kg)
+    held = held_out(table, observed, settings, base, min_group_load_kg, executor, progress)
+    abl = ablation(table, result.values, min_group_load_kg, executor)
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
     metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
     by_cause = None
     if static is not None and table.protocol == "wim":
-        by_cause = _attribute(table, result.values, min_load_kg, static, step, executor, settings, progress, metrics)
+        by_cause = _attribute(
+            table, result.values, min_group_load_kg, static, step, executor, settings, progress, metrics
+        )
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
     return metrics, _tables(result, direct, abl, by_cause)
 
 
 def _attribute(
-    table: Table, values: Mapping[str, float], min_load_kg: float, static: StaticProtocol, step: float | None,
+    table: Table, values: Mapping[str, float], min_group_load_kg: float, static: StaticProtocol, step: float | None,
     executor: Executor | Mapper | None, settings: CalibrationSettings, progress: Callable[[str], None],
     metrics: dict[str, Any],
 ) -> pd.DataFrame:  # fmt: skip
     """The calibrated fleet's inequality by cause (:func:`attribution`); its metrics go to metrics["attribution"]."""
     progress("calibrate: attribution, the calibrated fleet weighed four ways")
     by_cause, metrics["attribution"] = attribution(
-        table, values, min_load_kg, static, step, executor, settings.seed,
+        table, values, min_group_load_kg, static, step, executor, settings.seed,
         max(settings.bootstrap_resamples, 200), settings.confidence_level,
     )  # fmt: skip
     return by_cause

@@ -75,7 +75,7 @@ class SyntheticLikelihood:
 
     def simulated(self, theta: np.ndarray) -> np.ndarray:
         p = self.problem
-        sim = simulated(p.table, _values(theta, p.fitted, p.base), p.min_load_kg, None, p.weight_step_kg)
+        sim = simulated(p.table, _values(theta, p.fitted, p.base), p.min_group_load_kg, None, p.weight_step_kg)
         return _sim_summaries(p, sim)
 
     def __call__(self, theta: np.ndarray) -> float:
@@ -100,7 +100,7 @@ def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> Synth
     sim_draws = []
     for _ in range(BOOTSTRAP):
         slots = rng.multinomial(n, np.full(n, 1.0 / n)).astype(float)
-        sim = simulated(problem.table, values, problem.min_load_kg, slots, problem.weight_step_kg)
+        sim = simulated(problem.table, values, problem.min_group_load_kg, slots, problem.weight_step_kg)
         sim_draws.append(_sim_summaries(problem, sim))
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
     cov = c_obs + c_sim

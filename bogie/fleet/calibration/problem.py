@@ -131,11 +131,11 @@ class Simulated:
 
 
 def simulated(
-    table: Table, values: Mapping[str, float], min_load_kg: float, slot_counts: np.ndarray | None = None,
+    table: Table, values: Mapping[str, float], min_group_load_kg: float, slot_counts: np.ndarray | None = None,
     weight_step_kg: float | None = None,
 ) -> Simulated:  # fmt: skip
     """The simulated survey: the calibration groups that pass the filters (every axle read and loaded, the group at
-    least ``min_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
+    least ``min_group_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
     bootstrap count ``slot_counts``, None: 1; a steel group also by its density ratio under the fitted inhibitor
     distributions, :func:`~bogie.fleet.calibration.table.steel_weights`); every reading first read at the observed
     file's resolution ``weight_step_kg`` [kg] (None: as it is)."""
@@ -151,7 +151,9 @@ def simulated(
         steel = counts[sel] * moved[sel]
         steel = steel * (counts[sel].sum() / steel.sum()) if steel.sum() > 0.0 else steel
         w = np.concatenate([(1.0 - share) * steel, share * counts[sel]])
-        keep = np.all(np.isfinite(loads), axis=1) & np.all(loads > 0.0, axis=1) & (loads.sum(axis=1) >= min_load_kg)
+        keep = (
+            np.all(np.isfinite(loads), axis=1) & np.all(loads > 0.0, axis=1) & (loads.sum(axis=1) >= min_group_load_kg)
+        )
         keep &= w > 0.0
         quantities[size] = observed_quantities(loads[keep]) if keep.any() else np.zeros((0, n + 1))
         weights[size] = w[keep]
@@ -220,7 +222,7 @@ class Problem:
     fitted: tuple[str, ...]
     bounds: tuple[tuple[float, float], ...]
     base: dict[str, float]
-    min_load_kg: float
+    min_group_load_kg: float
     weight_step_kg: float | None = None  # the observed file's resolution [kg]
 
     def objective(self, obs_weights: Mapping[str, np.ndarray], slot_counts: np.ndarray | None) -> Callable:
@@ -229,7 +231,7 @@ class Problem:
 
         def f(theta: np.ndarray) -> float:
             values = _values(theta, self.fitted, self.base)
-            sim = simulated(self.table, values, self.min_load_kg, slot_counts, self.weight_step_kg)
+            sim = simulated(self.table, values, self.min_group_load_kg, slot_counts, self.weight_step_kg)
             return _sorted_distance(observed, sim, self.scales)
 
         return f
@@ -238,7 +240,9 @@ class Problem:
         return {k: np.ones(len(v)) for k, v in self.obs.items()}
 
 
-def _check_problem(table: Table, fit: Mapping[str, Sequence[float]], base: Mapping[str, float], min_load_kg: float):
+def _check_problem(
+    table: Table, fit: Mapping[str, Sequence[float]], base: Mapping[str, float], min_group_load_kg: float
+):
     check_fit(fit)
     if table.protocol != "wim" and any(q in WIM_QUANTITIES for q in fit):
         wim_only = [q for q in fit if q in WIM_QUANTITIES]
@@ -265,13 +269,17 @@ def _check_problem(table: Table, fit: Mapping[str, Sequence[float]], base: Mappi
     missing = [q for q in ORDER if q not in base]
     if missing:
         raise CalibrationError(f"base: no value for {', '.join(missing)} (base_values gives every quantity)")
-    if isinstance(min_load_kg, bool) or not isinstance(min_load_kg, (int, float)) or not 0.0 <= min_load_kg < math.inf:
-        raise CalibrationError(f"min_load_kg = {min_load_kg!r}: must be a finite number >= 0 [kg]")
+    if (
+        isinstance(min_group_load_kg, bool)
+        or not isinstance(min_group_load_kg, (int, float))
+        or not 0.0 <= min_group_load_kg < math.inf
+    ):
+        raise CalibrationError(f"min_group_load_kg = {min_group_load_kg!r}: must be a finite number >= 0 [kg]")
 
 
 def make_problem(
     table: Table, observed: Observed, fit: Mapping[str, Sequence[float]], base: Mapping[str, float],
-    min_load_kg: float = 0.0,
+    min_group_load_kg: float = 0.0,
 ) -> Problem:  # fmt: skip
     """The fit of the quantities ``fit`` to ``observed`` on ``table`` (sizes with fewer than :data:`MIN_GROUPS`
     groups left out).
@@ -286,7 +294,7 @@ def make_problem(
         Quantity -> (low, high), in the unit of its name (:class:`CalibrationSettings`' ``fit``).
     base
         Every quantity's value in the fleet (:func:`base_values`): what an unfitted quantity keeps.
-    min_load_kg
+    min_group_load_kg
         Smallest simulated group load kept [kg]: the survey's own filter.
 
     Raises
@@ -294,10 +302,10 @@ def make_problem(
     CalibrationError
         If ``fit`` is not as :func:`check_fit` wants, fits a WIM quantity on a static table, the tilt's centre or
         spread of a tilt distribution that is not a TruncNormal, the site roughness outside the table's levels; if
-        ``base`` lacks a quantity or ``min_load_kg`` is not a finite number >= 0; if no size has
+        ``base`` lacks a quantity or ``min_group_load_kg`` is not a finite number >= 0; if no size has
         :data:`MIN_GROUPS` observed groups (a held-out half of a small survey).
     """
-    _check_problem(table, fit, base, min_load_kg)
+    _check_problem(table, fit, base, min_group_load_kg)
     obs = {k: observed_quantities(v) for k, v in observed.loads.items() if len(v) >= MIN_GROUPS}
     if not obs:  # nothing to fit to: the distance would be 0 whatever the values
         counts = ", ".join(f"{len(v)} {k}" for k, v in observed.loads.items())
@@ -305,7 +313,7 @@ def make_problem(
     scales = {k: np.maximum(np.std(v, axis=0), 1e-9) for k, v in obs.items()}
     fitted = tuple(q for q in ORDER if q in fit)
     bounds = tuple(tuple(fit[q]) for q in fitted)
-    return Problem(table, obs, scales, fitted, bounds, dict(base), min_load_kg, observed.weight_step_kg)
+    return Problem(table, obs, scales, fitted, bounds, dict(base), min_group_load_kg, observed.weight_step_kg)
 
 
 def fit(

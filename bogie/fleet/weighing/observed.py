@@ -75,7 +75,7 @@ def with_inequality(groups: pd.DataFrame) -> pd.DataFrame:
 
 
 def simulated_readings(
-    runs: pd.DataFrame, min_group_load: float = 0.0, position: str = "all", weight_step_kg: float | None = None
+    runs: pd.DataFrame, min_group_load_kg: float = 0.0, position: str = "all", weight_step_kg: float | None = None
 ) -> tuple[pd.DataFrame, dict[str, dict[str, int]]]:
     """The fleet's readings under the observed survey's filters, and what was left out, per protocol.
 
@@ -87,7 +87,7 @@ def simulated_readings(
     ----------
     runs
         The fleet study's runs (every protocol, failed rows included).
-    min_group_load
+    min_group_load_kg
         Smallest group load kept [kg] (the runs' loads are in N: kg x GRAVITY).
     position
         The survey's position filter: ``all`` and ``trailer`` keep every simulated group, ``steer`` and ``drive``
@@ -102,7 +102,7 @@ def simulated_readings(
         The columns of :data:`SIMULATED_COLUMNS`, loads in kg, sorted by protocol and sample.
     counts : dict
         Per protocol: ``n_runs``, ``n_failed``, ``n_airborne`` (a WIM reading with a wheel in the air), ``n_light``
-        (below ``min_group_load``), ``n_position`` (left out by the position filter) and ``n_kept``.
+        (below ``min_group_load_kg``), ``n_position`` (left out by the position filter) and ``n_kept``.
     """
     failed = runs["status"].astype(str) != "ok"
     airborne = ~failed & runs["wheel_airborne"].fillna(False).astype(bool)
@@ -117,7 +117,7 @@ def simulated_readings(
         group_load = np.nansum(loads, axis=1)
     else:
         group_load = runs["group_load"].to_numpy(dtype=float) / GRAVITY
-    light = usable & (group_load < min_group_load)
+    light = usable & (group_load < min_group_load_kg)
     by_position = usable & ~light & (position not in SIMULATED_POSITIONS)
     kept = usable & ~light & ~by_position
     counts = _protocol_counts(runs["protocol"].astype(str), failed, airborne, light, by_position, kept)
@@ -165,7 +165,7 @@ def simulated_statistics(readings: pd.DataFrame, counts: Mapping[str, Mapping[st
 
 
 def compare(
-    runs: pd.DataFrame, observed: ObservedSurvey, min_group_load_t: float = 0.0, position: str = "all"
+    runs: pd.DataFrame, observed: ObservedSurvey, *, min_group_load_kg: float = 0.0, position: str = "all"
 ) -> pd.DataFrame:
     """The survey statistics of an observed survey and of the simulated fleet's readings, one row per side and group.
 
@@ -175,8 +175,8 @@ def compare(
         The fleet's runs (:func:`bogie.fleet.weigh_fleet`), every protocol, failed rows included (counted, not used).
     observed
         The observed survey (:func:`bogie.weighings.survey.observed_survey`), filtered as wanted.
-    min_group_load_t
-        Smallest simulated group load kept [t]: the observed survey's own filter, for a like-for-like comparison.
+    min_group_load_kg
+        Smallest simulated group load kept [kg]: the observed survey's own filter, for a like-for-like comparison.
     position
         The observed survey's position filter (``all``, ``trailer``: every simulated group; ``steer``, ``drive``:
         none).
@@ -189,7 +189,7 @@ def compare(
         in kg and %, the load-share quantiles); the simulated loads are read at the observed file's weight resolution
         first (:func:`bogie.weighings.stats.at_resolution`).
     """
-    readings, _ = simulated_readings(runs, 1000.0 * min_group_load_t, position, observed.read.weight_step_kg)
+    readings, _ = simulated_readings(runs, min_group_load_kg, position, observed.read.weight_step_kg)
     sides = [observed.statistics.assign(source="observed")]
     for protocol, sub in readings.groupby("protocol", sort=True):
         sides.append(survey_statistics(sub, by="group").assign(source=protocol))
