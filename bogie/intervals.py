@@ -21,7 +21,7 @@ _Z = {0.9: 1.6448536269514722, 0.95: 1.959963984540054, 0.99: 2.5758293035489004
 
 
 def _z(confidence_level: float) -> float:
-    """scipy.special.ndtri(0.5 + 0.5 confidence): the two-sided normal quantile of ``confidence``."""
+    """scipy.special.ndtri(0.5 + 0.5 confidence_level): the two-sided normal quantile of ``confidence_level``."""
     if confidence_level in _Z:
         return _Z[confidence_level]
     from scipy.special import ndtri

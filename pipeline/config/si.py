@@ -154,7 +154,10 @@ def config_class(
         text = f"{info.description} " if info.description else ""
         lines.append(f"{attr}\n    {text}(params.yaml ``{key}``; {what}{'; None if not given' if optional else ''})")
     for attr, text in extra:
-        fields.append((attr, Any, dataclasses.field(default=None, metadata={"derived": True})))
+        # not compared nor hashed: it follows from the sections it is made of (and may hold unhashable mappings)
+        fields.append(
+            (attr, Any, dataclasses.field(default=None, compare=False, hash=False, metadata={"derived": True}))
+        )
         lines.append(f"{attr}\n    {text}")
     section = getattr(model, "__doc__", "") or ""
     doc = (
