@@ -30,10 +30,7 @@ __all__ = ["as_json", "main"]
 def as_json(value: Any) -> Any:
     """A validated configuration (dataclasses, maps, tuples) as plain JSON values; a distribution gets its ``kind``."""
     if dataclasses.is_dataclass(value) and not isinstance(value, type):
-        # an attribute derived from other sections (config.fleet_study) would repeat them: left out
-        fields = {
-            f.name: as_json(getattr(value, f.name)) for f in dataclasses.fields(value) if not f.metadata.get("derived")
-        }
+        fields = {f.name: as_json(getattr(value, f.name)) for f in dataclasses.fields(value)}
         # a distribution gets its kind; a section of the configuration (or a protocol's settings) does not
         distribution = isinstance(value, Distribution)
         return {"kind": type(value).__name__.lower(), **fields} if distribution else fields

@@ -28,37 +28,18 @@ pipeline's code dependencies and the simulate stage's code hash follow imports (
 
 from __future__ import annotations
 
+import importlib
+
 from bogie.lazy import lazy_names
 
-#: each public name -> the submodule that defines it
+#: the rooms, each declaring its public names once (its EXPORTS); importing one runs only its light __init__.py
+_ROOMS = ("sampling", "weighing", "design", "calibration")
+#: each public name -> the submodule that defines it: every room's names, and the observed survey of a file
 _EXPORTS: dict[str, str] = {
-    **dict.fromkeys(
-        ("DesignExperiment", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"), "design.experiment"
-    ),
-    **dict.fromkeys(("DesignError", "DesignSettings"), "design.settings"),
-    **dict.fromkeys(
-        ("DesignAnalysis", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "design.analysis"
-    ),
-    **dict.fromkeys(
-        ("Choice", "Constant", "Distribution", "LogNormal", "LogUniform", "Normal", "ParameterError", "TruncNormal",
-         "Uniform"),
-        "sampling.distributions",
-    ),
-    **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "calibration.problem"),
-    **dict.fromkeys(("Table", "base_values", "build_table"), "calibration.table"),
-    **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "calibration.settings"),
-    "calibrate": "calibration.fitting",
-    **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "calibration.checks"),
-    **dict.fromkeys(("compare", "simulated_readings"), "weighing.observed"),
-    **dict.fromkeys(("StaticProtocol", "WimProtocol"), "weighing.settings"),
-    **dict.fromkeys(
-        ("FLEET_QUANTITIES", "Fleet", "FleetError", "bogie_from_sample", "design_bogie", "sample_fleet"),
-        "sampling.sample",
-    ),
-    "survey_tables": "weighing.survey",
-    **dict.fromkeys(("weigh", "weigh_fleet"), "weighing.weigher"),
-}  # fmt: skip
-#: a public name defined outside the package: the observed survey of a file (bogie.weighings.survey)
+    name: f"{room}.{module}"
+    for room in _ROOMS
+    for name, module in importlib.import_module(f"{__name__}.{room}").EXPORTS.items()
+}
 _EXPORTS["observed_survey"] = "bogie.weighings.survey"
 
 __all__ = sorted(_EXPORTS)

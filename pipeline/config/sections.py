@@ -9,6 +9,9 @@ for the IRI (m/km, its own unit) and the tilt grids' steps (``tilt_step_deg``, n
 
 from __future__ import annotations
 
+from typing import Any
+
+from bogie.fleet.sampling.sample import FLEET_QUANTITIES, Fleet
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from pipeline.config import schema
 from pipeline.config.si import FrozenMap, config_class
@@ -38,17 +41,23 @@ ObservedConfig = config_class(schema.Observed, "ObservedConfig")
 SurveyConfig = config_class(schema.Survey, "SurveyConfig")
 CalibrateConfig = config_class(schema.Calibrate, "CalibrateConfig")
 DesignConfig = config_class(schema.Design, "DesignConfig")
+
+
+def _fleet_study(config: Any) -> Fleet:
+    """The fleet study's fleet, ``fleet:`` and ``distributions:`` together, as the library's
+    :class:`bogie.fleet.Fleet` (SI): what :func:`bogie.fleet.sample_fleet` samples."""
+    fleet = config.fleet
+    return Fleet(
+        distributions={name: config.distributions[name] for name in FLEET_QUANTITIES},
+        axle_mix=fleet.axle_mix,
+        presets=fleet.presets,
+        legal_group_load=fleet.legal_group_load,
+        legal_axle_load=fleet.legal_axle_load,
+        suspension_mix=fleet.suspension_mix,
+    )
+
+
 #: the whole file; ``figure2`` (and the other sections of schema.OTHER_SECTIONS) are read by their own stages
 Config = config_class(
-    schema.Params,
-    "Config",
-    skip=schema.OTHER_SECTIONS,
-    extra=(
-        (
-            "fleet_study",
-            "The fleet study's fleet, ``fleet:`` and ``distributions:`` together, as the library's "
-            ":class:`bogie.fleet.Fleet` (SI): what :func:`bogie.fleet.sample_fleet` samples. Made when params.yaml is "
-            "loaded: a configuration changed with ``dataclasses.replace`` keeps the fleet it was loaded with.",
-        ),
-    ),
+    schema.Params, "Config", skip=schema.OTHER_SECTIONS, properties={"fleet_study": property(_fleet_study)}
 )

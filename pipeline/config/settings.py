@@ -28,7 +28,6 @@ import yaml
 from pydantic import ValidationError
 
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
-from bogie.fleet.sampling.sample import FLEET_QUANTITIES, Fleet
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
 from bogie.weighings.readers import (
@@ -145,26 +144,11 @@ def calibration_note(params: Params) -> str | None:
     )
 
 
-def fleet_study(config: Config) -> Fleet:
-    """The fleet of ``fleet:`` and ``distributions:``, SI, as the library's :class:`bogie.fleet.Fleet`: the two
-    sections' keys it takes are its own arguments (``tests/pipeline/test_config_library.py``)."""
-    fleet = config.fleet
-    return Fleet(
-        distributions={name: config.distributions[name] for name in FLEET_QUANTITIES},
-        axle_mix=fleet.axle_mix,
-        presets=fleet.presets,
-        legal_group_load=fleet.legal_group_load,
-        legal_axle_load=fleet.legal_axle_load,
-        suspension_mix=fleet.suspension_mix,
-    )
-
-
 def to_config(params: Params) -> Config:
     """The validated params.yaml sections (:class:`~pipeline.config.schema.Params`) as a :class:`Config`, SI
     (:func:`pipeline.config.si.to_config`), the calibration's protocol resolved and its WIM quantities dropped for a
     static one (:func:`calibration_note`)."""
     config = si.to_config(params)
-    config = dataclasses.replace(config, fleet_study=fleet_study(config))
     if params.calibrate is None:
         return config
     cal = config.calibrate

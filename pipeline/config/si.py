@@ -125,14 +125,14 @@ def config_class(
     model: type[BaseModel],
     name: str | None = None,
     skip: tuple[str, ...] = (),
-    extra: tuple[tuple[str, str], ...] = (),
+    properties: dict[str, property] | None = None,
 ) -> type:
     """The frozen dataclass a validated ``model`` converts to: one attribute per key, named and in the unit of the
     table above; an optional section (``None`` allowed) defaults to None. Made once per model; the model's
     ``library_class`` if it names one. ``name`` names the class (module
     :mod:`pipeline.config.sections`); the keys in ``skip`` are left out (sections other stages read themselves);
-    ``extra`` adds attributes (name, doc), default None, that the loader fills from several sections (marked
-    ``derived`` in their field's metadata: ``data/config.json`` leaves them out, they would repeat those sections)."""
+    ``properties`` adds read-only attributes computed from the others (not fields: not stored, compared, hashed or
+    written to ``data/config.json``)."""
     if model in _CLASSES:
         return _CLASSES[model]
     library = getattr(model, "library_class", None)
@@ -153,19 +153,17 @@ def config_class(
             what = f"[{unit}]"
         text = f"{info.description} " if info.description else ""
         lines.append(f"{attr}\n    {text}(params.yaml ``{key}``; {what}{'; None if not given' if optional else ''})")
-    for attr, text in extra:
-        # not compared nor hashed: it follows from the sections it is made of (and may hold unhashable mappings)
-        fields.append(
-            (attr, Any, dataclasses.field(default=None, compare=False, hash=False, metadata={"derived": True}))
-        )
-        lines.append(f"{attr}\n    {text}")
+    for attr, prop in (properties or {}).items():
+        lines.append(f"{attr}\n    {prop.__doc__} (computed from the sections above)")
     section = getattr(model, "__doc__", "") or ""
     doc = (
         f"{section.splitlines()[0] if section else model.__name__} In SI (:mod:`pipeline.config.si`), made from "
         f":class:`pipeline.config.schema.{model.__name__}`.\n\n"
         "Attributes\n----------\n" + "\n".join(lines)
     )
-    cls = dataclasses.make_dataclass(name or f"{model.__name__}Config", fields, frozen=True, namespace={"__doc__": doc})
+    cls = dataclasses.make_dataclass(
+        name or f"{model.__name__}Config", fields, frozen=True, namespace={"__doc__": doc, **(properties or {})}
+    )
     cls.__module__ = "pipeline.config.sections"
     _CLASSES[model] = cls
     return cls

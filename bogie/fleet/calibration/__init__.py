@@ -15,14 +15,12 @@ Names load on first use (:mod:`bogie.lazy`).
 
 from bogie.lazy import lazy_names
 
-__getattr__, __dir__ = lazy_names(
-    __name__,
-    {
-        **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "settings"),
-        **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "problem"),
-        **dict.fromkeys(("Table", "base_values", "build_table"), "table"),
-        "calibrate": "fitting",
-        **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "checks"),
-    },
-    former="problem",
-)
+#: each public name of the room -> the module that defines it (bogie.fleet re-exports them all)
+EXPORTS: dict[str, str] = {
+    **dict.fromkeys(("CalibrationError", "CalibrationSettings"), "settings"),
+    **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "problem"),
+    **dict.fromkeys(("Table", "base_values", "build_table"), "table"),
+    "calibrate": "fitting",
+    **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "checks"),
+}
+__getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="problem")

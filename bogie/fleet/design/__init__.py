@@ -14,13 +14,11 @@ Names load on first use (:mod:`bogie.lazy`).
 
 from bogie.lazy import lazy_names
 
-__getattr__, __dir__ = lazy_names(
-    __name__,
-    {
-        **dict.fromkeys(("DesignError", "DesignSettings"), "settings"),
-        **dict.fromkeys(("DesignExperiment", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"),
-                        "experiment"),
-        **dict.fromkeys(("DesignAnalysis", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "analysis"),
-    },
-    former="experiment",
-)  # fmt: skip
+#: each public name of the room -> the module that defines it (bogie.fleet re-exports them all)
+EXPORTS: dict[str, str] = {
+    **dict.fromkeys(("DesignError", "DesignSettings"), "settings"),
+    **dict.fromkeys(("DesignExperiment", "DesignStudy", "design_experiment", "study_designs", "weigh_designs"),
+                    "experiment"),
+    **dict.fromkeys(("DesignAnalysis", "analyse_designs", "guidance_sentences", "tilt_tolerance"), "analysis"),
+}  # fmt: skip
+__getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="experiment")

@@ -11,12 +11,12 @@ Names load on first use (:mod:`bogie.lazy`).
 
 from bogie.lazy import lazy_names
 
-__getattr__, __dir__ = lazy_names(
-    __name__,
-    {
-        **dict.fromkeys(("COLUMNS", "FLEET_QUANTITIES", "Fleet", "FleetError", "bogie_from_sample", "design_bogie",
-                         "sample_fleet"), "sample"),
-        **dict.fromkeys(("design_seed", "road_seed", "sensor_seed", "suspension_draw"), "seeds"),
-    },
-    former="sample",
-)  # fmt: skip
+#: each public name of the room -> the module that defines it (bogie.fleet re-exports them all)
+EXPORTS: dict[str, str] = {
+    **dict.fromkeys(("COLUMNS", "FLEET_QUANTITIES", "Fleet", "FleetError", "bogie_from_sample", "design_bogie",
+                     "sample_fleet"), "sample"),
+    **dict.fromkeys(("design_seed", "road_seed", "sensor_seed", "suspension_draw"), "seeds"),
+    **dict.fromkeys(("Choice", "Constant", "Distribution", "LogNormal", "LogUniform", "Normal", "ParameterError",
+                     "TruncNormal", "Uniform"), "distributions"),
+}  # fmt: skip
+__getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="sample")

@@ -15,13 +15,11 @@ Names load on first use (:mod:`bogie.lazy`).
 
 from bogie.lazy import lazy_names
 
-__getattr__, __dir__ = lazy_names(
-    __name__,
-    {
-        **dict.fromkeys(("StaticProtocol", "WimProtocol"), "settings"),
-        **dict.fromkeys(("weigh", "weigh_fleet", "weigh_rows"), "weigher"),
-        "survey_tables": "survey",
-        **dict.fromkeys(("compare", "simulated_readings"), "observed"),
-    },
-    former="weigher",
-)
+#: each public name of the room -> the module that defines it (bogie.fleet re-exports them all)
+EXPORTS: dict[str, str] = {
+    **dict.fromkeys(("StaticProtocol", "WimProtocol"), "settings"),
+    **dict.fromkeys(("weigh", "weigh_fleet", "weigh_rows"), "weigher"),
+    "survey_tables": "survey",
+    **dict.fromkeys(("compare", "simulated_readings"), "observed"),
+}
+__getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="weigher")
