@@ -30,8 +30,11 @@ def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m bench.profile_stage", description=__doc__.splitlines()[0])
     parser.add_argument("--fraction", type=float, default=0.1, help="share of each study weighed (default 0.1)")
     args = parser.parse_args(argv)
-    if not 0.0 < args.fraction <= 1.0:
-        raise SystemExit(f"--fraction = {args.fraction!r} is out of range: must be in (0, 1] (share of each study)")
+    from bogie.settings import check_value
+
+    check_value(
+        "--fraction", args.fraction, low=0.0, low_open=True, high=1.0, note="share of each study", error=SystemExit
+    )
 
     import pandas as pd
 

@@ -31,6 +31,7 @@ from bogie.guarded_yaml import read_text_file, read_yaml
 from bogie.params import Bogie
 from bogie.presets import PRESETS, preset, preset_fields
 from bogie.ranges import AXLE_RANGES, EQUALISER_RANGES, SCALAR_RANGES, FieldRange
+from bogie.settings import refusal
 
 __all__ = [
     "BASE_KEY", "FILE_KEYS", "BogieFileError", "FileKey", "base_bogie", "base_fields", "is_bogie_file", "load_bogie",
@@ -110,11 +111,14 @@ class BogieFileError(ValueError):
     key with its value, the allowed range and the unit."""
 
 
-def _range_in_file_units(rng: FieldRange, key: FileKey) -> str:
-    def show(si: float) -> str:
-        return f"{math.degrees(si):g}" if key.scale is None else f"{si / float(key.scale):g}"
+def _range_in_file_units(rng: FieldRange, key: FileKey) -> dict[str, Any]:
+    """The range ``rng`` [SI] in the file's unit, as :func:`bogie.settings.refusal`'s bounds (the message only: the
+    check is :meth:`FieldRange.contains` on the SI value)."""
 
-    return f"{'[' if rng.low_inclusive else '('}{show(rng.low)}, {show(rng.high)}] {key.unit}"
+    def show(si: float) -> float:
+        return math.degrees(si) if key.scale is None else si / float(key.scale)
+
+    return {"low": show(rng.low), "high": show(rng.high), "low_open": not rng.low_inclusive}
 
 
 def _to_si(value: Any, key: FileKey) -> float:
@@ -137,7 +141,7 @@ def _scalar(field: str, value: Any, problems: list[str], label: str | None = Non
     key = FILE_KEYS[field]
     rng = SCALAR_RANGES.get(field) or AXLE_RANGES.get(field) or EQUALISER_RANGES[field]
     label = label or key.key
-    allowed = _range_in_file_units(rng, key)
+    bounds = _range_in_file_units(rng, key)
     try:
         si = _to_si(value, key)
     except TypeError:
@@ -148,13 +152,13 @@ def _scalar(field: str, value: Any, problems: list[str], label: str | None = Non
                 mantissa, _, exponent = value.lower().partition("e")
                 mantissa += "" if "." in mantissa else ".0"
                 exponent = exponent if exponent.startswith(("+", "-")) else f"+{exponent}"
-                hint = f"; YAML needs a dot and the exponent's sign: write {mantissa}e{exponent}"
+                hint = f"YAML needs a dot and the exponent's sign: write {mantissa}e{exponent}"
             except ValueError:
                 pass
-        problems.append(f"{label} = {value!r} is not a number ({_kind(value)}{hint}): must be in {allowed}")
+        problems.append(refusal(label, value, key.unit, **bounds, note=hint))
         return None
     if not (math.isfinite(si) and rng.contains(si)):
-        problems.append(f"{label} = {value!r} is out of range: must be in {allowed}")
+        problems.append(refusal(label, value, key.unit, **bounds))
         return None
     return si
 

@@ -87,16 +87,17 @@ def _cmd_case(args: argparse.Namespace) -> int:
 
 
 def _range(name: str, low: float, high: float, unit: str):
-    """An argparse type: a float in [low, high], refused with the parameter, value, range and unit."""
+    """An argparse type: a float in [low, high], refused with the parameter, value, range and unit
+    (:func:`bogie.settings.check_value`'s message)."""
 
     def parse(text: str) -> float:
+        from bogie.settings import check_value
+
         try:
-            value = float(text)
+            value: float | str = float(text)
         except ValueError:
-            raise argparse.ArgumentTypeError(f"{name} {text!r} is not a number ({unit})") from None
-        if not low <= value <= high:
-            raise argparse.ArgumentTypeError(f"{name} {text} outside the allowed range [{low:g}, {high:g}] {unit}")
-        return value
+            value = text  # not a number: check_value says so
+        return check_value(name, value, unit, low=low, high=high, error=argparse.ArgumentTypeError)
 
     return parse
 

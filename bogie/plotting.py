@@ -12,6 +12,7 @@ from matplotlib.figure import Figure
 
 from bogie.metrics import p
 from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
+from bogie.settings import check_value
 from bogie.steel.static import nondimensional_loads
 
 #: the reference's Figure 2: chassis slopes 0 to 2 degrees in half-degree steps
@@ -72,10 +73,8 @@ def figure2(
     fe_points
         Optional finite element results to overlay: slope [degree] -> (q, p).
     """
-    if not (math.isfinite(q_max) and q_max > 0.0):
-        raise ValueError(f"q_max = {q_max!r} is out of range: must be > 0 (stiffness ratio, dimensionless)")
-    if not (math.isfinite(chassis_deflection) and chassis_deflection > 0.0):
-        raise ValueError(f"chassis_deflection = {chassis_deflection!r} is out of range: must be > 0 m")
+    check_value("q_max", q_max, "-", low=0.0, low_open=True, note="stiffness ratio")
+    check_value("chassis_deflection", chassis_deflection, "m", low=0.0, low_open=True)
     stage1 = triaxle_stage1()
     spacing = stage1.axle_x[1] - stage1.axle_x[0] if axle_spacing is None else axle_spacing
     q_mark = stage1.q(0) if stage1_q is None else stage1_q

@@ -14,6 +14,8 @@ from typing import Any, NamedTuple
 
 import numpy as np
 
+from bogie.settings import _show, check_value
+
 
 class FieldRange(NamedTuple):
     """The allowed range of a :class:`bogie.params.Bogie` field: ``low < x <= high`` (``low <= x`` if low_inclusive).
@@ -82,48 +84,24 @@ EQUALISER_RANGES: dict[str, FieldRange] = {
 }
 
 
-def _range_text(low: float, high: float, unit: str, low_inclusive: bool) -> str:
-    bracket = "[" if low_inclusive else "("
-    return f"{bracket}{low:g}, {high:g}] {unit}"
-
-
-def _show(value: Any) -> str:
-    """A value as the user wrote it: ``0.001``, not numpy's ``np.float64(0.001)``."""
-    return repr(value.item()) if isinstance(value, np.generic) else repr(value)
-
-
 def check_scalar(name: str, value: Any, low: float, high: float, unit: str, low_inclusive: bool) -> float:
     """``value`` as a float if it is a real number (not a bool or a text) in ``low < value <= high`` (``low <=`` if
-    ``low_inclusive``), finite; else a ValueError naming ``name``, the value, the allowed range and ``unit``."""
+    ``low_inclusive``), finite; else :func:`bogie.settings.check_value`'s ValueError naming ``name``, the value, the
+    allowed range and ``unit``."""
     if type(value) is float:
-        # the usual case, without the array round trip below (float(np.asarray(v)) is v itself): a bogie is
-        # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel
+        # the usual case, a float in range, returned as it is without the one check's general path (a bogie is
+        # validated once per weighing and its ~40 scalars took a fifth of the Python around the kernel)
         if math.isfinite(value) and (value >= low if low_inclusive else value > low) and value <= high:
             return value
-        raise ValueError(
-            f"{name} = {value!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}"
-        )
-    # a real number: Python's or numpy's (a 0-d array too); not a bool (True is not 1 N m/rad) nor a numeric text
-    arr = None if isinstance(value, str | bytes) else np.asarray(value)
-    if arr is None or arr.ndim != 0 or arr.dtype.kind not in "iuf":
-        kind = "text" if isinstance(value, str | bytes) else type(value).__name__
-        allowed = _range_text(low, high, unit, low_inclusive)
-        raise ValueError(f"{name} = {_show(value)} is not a number ({kind}): must be in {allowed}")
-    v = float(arr)
-    ok_low = v >= low if low_inclusive else v > low
-    if not math.isfinite(v) or not ok_low or v > high:
-        raise ValueError(f"{name} = {v!r} is out of range: must be in {_range_text(low, high, unit, low_inclusive)}")
-    return v
+    # anything else: a real number, Python's or numpy's (a 0-d array too), as a float; not a bool (True is not 1 N
+    # m/rad) nor a numeric text
+    return check_value(name, value, unit, low=low, high=high, low_open=not low_inclusive)
 
 
 def check_positive(name: str, value: Any, unit: str, allow_zero: bool = False) -> float:
-    """``value`` as a float if it is finite and > 0 (>= 0 if ``allow_zero``); else a ValueError naming ``name``, the
-    value and ``unit``."""
-    v = float(value)
-    ok = v >= 0.0 if allow_zero else v > 0.0
-    if not (math.isfinite(v) and ok):
-        raise ValueError(f"{name} = {value!r} is out of range: must be {'>= 0' if allow_zero else '> 0'} {unit}")
-    return v
+    """``value`` as a float if it is a real number, finite and > 0 (>= 0 if ``allow_zero``); else
+    :func:`bogie.settings.check_value`'s ValueError naming ``name``, the value and ``unit``."""
+    return check_value(name, value, unit, low=0.0, low_open=not allow_zero)
 
 
 def check_vector(

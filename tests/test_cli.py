@@ -140,4 +140,4 @@ def test_design_show_names_a_bad_file_and_refuses_a_tilt_out_of_range(tmp_path, 
     assert "tyre_radius_mm = 5000 is out of range: must be in [50, 2000] mm" in capsys.readouterr().err
     with pytest.raises(SystemExit):
         main(["design", "show", "tandem_trrl", "--tilt-deg", "30"])
-    assert "--tilt-deg 30 outside the allowed range [-10, 10] degree" in capsys.readouterr().err
+    assert "--tilt-deg = 30.0 is out of range: must be in [-10, 10] degree" in capsys.readouterr().err

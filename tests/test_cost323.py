@@ -57,7 +57,7 @@ def test_normal_errors_fill_each_tolerance_as_the_normal_law_says():
         (([[1.0, 1.0]], [[1.0, 1.0, 1.0]]), {}, "same (groups, axles) shape"),
         (([[1.0, NAN]], [[1.0, 1.0]]), {}, "present (finite) in one and not in the other"),
         (([[0.0, 1.0]], [[1.0, 1.0]]), {}, "every load present must be > 0"),
-        ((STATIC, WIM), {"required_share": 0.0}, "required_share = 0.0: must be a number in (0, 1]"),
+        ((STATIC, WIM), {"required_share": 0.0}, "required_share = 0.0 is out of range: must be in (0, 1] -"),
         ((STATIC, WIM), {"criteria": ("gross",)}, "criteria = ['gross']: must be one or more of group"),
         ((np.zeros((0, 2)), np.zeros((0, 2))), {}, "no group to test"),
     ],

@@ -164,16 +164,16 @@ def test_the_experiment_runs_every_design_over_the_same_conditions_and_tilts():
     ("changes", "message"),
     [
         ({"grid": {"bush_damping": [1.0]}}, r"grid: 'bush_damping' is not a design factor; allowed: bush_stiffness"),
-        ({"grid": {"equaliser_arm": [0.2, -0.1]}}, r"grid\['equaliser_arm'\]\[1\] = -0.1: .* >= 0 \[m\]"),
+        ({"grid": {"equaliser_arm": [0.2, -0.1]}}, r"grid\['equaliser_arm'\]\[1\] = -0.1 is out of range: must be >= "),
         ({"grid": {"bush_stiffness": [1.0, 1.0]}}, r"grid\['bush_stiffness'\] = \[1.0, 1.0\]: lists a level twice"),
-        ({"grid": {"spring_friction_band": []}}, r"grid\['spring_friction_band'\] = \[\]: .* one or more levels \[N\]"),
+        ({"grid": {"spring_friction_band": []}}, r"grid\['spring_friction_band'\] = \[\]: .* one or more levels, in N"),
         ({"grid": {}}, r"grid = \{\}: must map one or more of bush_stiffness"),
         ({"groups": ("quad",)}, r"groups = \('quad',\): must be one or more distinct axle groups among tandem"),
-        ({"n_conditions": 1}, r"n_conditions = 1: must be a whole number >= 2 \[-\]"),
-        ({"n_space_filling": 1.5}, r"n_space_filling = 1.5: must be a whole number >= 0 \[-\]"),
-        ({"tilt_step_deg": 0.0}, r"tilt_step_deg = 0.0: must be a finite number > 0 \[degree\]"),
-        ({"target_share": 1.5}, r"target_share = 1.5: must be a finite number in \(0, 1\) \[-\]"),
-        ({"confidence_level": 0.0}, r"confidence_level = 0.0: must be a finite number in \(0, 1\) \[-\]"),
+        ({"n_conditions": 1}, r"n_conditions = 1 is out of range: must be a whole number >= 2 -"),
+        ({"n_space_filling": 1.5}, r"n_space_filling = 1.5 is not a whole number \(float\): .* >= 0 -"),
+        ({"tilt_step_deg": 0.0}, r"tilt_step_deg = 0.0 is out of range: must be > 0 degree"),
+        ({"target_share": 1.5}, r"target_share = 1.5 is out of range: must be in \(0, 1\) -"),
+        ({"confidence_level": 0.0}, r"confidence_level = 0.0 is out of range: must be in \(0, 1\) -"),
     ],
 )
 def test_bad_settings_are_refused_naming_the_argument_value_range_and_unit(changes, message):
@@ -185,11 +185,11 @@ def test_bad_arguments_of_the_steps_are_refused():
     nose_up = fleet(distributions={**DISTS, "chassis_tilt": bf.Uniform(0.01, 0.03)})
     with pytest.raises(bf.DesignError, match=r"chassis_tilt'\]: its range \[0.57\d*, 1.7\d*\] degree must include"):
         L.tilt_grid(nose_up, 0.5)
-    with pytest.raises(bf.DesignError, match=r"seed = -1: must be a whole number >= 0 \[-\]"):
+    with pytest.raises(bf.DesignError, match=r"seed = -1 is out of range: must be a whole number >= 0 -"):
         L.conditions(fleet(), 3, seed=-1)
-    with pytest.raises(bf.DesignError, match=r"tilts = .*strictly increasing \[degree\]"):
+    with pytest.raises(bf.DesignError, match=r"tilts = .*strictly increasing, in degree"):
         bf.analyse_designs(hand_runs(), hand_designs(), TILTS[::-1], 0.95, 0.95)
-    with pytest.raises(bf.DesignError, match=r"confidence_level = 1: must lie in \(0, 1\) \[-\]"):
+    with pytest.raises(bf.DesignError, match=r"confidence_level = 1 is out of range: must be in \(0, 1\) -"):
         bf.analyse_designs(hand_runs(), hand_designs(), TILTS, 0.95, 1)
     with pytest.raises(bf.DesignError, match="runs: the columns slot are missing"):
         bf.analyse_designs(hand_runs().drop(columns="slot"), hand_designs(), TILTS, 0.95, 0.95)

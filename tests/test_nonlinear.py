@@ -242,9 +242,9 @@ def test_a_run_that_cannot_be_solved_fails_with_a_message_and_no_nan():
 
 def test_inputs_are_validated():
     bogie = tandem_trrl()
-    with pytest.raises(ValueError, match=r"load_factor = 0.0 is out of range: must be in \(0, 2\]"):
+    with pytest.raises(ValueError, match=r"load_factor = 0.0 is out of range: must be in \(0, 2\] - \(fraction of"):
         nl.hold(bogie, 1.0, 0.01, load_factor=0.0)
-    with pytest.raises(ValueError, match=r"dt = -0.01 is out of range: must be in \(0, duration = 1\] s"):
+    with pytest.raises(ValueError, match=r"dt = -0.01 is out of range: must be in \(0, 1\] s \(at most the duration\)"):
         nl.hold(bogie, 1.0, -0.01)
     with pytest.raises(ValueError, match="inputs are for 2 axles but the bogie has 3"):
         nl.simulate(triaxle_stage1(), nl.hold(bogie, 0.1, 0.01))
@@ -295,7 +295,7 @@ def test_a_time_step_longer_than_the_phase_is_refused_not_stretched():
     from bogie.steel import nonlinear
 
     b = tandem_trrl()
-    with pytest.raises(ValueError, match=r"dt = 10 is out of range: must be in \(0, duration = 2\] s"):
+    with pytest.raises(ValueError, match=r"dt = 10 is out of range: must be in \(0, 2\] s \(at most the duration\)"):
         nonlinear.load_ramp(b, 0.25, 1.0, 2.0, 10)
     with pytest.raises(ValueError, match=r"dt = 5 is out of range"):
         nonlinear.hold(b, 1.0, 5)

@@ -160,10 +160,10 @@ def test_a_failed_phase_is_a_failed_run_with_its_reason_never_nan():
     "make, match",
     [
         (lambda: ph.Phase(-1.0), r"duration = -1.0 is out of range: must be > 0 s"),
-        (lambda: ph.Phase(1.0, dt=0.0), r"dt = 0.0 is out of range: must be > 0 s"),
-        (lambda: ph.Phase(1.0, dt=2.0), r"dt = 2.0 is out of range: must be in \(0, duration = 1\] s"),
+        (lambda: ph.Phase(1.0, dt=0.0), r"dt = 0.0 is out of range: must be in \(0, 1\] s \(at most the duration\)"),
+        (lambda: ph.Phase(1.0, dt=2.0), r"dt = 2.0 is out of range: must be in \(0, 1\] s \(at most the duration\)"),
         (lambda: ph.Phase(1.0, tolerance=-1e-7), r"tolerance = -1e-07 is out of range: must be > 0 m"),
-        (lambda: ph.Phase(1.0, load_factor=(0.2, 2.5)), r"load_factor = 2.5 is out of range: must be in \(0, 2\]"),
+        (lambda: ph.Phase(1.0, load_factor=(0.2, 2.5)), r"load_factor = 2.5 is out of range: must be in \(0, 2\] -"),
         (lambda: ph.Phase(1.0, reading=ph.MeanReading(0.5, 1.5)), r"reading window \[0.5, 1.5\] s must lie in"),
         (lambda: ph.Phase(1.0, reading=ph.SensorReading(0.5, 0.01, 0.0)), r"needs a speed > 0 m/s"),
         (lambda: ph.RoadTable(0.0, 0.0, np.zeros(3)), r"dx = 0.0 is out of range: must be > 0 m"),
@@ -180,5 +180,5 @@ def test_a_road_table_that_does_not_cover_the_axles_path_is_refused(bogie):
     expected = r"cover road distances \[-2.62, 14\] m but its road table covers \[0, 0.99\] m"
     with pytest.raises(ValueError, match=expected):
         ph.run(bogie, [ph.Phase(1.0, road=table, speed=14.0)])
-    with pytest.raises(ValueError, match="check_every = 0 is out of range"):
+    with pytest.raises(ValueError, match=r"check_every = 0 is out of range: must be a whole number >= 1 steps"):
         ph.run(bogie, [ph.Phase(1.0)], check_every=0)

@@ -62,7 +62,7 @@ def test_stiff_bush_leaves_tilt_unequalised():
 
 
 def test_nondimensional_loads_refuses_bad_input():
-    with pytest.raises(ValueError, match=r"q = -1.0 is out of range: must be in \[0, inf\]"):
+    with pytest.raises(ValueError, match=r"q = -1.0 is out of range: must be >= 0 - \(stiffness ratio .*inf: a free"):
         nondimensional_loads(-1.0, 0.1)
     with pytest.raises(ValueError, match="n_axles = 1"):
         nondimensional_loads(1.0, 0.1, n_axles=1)

@@ -100,9 +100,9 @@ def test_the_table_names_the_skipped_lines_and_the_statistics_in_percent(capsys)
 
 @pytest.mark.parametrize(
     ("args", "message"),
-    [(["--min-group-load-t", "-2"], "--min-group-load-t -2 outside the allowed range [0, 100] t"),
-     (["--min-group-load-t", "heavy"], "--min-group-load-t 'heavy' is not a number (t)"),
-     (["--group-spacing-m", "9"], "--group-spacing-m 9 outside the allowed range [0.1, 5] m"),
+    [(["--min-group-load-t", "-2"], "--min-group-load-t = -2.0 is out of range: must be in [0, 100] t"),
+     (["--min-group-load-t", "heavy"], "--min-group-load-t = 'heavy' is not a number (text): must be in [0, 100] t"),
+     (["--group-spacing-m", "9"], "--group-spacing-m = 9.0 is out of range: must be in [0.1, 5] m"),
      (["--position", "front"], "invalid choice: 'front'")],
 )  # fmt: skip
 def test_bad_arguments_name_the_parameter_value_range_and_unit(capsys, args, message):

@@ -106,10 +106,11 @@ def test_a_resolution_set_by_the_user_is_applied_and_the_detection_kept_beside_i
 @pytest.mark.parametrize(
     ("value", "fmt", "message"),
     [
-        (0, "mon", "resolution_kg = 0 kg outside the allowed range (0, 1000] kg"),
-        (-100, "mon", "resolution_kg = -100 kg outside the allowed range (0, 1000] kg"),
-        (1500, "mon", "resolution_kg = 1500 kg outside the allowed range (0, 1000] kg"),
-        (float("nan"), "mon", "resolution_kg = nan: a weight resolution is a number of kilograms"),
+        (0, "mon", "resolution_kg = 0 is out of range: must be in (0, 1000] kg, or None (None: detect it from"),
+        (-100, "mon", "resolution_kg = -100 is out of range: must be in (0, 1000] kg, or None"),
+        (1500, "mon", "resolution_kg = 1500 is out of range: must be in (0, 1000] kg, or None"),
+        (float("nan"), "mon", "resolution_kg = nan is out of range: must be in (0, 1000] kg, or None"),
+        ("100", "mon", "resolution_kg = '100' is not a number (text): must be in (0, 1000] kg, or None"),
         (50, "castor", "resolution_kg = 50 kg is not a whole multiple of the format's weight unit (100 kg)"),
     ],
 )
@@ -136,7 +137,7 @@ def test_bogie_weighings_prints_the_resolution_and_takes_one(tmp_path, capsys):
     assert main(["weighings", str(path), "--resolution-kg", "200"]) == 0
     assert "weight resolution 200 kg (set; detected from the file: 100 kg)" in capsys.readouterr().out
     assert main(["weighings", str(path), "--resolution-kg", "0"]) == 2
-    assert "resolution_kg = 0.0 kg outside the allowed range (0, 1000] kg" in capsys.readouterr().err
+    assert "resolution_kg = 0.0 is out of range: must be in (0, 1000] kg, or None" in capsys.readouterr().err
 
 
 def test_the_observed_stage_reports_the_resolution_and_applies_the_one_set(tmp_path):

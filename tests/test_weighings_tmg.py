@@ -201,4 +201,4 @@ def test_bogie_weighings_takes_the_legal_loads_of_the_files_country(tmp_path, ca
     with pytest.raises(SystemExit) as stop:
         main(["weighings", str(path), "--legal-axle-kg", "10"])
     assert stop.value.code == 2
-    assert "--legal-axle-kg 10 outside the allowed range [1000, 50000] kg" in capsys.readouterr().err
+    assert "--legal-axle-kg = 10.0 is out of range: must be in [1000, 50000] kg" in capsys.readouterr().err

@@ -24,6 +24,7 @@ from bogie import numerics
 from bogie.params import GRAVITY, AxleGroup
 from bogie.presets import tandem_trrl, triaxle_stage1
 from bogie.ranges import FieldRange, check_scalar, check_vector
+from bogie.settings import refusal
 
 GAS_CONSTANT_AIR = 287.05
 #: the standard atmosphere [Pa]
@@ -131,10 +132,11 @@ class AirBogie(AxleGroup):
             object.__setattr__(self, name, check_scalar(name, getattr(self, name), *r))
         p0 = self.design_gauge_pressure
         if p0 >= self.supply_pressure:
-            raise ValueError(
-                f"supply_pressure = {self.supply_pressure!r} is out of range: must exceed the design gauge pressure "
-                f"{p0:.6g} Pa (the design bag load over bag_effective_area), or the valve could not fill the bags"
+            note = (
+                "the design gauge pressure: the design bag load over bag_effective_area; at or below it the valve "
+                "could not fill the bags"
             )
+            raise ValueError(refusal("supply_pressure", self.supply_pressure, "Pa", low=p0, low_open=True, note=note))
         for i, w in enumerate(self.tyre_wear):
             if w >= self.tyre_radius:
                 raise ValueError(f"tyre_wear[{i}] = {w!r} must be less than tyre_radius = {self.tyre_radius!r} m")

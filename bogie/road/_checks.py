@@ -2,39 +2,8 @@
 
 from __future__ import annotations
 
-import math
-from typing import Any
-
 import numpy as np
 from numpy.typing import ArrayLike
-
-
-def _range_text(low: float, high: float, unit: str, low_inclusive: bool, high_inclusive: bool) -> str:
-    return f"{'[' if low_inclusive else '('}{low:g}, {high:g}{']' if high_inclusive else ')'} {unit}"
-
-
-def _check_range(
-    name: str,
-    value: Any,
-    low: float,
-    high: float,
-    unit: str,
-    low_inclusive: bool = True,
-    high_inclusive: bool = True,
-) -> float:
-    """``value`` as a float, or a ValueError naming ``name``, the value, the allowed range and the unit."""
-    allowed = _range_text(low, high, unit, low_inclusive, high_inclusive)
-    if isinstance(value, bool):
-        raise ValueError(f"{name} = {value!r} is not a number: must be in {allowed}")
-    try:
-        v = float(value)
-    except (TypeError, ValueError):
-        raise ValueError(f"{name} = {value!r} is not a number: must be in {allowed}") from None
-    ok_low = v >= low if low_inclusive else v > low
-    ok_high = v <= high if high_inclusive else v < high
-    if not (math.isfinite(v) and ok_low and ok_high):
-        raise ValueError(f"{name} = {v!r} is out of range: must be in {allowed}")
-    return v
 
 
 def _finite_array(name: str, value: ArrayLike, unit: str) -> np.ndarray:

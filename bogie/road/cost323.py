@@ -22,6 +22,7 @@ import pandas as pd
 from numpy.typing import ArrayLike
 
 from bogie.road.wim import COST323_TOLERANCES
+from bogie.settings import check_value
 
 __all__ = ["CRITERIA", "REQUIRED_SHARE", "ClassTest", "class_test", "relative_errors"]
 
@@ -104,8 +105,7 @@ def class_test(
         group.
     """
     share = required_share
-    if isinstance(share, bool) or not isinstance(share, (int, float)) or not 0.0 < share <= 1.0:
-        raise ValueError(f"required_share = {share!r}: must be a number in (0, 1] [-]")
+    check_value("required_share", share, "-", low=0.0, low_open=True, high=1.0)
     unknown = [c for c in criteria if c not in CRITERIA]
     if unknown or not criteria:
         raise ValueError(f"criteria = {list(criteria)!r}: must be one or more of {', '.join(CRITERIA)}")

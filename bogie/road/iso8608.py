@@ -15,7 +15,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from bogie import numerics
-from bogie.road._checks import _check_range, _finite_array, _frozen, _uniform_interp
+from bogie.road._checks import _finite_array, _frozen, _uniform_interp
+from bogie.settings import check_value, refusal
 
 #: ISO 8608 reference spatial frequency n0 [cycle/m]
 ISO8608_N0 = 0.1
@@ -88,7 +89,7 @@ class ISO8608Profile:
 
     def __post_init__(self) -> None:
         if self.gd_n0 is not None:
-            object.__setattr__(self, "gd_n0", _check_range("gd_n0", self.gd_n0, 0.0, 1.0, "m^3", low_inclusive=False))
+            object.__setattr__(self, "gd_n0", check_value("gd_n0", self.gd_n0, "m^3", low=0.0, high=1.0, low_open=True))
             object.__setattr__(self, "road_class", None)
         elif not isinstance(self.road_class, str) or self.road_class.upper() not in ISO8608_CLASSES:
             raise ValueError(
@@ -96,18 +97,17 @@ class ISO8608Profile:
             )
         else:
             object.__setattr__(self, "road_class", self.road_class.upper())
-        length = _check_range("length", self.length, 1.0, 1e4, "m")
+        length = check_value("length", self.length, "m", low=1.0, high=1e4)
         object.__setattr__(self, "length", length)
-        if isinstance(self.seed, bool) or not isinstance(self.seed, (int, np.integer)) or self.seed < 0:
-            raise ValueError(f"seed = {self.seed!r} must be a non-negative integer")
-        n_min = _check_range("n_min", self.n_min, 0.0, 10.0, "cycle/m", low_inclusive=False)
-        n_max = _check_range("n_max", self.n_max, 0.0, 10.0, "cycle/m", low_inclusive=False)
+        check_value("seed", self.seed, low=0, whole=True)
+        n_min = check_value("n_min", self.n_min, "cycle/m", low=0.0, high=10.0, low_open=True)
+        n_max = check_value("n_max", self.n_max, "cycle/m", low=0.0, high=10.0, low_open=True)
         if n_max <= n_min:
             raise ValueError(f"n_max = {n_max!r} must be greater than n_min = {n_min!r} cycle/m")
         object.__setattr__(self, "n_min", n_min)
         object.__setattr__(self, "n_max", n_max)
         object.__setattr__(
-            self, "waviness", _check_range("waviness", self.waviness, 0.0, 5.0, "-", low_inclusive=False)
+            self, "waviness", check_value("waviness", self.waviness, "-", low=0.0, high=5.0, low_open=True)
         )
 
         # the tolerance keeps a band edge that is a harmonic up to rounding (e.g. 0.015 * 200) inside the band
@@ -182,7 +182,7 @@ class ISO8608Profile:
         """
         n = _finite_array("n", n, "cycle/m")
         if (n <= 0.0).any():
-            raise ValueError(f"n = {float(n[n <= 0.0].flat[0])!r} is out of range: must be in (0, inf) cycle/m")
+            raise ValueError(refusal("n", float(n[n <= 0.0].flat[0]), "cycle/m", low=0.0, low_open=True))
         return self.psd_n0 * numerics.power(n / ISO8608_N0, -self.waviness)
 
     def __call__(self, x: ArrayLike) -> np.ndarray:

@@ -12,7 +12,8 @@ import numpy as np
 from numpy.typing import ArrayLike
 
 from bogie import numerics
-from bogie.road._checks import _check_range, _finite_array
+from bogie.road._checks import _finite_array
+from bogie.settings import check_value
 
 
 @dataclass(frozen=True)
@@ -57,12 +58,14 @@ class RampedStep:
     start: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "rise", _check_range("rise", self.rise, 0.0, 0.5, "m"))
+        object.__setattr__(self, "rise", check_value("rise", self.rise, "m", low=0.0, high=0.5))
         object.__setattr__(
-            self, "ramp_length", _check_range("ramp_length", self.ramp_length, 0.0, 10.0, "m", low_inclusive=False)
+            self, "ramp_length", check_value("ramp_length", self.ramp_length, "m", low=0.0, high=10.0, low_open=True)
         )
-        object.__setattr__(self, "plateau_length", _check_range("plateau_length", self.plateau_length, 0.0, 100.0, "m"))
-        object.__setattr__(self, "start", _check_range("start", self.start, -1e6, 1e6, "m"))
+        object.__setattr__(
+            self, "plateau_length", check_value("plateau_length", self.plateau_length, "m", low=0.0, high=100.0)
+        )
+        object.__setattr__(self, "start", check_value("start", self.start, "m", low=-1e6, high=1e6))
 
     @property
     def end(self) -> float:
@@ -104,12 +107,14 @@ class Sinusoid:
     start: float = 0.0
 
     def __post_init__(self) -> None:
-        object.__setattr__(self, "amplitude", _check_range("amplitude", self.amplitude, 0.0, 1.0, "m"))
+        object.__setattr__(self, "amplitude", check_value("amplitude", self.amplitude, "m", low=0.0, high=1.0))
         object.__setattr__(
-            self, "wavelength", _check_range("wavelength", self.wavelength, 0.0, 1e4, "m", low_inclusive=False)
+            self, "wavelength", check_value("wavelength", self.wavelength, "m", low=0.0, high=1e4, low_open=True)
         )
-        object.__setattr__(self, "phase", _check_range("phase", self.phase, -2.0 * math.pi, 2.0 * math.pi, "rad"))
-        object.__setattr__(self, "start", _check_range("start", self.start, -1e6, 1e6, "m"))
+        object.__setattr__(
+            self, "phase", check_value("phase", self.phase, "rad", low=-2.0 * math.pi, high=2.0 * math.pi)
+        )
+        object.__setattr__(self, "start", check_value("start", self.start, "m", low=-1e6, high=1e6))
 
     def __call__(self, x: ArrayLike) -> np.ndarray:
         """Road height [m] at road distance ``x`` [m]."""
@@ -155,11 +160,11 @@ def axle_heights(
         raise ValueError(f"axle_x = {axle_x!r} must be a 1-D sequence of at least 1 axle position in m")
     if (np.diff(ax) <= 0.0).any():
         raise ValueError(f"axle_x = {ax.tolist()!r} must increase strictly from front to rear (m)")
-    v = _check_range("speed", speed, 0.0, 100.0, "m/s")
+    v = check_value("speed", speed, "m/s", low=0.0, high=100.0)
     times = _finite_array("t", t, "s")
     if times.ndim != 1:
         raise ValueError(f"t must be a 1-D array of times in s, got shape {times.shape}")
-    x0 = _check_range("front_axle_start", front_axle_start, -1e6, 1e6, "m")
+    x0 = check_value("front_axle_start", front_axle_start, "m", low=-1e6, high=1e6)
     road_x = x0 - (ax - ax[0])[np.newaxis, :] + v * times[:, np.newaxis]
     heights = np.asarray(profile(road_x), dtype=float)
     if heights.shape != road_x.shape:

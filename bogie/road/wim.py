@@ -33,6 +33,7 @@ import numpy as np
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
+from bogie.settings import check_value, refusal
 
 __all__ = [
     "COST323_TOLERANCES", "SENSORS", "SENSOR_ERRORS", "SITE_BLEND_LENGTH", "SiteRoad", "gd_n0_for_iri",
@@ -71,9 +72,7 @@ SENSORS: tuple[str, ...] = tuple(SENSOR_ERRORS)
 
 
 def _fraction(name: str, value: float) -> float:
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not (0.0 <= value < 0.5):
-        raise ValueError(f"{name} = {value!r}: must be a number in [0, 0.5) [-] (a fraction: 0.02 is 2 %)")
-    return float(value)
+    return check_value(name, value, "-", low=0.0, high=0.5, high_open=True, note="a fraction: 0.02 is 2 %")
 
 
 def sensor_normals(seed: int, n_axles: int) -> tuple[float, NDArray[np.float64]]:
@@ -82,8 +81,7 @@ def sensor_normals(seed: int, n_axles: int) -> tuple[float, NDArray[np.float64]]
     ``z_i`` is the i-th draw of ``numpy.random.default_rng(seed)`` (axle i has the same draw whatever the number of
     axles); ``z_v`` the first draw of a stream of its own, ``SeedSequence(seed, spawn_key=(1,))``, so that the pass's
     part changes no axle's draw (common random numbers)."""
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise ValueError(f"seed = {seed!r} must be a non-negative integer")
+    check_value("seed", seed, low=0, whole=True)
     z_axles = np.random.default_rng(int(seed)).standard_normal(int(n_axles))
     z_pass = float(np.random.default_rng(np.random.SeedSequence(int(seed), spawn_key=(1,))).standard_normal())
     return z_pass, z_axles
@@ -223,8 +221,7 @@ def iri_of_iso8608(gd_n0: float, waviness: float = 2.0, n_min: float = 0.011, n_
     n_min, n_max
         The band of spatial frequencies [cycle/m] (those of :class:`bogie.road.ISO8608Profile`).
     """
-    if not (gd_n0 > 0.0 and math.isfinite(gd_n0)):
-        raise ValueError(f"gd_n0 = {gd_n0!r} is out of range: must be > 0 m^3")
+    check_value("gd_n0", gd_n0, "m^3", low=0.0, low_open=True)
     car = _GOLDEN_CAR
     n = numerics.geomspace(n_min, n_max, 20_001)
     s = 2j * np.pi * car["speed"] * n
@@ -241,8 +238,7 @@ def iri_of_iso8608(gd_n0: float, waviness: float = 2.0, n_min: float = 0.011, n_
 
 def gd_n0_for_iri(iri: float, waviness: float = 2.0) -> float:
     """The ISO 8608 G_d(n0) [m^3] of a road whose IRI is ``iri`` [m/km] (inverse of :func:`iri_of_iso8608`)."""
-    if not (iri > 0.0 and math.isfinite(iri)):
-        raise ValueError(f"iri = {iri!r} is out of range: must be > 0 m/km")
+    check_value("iri", iri, "m/km", low=0.0, low_open=True)
     return 1e-6 * (iri / _unit_iri(float(waviness))) ** 2
 
 
@@ -286,10 +282,9 @@ class SiteRoad:
 
     def __post_init__(self) -> None:
         for name in ("before", "after"):
-            if not getattr(self, name) >= 0.0:
-                raise ValueError(f"{name} = {getattr(self, name)!r} is out of range: must be >= 0 m")
-        if not 0.0 <= self.scale <= 1.0:
-            raise ValueError(f"scale = {self.scale!r} is out of range: must be in [0, 1] [-]")
+            if not getattr(self, name) >= 0.0:  # inf allowed: a site the whole road long
+                raise ValueError(refusal(name, getattr(self, name), "m", low=0.0))
+        check_value("scale", self.scale, "-", low=0.0, high=1.0)
 
     def site_weight(self, x: ArrayLike) -> NDArray[np.float64]:
         """b(x) [-]: 1 on the site, 0 on the sampled road, a cosine taper between."""

@@ -30,6 +30,7 @@ from bogie import numerics
 from bogie.params import GRAVITY, Bogie, design_spring_loads
 from bogie.results import DynamicResult, Profile
 from bogie.road import axle_heights
+from bogie.settings import check_value
 from bogie.steel.newmark import consistent_acceleration, linear_steps
 
 #: ground springs are this many times stiffer than the tyres
@@ -110,8 +111,7 @@ def matrices(bogie: Bogie, ground_stiffness_factor: float = GROUND_STIFFNESS_FAC
     The leaf-spring, tyre and ground springs each contribute k B^T B for their compression B q; the bush
     contributes K_B and C_B on (equaliser - chassis) rotation. Small angles; spring ends stay at their design x.
     """
-    if not ground_stiffness_factor > 1.0:
-        raise ValueError(f"ground_stiffness_factor = {ground_stiffness_factor!r} is out of range: must be > 1 (-)")
+    check_value("ground_stiffness_factor", ground_stiffness_factor, "-", low=1.0, low_open=True)
     n = bogie.n_axles
     n_dof = 3 * n
     i_eq, i_ax, i_ty = 1, n, 2 * n

@@ -17,7 +17,6 @@ load application, a crawl over a road, settling on a weighbridge, each starting 
 
 from __future__ import annotations
 
-import math
 from dataclasses import dataclass
 
 import numpy as np
@@ -27,6 +26,7 @@ from bogie import numerics
 from bogie.params import Bogie
 from bogie.results import DynamicResult, Profile
 from bogie.road import axle_heights
+from bogie.settings import check_value, refusal
 from bogie.steel.force import core
 from bogie.steel.force import equilibrium as eq
 from bogie.steel.force.pack import (  # noqa: F401 - the packing's public names, importable from here as before
@@ -72,8 +72,7 @@ class Inputs:
     kingpin_rise: NDArray[np.float64]
 
     def __post_init__(self) -> None:
-        if not (math.isfinite(self.dt) and self.dt > 0.0):
-            raise ValueError(f"dt = {self.dt!r} is out of range: must be > 0 s")
+        check_value("dt", self.dt, "s", low=0.0, low_open=True)
         n_t = self.road_height.shape[0]
         if n_t < 2:
             raise ValueError(f"inputs have {n_t} rows: at least 2 (one step) are needed")
@@ -85,10 +84,8 @@ class Inputs:
                 raise ValueError(f"{name} contains NaN or infinity: inputs must be finite")
         if np.any(self.load_factor <= 0.0) or np.any(self.load_factor > 2.0):
             bad = float(self.load_factor[(self.load_factor <= 0.0) | (self.load_factor > 2.0)][0])
-            raise ValueError(
-                f"load_factor = {bad!r} is out of range: must be in (0, 2] (fraction of the design payload, -); "
-                "an empty trailer still has its chassis weight"
-            )
+            note = "fraction of the design payload; an empty trailer still has its chassis weight"
+            raise ValueError(refusal("load_factor", bad, "-", low=0.0, low_open=True, high=2.0, note=note))
 
     @property
     def n_steps(self) -> int:
@@ -138,11 +135,9 @@ class Inputs:
 
 
 def _steps(duration: float, dt: float) -> int:
-    if not (math.isfinite(duration) and duration > 0.0):
-        raise ValueError(f"duration = {duration!r} is out of range: must be > 0 s")
-    if not (math.isfinite(dt) and 0.0 < dt <= duration):
-        # a time step longer than the phase would silently stretch it to one step of dt
-        raise ValueError(f"dt = {dt!r} is out of range: must be in (0, duration = {duration:g}] s")
+    check_value("duration", duration, "s", low=0.0, low_open=True)
+    # a time step longer than the phase would silently stretch it to one step of dt
+    check_value("dt", dt, "s", low=0.0, low_open=True, high=duration, note="at most the duration")
     return max(1, int(round(duration / dt)))
 
 

@@ -19,6 +19,7 @@ from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
 from bogie.params import GRAVITY, Bogie
+from bogie.settings import check_value, refusal
 
 
 @lru_cache(maxsize=16)
@@ -67,10 +68,8 @@ def nondimensional_loads(q: ArrayLike, d: ArrayLike, n_axles: int = 3) -> NDArra
     d_arr = np.asarray(d, dtype=float)
     bad_q = q_arr[np.isnan(q_arr) | (q_arr < 0.0)]
     if bad_q.size:
-        raise ValueError(
-            f"q = {float(bad_q.flat[0])!r} is out of range: must be in [0, inf] (stiffness ratio b^2 K_S / 4 K_B, "
-            "dimensionless; inf = free bush)"
-        )
+        note = "stiffness ratio b^2 K_S / 4 K_B; inf: a free bush"
+        raise ValueError(refusal("q", float(bad_q.flat[0]), "-", low=0.0, note=note))
     bad_d = d_arr[~np.isfinite(d_arr)]
     if bad_d.size:
         raise ValueError(f"d = {float(bad_d.flat[0])!r} must be finite (generalised chassis rotation, dimensionless)")
@@ -227,8 +226,7 @@ def tilted_axle_loads(bogie: Bogie, chassis_tilt: float | None = None) -> NDArra
         One load per axle [N]; they sum to the sprung weight on the bogie plus the axles' weight.
     """
     tilt = bogie.chassis_tilt if chassis_tilt is None else float(chassis_tilt)
-    if not (math.isfinite(tilt) and abs(tilt) < math.pi / 2):
-        raise ValueError(f"chassis_tilt = {tilt!r} is out of range: must be in (-pi/2, pi/2) rad")
+    check_value("chassis_tilt", tilt, "rad", low=-math.pi / 2, high=math.pi / 2, low_open=True, high_open=True)
     x = np.asarray(bogie.axle_x)
     per_deflection = wheel_loads(bogie, 1.0, 0.0, np.zeros(bogie.n_axles))  # [N/m]
     tilted = wheel_loads(bogie, 0.0, tilt)  # the tilt and the wear at zero deflection [N]

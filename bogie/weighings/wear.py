@@ -40,6 +40,7 @@ from bogie import numerics
 from bogie.intervals import percentile_interval, wilson_interval
 from bogie.params import GRAVITY
 from bogie.rounding import json_number
+from bogie.settings import check_value, refusal
 from bogie.weighings._records import REL_TOL
 from bogie.weighings.stats import _width, axle_columns
 
@@ -217,10 +218,9 @@ def wear_statistics(
 def _checked_width(groups: pd.DataFrame, confidence_level: float, resamples: int) -> int:
     """The axle columns of :func:`wear_statistics`' ``groups`` [-], once its ``confidence_level``, ``resamples`` and
     columns are checked (a ValueError naming what is wrong)."""
-    if not 0.0 < confidence_level < 1.0:
-        raise ValueError(f"confidence_level = {confidence_level!r}: must lie in (0, 1) [-]")
+    check_value("confidence_level", confidence_level, "-", low=0.0, high=1.0, low_open=True, high_open=True)
     if resamples < 0:
-        raise ValueError(f"resamples = {resamples!r}: must be 0 or more [-]")
+        raise ValueError(refusal("resamples", resamples, low=0, whole=True))
     width = _width(groups)
     if width < 2 or "n_axles" not in groups.columns or "group" not in groups.columns:
         raise ValueError(

@@ -43,7 +43,7 @@ def check_fit(fit: Mapping[str, Sequence[float]]) -> None:
             not isinstance(b, bool) and isinstance(b, (int, float)) and math.isfinite(b) for b in bounds
         )
         if not numbers or not bounds[0] < bounds[1] or bounds[0] < low or bounds[1] > high:
-            expected = f"must be (low, high), low < high, within [{low:g}, {high:g}] [{unit}]"
+            expected = f"must be (low, high), low < high, within [{low:g}, {high:g}] {unit}"
             raise CalibrationError(f"fit[{name!r}] = {tuple(bounds)!r}: {expected}")
 
 

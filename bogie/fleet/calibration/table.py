@@ -205,7 +205,7 @@ def _increasing(name: str, values: Any, unit: str, positive: bool = False) -> np
     bad = out.ndim != 1 or len(out) < 2 or not np.all(np.isfinite(out)) or np.any(np.diff(out) <= 0.0)
     if bad or (positive and out[0] <= 0.0):
         sign = " positive" if positive else ""
-        raise CalibrationError(f"{name} = {values!r}: must be two or more finite{sign} increasing values [{unit}]")
+        raise CalibrationError(f"{name} = {values!r}: must be two or more finite{sign} increasing values, in {unit}")
     return out
 
 

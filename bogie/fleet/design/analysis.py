@@ -26,6 +26,7 @@ from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.design.settings import FACTORS, DesignError
 from bogie.fleet.design.table import wilson_interval
 from bogie.metrics import max_deviation
+from bogie.settings import check_value
 from bogie.weighings.stats import group_inequality
 
 __all__ = [
@@ -127,12 +128,10 @@ def pareto_front(share: np.ndarray, distance: np.ndarray) -> np.ndarray:
 def _arguments(runs: pd.DataFrame, designs: pd.DataFrame, tilts: Any, target: Any, confidence_level: Any) -> np.ndarray:
     """Refuse what the analysis cannot read, naming it; the tilt grid as floats [degree]."""
     for name, value in (("target_share", target), ("confidence_level", confidence_level)):
-        number = not isinstance(value, bool) and isinstance(value, (int, float, np.floating))
-        if not (number and 0.0 < value < 1.0):
-            raise DesignError(f"{name} = {value!r}: must lie in (0, 1) [-]")
+        check_value(name, value, low=0.0, high=1.0, low_open=True, high_open=True, error=DesignError)
     grid = np.asarray(tilts, dtype=float)
     if grid.ndim != 1 or len(grid) == 0 or not np.all(np.isfinite(grid)) or np.any(np.diff(grid) <= 0.0):
-        raise DesignError(f"tilts = {tilts!r}: must be one or more finite tilts, strictly increasing [degree]")
+        raise DesignError(f"tilts = {tilts!r}: must be one or more finite tilts, strictly increasing, in degree")
     for name, frame, needs in (("runs", runs, RUN_NEEDS), ("designs", designs, DESIGN_NEEDS)):
         missing = [c for c in needs if c not in frame.columns]
         if missing:

@@ -149,8 +149,7 @@ def tilt_grid(fleet: Fleet, tilt_step_deg: float) -> np.ndarray:
         If the tilt distribution's range does not include level, or the step is not a finite number > 0.
     """
     step = tilt_step_deg
-    if isinstance(step, bool) or not isinstance(step, (int, float)) or not (math.isfinite(step) and step > 0.0):
-        raise DesignError(f"tilt_step_deg = {step!r}: must be a finite number > 0 [degree]")
+    check_value("tilt_step_deg", step, "degree", low=0.0, low_open=True, error=DesignError)
     low, high = (math.degrees(v) for v in fleet.distributions["chassis_tilt"].support)
     if not low <= 0.0 <= high:
         raise DesignError(

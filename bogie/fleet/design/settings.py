@@ -4,7 +4,6 @@ its error. :mod:`bogie.fleet.design.experiment` and :mod:`bogie.fleet.design.ana
 
 from __future__ import annotations
 
-import math
 from collections.abc import Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
@@ -12,7 +11,7 @@ from typing import Any
 import numpy as np
 
 from bogie.fleet.constants import GROUP_AXLES
-from bogie.settings import FrozenMap, check_settings, setting
+from bogie.settings import FrozenMap, check_settings, check_value, setting
 
 __all__ = ["FACTORS", "FACTOR_UNITS", "DesignError", "DesignSettings"]
 
@@ -43,11 +42,9 @@ def _levels(factor: Any, levels: Any) -> tuple[float, ...]:
         raise DesignError(f"grid: {factor!r} is not a design factor; allowed: {', '.join(FACTORS)}")
     where, unit = f"grid[{factor!r}] = {levels!r}", FACTOR_UNITS[factor]
     if isinstance(levels, (str, bytes)) or not isinstance(levels, Sequence | np.ndarray) or len(levels) == 0:
-        raise DesignError(f"{where}: must be a sequence of one or more levels [{unit}]")
+        raise DesignError(f"{where}: must be a sequence of one or more levels, in {unit}")
     for i, v in enumerate(levels):
-        number = not isinstance(v, bool) and isinstance(v, (int, float, np.integer, np.floating))
-        if not (number and math.isfinite(v) and v >= 0.0):
-            raise DesignError(f"grid[{factor!r}][{i}] = {v!r}: must be a finite number >= 0 [{unit}]")
+        check_value(f"grid[{factor!r}][{i}]", v, unit, low=0.0, error=DesignError)
     out = tuple(float(v) for v in levels)
     if len(set(out)) != len(out):
         raise DesignError(f"{where}: lists a level twice")

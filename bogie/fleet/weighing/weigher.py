@@ -30,6 +30,7 @@ from bogie.fleet.weighing.protocols import static_weighbridge, wim_pass
 from bogie.fleet.weighing.runs import RESULT_COLUMNS, RUN_COLUMNS, runs_frame
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.params import GRAVITY, Bogie
+from bogie.settings import check_value
 
 __all__ = ["Outcome", "Protocols", "result_row", "result_rows", "weigh", "weigh_fleet", "weigh_rows", "weighing"]
 
@@ -247,8 +248,7 @@ def weigh_fleet(
         raise ValueError(
             f"samples: the columns {', '.join(missing)} are missing (see bogie.fleet.sampling.sample.COLUMNS)"
         )
-    if isinstance(chunk_rows, bool) or not isinstance(chunk_rows, int) or chunk_rows < 1:
-        raise ValueError(f"chunk_rows = {chunk_rows!r}: must be a whole number >= 1 [-]")
+    check_value("chunk_rows", chunk_rows, low=1, whole=True)
     # the columns' Python scalars, as to_dict("records") gives them, at a third of its cost
     columns = {c: samples[c].tolist() for c in samples.columns}
     chunks = [{c: v[i : i + chunk_rows] for c, v in columns.items()} for i in range(0, len(samples), chunk_rows)]

@@ -25,6 +25,7 @@ from bogie.metrics import p as deviation_p
 from bogie.params import Bogie
 from bogie.presets import STAGE1_CHASSIS_DEFLECTION, triaxle_stage1
 from bogie.ranges import check_positive
+from bogie.settings import check_value
 from bogie.steel.fe.frame import DOF_NAMES, FrameModel, FrameSolution, beam_local_stiffness
 
 __all__ = [
@@ -110,8 +111,7 @@ class MeshOptions:
             check_positive(name, getattr(self, name), unit)
         if self.tyre_longitudinal_stiffness is not None:
             check_positive("tyre_longitudinal_stiffness", self.tyre_longitudinal_stiffness, "N/m", allow_zero=True)
-        if not (math.isfinite(self.drag_link_rise) and abs(self.drag_link_rise) <= 0.5):
-            raise ValueError(f"drag_link_rise = {self.drag_link_rise!r} is out of range: must be in [-0.5, 0.5] m")
+        check_value("drag_link_rise", self.drag_link_rise, "m", low=-0.5, high=0.5)
 
 
 @dataclass(frozen=True)
@@ -144,14 +144,10 @@ class BogieFEResult:
 
 
 def _check_loading(chassis_deflection: float, chassis_rotation: float) -> None:
-    if not (math.isfinite(chassis_deflection) and abs(chassis_deflection) <= 0.5):
-        raise ValueError(f"chassis_deflection = {chassis_deflection!r} is out of range: must be in [-0.5, 0.5] m")
+    check_value("chassis_deflection", chassis_deflection, "m", low=-0.5, high=0.5)
     limit = math.radians(10.0)
-    if not (math.isfinite(chassis_rotation) and abs(chassis_rotation) <= limit):
-        raise ValueError(
-            f"chassis_rotation = {chassis_rotation!r} is out of range: must be in [-{limit:.4f}, {limit:.4f}] rad "
-            "(10 degrees; the model is linear in small angles)"
-        )
+    note = "10 degrees; the model is linear in small angles"
+    check_value("chassis_rotation", chassis_rotation, "rad", low=-limit, high=limit, note=note)
 
 
 @dataclass
@@ -430,12 +426,10 @@ def figure2_points(
         Mesh properties; :class:`MeshOptions` defaults if None.
     """
     bogie = triaxle_stage1() if bogie is None else bogie
-    if not (math.isfinite(chassis_deflection) and 0.0 < chassis_deflection <= 0.5):
-        raise ValueError(f"chassis_deflection = {chassis_deflection!r} is out of range: must be in (0, 0.5] m")
+    check_value("chassis_deflection", chassis_deflection, "m", low=0.0, low_open=True, high=0.5)
     points = {}
     for slope in slopes_deg:
-        if not (math.isfinite(slope) and abs(slope) <= 10.0):
-            raise ValueError(f"slope = {slope!r} is out of range: must be in [-10, 10] degree")
+        check_value("slope", slope, "degree", low=-10.0, high=10.0)
         loads = fe_wheel_loads(bogie, chassis_deflection, math.radians(slope), drag_links, options)
         w_bar = loads / (chassis_deflection * bogie.combined_stiffness)
         points[float(slope)] = (bogie.q(0), float(deviation_p(w_bar)))

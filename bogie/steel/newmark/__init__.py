@@ -34,6 +34,7 @@ from numpy.typing import ArrayLike, NDArray
 from bogie import numerics
 from bogie.lu import lu_factor, lu_solve
 from bogie.ranges import check_positive
+from bogie.settings import check_value
 from bogie.steel.newmark.kernels import (
     MODEL_LINEAR,
     MODEL_NONLINEAR,
@@ -88,8 +89,7 @@ def generalized_alpha(rho_inf: float) -> tuple[float, float, float, float]:
     J. Chung, G. M. Hulbert, "A time integration algorithm for structural dynamics with improved numerical
     dissipation: the generalized-alpha method", Journal of Applied Mechanics, 60, 1993.
     """
-    if not 0.0 <= rho_inf <= 1.0:
-        raise ValueError(f"rho_inf = {rho_inf!r} is out of range: must be in [0, 1] (spectral radius, dimensionless)")
+    check_value("rho_inf", rho_inf, "-", low=0.0, high=1.0, note="spectral radius")
     alpha_m = (2.0 * rho_inf - 1.0) / (rho_inf + 1.0)
     alpha_f = rho_inf / (rho_inf + 1.0)
     gamma = 0.5 - alpha_m + alpha_f
@@ -139,10 +139,8 @@ def newmark_parameters(beta: float, gamma: float, rho_inf: float | None) -> tupl
     """(alpha_m, alpha_f, beta, gamma) for plain Newmark, or generalised-alpha when ``rho_inf`` is given."""
     if rho_inf is not None:
         return generalized_alpha(rho_inf)
-    if not (0.0 < beta <= 0.5):
-        raise ValueError(f"beta = {beta!r} is out of range: must be in (0, 0.5] (Newmark parameter, dimensionless)")
-    if not (0.5 <= gamma <= 1.0):
-        raise ValueError(f"gamma = {gamma!r} is out of range: must be in [0.5, 1] (Newmark parameter, dimensionless)")
+    check_value("beta", beta, "-", low=0.0, low_open=True, high=0.5, note="Newmark parameter")
+    check_value("gamma", gamma, "-", low=0.5, high=1.0, note="Newmark parameter")
     return 0.0, 0.0, beta, gamma
 
 

@@ -22,6 +22,7 @@ from numpy.typing import NDArray
 from bogie.params import Bogie
 from bogie.ranges import check_positive
 from bogie.results import Profile
+from bogie.settings import check_value
 from bogie.steel import nonlinear as nl
 from bogie.steel.force import core
 from bogie.steel.newmark import STATUS_TEXT, consistent_acceleration
@@ -158,19 +159,16 @@ class Phase:
 
     def __post_init__(self) -> None:
         check_positive("duration", self.duration, "s")
-        check_positive("dt", self.dt, "s")
-        if self.dt > self.duration:
-            raise ValueError(f"dt = {self.dt!r} is out of range: must be in (0, duration = {self.duration:g}] s")
+        check_value("dt", self.dt, "s", low=0.0, low_open=True, high=self.duration, note="at most the duration")
         if self.tolerance is not None:
             check_positive("tolerance", self.tolerance, "m")
             check_positive("max_step", self.max_step, "s")
         check_positive("speed", self.speed, "m/s", allow_zero=True)
         lf = self.load_factor if isinstance(self.load_factor, tuple) else (self.load_factor, self.load_factor)
         for value in lf:
-            if not (math.isfinite(value) and 0.0 < value <= 2.0):
-                raise ValueError(
-                    f"load_factor = {value!r} is out of range: must be in (0, 2] (fraction of the design payload, -)"
-                )
+            check_value(
+                "load_factor", value, "-", low=0.0, low_open=True, high=2.0, note="fraction of the design payload"
+            )
         if isinstance(self.reading, MeanReading):
             if not (0.0 <= self.reading.start < self.reading.end <= self.duration):
                 raise ValueError(
@@ -329,8 +327,7 @@ def run(
     phases = list(phases)
     if not phases:
         raise ValueError("phases is empty: give at least one Phase")
-    if isinstance(check_every, bool) or not isinstance(check_every, int) or check_every < 1:
-        raise ValueError(f"check_every = {check_every!r} is out of range: must be an integer >= 1 (steps)")
+    check_every = check_value("check_every", check_every, "steps", low=1, whole=True)
     c = nl.constants(bogie)  # the bogie's pack, tolerances and limits, computed once per bogie
     n = bogie.n_axles
     u, v, a, hist = _start(bogie, initial)
