@@ -15,23 +15,13 @@ from __future__ import annotations
 import argparse
 import sys
 from pathlib import Path
-from typing import Any
 
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.constants import GROUP_AXLES
-from bogie.fleet.sampling.sample import (
-    COLUMNS,
-    SCALAR_QUANTITIES,
-    TYRE_WEAR_COLUMNS,
-    VARIANTS,
-    design_seed,
-    road_seed,
-    sensor_seed,
-    study_frame,
-)
+from bogie.fleet.sampling.sample import COLUMNS, VARIANTS
 from bogie.fleet.sampling.sample import sample_fleet as fleet_sample
+from bogie.fleet.sampling.sensitivity import sensitivity_design
 from bogie.params import INHIBITORS
 from pipeline.atomic import run_stage, stage_inputs
 from pipeline.config import Config, ConfigError, load_config
@@ -47,76 +37,11 @@ def sample_fleet(config: Config) -> pd.DataFrame:
     return fleet_sample(config.fleet_study, config.fleet.n_bogies, config.seed, config.fleet.sampling)
 
 
-def sensitivity_problem(config: Config) -> dict[str, Any]:
-    """The SALib problem of the sensitivity design, over the unit hypercube.
-
-    One variable per factor, except tyre wear, which has one variable per axle of ``sensitivity.group`` (named
-    ``tyre_wear_<i>``) gathered in the SALib group ``tyre_wear``. Pass the same dict to
-    ``SALib.analyze.sobol.analyze`` with ``calc_second_order=False``.
-
-    Parameters
-    ----------
-    config
-        The validated parameters.
-
-    Returns
-    -------
-    dict
-        ``num_vars``, ``names``, ``bounds`` (all [0, 1]) and ``groups`` (one per factor, in the order of
-        ``sensitivity.factors``). A new dict at every call: SALib adds keys to the one it is given.
-    """
-    n_axles = GROUP_AXLES[config.sensitivity.group]
-    names: list[str] = []
-    groups: list[str] = []
-    for factor in config.sensitivity.factors:
-        members = list(TYRE_WEAR_COLUMNS[:n_axles]) if factor == "tyre_wear" else [factor]
-        names += members
-        groups += [factor] * len(members)
-    return {"num_vars": len(names), "names": names, "bounds": [[0.0, 1.0]] * len(names), "groups": groups}
-
-
 def sample_sensitivity(config: Config) -> pd.DataFrame:
-    """The Sobol' sensitivity design: SALib's Saltelli sampling of the factors, N (G + 2) rows.
-
-    The base bogie is the group's preset; each factor is mapped from SALib's unit design through the same
-    distribution as in the fleet, and every other quantity is held at its distribution's median. All rows share one
-    approach road, ``road_seed(seed, "sensitivity", 0)``: the road is a non-factor too, and a road per row would add
-    variance that no factor explains. So do the WIM sensor's errors, ``sensor_seed(seed, "sensitivity", 0)``.
-
-    Parameters
-    ----------
-    config
-        The validated parameters.
-
-    Returns
-    -------
-    pandas.DataFrame
-        Rows in SALib's order (``sample_id``), the columns of :data:`COLUMNS`, SI; ``base_id`` is the Saltelli
-        base row a row belongs to.
-    """
-    from SALib.sample import sobol  # here: the simulate stage's workers need none of it
-
+    """The Sobol' sensitivity design of params.yaml: :func:`bogie.fleet.sensitivity_design` of ``sensitivity.factors``
+    around ``sensitivity.group``'s base bogie, ``sensitivity.base_size`` base rows."""
     sens = config.sensitivity
-    problem = sensitivity_problem(config)
-    u = sobol.sample(
-        problem, sens.base_size, calc_second_order=False, scramble=True, seed=design_seed(config.seed, "sensitivity")
-    )
-    n = len(u)
-    n_groups = len(sens.factors)
-    values: dict[str, np.ndarray] = {}
-    for name in (*SCALAR_QUANTITIES, "road_class"):
-        values[name] = np.full(
-            n, config.distributions[name].quantile(0.5), dtype=object if name == "road_class" else float
-        )
-    for c in TYRE_WEAR_COLUMNS:
-        values[c] = np.full(n, config.distributions["tyre_wear"].quantile(0.5))
-    for j, name in enumerate(problem["names"]):
-        dist = config.distributions["tyre_wear" if name.startswith("tyre_wear_") else name]
-        values[name] = dist.ppf(u[:, j])
-    values["road_seed"] = np.full(n, road_seed(config.seed, "sensitivity", 0), dtype=np.int64)
-    values["sensor_seed"] = np.full(n, sensor_seed(config.seed, "sensitivity", 0), dtype=np.int64)
-    groups = np.full(n, sens.group, dtype=object)
-    return study_frame(config.fleet_study, "sensitivity", groups, values, np.arange(n) // (n_groups + 2))
+    return sensitivity_design(config.fleet_study, sens.factors, sens.group, sens.base_size, config.seed)
 
 
 def sample_ablation(config: Config, fleet: pd.DataFrame) -> pd.DataFrame:

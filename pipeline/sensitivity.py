@@ -1,7 +1,7 @@
 """DVC stage ``sensitivity``: Sobol' indices and the switch-off ablation -> data/sensitivity/, metrics/sensitivity.json.
 
 ``python -m pipeline.sensitivity`` reads the runs of the ``sensitivity`` study (SALib's Saltelli design over the
-five inhibitors, chassis tilt and tyre wear, see :func:`pipeline.sample.sample_sensitivity`) and of the
+five inhibitors, chassis tilt and tyre wear, see :func:`bogie.fleet.sensitivity_design`) and of the
 ``ablation`` study (fleet bogies with each inhibitor switched off), and writes:
 
 - first-order and total Sobol' indices with bootstrap confidence intervals of the inequality measures
@@ -33,6 +33,7 @@ from SALib.analyze import sobol
 from SALib.util import extract_group_names
 
 from bogie.fleet.sampling.sample import TYRE_WEAR_COLUMNS, design_seed
+from bogie.fleet.sampling.sensitivity import sensitivity_problem
 from bogie.fleet.weighing.survey import AXLE_LOAD_COLUMNS
 from bogie.rounding import json_number
 from pipeline.ablation import (
@@ -44,7 +45,6 @@ from pipeline.ablation import (
 )
 from pipeline.atomic import run_stage, stage_inputs
 from pipeline.config import Config, load_config
-from pipeline.sample import sensitivity_problem
 from pipeline.survey import read_runs, write_outputs
 
 #: inequality measures (result columns) whose Sobol' indices are computed
@@ -165,7 +165,7 @@ def saltelli_outputs(
     runs
         Runs of the sensitivity study under one protocol, any row order, failed rows included.
     problem
-        The SALib problem of the design (:func:`pipeline.sample.sensitivity_problem`).
+        The SALib problem of the design (:func:`bogie.fleet.sensitivity_problem`).
     base_size
         Base size N of the design [-].
     measures
@@ -367,7 +367,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     with stage_inputs("sensitivity"):
         config = load_config(args.params)
         sens = config.sensitivity
-        problem = sensitivity_problem(config)
+        problem = sensitivity_problem(sens.factors, sens.group)
         base = ["sample_id", "base_id", "protocol", "status", "message"]
         runs = read_runs(args.runs, "sensitivity", [*base, *problem["names"], *SOBOL_MEASURES])
         loads = ["n_axles", "chassis_tilt", *TYRE_WEAR_COLUMNS, *AXLE_LOAD_COLUMNS, "max_deviation", "p1"]

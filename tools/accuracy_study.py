@@ -26,11 +26,10 @@ import numpy as np
 ROOT = Path(__file__).resolve().parents[1]
 sys.path.insert(0, str(ROOT))
 
-from bogie.fleet import sample_fleet  # noqa: E402
+from bogie.fleet import sample_fleet, sensitivity_design  # noqa: E402
 from bogie.fleet.sampling.sample import bogie_from_sample  # noqa: E402
 from bogie.fleet.weighing.weigher import protocols as protocol  # noqa: E402
 from pipeline.config import load_config  # noqa: E402
-from pipeline.sample import sample_sensitivity  # noqa: E402 - the Saltelli design is the pipeline's (SALib)
 
 #: the reference's time step is the protocol's divided by this, in fixed steps
 DT_DIVISOR = 4
@@ -90,7 +89,9 @@ def main() -> None:
         static = dataclasses.replace(static, step_tolerance=args.static_tolerance)
     fleet = sample_fleet(config.fleet_study, config.fleet.n_bogies, config.seed, config.fleet.sampling)
     fleet = fleet.head(args.fleet).to_dict("records")
-    design = sample_sensitivity(config).head(args.sensitivity).to_dict("records")
+    sens = config.sensitivity
+    design = sensitivity_design(config.fleet_study, sens.factors, sens.group, sens.base_size, config.seed)
+    design = design.head(args.sensitivity).to_dict("records")
     load = " ".join(f"{x:.2f}" for x in os.getloadavg())
     print(f"static step_tolerance {getattr(static, 'step_tolerance', None)} m, dt {static.dt} s; reference: fixed "
           f"steps of dt / {DT_DIVISOR}; load average {load}")  # fmt: skip

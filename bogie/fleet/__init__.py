@@ -5,6 +5,7 @@ concern:
 
 - :mod:`.sampling`: :class:`Fleet` and :func:`sample_fleet`, what varies between the bogies and how (one
   distribution per quantity, :mod:`.sampling.distributions`), drawn from one seeded Latin hypercube or Sobol' design;
+  :func:`sensitivity_design`, the Sobol' sensitivity design (SALib's Saltelli sampling) of chosen quantities;
 - :mod:`.weighing`: :class:`StaticProtocol`, :class:`WimProtocol` and :func:`weigh_fleet`, each bogie weighed on a
   static weighbridge and by a weigh-in-motion pass over a random ISO 8608 road, one run row each, a failure a row
   with its reason; :func:`survey_tables`, the roadside-survey statistics of the runs; :func:`compare`, the runs'

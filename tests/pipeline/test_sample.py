@@ -15,6 +15,7 @@ import yaml
 from SALib.analyze import sobol as sobol_analyze
 
 from bogie.fleet.sampling.sample import COLUMNS, TYRE_WEAR_COLUMNS, VARIANTS, bogie_from_sample, road_seed, sensor_seed
+from bogie.fleet.sampling.sensitivity import sensitivity_problem
 from bogie.params import GRAVITY, INHIBITORS, design_spring_loads
 from pipeline.config import ConfigError, load_params, parse_config
 from pipeline.sample import (
@@ -24,7 +25,6 @@ from pipeline.sample import (
     sample_fleet,
     sample_sensitivity,
     sample_studies,
-    sensitivity_problem,
     write_parquet_atomic,
 )
 
@@ -53,6 +53,11 @@ def small_raw(**changes):
             node = node[key]
         node[last] = value
     return raw
+
+
+def design_problem(config):
+    """The SALib problem of the config's sensitivity design (:func:`bogie.fleet.sensitivity_problem`)."""
+    return sensitivity_problem(config.sensitivity.factors, config.sensitivity.group)
 
 
 @pytest.fixture(scope="module")
@@ -197,7 +202,7 @@ def test_ablation_takes_the_first_fleet_bogies(config, studies):
 
 # ---- the sensitivity design --------------------------------------------------------------------------------------
 def test_sensitivity_design_has_n_times_groups_plus_two_rows_with_tyre_wear_as_one_group(config, studies):
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     n_groups = len(config.sensitivity.factors)
     # five inhibitors, chassis tilt and tyre wear; three tyre wears, one group
     assert n_groups == 7 and problem["num_vars"] == 9
@@ -220,8 +225,8 @@ def test_sensitivity_holds_non_factors_at_their_median_and_one_road(config, stud
 
 def test_saltelli_blocks_change_one_factor_group_at_a_time(config, studies):
     design = studies["sensitivity"]
-    names = sensitivity_problem(config)["names"]
-    groups = sensitivity_problem(config)["groups"]
+    names = design_problem(config)["names"]
+    groups = design_problem(config)["groups"]
     block = design[design["base_id"] == 3][names].to_numpy()
     a = block[0]
     for k, factor in enumerate(dict.fromkeys(groups)):
@@ -236,7 +241,7 @@ def test_salib_analysis_of_the_design_finds_the_only_influential_group():
     # seeds is about 0.15 at N = 16 (this seed gives 1.29) and under 0.01 at N = 512
     config = parse_config(small_raw(sensitivity__base_size=512))
     design = sample_sensitivity(config)
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     y = design[list(TYRE_WEAR_COLUMNS)].sum(axis=1).to_numpy()  # depends on tyre wear only
     indices = sobol_analyze.analyze(problem, y, calc_second_order=False, num_resamples=20, seed=1)
     total = dict(zip(dict.fromkeys(problem["groups"]), indices["ST"]))

@@ -14,10 +14,11 @@ from SALib.sample import sobol as sobol_sample
 from SALib.test_functions import Ishigami
 
 from bogie.fleet.sampling.sample import VARIANTS
+from bogie.fleet.sampling.sensitivity import sensitivity_problem
 from bogie.fleet.weighing.weigher import result_row
 from pipeline.ablation import SensitivityDataError, ablation_effects, ablation_pairs
 from pipeline.config import load_params, parse_config
-from pipeline.sample import sample_studies, sensitivity_problem
+from pipeline.sample import sample_studies
 from pipeline.schema import RESULT_COLUMNS, write_runs_file
 from pipeline.sensitivity import (
     bootstrap_seed,
@@ -51,6 +52,11 @@ def small_raw():
     raw["sensitivity"]["bootstrap_resamples"] = 200
     raw["ablation"]["n_bogies"] = 12
     return raw
+
+
+def design_problem(config):
+    """The SALib problem of the config's sensitivity design (:func:`bogie.fleet.sensitivity_problem`)."""
+    return sensitivity_problem(config.sensitivity.factors, config.sensitivity.group)
 
 
 @pytest.fixture(scope="module")
@@ -120,7 +126,7 @@ def test_ishigami_indices_match_the_closed_form_within_the_bootstrap_interval():
 
 
 def test_the_design_path_recovers_an_additive_models_indices_ranking_and_groups(config, sens_runs):
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     design = saltelli_outputs(sens_runs, problem, BASE_SIZE)
     assert design.n_blocks == BASE_SIZE and design.excluded.empty
     table = sobol_table(design, problem, 200, 0.95, seed=5)
@@ -162,7 +168,7 @@ def test_reference_check_tells_an_unresolved_ranking_from_a_resolved_one():
 
 # ---- failed and missing data --------------------------------------------------------------------------------------
 def test_failed_runs_drop_their_whole_saltelli_block_and_are_listed(config, sens_runs):
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     runs = sens_runs.copy()
     bad = runs["sample_id"].isin([19, 20, 901])  # blocks 2 (two runs) and 100 of G + 2 = 9 runs each
     runs.loc[bad, ["status", "message", "max_deviation", "p1", "road_wear_factor"]] = ["failed", "diverged", 0, 0, 0]
@@ -182,12 +188,12 @@ def test_too_many_failures_refuse_with_their_count_and_ids(config, sens_runs):
     failed_ids = np.arange(20) * 9 * 5  # the first run of every fifth block of 9: 20 blocks of 256, 7.8 % > 5 %
     runs.loc[runs["sample_id"].isin(failed_ids), ["status", "message"]] = ["failed", "Newton failed at t = 2 s"]
     with pytest.raises(SensitivityDataError, match=r"20 of 2304 sensitivity runs failed \(sample_id 0, 45, 90") as e:
-        saltelli_outputs(runs, sensitivity_problem(config), BASE_SIZE)
+        saltelli_outputs(runs, design_problem(config), BASE_SIZE)
     assert "20 x 'Newton failed at t = 2 s'" in str(e.value) and "more than 5%" in str(e.value)
 
 
 def test_missing_duplicated_or_foreign_runs_are_refused(config, sens_runs):
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     with pytest.raises(SensitivityDataError, match=r"1 are missing: sample_id 33;"):
         saltelli_outputs(sens_runs[sens_runs["sample_id"] != 33], problem, BASE_SIZE)
     with pytest.raises(SensitivityDataError, match="sample_id 5 twice"):
@@ -199,14 +205,14 @@ def test_missing_duplicated_or_foreign_runs_are_refused(config, sens_runs):
 def test_rows_out_of_saltelli_order_are_refused(config, sens_runs):
     runs = sens_runs.sort_values("sample_id").reset_index(drop=True)
     # swap the factor values of two rows of block 3 (AB_1 and AB_2), keeping their ids: no longer Saltelli's cross
-    names = sensitivity_problem(config)["names"]
+    names = design_problem(config)["names"]
     runs.loc[[28, 29], names] = runs.loc[[29, 28], names].to_numpy()
     with pytest.raises(SensitivityDataError, match=r"not in SALib's Saltelli order: block 3 \(sample_id 27-35\)"):
-        saltelli_outputs(runs, sensitivity_problem(config), BASE_SIZE)
+        saltelli_outputs(runs, design_problem(config), BASE_SIZE)
 
 
 def test_a_constant_or_non_finite_output_has_no_indices(config):
-    problem = sensitivity_problem(config)
+    problem = design_problem(config)
     n = 4 * (len(config.sensitivity.factors) + 2)
     with pytest.raises(SensitivityDataError, match="constant"):
         sobol_indices(problem, np.full(n, 0.02), 10, 0.95, seed=1)
