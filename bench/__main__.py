@@ -10,6 +10,7 @@ BENCHMARKS = (
     "bench.bench_linear",
     "bench.bench_nonlinear",
     "bench.bench_single_run",
+    "bench.bench_newton",
     "bench.bench_pipeline",
     "bench.bench_protocol",
     "bench.bench_stage",
