@@ -74,3 +74,33 @@ def test_the_project_holds_the_house_issue_42_asks_for():
     assert m["private_imports_across_packages"] == []
     assert m["modules_over_500"] == []
     assert m["functions_over_60"] == []
+
+
+def _pipeline_imports(path: Path) -> set[str]:
+    """What ``path`` imports from ``pipeline``: each ``pipeline.module.name`` (``import pipeline.x``: itself)."""
+    import ast
+
+    found = set()
+    for node in ast.walk(ast.parse(path.read_text())):
+        if isinstance(node, ast.ImportFrom) and node.module and node.module.split(".")[0] == "pipeline":
+            found |= {f"{node.module}.{alias.name}" for alias in node.names}
+        elif isinstance(node, ast.Import):
+            found |= {alias.name for alias in node.names if alias.name.split(".")[0] == "pipeline"}
+    return found
+
+
+def test_the_tools_sample_and_weigh_through_the_library_reading_params_yaml_through_its_one_reader():
+    # issue 42 Must 4: tools/ uses bogie.fleet; params.yaml has one reader, the pipeline's (its units and the project's
+    # rules are there), so a tool that studies the project's fleet reads the file through it and nothing else of the
+    # pipeline; tools/dvc_deps.py rewrites dvc.yaml's code deps from the pipeline's own file lists
+    allowed = {"pipeline.config.load_config"}
+    for path in sorted((ROOT / "tools").glob("*.py")):
+        if path.name == "dvc_deps.py":
+            continue
+        assert _pipeline_imports(path) <= allowed, (path.name, _pipeline_imports(path) - allowed)
+
+
+def test_a_tool_that_samples_through_the_pipeline_is_seen(tmp_path):
+    tool = tmp_path / "study.py"
+    tool.write_text("import pipeline.sample\nfrom pipeline.config import load_config\nfrom bogie.fleet import Fleet\n")
+    assert _pipeline_imports(tool) == {"pipeline.sample", "pipeline.config.load_config"}

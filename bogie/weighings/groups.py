@@ -21,6 +21,7 @@ from bogie.group_names import GROUP_OF_AXLES
 from bogie.settings import check_value
 from bogie.weighings._groups_core import split_groups
 from bogie.weighings._records import REL_TOL
+from bogie.weighings.settings import GROUP_FILTER, POSITIONS
 
 __all__ = [
     "GROUPING_RULES", "GROUP_SPACING_M", "GROUP_TABLE_COLUMNS", "POSITIONS", "SIZES", "US_TANDEM_M", "axle_groups",
@@ -37,8 +38,6 @@ US_TANDEM_M: tuple[float, float] = (40 * 0.0254, 96 * 0.0254)
 GROUPING_RULES: tuple[str, ...] = ("spacing", "us-tandem")
 #: group labels by number of axles (:mod:`bogie.group_names`)
 SIZES: dict[int, str] = GROUP_OF_AXLES
-#: group positions a filter can ask for
-POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
 #: most axles in a group's columns of the group table [-] (a group with more is labelled ``other``)
 _GROUP_COLUMNS = 3
 #: the columns of the group table (:func:`axle_groups`), in order; units in its docstring
@@ -86,7 +85,7 @@ def axle_groups(
         ``group_load`` [kg], ``axle_load_1..3`` [kg] (front first; NaN past the group's axles or for a group of
         more than three) and ``spacing_1..2`` [m].
     """
-    check_value("group_spacing_m", group_spacing_m, "m", low=0.0, high=5.0, low_open=True)
+    GROUP_FILTER["group_spacing"].check("group_spacing_m", group_spacing_m)
     if rule not in GROUPING_RULES:
         raise ValueError(f"rule = {rule!r} unknown; allowed: {', '.join(GROUPING_RULES)}")
     columns = list(GROUP_TABLE_COLUMNS)
@@ -148,9 +147,8 @@ def filter_groups(
         (lowest, highest) speed kept, inclusive, 0 <= lowest <= highest <= 160 [km/h]; None keeps every speed,
         a range drops groups of unknown speed.
     """
-    check_value("min_group_load_kg", min_group_load_kg, "kg", low=0.0, high=100_000.0)
-    if position not in POSITIONS:
-        raise ValueError(f"position = {position!r} unknown; allowed: {', '.join(POSITIONS)}")
+    GROUP_FILTER["min_group_load"].check("min_group_load_kg", min_group_load_kg)
+    GROUP_FILTER["position"].check("position", position)
     keep = groups["group_load"].to_numpy() >= min_group_load_kg
     if position != "all":
         keep &= (groups["position"] == position).to_numpy(dtype=bool)

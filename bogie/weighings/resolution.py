@@ -27,14 +27,13 @@ from dataclasses import dataclass, field
 import numpy as np
 from numba import njit
 
+from bogie.weighings.settings import GROUP_FILTER, MAX_RESOLUTION_KG, WEIGHT_STEPS_KG
+
 __all__ = [
     "MAX_CHANCE", "MAX_RESOLUTION_KG", "ON_GRID_SHARE", "TOLERANT_FROM", "WEIGHT_STEPS_KG", "Resolution",
     "ResidueCounts", "check_resolution_kg", "detect_resolution",
 ]  # fmt: skip
 
-#: the weight steps a file's resolution is detected among [kg] (MON files are seen at 10 kg and at 100 kg; CASTOR,
-#: BeDIT, DITIS and TMG 2001 write kg/100)
-WEIGHT_STEPS_KG: tuple[int, ...] = (1, 2, 5, 10, 20, 50, 100, 200, 500, 1000)
 assert all(WEIGHT_STEPS_KG[-1] % s == 0 for s in WEIGHT_STEPS_KG)  # ResidueCounts.add's one histogram
 #: the least share of the axle loads on (or near) a multiple of a step for the step to be supported [-]: a real
 #: file's odd loads (a WIM system's correction, a hand-edited record) are tolerated up to 1 in 100. A convention of
@@ -47,8 +46,6 @@ MAX_CHANCE: float = 1e-6
 #: the one-unit tolerance applies to steps of at least this many units [-]: below, "near" covers 30 % or more of
 #: all residues and says little
 TOLERANT_FROM: int = 10
-#: the largest resolution a user may set [kg] (the coarsest candidate step)
-MAX_RESOLUTION_KG: float = float(WEIGHT_STEPS_KG[-1])
 
 
 def check_resolution_kg(value: float | None, unit_kg: float | None, name: str = "resolution_kg") -> float | None:
@@ -56,11 +53,7 @@ def check_resolution_kg(value: float | None, unit_kg: float | None, name: str = 
     and a whole multiple of the format's unit ``unit_kg`` (a scale cannot read finer than its file can write)."""
     if value is None:
         return None
-    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value):
-        raise ValueError(f"{name} = {value!r}: a weight resolution is a number of kilograms in (0, "
-                         f"{MAX_RESOLUTION_KG:g}] kg, or none to detect it from the file")  # fmt: skip
-    if not 0.0 < value <= MAX_RESOLUTION_KG:
-        raise ValueError(f"{name} = {value!r} kg outside the allowed range (0, {MAX_RESOLUTION_KG:g}] kg")
+    GROUP_FILTER["resolution_kg"].check(name, value, note="None: detect it from the file")
     if unit_kg is not None:
         units = value / unit_kg
         if abs(units - round(units)) > 1e-9 * units or round(units) < 1:

@@ -1,29 +1,25 @@
 """The params.yaml form of a distribution: one pydantic model per ``kind``, a union tagged by ``kind``.
 
-Each model holds the parameters exactly as written in params.yaml, in the unit of the quantity's key; its
+Each model is made from the library's distribution class of its kind (:func:`spec_model`): its keys are the class's
+parameters, with their defaults, and nothing else is declared here. It holds the parameters exactly as written in
+params.yaml, in the unit of the quantity's key (but those the class names ``dimensionless``); its
 :meth:`DistributionSpec.build` makes the sampling class of :mod:`bogie.fleet.sampling.distributions` from them, which
-checks the rules that span parameters (``low < high``, one weight per value) and raises
+checks every parameter's rule (``sd > 0``, ``low < high``, one weight per value) and raises
 :class:`~bogie.fleet.sampling.distributions.ParameterError`. The conversion to SI and the check against the physical
 range of the quantity are done per quantity by :mod:`pipeline.config.schema`.
 """
 
 from __future__ import annotations
 
-import math
+import dataclasses
+import functools
+import operator
+import typing
 from typing import Annotated, Any, ClassVar, Literal
 
-from pydantic import BaseModel, ConfigDict, Field
+from pydantic import BaseModel, ConfigDict, Field, create_model
 
-from bogie.fleet.sampling.distributions import (
-    Choice,
-    Constant,
-    Distribution,
-    LogNormal,
-    LogUniform,
-    Normal,
-    TruncNormal,
-    Uniform,
-)
+from bogie.fleet.sampling.distributions import KINDS, Choice, Constant, Distribution
 from bogie.road import ISO8608_CLASSES
 
 #: ISO 8608 road roughness classes, smoothest first
@@ -32,11 +28,6 @@ ROAD_CLASSES: tuple[str, ...] = tuple(ISO8608_CLASSES)
 
 #: a road class label
 RoadClass = Literal[ROAD_CLASSES]  # type: ignore[valid-type]
-
-
-def dimensionless(**constraints: Any) -> Any:
-    """A parameter without unit whatever the quantity (``sigma``, ``weights``) [-]."""
-    return Field(json_schema_extra={"unit": "-"}, **constraints)
 
 
 class Strict(BaseModel):
@@ -64,94 +55,45 @@ class DistributionSpec(Strict):
         return self.sampler(**{k: tuple(v) if isinstance(v, list) else v for k, v in args.items()})
 
 
-class ConstantSpec(DistributionSpec):
-    """``{kind: constant, value}``: every sample is ``value``."""
-
-    kind: Literal["constant"]
-    value: float
-    sampler: ClassVar[type[Distribution]] = Constant
-
-
-class UniformSpec(DistributionSpec):
-    """``{kind: uniform, low, high}``."""
-
-    kind: Literal["uniform"]
-    low: float
-    high: float
-    sampler: ClassVar[type[Distribution]] = Uniform
+def _annotation(hint: Any, labels: bool) -> Any:
+    """The params.yaml type of a library distribution's parameter: a number (a road class label for a categorical
+    quantity), a list for a tuple."""
+    if hint is float:
+        return float
+    if hint == (float | str) or hint is Any:  # a value: a label of a categorical quantity
+        return RoadClass if labels else float
+    if typing.get_origin(hint) is tuple:
+        return list[_annotation(typing.get_args(hint)[0], labels)]
+    args = typing.get_args(hint)
+    if type(None) in args:
+        return _annotation(next(a for a in args if a is not type(None)), labels) | None
+    raise TypeError(f"a distribution parameter of type {hint!r} has no params.yaml form")
 
 
-class LogUniformSpec(DistributionSpec):
-    """``{kind: loguniform, low, high}`` with low > 0."""
-
-    kind: Literal["loguniform"]
-    low: float = Field(gt=0.0)
-    high: float
-    sampler: ClassVar[type[Distribution]] = LogUniform
-
-
-class NormalSpec(DistributionSpec):
-    """``{kind: normal, mean, sd}`` with sd > 0 (unbounded)."""
-
-    kind: Literal["normal"]
-    mean: float
-    sd: float = Field(gt=0.0)
-    sampler: ClassVar[type[Distribution]] = Normal
-
-
-class TruncNormalSpec(DistributionSpec):
-    """``{kind: truncnormal, mean, sd, low, high}``: the mean and sd of the parent normal, sd > 0."""
-
-    kind: Literal["truncnormal"]
-    mean: float
-    sd: float = Field(gt=0.0)
-    low: float
-    high: float
-    sampler: ClassVar[type[Distribution]] = TruncNormal
-
-
-class LogNormalSpec(DistributionSpec):
-    """``{kind: lognormal, median, sigma, low: optional, high: optional}``; sigma of ln x [-], truncated if given."""
-
-    kind: Literal["lognormal"]
-    median: float = Field(gt=0.0)
-    sigma: float = dimensionless(gt=0.0)
-    low: float = Field(0.0, ge=0.0)
-    high: float = math.inf
-    sampler: ClassVar[type[Distribution]] = LogNormal
-
-
-class ChoiceSpec(DistributionSpec):
-    """``{kind: choice, values, weights: optional}``: one of the numbers ``values``, with relative ``weights``."""
-
-    kind: Literal["choice"]
-    values: list[float] = Field(min_length=1)
-    weights: list[float] | None = dimensionless(default=None)
-    sampler: ClassVar[type[Distribution]] = Choice
-
-
-class LabelConstantSpec(DistributionSpec):
-    """``{kind: constant, value}`` for a categorical quantity: every sample is the label ``value``."""
-
-    kind: Literal["constant"]
-    value: RoadClass
-    sampler: ClassVar[type[Distribution]] = Constant
-
-
-class LabelChoiceSpec(DistributionSpec):
-    """``{kind: choice, values, weights: optional}`` for a categorical quantity: one of the labels ``values``."""
-
-    kind: Literal["choice"]
-    values: list[RoadClass] = Field(min_length=1)
-    weights: list[float] | None = dimensionless(default=None)
-    sampler: ClassVar[type[Distribution]] = Choice
+def spec_model(sampler: type[Distribution], labels: bool = False) -> type[DistributionSpec]:
+    """The params.yaml model of the library's distribution ``sampler``: ``kind`` and one key per parameter of the
+    class, in its order, with its default; the values are checked by the class itself when :meth:`build` makes it
+    (:class:`~bogie.fleet.sampling.distributions.ParameterError`), so that a parameter's rule is written once, there.
+    ``labels``: for a categorical quantity (a road class label for a number)."""
+    hints = typing.get_type_hints(sampler)
+    fields: dict[str, Any] = {"kind": (Literal[sampler.kind], ...)}
+    required, _optional = sampler.parameter_names()
+    for f in dataclasses.fields(sampler):
+        default = {} if f.name in required else {"default": f.default}
+        unit = {"json_schema_extra": {"unit": "-"}} if f.name in sampler.dimensionless else {}
+        fields[f.name] = (_annotation(hints[f.name], labels), Field(**default, **unit))
+    written = ", ".join(["kind: " + sampler.kind, *(f.name for f in dataclasses.fields(sampler))])
+    summary = (sampler.__doc__ or "").strip().splitlines()[0]
+    model = create_model(
+        f"{'Label' if labels else ''}{sampler.__name__}Spec", __base__=DistributionSpec,
+        __doc__=f"``{{{written}}}``: {summary}", **fields,
+    )  # fmt: skip
+    model.sampler = sampler
+    return model
 
 
 #: a distribution of a numeric quantity, by ``kind``
-NumericSpec = Annotated[
-    ConstantSpec | UniformSpec | LogUniformSpec | NormalSpec | TruncNormalSpec | LogNormalSpec | ChoiceSpec,
-    Field(discriminator="kind"),
-]
+NumericSpec = Annotated[functools.reduce(operator.or_, map(spec_model, KINDS.values())), Field(discriminator="kind")]
 
 #: a distribution of a categorical quantity (road class), by ``kind``
-LabelSpec = Annotated[LabelChoiceSpec | LabelConstantSpec, Field(discriminator="kind")]
+LabelSpec = Annotated[spec_model(Choice, labels=True) | spec_model(Constant, labels=True), Field(discriminator="kind")]

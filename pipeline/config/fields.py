@@ -9,19 +9,19 @@ holds as :class:`~pipeline.config.si.FrozenMap`.
 from __future__ import annotations
 
 import dataclasses
-from collections.abc import Callable
+from collections.abc import Mapping
 from pathlib import Path
 from typing import Any, ClassVar, Literal
 
 from pydantic import AfterValidator, Field, ValidationInfo, create_model, field_validator, model_validator
 
 from bogie.bogie_file import BogieFileError, base_bogie, is_bogie_file
-from bogie.fleet.constants import GROUP_AXLES, SUSPENSIONS
+from bogie.fleet.constants import GROUP_AXLES
 from bogie.presets import PRESETS
-from bogie.settings import Setting, declared
+from bogie.settings import TOTAL_TOLERANCE, MapSetting, Setting, declared
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error
-from pipeline.config.si import UNITS
+from pipeline.config.si import TONNE, UNITS
 
 
 def number(unit: str, si: str | None = None, **bounds: float) -> Any:
@@ -55,11 +55,6 @@ def power_of_two(n: int) -> int:
     return n
 
 
-def _group_map(name: str, base: type[Strict], annotation: Any, field: Callable[[], Any], doc: str) -> type[Strict]:
-    """A model with one field per axle group of :data:`GROUP_AXLES`, in that order."""
-    return create_model(name, __base__=base, __doc__=doc, **{group: (annotation, field()) for group in GROUP_AXLES})
-
-
 class _Map(Strict):
     """A mapping of fixed keys (axle groups, suspensions): a :class:`~pipeline.config.si.FrozenMap` in the config."""
 
@@ -67,11 +62,17 @@ class _Map(Strict):
 
 
 class _Mix(_Map):
+    """A map whose values must sum to ``total`` (the library's :attr:`bogie.settings.MapSetting.total`)."""
+
+    total: ClassVar[float] = 1.0
+
     @model_validator(mode="after")
-    def _sums_to_one(self) -> _Mix:
+    def _sums_to_total(self) -> _Mix:
         fractions = self.model_dump()
-        if abs(sum(fractions.values()) - 1.0) > 1e-9:
-            raise config_error("", fractions, f"the fractions must sum to 1, they sum to {sum(fractions.values()):g}")
+        if abs(sum(fractions.values()) - self.total) > TOTAL_TOLERANCE:
+            raise config_error(
+                "", fractions, f"the fractions must sum to {self.total:g}, they sum to {sum(fractions.values()):g}"
+            )
         return self
 
 
@@ -98,7 +99,10 @@ def _inside_bogies(name: str) -> None:
                            f"followed): copy the bogie file into {BOGIES_DIR}/")  # fmt: skip
 
 
-class _Presets(_Map):
+class GroupPresets(_Map):
+    """``fleet.presets``: a group's preset or bogie file, with the group's number of axles; a bogie file in the
+    project's ``bogies/`` (:func:`_inside_bogies`)."""
+
     @field_validator("*")
     @classmethod
     def _axles_match(cls, name: str, info: ValidationInfo) -> str:
@@ -117,44 +121,6 @@ class _Presets(_Map):
         if bogie.n_axles != n_axles:
             raise config_error("", name, f"has {bogie.n_axles} axles but a {group} has {n_axles}")
         return name
-
-
-AxleMix = _group_map(
-    "AxleMix",
-    _Mix,
-    float,
-    lambda: number("[-] (a fraction)", ge=0.0, le=1.0),
-    "``fleet.axle_mix``: the fraction of the fleet in each axle group [-], summing to 1.",
-)
-SuspensionShares = create_model(
-    "SuspensionShares",
-    __base__=_Mix,
-    __doc__="One axle group's fractions of steel-equalised and air-sprung groups [-], summing to 1.",
-    **{kind: (float, number("[-] (a fraction)", ge=0.0, le=1.0)) for kind in SUSPENSIONS},
-)
-SuspensionMix = _group_map(
-    "SuspensionMix",
-    _Map,
-    SuspensionShares,
-    lambda: Field(default_factory=lambda: SuspensionShares(steel=1.0, air=0.0)),
-    "``fleet.suspension_mix``: per axle group, the fractions of steel-equalised and air-sprung groups [-].",
-)
-GroupPresets = _group_map(
-    "GroupPresets",
-    _Presets,
-    str,
-    lambda: named("preset or bogie file"),
-    "``fleet.presets``: the base bogie of each group, with the group's number of axles: a bogie.params preset's name "
-    "or a bogie file's path relative to the project root (``docs/bogie-file.md``; keep it in ``bogies/``, the folder "
-    "dvc.yaml lists).",
-)
-GroupLoads = _group_map(
-    "GroupLoads",
-    _Map,
-    float,
-    lambda: number("t", si="N", gt=0.0, le=200.0),
-    "``fleet.legal_group_load_t``: the legal load of each axle group, both sides [t].",
-)
 
 
 #: a project bound stricter than the library's: (the bound's name ``ge``/``gt``/``le``/``lt``, its value in the key's
@@ -196,30 +162,45 @@ def library_model(
 
 def declared_fields(
     model: str,
-    library: type,
+    library: type | Mapping[str, Setting | MapSetting],
     attrs: list[str],
     units: dict[str, str] | None = None,
     bounds: dict[str, list[Bound]] | None = None,
     names: dict[str, str] | None = None,
+    required: dict[str, str] | None = None,
+    maps: dict[str, type[Strict]] | None = None,
 ) -> dict[str, dict[str, tuple[Any, Any]]]:
-    """The schema fields of the declared settings ``attrs`` of ``library``, by attribute: ``{attr: {key: (annotation,
-    field)}}``, the key the attribute's name with the suffix of its unit (:mod:`pipeline.config.si`), its type,
-    range, unit and doc the declaration's.
+    """The schema fields of the declared settings ``attrs`` of ``library`` (a settings class, or a function's
+    declared arguments by name), by attribute: ``{attr: {key: (annotation, field)}}``, the key the attribute's name
+    with the suffix of its unit (:mod:`pipeline.config.si`), its type, range, unit and doc the declaration's; a
+    mapping setting (:class:`bogie.settings.MapSetting`) is a model of its keys (:func:`map_model`).
 
     Only what the YAML adds is given here: ``units``, a field's unit in the YAML where it is not the library's
-    (``sensor_axle_error``: ``%`` where the library takes a fraction), and ``bounds``, the project's stricter
-    bounds by key, each with its reason (a bound that is not stricter than the library's is refused when the model
-    is made); ``names``, what a name field's value is, in the messages (``sensor``: ``sensor type``). A key of a
-    setting that may be None may be left out (None)."""
-    units, bounds, names = units or {}, bounds or {}, names or {}
-    settings = declared(library)
+    (``sensor_axle_error``: ``%`` where the library takes a fraction; ``legal_axle_load``: ``t`` where it takes N),
+    and ``bounds``, the project's stricter bounds by key, each with its reason (a bound that is not stricter than the
+    library's is refused when the model is made; a mapping's bound holds for each of its values); ``names``, what a
+    name field's value is, in the messages (``sensor``: ``sensor type``); ``required``, a setting the library lets be
+    None that the project requires, with the reason; ``maps``, the base model of a mapping whose values the project
+    checks further (``presets``: a bogie file must lie in ``bogies/``). A key of a setting that may be None may be
+    left out (None)."""
+    units, bounds, names, required, maps = units or {}, bounds or {}, names or {}, required or {}, maps or {}
+    settings = declared(library) if isinstance(library, type) else dict(library)
+    owner = library.__name__ if isinstance(library, type) else model
     out: dict[str, dict[str, tuple[Any, Any]]] = {}
     for attr in attrs:
         spec = settings[attr]
         unit = units.get(attr, spec.unit)
-        suffix, factor, _si = UNITS.get(unit, ("", 1.0, unit))
+        suffix, factor, si = _yaml_unit(unit, spec.unit)
         key = attr + suffix
-        default = {"default": None} if spec.optional else {}
+        if isinstance(spec, MapSetting):
+            default = _library_default(library, attr) if spec.optional else None
+            made = map_model(model, attr, spec, unit, bounds.get(key, ()), default, maps.get(attr), names.get(attr))
+            extra = {"unit": unit, **si}
+            factory = {} if default is None else {"default_factory": lambda made=made, d=default: made(**d)}
+            out[attr] = {key: (made, Field(description=spec.doc, json_schema_extra=extra, **factory))}
+            continue
+        optional = spec.optional and attr not in required
+        default = {"default": None} if optional else {}
         if spec.choices is not None:
             annotation: Any = Literal[spec.choices]
             field = Field(json_schema_extra={"what": names.get(attr, attr)}, description=spec.doc, **default)
@@ -228,14 +209,71 @@ def declared_fields(
             limits = _library_limits(spec, factor)
             for which, value, _reason in bounds.get(key, ()):
                 _stricter(model, key, limits, which, value)
-            field = Field(description=spec.doc, json_schema_extra={"unit": unit}, **limits, **default)
-        if spec.optional:
+            field = Field(description=spec.doc, json_schema_extra={"unit": unit, **si}, **limits, **default)
+        if optional:
             annotation = annotation | None
         out[attr] = {key: (annotation, field)}
     unknown = set(bounds) - {key for made in out.values() for key in made}
     if unknown:
-        raise TypeError(f"{model}: bounds for keys {sorted(unknown)} that {library.__name__} does not declare")
+        raise TypeError(f"{model}: bounds for keys {sorted(unknown)} that {owner} does not declare")
     return out
+
+
+def _yaml_unit(unit: str, library_unit: str) -> tuple[str, float, dict[str, str]]:
+    """A YAML unit's key suffix, its factor to the library's unit, and the ``si`` a tonne needs (a load: N; a mass:
+    kg; :mod:`pipeline.config.si`)."""
+    suffix, factor, _si = UNITS.get(unit, ("", 1.0, unit))
+    if factor is None:
+        if library_unit not in TONNE:
+            raise TypeError(f"a key in {unit} needs a library unit of {' or '.join(TONNE)}, not {library_unit}")
+        return suffix, TONNE[library_unit], {"si": library_unit}
+    return suffix, factor, {}
+
+
+def _library_default(library: Any, attr: str) -> Any:
+    """The library class's default of the field ``attr`` (its factory's value)."""
+    found = next(f for f in dataclasses.fields(library) if f.name == attr)
+    return found.default_factory() if found.default_factory is not dataclasses.MISSING else found.default
+
+
+def map_model(
+    model: str,
+    attr: str,
+    spec: MapSetting,
+    unit: str,
+    bounds: tuple[Bound, ...] | list[Bound] = (),
+    default: Mapping[str, Any] | None = None,
+    base: type[Strict] | None = None,
+    what: str | None = None,
+) -> type[Strict]:
+    """The model of a mapping setting: one field per key of ``spec.keys``, in that order, each required unless the
+    library gives a ``default`` (the project requires every key: a fleet names each group), each value declared by
+    ``spec.entry`` in the YAML's ``unit`` with the project's ``bounds`` (a mapping of mappings: a model per value);
+    summing to ``spec.total`` if it has one. Named after ``attr`` (``axle_mix``: ``AxleMix``)."""
+    name = "".join(word.capitalize() for word in attr.split("_"))
+    entry = spec.entry
+    fields: dict[str, Any] = {}
+    for key in spec.keys:
+        keep = {} if default is None else {"default_factory": (lambda v=default[key]: v)}
+        if isinstance(entry, MapSetting):
+            sub = map_model(model, f"{attr}_entry", entry, entry.unit, (), default[key] if default else None)
+            if default is not None:
+                keep = {"default_factory": lambda sub=sub, v=default[key]: sub(**v)}
+            fields[key] = (sub, Field(description=entry.doc, **keep))
+        elif entry is None:
+            fields[key] = (str, Field(json_schema_extra={"what": what or attr}, **keep))
+        else:
+            _suffix, factor, si = _yaml_unit(unit, entry.unit)
+            limits = _library_limits(entry, factor)
+            for which, value, _reason in bounds:
+                _stricter(model, f"{attr}.{key}", limits, which, value)
+            field = Field(json_schema_extra={"unit": unit, **si}, **limits, **keep)
+            fields[key] = (int if entry.whole else float, field)
+    parent = base or (_Mix if spec.total is not None else _Map)
+    made = create_model(name, __base__=parent, __doc__=spec.doc, **fields)
+    if spec.total is not None:
+        made.total = spec.total
+    return made
 
 
 def _library_limits(spec: Setting, factor: float) -> dict[str, float]:

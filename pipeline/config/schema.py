@@ -27,16 +27,15 @@ from bogie.fleet.constants import (
     SURVEY_PROTOCOLS,
 )
 from bogie.fleet.design.settings import DesignSettings
-from bogie.fleet.sampling.sample import SAMPLINGS
+from bogie.fleet.sampling.sample import SAMPLING_SETTINGS
+from bogie.fleet.sampling.sample import Fleet as FleetStudy
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.settings import declared
+from bogie.weighings.settings import GROUP_FILTER
 from pipeline.config.distributions import Strict
 from pipeline.config.errors import config_error, rule_error
 from pipeline.config.fields import (
-    AxleMix,
-    GroupLoads,
     GroupPresets,
-    SuspensionMix,
     declared_fields,
     distinct,
     integer,
@@ -51,11 +50,10 @@ from pipeline.config.si import FrozenMap, ToConfig
 from pipeline.resources import MAX_JOBS
 
 BACKENDS: tuple[str, ...] = ("loky", "dask")
-#: the formats and group positions of bogie.weighings (``auto`` and formats.FORMATS, groups.POSITIONS), written out
-#: here so that every stage's code (all of them import this schema) does not depend on the readers; a test keeps them
-#: equal. ``auto``: the one layout the file's first lines fit (bogie.weighings.readers.detect_format)
+#: the record formats of bogie.weighings (``auto`` and formats.FORMATS), written out here so that every stage's code
+#: (all of them import this schema) does not depend on the readers; a test keeps them equal. ``auto``: the one layout
+#: the file's first lines fit (bogie.weighings.readers.detect_format)
 OBSERVED_FORMATS: tuple[str, ...] = ("auto", "csv", "mon", "castor", "bedit", "ditis", "tmg2001", "tmg2013")
-OBSERVED_POSITIONS: tuple[str, ...] = ("all", "steer", "drive", "trailer")
 #: the formats the survey stage can write the fleet's WIM readings in (bogie.weighings.writers.write_weighings):
 #: not the TMG editions, whose records need a station, an FHWA vehicle class and a compass direction the simulated
 #: fleet does not have
@@ -69,26 +67,32 @@ OTHER_SECTIONS: tuple[str, ...] = ("figure2",)
 
 
 # ---- sections ----------------------------------------------------------------------------------------------------
-class Fleet(Strict):
-    """``fleet:`` the fleet study."""
-
-    n_bogies: int = integer(1, 10_000_000)
-    """Number of bogies."""
-    sampling: Literal[SAMPLINGS] = named("sampling method")  # type: ignore[valid-type]
-    """``lhs`` (Latin hypercube) or ``sobol`` (scrambled Sobol'), both from scipy.stats.qmc."""
-    axle_mix: AxleMix  # type: ignore[valid-type]
-    """Fraction of the fleet in each axle group, summing to 1."""
-    # all steel when not given: the study of the steel bogies the inhibitors belong to
-    suspension_mix: SuspensionMix = Field(default_factory=lambda: SuspensionMix())  # type: ignore[valid-type]
-    """Per axle group, the fraction of its groups of each suspension (``steel``: leaf springs and equalisers, ``air``:
-    connected air springs), summing to 1."""
-    presets: GroupPresets  # type: ignore[valid-type]
-    """The base bogie of each group: a bogie.params preset's name or a bogie file's path relative to the project root
-    (``docs/bogie-file.md``), in the folder ``bogies/`` that dvc.yaml lists as a dependency."""
-    legal_group_load_t: GroupLoads = Field(json_schema_extra={"unit": "t", "si": "N"})  # type: ignore[valid-type]
-    """Legal load of each group, both sides together (a load: N in the config)."""
-    legal_axle_load_t: float = number("t", si="N", gt=0.0, le=100.0)
-    """Legal load of a single axle, both sides together (a load: N in the config)."""
+# ``fleet:``: the library's Fleet (but its distributions, which are ``distributions:``) and sample_fleet's other
+# arguments, each key's type, range, unit and doc declared there once (bogie.settings); here only the YAML's units, the
+# project's stricter bounds and rules, with why
+_FLEET_KEYS = {
+    **declared_fields(
+        "Fleet", SAMPLING_SETTINGS, ["n_bogies", "sampling"], names={"sampling": "sampling method"},
+        bounds={"n_bogies": [("le", 10_000_000, "a sanity cap: 10^7 bogies need about 30 GiB at the pipeline's peak "
+                              "(pipeline.sample.BYTES_PER_BOGIE)")]},
+    ),
+    **declared_fields(
+        "Fleet", FleetStudy, ["axle_mix", "suspension_mix", "presets", "legal_group_load", "legal_axle_load"],
+        units={"legal_group_load": "t", "legal_axle_load": "t"},
+        names={"presets": "preset or bogie file"},
+        bounds={
+            "legal_group_load_t": [("le", 200.0, "a sanity cap, far above any legal group load (24 t for an EU "
+                                    "tri-axle): more was most likely given in another unit")],
+            "legal_axle_load_t": [("le", 100.0, "a sanity cap, far above any legal axle load (10-11.5 t in the EU)")],
+        },
+        required={"legal_axle_load": "the road stage's over-limit counts and the survey's need it"},
+        maps={"presets": GroupPresets},
+    ),
+}  # fmt: skip
+Fleet = create_model(
+    "Fleet", __base__=Strict, __doc__="``fleet:`` the fleet study (see :class:`bogie.fleet.Fleet`).",
+    **{key: made for fields in _FLEET_KEYS.values() for key, made in fields.items()},
+)  # fmt: skip
 
 
 # ``protocol.static`` and ``protocol.wim``: the library's settings classes, each key, type, range, unit and doc
@@ -242,7 +246,7 @@ def observed_path(value: str | None) -> str | None:
     return "/".join(parts)
 
 
-class Observed(Strict):
+class _ObservedFile(Strict):
     """``observed:`` an observed survey (WIM or weighbridge records) to hold against the simulated fleet."""
 
     path: Annotated[str | None, AfterValidator(observed_path)] = Field(
@@ -256,18 +260,18 @@ class Observed(Strict):
     format: Literal[OBSERVED_FORMATS] = named("record format")  # type: ignore[valid-type]
     """Its record format: ``auto`` (the one layout the file's first lines fit), ``csv``, ``mon``, ``castor``, ``bedit``
     or ``ditis`` (``docs/weighings.md``)."""
-    # bogie.weighings.groups.filter_groups' range
-    min_group_load_t: float = number("t", si="kg", ge=0.0, le=100.0)
-    """Smallest group load kept, observed and simulated groups alike (a mass, as the weighings give it)."""
-    # bogie.weighings.groups.axle_groups' range
-    group_spacing_m: float = number("m", gt=0.0, le=5.0)
-    """Largest spacing of two axles of one observed group."""
-    position: Literal[OBSERVED_POSITIONS] = named("group position")  # type: ignore[valid-type]
-    """Group position kept: ``all``, ``steer``, ``drive`` or ``trailer``."""
-    # bogie.weighings.resolution.check_resolution_kg's range; a multiple of the format's unit, checked by the reader.
-    # A default, so that a params.yaml written before the key still reads
-    resolution_kg: float | None = Field(default=None, gt=0.0, le=1000.0, json_schema_extra={"unit": "kg"})
-    """The file's weight resolution, applied to the simulated readings; None: detected from the file's loads."""
+
+
+# the group filter's keys: bogie.weighings.settings.GROUP_FILTER's declarations (filter_groups', axle_groups' and
+# check_resolution_kg's own), with the YAML's tonnes; resolution_kg may be left out (None), so that a params.yaml
+# written before the key still reads, and is checked against the format's weight unit by the reader
+Observed = create_model(
+    "Observed", __base__=_ObservedFile, __doc__=_ObservedFile.__doc__,
+    **{key: made for fields in declared_fields(
+        "Observed", GROUP_FILTER, list(GROUP_FILTER), units={"min_group_load": "t"},
+        names={"position": "group position"},
+    ).values() for key, made in fields.items()},
+)  # fmt: skip
 
 
 class Survey(Strict):

@@ -13,6 +13,7 @@ from typing import Any
 
 from bogie.fleet.sampling.sample import FLEET_QUANTITIES, Fleet
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
+from bogie.settings import declared
 from pipeline.config import schema
 from pipeline.config.si import FrozenMap, config_class
 
@@ -49,11 +50,7 @@ def _fleet_study(config: Any) -> Fleet:
     fleet = config.fleet
     return Fleet(
         distributions={name: config.distributions[name] for name in FLEET_QUANTITIES},
-        axle_mix=fleet.axle_mix,
-        presets=fleet.presets,
-        legal_group_load=fleet.legal_group_load,
-        legal_axle_load=fleet.legal_axle_load,
-        suspension_mix=fleet.suspension_mix,
+        **{name: getattr(fleet, name) for name in declared(Fleet)},
     )
 
 

@@ -28,6 +28,7 @@ import yaml
 from pydantic import ValidationError
 
 from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
+from bogie.fleet.sampling.sample import SAMPLINGS
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
 from bogie.weighings.readers import (
@@ -47,7 +48,6 @@ from pipeline.config.schema import (
     OBSERVED_DIR,
     OTHER_SECTIONS,
     PROTOCOLS,
-    SAMPLINGS,
     Params,
     observed_path,
 )

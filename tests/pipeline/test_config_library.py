@@ -158,11 +158,11 @@ def test_a_setting_out_of_range_is_named_with_what_is_allowed_and_its_unit():
             check_settings(self, KeyError, "Demo.")
 
     assert Demo(step=2.0, count=2, spare=0.0).step == 2.0
-    with pytest.raises(KeyError, match=r"Demo.step = 2.5: must be a finite number in \(0, 2\] \[degree\]"):
+    with pytest.raises(KeyError, match=r"Demo.step = 2.5 is out of range: must be in \(0, 2\] degree"):
         Demo(step=2.5)
-    with pytest.raises(KeyError, match=r"Demo.count = 2.0: must be a whole number >= 2 \[-\]"):
+    with pytest.raises(KeyError, match=r"Demo.count = 2.0 is not a whole number \(float\): .* >= 2 -"):
         Demo(count=2.0)
-    with pytest.raises(KeyError, match=r"Demo.spare = -1: must be a finite number >= 0, or None \[m\]"):
+    with pytest.raises(KeyError, match=r"Demo.spare = -1 is out of range: must be >= 0 m, or None"):
         Demo(spare=-1)
 
 
@@ -216,3 +216,49 @@ def test_the_fleet_sections_load_into_the_librarys_fleet_every_field_from_a_key(
     from pipeline.validate import as_json
 
     assert "fleet_study" not in as_json(config)  # derived: data/config.json would repeat fleet: and distributions:
+
+
+def test_every_fleet_key_is_declared_in_the_library_with_its_unit_range_and_doc():
+    """``fleet:``'s keys are made from the declarations of the library's Fleet and of sample_fleet's arguments
+    (bogie.settings): each key's doc is the declaration's; a mapping's keys are the declaration's and each value's
+    range is the library's, or stricter by a stated project bound; the YAML's tonnes are the library's newtons."""
+    from bogie.fleet.sampling.sample import SAMPLING_SETTINGS, Fleet
+    from bogie.params import GRAVITY
+    from bogie.settings import MapSetting
+
+    specs = {**declared(Fleet), **SAMPLING_SETTINGS}
+    for key, info in schema.Fleet.model_fields.items():
+        name = attribute(key, info)[0]
+        spec = specs[name]
+        assert info.description == spec.doc, name
+        if not isinstance(spec, MapSetting):
+            continue
+        entries = info.annotation.model_fields
+        assert tuple(entries) == spec.keys, name
+        if isinstance(spec.entry, Setting):
+            unit = (info.json_schema_extra or {})["unit"]
+            factor = 1000.0 * GRAVITY if unit == "t" else 1.0
+            for entry in entries.values():
+                low, low_open, high, _ = _schema_limits(entry, factor)
+                assert (low, low_open) == (spec.entry.low, spec.entry.low_open), name
+                assert spec.entry.contains(high), (name, high)
+    # the project's stricter bounds, each stated with its reason where the keys are made
+    assert _bounds(schema.Fleet.model_fields["legal_group_load_t"].annotation.model_fields["tandem"]) == {
+        "gt": 0.0, "le": 200.0}  # fmt: skip
+    assert _bounds(schema.Fleet.model_fields["n_bogies"]) == {"ge": 1, "le": 10_000_000}
+    # the library lets legal_axle_load be None; the project requires it (the road stage's over-limit counts)
+    assert schema.Fleet.model_fields["legal_axle_load_t"].is_required()
+    assert not specs["legal_axle_load"].contains(-1.0) and specs["legal_axle_load"].contains(None)
+
+
+def test_a_fleet_entry_out_of_the_declared_range_is_refused_by_the_library_and_the_yaml_alike(raw):
+    from bogie.fleet import Fleet, FleetError
+
+    config = parse_config(raw)
+    fleet = config.fleet_study
+    with pytest.raises(FleetError, match=r"legal_group_load\['tandem'\] = -1.0"):
+        dataclasses.replace(fleet, legal_group_load={**fleet.legal_group_load, "tandem": -1.0})
+    raw["fleet"]["legal_group_load_t"]["tandem"] = 0.0
+    with pytest.raises(Exception, match=r"fleet.legal_group_load_t.tandem = 0.0: must be a number in \(0, 200\] t"):
+        parse_config(raw)
+    assert Fleet is type(fleet)

@@ -10,6 +10,7 @@ import hashlib
 import json
 import shutil
 import tempfile
+import typing
 from pathlib import Path
 
 import numpy as np
@@ -24,7 +25,7 @@ from bogie.params import GRAVITY
 from bogie.weighings.formats import FORMATS
 from bogie.weighings.groups import POSITIONS
 from pipeline.config import load_params, parse_config
-from pipeline.config.schema import OBSERVED_FORMATS, OBSERVED_POSITIONS
+from pipeline.config.schema import OBSERVED_FORMATS, Observed
 from pipeline.observed import GROUPS_SCHEMA, SIMULATED_SCHEMA, main, simulated_readings, simulated_statistics
 from pipeline.sample import sample_studies
 from pipeline.schema import runs_frame, verified_table, write_runs_file
@@ -99,7 +100,9 @@ def test_the_tables_columns_are_the_librarys_each_with_a_type_and_a_unit():
 
 def test_the_schema_offers_the_formats_and_positions_of_the_readers():
     assert OBSERVED_FORMATS == ("auto", *FORMATS)
-    assert OBSERVED_POSITIONS == POSITIONS
+    # the group filter's keys are made from the library's declarations (bogie.weighings.settings.GROUP_FILTER)
+    assert typing.get_args(Observed.model_fields["position"].annotation) == POSITIONS
+    assert Observed.model_fields["min_group_load_t"].metadata[-1].le == 100.0  # 100 000 kg in the YAML's tonnes
 
 
 def test_simulated_readings_leave_out_failed_airborne_and_light_groups_and_count_them(tmp_path):

@@ -47,6 +47,7 @@ from bogie.fleet.calibration.table import (
 )
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, TILTED_QUANTITIES, WIM_QUANTITIES
 from bogie.fleet.sampling.distributions import TruncNormal
+from bogie.weighings.settings import GROUP_FILTER
 from bogie.weighings.stats import at_resolution
 from bogie.weighings.survey import ObservedSurvey
 
@@ -265,16 +266,11 @@ def _check_problem(
         if not lo < fit[q][0] < fit[q][1] < hi:
             unit = CALIBRATION_QUANTITIES[q][2]
             raise CalibrationError(f"fit[{q!r}] = {tuple(fit[q])!r}: must lie strictly within the fleet distribution's "
-                                   f"support ({lo:g}, {hi:g}) [{unit}]")  # fmt: skip
+                                   f"support ({lo:g}, {hi:g}) {unit}")  # fmt: skip
     missing = [q for q in ORDER if q not in base]
     if missing:
         raise CalibrationError(f"base: no value for {', '.join(missing)} (base_values gives every quantity)")
-    if (
-        isinstance(min_group_load_kg, bool)
-        or not isinstance(min_group_load_kg, (int, float))
-        or not 0.0 <= min_group_load_kg < math.inf
-    ):
-        raise CalibrationError(f"min_group_load_kg = {min_group_load_kg!r}: must be a finite number >= 0 [kg]")
+    GROUP_FILTER["min_group_load"].check("min_group_load_kg", min_group_load_kg, CalibrationError)
 
 
 def make_problem(

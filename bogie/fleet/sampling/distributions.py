@@ -108,6 +108,9 @@ class Distribution:
     """Base of the distributions: a name (``kind``), a support and a vectorised inverse CDF."""
 
     kind: ClassVar[str] = ""
+    #: the parameters without unit whatever the quantity's (a log-normal's ``sigma``, a choice's ``weights``); the
+    #: others are in the quantity's unit
+    dimensionless: ClassVar[tuple[str, ...]] = ()
 
     def ppf(self, u: Any) -> np.ndarray:
         """Inverse cumulative distribution function at design points ``u`` in [0, 1) [unit of the quantity]."""
@@ -276,6 +279,7 @@ class LogNormal(Distribution):
     low: float = 0.0
     high: float = math.inf
     kind: ClassVar[str] = "lognormal"
+    dimensionless: ClassVar[tuple[str, ...]] = ("sigma",)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.median) and self.median > 0.0):
@@ -325,6 +329,7 @@ class Choice(Distribution):
 
     values: tuple[Any, ...]
     weights: tuple[float, ...] | None = None
+    dimensionless: ClassVar[tuple[str, ...]] = ("weights",)
     kind: ClassVar[str] = "choice"
 
     def __post_init__(self) -> None:

@@ -14,10 +14,9 @@ of row order, chunking and the number of workers.
 from __future__ import annotations
 
 import functools
-import math
 import warnings
 from collections.abc import Mapping
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
@@ -45,11 +44,12 @@ from bogie.params import (
 )
 from bogie.presets import PRESETS
 from bogie.road import ISO8608_CLASSES
+from bogie.settings import MapSetting, Setting, declared, documented, map_setting, setting
 
 __all__ = [
-    "COLUMNS", "FLEET_QUANTITIES", "SAMPLINGS", "SCALAR_QUANTITIES", "TYRE_WEAR_COLUMNS", "VARIANTS", "Fleet",
-    "FleetError", "bogie_from_sample", "design_bogie", "design_seed", "road_seed", "sample_fleet", "sensor_seed",
-    "study_frame", "suspension_draw", "suspensions",
+    "COLUMNS", "FLEET_QUANTITIES", "SAMPLINGS", "SAMPLING_SETTINGS", "SCALAR_QUANTITIES", "TYRE_WEAR_COLUMNS",
+    "VARIANTS", "Fleet", "FleetError", "bogie_from_sample", "design_bogie", "design_seed", "road_seed", "sample_fleet",
+    "sensor_seed", "study_frame", "suspension_draw", "suspensions",
 ]  # fmt: skip
 
 #: ablation variants: the baseline, each inhibitor switched off alone, and all five off
@@ -113,37 +113,42 @@ FLEET_QUANTITIES: tuple[str, ...] = (*SCALAR_QUANTITIES, "tyre_wear", "road_clas
 
 #: the uniform designs of the unit hypercube: Latin hypercube, scrambled Sobol' (scipy.stats.qmc)
 SAMPLINGS: tuple[str, ...] = ("lhs", "sobol")
-#: a mix's fractions must sum to 1 within this [-]
-_MIX_TOLERANCE = 1e-9
+#: :func:`sample_fleet`'s arguments other than the fleet, declared once (:mod:`bogie.settings`): params.yaml's
+#: ``fleet.n_bogies`` and ``fleet.sampling`` are built from these
+SAMPLING_SETTINGS: dict[str, Setting] = {
+    "n_bogies": Setting("-", "Number of bogies.", low=1, whole=True),
+    "sampling": Setting(
+        "-", "``lhs`` (Latin hypercube) or ``sobol`` (scrambled Sobol'), both from scipy.stats.qmc.", choices=SAMPLINGS
+    ),
+    "seed": Setting("-", "Master seed: the design, each bogie's road, WIM sensor errors and suspension draw.", low=0,
+                    whole=True),
+}  # fmt: skip
+#: a fraction of a mix [-]
+_FRACTION = Setting("-", "A fraction.", low=0.0, high=1.0)
 
 
 class FleetError(ValueError):
     """A fleet that cannot be sampled: the message names the argument, its value and what is allowed."""
 
 
-def _fractions(name: str, mix: Mapping[str, float], labels: tuple[str, ...]) -> dict[str, float]:
-    unknown = [k for k in mix if k not in labels]
-    if unknown or not mix:
-        raise FleetError(f"{name} = {dict(mix)!r}: keys must be among {', '.join(labels)} (at least one) [-]")
-    values = {str(k): float(v) for k, v in mix.items()}
-    bad = {k: v for k, v in values.items() if not (math.isfinite(v) and 0.0 <= v <= 1.0)}
-    if bad:
-        raise FleetError(f"{name} = {dict(mix)!r}: each fraction must lie in [0, 1] [-]")
-    if abs(sum(values.values()) - 1.0) > _MIX_TOLERANCE:
-        raise FleetError(f"{name} = {dict(mix)!r}: the fractions must sum to 1, they sum to {sum(values.values()):g}")
-    return values
-
-
-def _count(name: str, value: Any) -> int:
-    if isinstance(value, bool) or not isinstance(value, (int, np.integer)) or value < 1:
-        raise FleetError(f"{name} = {value!r}: must be a whole number, at least 1 [-]")
-    return int(value)
+def _fractions(name: str, mix: Mapping[str, Any], spec: MapSetting) -> dict[str, float]:
+    """A mix checked by its declaration (keys among ``spec.keys``, each fraction in [0, 1], summing to 1), as floats."""
+    spec.check(name, mix, FleetError)
+    return {str(k): float(v) for k, v in mix.items()}
 
 
 def _all_steel() -> dict[str, dict[str, float]]:
     return {g: {"steel": 1.0, "air": 0.0} for g in GROUP_AXLES}
 
 
+#: a group's suspension mix: the fractions of steel-equalised and air-sprung groups [-]
+_SUSPENSION_SHARES = MapSetting(
+    "-", "One axle group's fractions of steel-equalised and air-sprung groups, summing to 1.", SUSPENSIONS, _FRACTION,
+    total=1.0,
+)  # fmt: skip
+
+
+@documented
 @dataclass(frozen=True)
 class Fleet:
     """What varies between the bogies of a fleet, and how: the input of :func:`sample_fleet`.
@@ -155,29 +160,36 @@ class Fleet:
         :class:`~bogie.fleet.sampling.distributions.Distribution` (``road_class`` a ``Choice`` of ISO 8608 labels). A
         sample outside a quantity's physical range (:mod:`bogie.params`) is not refused here: its weighings are
         rows with ``status = "failed"`` and the reason.
-    axle_mix
-        Fraction of the fleet in each axle group (``tandem``, ``triaxle``) [-], summing to 1.
-    presets
-        Each group's base bogie: a :data:`bogie.presets.PRESETS` name or the path of a bogie file
-        (:func:`bogie.bogie_file.load_bogie`, ``docs/bogie-file.md``; relative to the working directory, which must be
-        the same for every process that rebuilds a bogie from a sample row) with the group's number of axles. The
-        sample rows' ``preset`` column holds it as given.
-    legal_group_load
-        Each group's legal load, both sides together [N]: its design payload (:func:`design_bogie`).
-    legal_axle_load
-        Legal load of a single axle, both sides together [N] (the survey's over-limit counts), or None.
-    suspension_mix
-        Per group, the fraction of ``steel`` (leaf springs and equalisers) and ``air`` (connected air springs,
-        :mod:`bogie.air`) groups [-], each summing to 1. Default: every group steel, the bogies the
-        reference's inhibitors belong to.
     """
 
+    # every field but the distributions declared once here, its unit, range and doc as data (bogie.settings): the
+    # docstring's other parameters and params.yaml's fleet: keys are made from these
     distributions: Mapping[str, Distribution]
-    axle_mix: Mapping[str, float]
-    presets: Mapping[str, str]
-    legal_group_load: Mapping[str, float]
-    legal_axle_load: float | None = None
-    suspension_mix: Mapping[str, Mapping[str, float]] = field(default_factory=_all_steel)
+    axle_mix: Mapping[str, float] = map_setting(
+        unit="-", doc="Fraction of the fleet in each axle group, summing to 1.", keys=GROUP_AXLES, entry=_FRACTION,
+        total=1.0,
+    )  # fmt: skip
+    presets: Mapping[str, str] = map_setting(
+        unit="-", keys=GROUP_AXLES,
+        doc="Each group's base bogie, with the group's number of axles: a bogie.presets.PRESETS name or the path of a "
+        "bogie file (bogie.bogie_file.load_bogie, docs/bogie-file.md; relative to the working directory, which must be "
+        "the same for every process that rebuilds a bogie from a sample row), held as given in the sample rows' preset "
+        "column.",
+    )  # fmt: skip
+    legal_group_load: Mapping[str, float] = map_setting(
+        unit="N", keys=GROUP_AXLES, entry=Setting("N", "A group's legal load.", low=0.0, low_open=True),
+        doc="Legal load of each group, both sides together: its design payload (design_bogie).",
+    )  # fmt: skip
+    legal_axle_load: float | None = setting(
+        None, unit="N", low=0.0, low_open=True,
+        doc="Legal load of a single axle, both sides together (the survey's over-limit counts); None: no limit given.",
+    )  # fmt: skip
+    suspension_mix: Mapping[str, Mapping[str, float]] = map_setting(
+        unit="-", keys=GROUP_AXLES, entry=_SUSPENSION_SHARES, default_factory=_all_steel,
+        doc="Per axle group, the fraction of its groups of each suspension (steel: leaf springs and equalisers, air: "
+        "connected air springs, bogie.air), summing to 1. Default: every group steel, the bogies the reference's "
+        "inhibitors belong to.",
+    )  # fmt: skip
 
     def __post_init__(self) -> None:
         missing = [q for q in FLEET_QUANTITIES if q not in self.distributions]
@@ -198,39 +210,41 @@ class Fleet:
                 f"distributions['road_class'] = {road!r}: must be a Choice or Constant of ISO 8608 classes "
                 f"({', '.join(ISO8608_CLASSES)})"
             )
-        mix = _fractions("axle_mix", self.axle_mix, tuple(GROUP_AXLES))
+        specs = declared(Fleet)
+        mix = _fractions("axle_mix", self.axle_mix, specs["axle_mix"])
         # the groups in a fixed order, fewest axles first: the order is part of the design
         object.__setattr__(self, "axle_mix", {g: mix[g] for g in GROUP_AXLES if g in mix})
         for name, table in (("presets", self.presets), ("legal_group_load", self.legal_group_load)):
             lacking = [g for g in self.axle_mix if g not in table]
             if lacking:
                 raise FleetError(f"{name} = {dict(table)!r}: a value is needed for {', '.join(lacking)}")
+        for name in ("presets", "legal_group_load", "legal_axle_load"):
+            specs[name].check(name, getattr(self, name), FleetError)
         for g in self.axle_mix:
-            name = self.presets[g]
-            if name not in PRESETS and not is_bogie_file(name):
-                raise FleetError(
-                    f"presets[{g!r}] = {name!r}: must be one of {', '.join(PRESETS)} or a bogie file's path (.yaml)"
-                )
-            try:
-                n_axles = base_bogie(name).n_axles
-            except ValueError as exc:
-                raise FleetError(f"presets[{g!r}] = {name!r}: {exc}") from None
-            if n_axles != GROUP_AXLES[g]:
-                raise FleetError(
-                    f"presets[{g!r}] = {self.presets[g]!r} has {n_axles} axles but a {g} has {GROUP_AXLES[g]} [-]"
-                )
-            load = float(self.legal_group_load[g])
-            if not (math.isfinite(load) and load > 0.0):
-                raise FleetError(f"legal_group_load[{g!r}] = {load!r}: must be a finite load > 0 [N]")
-        if self.legal_axle_load is not None and not (math.isfinite(self.legal_axle_load) and self.legal_axle_load > 0):
-            raise FleetError(f"legal_axle_load = {self.legal_axle_load!r}: must be a finite load > 0 [N], or None")
-        suspension = {}
-        for g in self.axle_mix:
-            if g not in self.suspension_mix:
-                raise FleetError(f"suspension_mix = {dict(self.suspension_mix)!r}: a mix is needed for {g}")
-            suspension[g] = _fractions(f"suspension_mix[{g!r}]", self.suspension_mix[g], SUSPENSIONS)
-            suspension[g].setdefault("air", 0.0)
+            _check_preset(g, self.presets[g])
+        if g_missing := [g for g in self.axle_mix if g not in self.suspension_mix]:
+            raise FleetError(f"suspension_mix = {dict(self.suspension_mix)!r}: a mix is needed for {g_missing[0]}")
+        specs["suspension_mix"].check("suspension_mix", self.suspension_mix, FleetError)
+        suspension = {g: {str(k): float(v) for k, v in self.suspension_mix[g].items()} for g in self.axle_mix}
+        for shares in suspension.values():
+            shares.setdefault("air", 0.0)
         object.__setattr__(self, "suspension_mix", suspension)
+
+
+def _check_preset(group: str, name: str) -> None:
+    """A group's preset: a preset's name or a readable bogie file with the group's number of axles."""
+    if name not in PRESETS and not is_bogie_file(name):
+        raise FleetError(
+            f"presets[{group!r}] = {name!r}: must be one of {', '.join(PRESETS)} or a bogie file's path (.yaml)"
+        )
+    try:
+        n_axles = base_bogie(name).n_axles
+    except ValueError as exc:
+        raise FleetError(f"presets[{group!r}] = {name!r}: {exc}") from None
+    if n_axles != GROUP_AXLES[group]:
+        raise FleetError(
+            f"presets[{group!r}] = {name!r} has {n_axles} axles but a {group} has {GROUP_AXLES[group]} [-]"
+        )
 
 
 # ---- the design bogie ------------------------------------------------------------------------------------------
@@ -422,11 +436,9 @@ def sample_fleet(fleet: Fleet, n_bogies: int, seed: int, sampling: str = "lhs") 
     pandas.DataFrame
         One row per bogie with the columns of :data:`COLUMNS`, SI.
     """
-    n = _count("n_bogies", n_bogies)
-    if sampling not in SAMPLINGS:
-        raise FleetError(f"sampling = {sampling!r}: must be one of {', '.join(SAMPLINGS)}")
-    if isinstance(seed, bool) or not isinstance(seed, (int, np.integer)) or seed < 0:
-        raise FleetError(f"seed = {seed!r}: must be a whole number >= 0 [-]")
+    for name, value in (("n_bogies", n_bogies), ("sampling", sampling), ("seed", seed)):
+        SAMPLING_SETTINGS[name].check(name, value, FleetError)
+    n = int(n_bogies)
     u = _unit_design(n, len(_FLEET_DIMENSIONS), sampling, design_seed(seed, "fleet"))
     mix = fleet.axle_mix
     values: dict[str, np.ndarray] = {}
