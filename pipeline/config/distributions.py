@@ -81,7 +81,8 @@ def spec_model(sampler: type[Distribution], labels: bool = False) -> type[Distri
     for f in dataclasses.fields(sampler):
         default = {} if f.name in required else {"default": f.default}
         unit = {"json_schema_extra": {"unit": "-"}} if f.name in sampler.dimensionless else {}
-        fields[f.name] = (_annotation(hints[f.name], labels), Field(**default, **unit))
+        bound = {"gt": 0.0} if f.name in sampler.positive else {"ge": 0.0} if f.name in sampler.nonnegative else {}
+        fields[f.name] = (_annotation(hints[f.name], labels), Field(**default, **unit, **bound))
     written = ", ".join(["kind: " + sampler.kind, *(f.name for f in dataclasses.fields(sampler))])
     summary = (sampler.__doc__ or "").strip().splitlines()[0]
     model = create_model(

@@ -100,11 +100,12 @@ def test_the_tag_of_a_distribution_is_not_part_of_the_key_and_the_unit_is_the_qu
             "missing key distributions.tyre_wear_mm.high: expected a number in mm (kind uniform takes low, high)",
         )
     ]
-    # sigma is dimensionless (the library's LogNormal.dimensionless): no unit, where the median is in the quantity's
-    (sigma,) = line(Params, error("float_type", ["distributions", "bush_damping", "lognormal", "sigma"], "wide"))
-    assert sigma[1] == "distributions.bush_damping.sigma = 'wide': must be a number"
+    # sigma is dimensionless (the library's LogNormal.dimensionless): no unit, where the median is in the quantity's;
+    # both > 0 (LogNormal.positive)
+    (sigma,) = line(Params, error("greater_than", ["distributions", "bush_damping", "lognormal", "sigma"], 0, gt=0.0))
+    assert sigma[1] == "distributions.bush_damping.sigma = 0: must be a number > 0"
     (median,) = line(Params, error("float_type", ["distributions", "bush_damping", "lognormal", "median"], "big"))
-    assert median[1] == "distributions.bush_damping.median = 'big': must be a number in N m s/rad"
+    assert median[1] == "distributions.bush_damping.median = 'big': must be a number > 0 N m s/rad"
 
 
 def test_a_bad_kind_is_reported_at_the_kind_key():

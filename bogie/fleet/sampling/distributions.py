@@ -111,6 +111,10 @@ class Distribution:
     #: the parameters without unit whatever the quantity's (a log-normal's ``sigma``, a choice's ``weights``); the
     #: others are in the quantity's unit
     dimensionless: ClassVar[tuple[str, ...]] = ()
+    #: the parameters that must be > 0, and those that must be >= 0, as data for params.yaml's form (the class's
+    #: ``__post_init__`` refuses them otherwise; tests/test_fleet_distributions.py holds the two together)
+    positive: ClassVar[tuple[str, ...]] = ()
+    nonnegative: ClassVar[tuple[str, ...]] = ()
 
     def ppf(self, u: Any) -> np.ndarray:
         """Inverse cumulative distribution function at design points ``u`` in [0, 1) [unit of the quantity]."""
@@ -191,6 +195,7 @@ class LogUniform(Distribution):
     low: float
     high: float
     kind: ClassVar[str] = "loguniform"
+    positive: ClassVar[tuple[str, ...]] = ("low",)
 
     def __post_init__(self) -> None:
         if not self.low > 0.0:
@@ -217,6 +222,7 @@ class Normal(Distribution):
     mean: float
     sd: float
     kind: ClassVar[str] = "normal"
+    positive: ClassVar[tuple[str, ...]] = ("sd",)
 
     def __post_init__(self) -> None:
         _finite("mean", self.mean)
@@ -244,6 +250,7 @@ class TruncNormal(Distribution):
     low: float
     high: float
     kind: ClassVar[str] = "truncnormal"
+    positive: ClassVar[tuple[str, ...]] = ("sd",)
 
     def __post_init__(self) -> None:
         Normal(self.mean, self.sd)
@@ -280,6 +287,8 @@ class LogNormal(Distribution):
     high: float = math.inf
     kind: ClassVar[str] = "lognormal"
     dimensionless: ClassVar[tuple[str, ...]] = ("sigma",)
+    positive: ClassVar[tuple[str, ...]] = ("median", "sigma")
+    nonnegative: ClassVar[tuple[str, ...]] = ("low",)
 
     def __post_init__(self) -> None:
         if not (math.isfinite(self.median) and self.median > 0.0):

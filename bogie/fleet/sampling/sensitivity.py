@@ -155,7 +155,13 @@ def sensitivity_design(fleet: Fleet, factors: Sequence[str], group: str, base_si
     FleetError
         A bad argument, naming it, its value and what is allowed.
     """
-    from SALib.sample import sobol  # here: the simulate stage's workers need none of it
+    try:  # here: the simulate stage's workers need none of it, and the library's core does not depend on it
+        from SALib.sample import sobol
+    except ImportError:
+        raise ImportError(
+            "sensitivity_design needs SALib (Saltelli sampling), an optional dependency of bogie: "
+            "pip install 'bogie[sensitivity]' (or the pipeline's extra)"
+        ) from None
 
     problem = sensitivity_problem(factors, group)
     _check_fleet(fleet, group)
