@@ -246,6 +246,9 @@ def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[P
     else:
         fitted = ", ".join(f"{q} {e['value']:.3g}" for q, e in metrics["fitted"].items())
         print(f"calibrate: {fitted}; distance {metrics['distance']}; wrote {args.out} and {args.metrics}")
+        post = metrics.get("posterior") or {}
+        if post.get("converged") is False:  # issue 43 Must 5: an unconverged posterior is said, with what to change
+            print(f"calibrate: posterior {post['advice']}")
     return 0
 
 

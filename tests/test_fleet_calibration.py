@@ -100,8 +100,15 @@ def test_the_bootstrap_the_valley_and_the_profiles_are_around_the_fit(recovered)
         # each profile is lowest at the grid point next to the fitted value (the others at theirs)
         step = (FIT[name][1] - FIT[name][0]) / (F.PROFILE_POINTS - 1)
         lowest = profile.loc[profile["distance"].idxmin(), "value"]
-        assert abs(lowest - result.fitted[name]["value"]) <= step + 1e-12, (name, lowest)
+        assert abs(lowest - result.prior_free[name]["value"]) <= step + 1e-12, (name, lowest)
+    # the calibrated fleet is the posterior's: its medians, priors included; the prior-free minimum is the profiles'
     assert result.values == {**problem.base, **{q: e["value"] for q, e in result.fitted.items()}}
+    for name, entry in result.fitted.items():
+        summary = result.posterior.summary[name]
+        assert entry["source"] == "posterior" and (entry["value"], entry["low"], entry["high"]) == (
+            summary["median"], summary["low"], summary["high"])  # fmt: skip
+    assert result.distance == problem.objective(problem.unit_weights(), None)(
+        np.array([result.fitted[q]["value"] for q in problem.fitted])) >= result.prior_free_distance  # fmt: skip
 
 
 def test_a_fit_piled_against_a_bound_is_flagged_with_its_side_value_and_refits():
@@ -110,9 +117,13 @@ def test_a_fit_piled_against_a_bound_is_flagged_with_its_side_value_and_refits()
     narrow = {**FIT, "air_share": (0.0, 0.2)}
     settings = L.CalibrationSettings(narrow, seed=3, maxiter=30, popsize=8, bootstrap_resamples=8)
     result = F.calibrate(L.make_problem(table, observed, narrow, L.base_values(TILT, 0.0, None)), settings)
-    finding = result.fitted["air_share"]["at_bound"]
+    # the prior-free minimum (the diagnostic) sits at the bound and its refits pile there
+    finding = result.prior_free["air_share"]["at_bound"]
     assert finding["bound"] == "high" and finding["limit"] == 0.2
     assert 0.2 - F.AT_BOUND * 0.2 <= finding["value"] <= 0.2 and finding["share_of_refits"] >= F.PILED
+    # and so does the posterior, the calibrated fleet: flagged with the share of its draws at the bound
+    finding = result.fitted["air_share"]["at_bound"]
+    assert finding["bound"] == "high" and finding["limit"] == 0.2 and finding["share_of_posterior"] >= F.PILED
 
 
 def test_a_held_out_half_too_small_to_fit_gives_its_reason_not_a_distance_of_zero():

@@ -61,8 +61,11 @@ def fitted():
 def test_the_posterior_holds_the_known_fleet_and_is_narrower_than_its_prior(fitted):
     post = fitted.posterior
     assert len(post.draws) == 3000 and 0.15 < post.acceptance < 0.6
+    # four chains of 750 (posterior_draws is the draws in all), each quantity's R-hat and ESS beside its interval
+    assert post.chains == 4 and post.draws["chain"].tolist() == [k for k in range(4) for _ in range(750)]
     for q, truth in TRUTH.items():
-        s = fitted.fitted[q]["posterior"]
+        s = post.summary[q]
+        assert 1.0 <= s["rhat"] < 1.1 and 100 < s["ess_bulk"] < 3000 and 100 < s["ess_tail"] < 3000, (q, s)
         assert s["low"] <= truth <= s["high"], (q, s)
         assert s["high"] - s["low"] < 0.2 * (FIT[q][1] - FIT[q][0]) and s["piled"] is None
     assert fitted.fitted["contact_roll_radius_mean_mm"]["at_bound"] is None
@@ -77,4 +80,42 @@ def test_a_posterior_piled_against_a_bound_is_flagged_with_its_share_of_draws():
     result = F.calibrate(L.make_problem(table, observed, narrow, base), settings)
     finding = result.fitted["contact_roll_radius_mean_mm"]["at_bound"]
     assert finding["bound"] == "low" and finding["limit"] == 50.0 and finding["share_of_posterior"] >= PILED
-    assert result.fitted["contact_roll_radius_mean_mm"]["posterior"]["piled"] == "low"
+    assert result.posterior.summary["contact_roll_radius_mean_mm"]["piled"] == "low"
+
+
+@pytest.fixture(scope="module")
+def radius_problem():
+    table, observed = radius_table(), radius_survey()
+    base = L.base_values(TILT, 0.0, None, {"contact_roll_radius": RADIUS, "bush_stiffness": BUSH})
+    problem = L.make_problem(table, observed, FIT, base)
+    best = np.array([TRUTH[q] for q in problem.fitted])
+    return problem, F.priors_for(problem, L.CalibrationSettings(FIT, seed=4)), best
+
+
+def test_each_chain_is_its_own_same_bits_whatever_the_number_of_chains(radius_problem):
+    # issue 43 Must 5: chain k is seeded by spawn key (3, k) alone, so 2 chains of 160 are the first two of 4 chains
+    # of 160, bit for bit; and the same arguments give the same draws
+    problem, priors, best = radius_problem
+    two = P.posterior(problem, priors, best, 320, 4, 0.9, chains=2)
+    four = P.posterior(problem, priors, best, 640, 4, 0.9, chains=4)
+    again = P.posterior(problem, priors, best, 640, 4, 0.9, chains=4)
+    assert list(four.draws.columns) == ["chain", *problem.fitted, "log_likelihood"]
+    first_two = four.draws[four.draws["chain"] < 2].reset_index(drop=True)
+    assert np.array_equal(two.draws.to_numpy(), first_two.to_numpy())
+    assert np.array_equal(four.draws.to_numpy(), again.draws.to_numpy()) and four.summary == again.summary
+    # the chains start apart: chain 0 at the fit, the others at points drawn within the bounds
+    starts = four.draws.groupby("chain").first()
+    assert starts[problem.fitted[0]].nunique() == 4
+    # the pooled median is over every chain's draws
+    q = problem.fitted[1]
+    assert four.summary[q]["median"] == float(np.median(four.draws[q]))
+
+
+def test_a_short_posterior_is_called_unconverged_and_told_to_draw_more(radius_problem):
+    problem, priors, best = radius_problem
+    post = P.posterior(problem, priors, best, 200, 4, 0.9, chains=4)  # 50 draws a chain: far too few
+    assert not post.converged and post.advice.startswith("unconverged")
+    assert "raise posterior_draws (params.yaml calibrate.posterior_draws) from 200 to " in post.advice
+    assert post.thresholds["rhat_below"] == 1.01 and post.thresholds["ess_bulk_and_tail_at_least"] == 400.0
+    with pytest.raises(ValueError, match="chains = 0"):
+        P.posterior(problem, priors, best, 200, 4, 0.9, chains=0)

@@ -331,6 +331,7 @@ Calibrate = create_model(
         "maxiter": [("le", 10_000, "a sanity cap: 10^4 generations")],
         "popsize": [("le", 200, "a sanity cap: 200 a fitted quantity")],
         "posterior_draws": [("le", 1_000_000, "a sanity cap: 10^6 draws")],
+        "chains": [("le", 64, "a sanity cap: 64 chains")],
     }).values() for key, spec in made.items()},
 )  # fmt: skip
 

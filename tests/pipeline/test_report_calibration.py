@@ -27,6 +27,12 @@ FITTED = {
     "air_share": {"value": 0.4156, "low": None, "high": None, "bounds": [0.0, 1.0]},
 }
 FIXED = {"site_iri_m_km": 1.5, "sensor_error_pct": 2.25}
+#: the prior-free minimum of the distance beside the fitted (posterior) values, a diagnostic (issue 43 Must 1); the
+#: third quantity has none (an older stage's metrics: "-")
+PRIOR_FREE = {
+    "chassis_tilt_mean_deg": {"value": 1.49, "low": 0.91, "high": 1.5, "bounds": [-1.0, 1.5]},
+    "chassis_tilt_sd_deg": {"value": 0.18, "low": 0.1, "high": 0.52, "bounds": [0.1, 1.5]},
+}
 #: the posterior of two of the fitted quantities (an older stage's metrics have none: the third shows "-")
 POSTERIOR = {
     "chassis_tilt_mean_deg": {"median": 0.7412, "low": 0.4871, "high": 1.1023, "share_at_low": 0.0,
@@ -75,6 +81,7 @@ def fitted_metrics(held=True):
         "bootstrap_resamples": 4,
         "distance": 4.49106,
         "distance_direct": 7.07898,
+        "prior_free_minimum": {"note": "a diagnostic", "fitted": PRIOR_FREE, "at_bounds": {}, "distance": 4.1},
         "sizes_fitted": ["tandem", "triaxle"],
         "evaluations": 512,
         "trade_offs": [{"quantities": ["chassis_tilt_mean_deg", "chassis_tilt_sd_deg"], "correlation": 0.973}],
@@ -247,17 +254,18 @@ def test_the_fit_table_gives_the_metrics_numbers(tmp_path):
         else:
             low, high = row[3].split(" to ")
             assert (float(low), float(high)) == (e["low"], e["high"])
-        p = POSTERIOR.get(q)
+        p = PRIOR_FREE.get(q)
         if p is None:
             assert row[4] == "-"
         else:
-            assert row[4] == f"{p['median']:g} ({p['low']:g} to {p['high']:g})"
+            assert row[4] == f"{p['value']:g} ({p['low']:g} to {p['high']:g})"
         assert [float(b) for b in row[5].split(" to ")] == e["bounds"]
     for q, v in metrics["fixed"].items():
         row = by_label[calibration.quantity_label(q)]
         assert row[1] == "fixed" and float(row[2]) == v
     page = figure_text(fig)
-    assert f"Distance reached: {metrics['distance']:g} through the table" in page
+    reached = f"Distance reached: {metrics['distance']:g} at the posterior medians (4.1 at the prior-free minimum), "
+    assert reached + "through the table" in page
     assert f"simulated directly: {metrics['distance_direct']:g}" in page
     assert "chassis tilt, centre and chassis tilt, spread (sd): +0.97" in page
     flat = " ".join(page.split())
@@ -306,30 +314,33 @@ def test_a_single_fitted_quantity_and_no_held_out_check_still_give_both_pages(tm
 def test_a_fit_at_a_bound_is_said_in_words_on_the_fit_page_and_nothing_is_said_without_one(tmp_path):
     metrics = fitted_metrics()
     page = figure_text(pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[0].figure)
-    assert "Fitted at a bound" not in page  # the metrics of a fit without one (and of an older stage: no key)
+    assert "At a bound" not in page  # the metrics of a fit without one (and of an older stage: no key)
+    # the posterior (the fitted values) piled at the spread's lower bound, its median near the air share's upper one;
+    # the prior-free minimum (the diagnostic) at the tilt mean's upper bound, where the posterior is not
     metrics["at_bounds"] = {
-        "chassis_tilt_sd_deg": {
-            "bound": "low",
-            "value": 0.1,
-            "limit": 0.1,
-            "share_of_refits": 0.75,
-            "share_of_posterior": 0.31,
-        },
-        "air_share": {"bound": "high", "value": 0.99, "limit": 1.0, "share_of_refits": None},
+        "chassis_tilt_sd_deg": {"bound": "low", "value": 0.1, "limit": 0.1, "share_of_posterior": 0.31},
+        "air_share": {"bound": "high", "value": 0.99, "limit": 1.0, "share_of_posterior": 0.05},
+    }
+    metrics["prior_free_minimum"]["at_bounds"] = {
+        "chassis_tilt_mean_deg": {"bound": "high", "value": 1.49, "limit": 1.5, "share_of_refits": 0.25},
     }
     tables, read = written(tmp_path / "b", metrics, fitted_tables())
     fig = pages_of(tables, read)[0].figure
     page = " ".join(figure_text(fig).split())
-    assert "Fitted at a bound: a finding about the model, not a value of the fleet" in page
+    assert "At a bound: a finding about the model, not a value of the fleet" in page
     spread = calibration.quantity_label("chassis_tilt_sd_deg", False)
-    assert (f"{spread}: fitted 0.1, at its lower bound 0.1, as are 75 % of the bootstrap refits; 31 % of the "
-            "posterior's draws lie there.") in page  # fmt: skip
-    assert f"{calibration.quantity_label('air_share', False)}: fitted 0.99, at its upper bound 1." in page
+    assert (f"{spread}: posterior median 0.1, at its lower bound 0.1; 31 % of the posterior's draws lie within 2 % "
+            "of the range from it.") in page  # fmt: skip
+    assert f"{calibration.quantity_label('air_share', False)}: posterior median 0.99, near its upper bound 1;" in page
+    mean = calibration.quantity_label("chassis_tilt_mean_deg", False)
+    assert (f"{mean}, prior-free minimum (the diagnostic): 1.49, at its upper bound 1.5, as are 25 % of the bootstrap "
+            "refits; the posterior, with its prior, is not piled there.") in page  # fmt: skip
     assert_text_above_the_footer(fig)
 
 
 def attribution_metrics():
-    """metrics/calibration.json's ``attribution`` for two of the four groups (numbers chosen to format distinctly)."""
+    """metrics/calibration.json's ``attribution`` for two of the four groups (numbers chosen to format distinctly;
+    the Shapley shares add up to as observed - at rest, the one-at-a-time shares with the interaction too)."""
 
     def share(v, lo, hi):
         return {"share_outside_5pct": {"value": v, "low": lo, "high": hi},
@@ -341,11 +352,19 @@ def attribution_metrics():
 
     return {
         "triaxle/steel": {"n_groups": 21, "n_dropped": 0, "as_observed": stats(0.81), "at_rest": stats(0.29),
-                          "causes": {"resolution": share(0.0, -0.01, 0.01), "sensor": share(0.05, -0.02, 0.12),
-                                     "tilt": share(0.33, 0.21, 0.46), "dynamics": share(-0.07, -0.15, 0.02)}},
+                          "total": share(0.52, 0.4, 0.63),
+                          "shapley": {"resolution": share(0.0, -0.01, 0.01), "sensor": share(0.08, 0.01, 0.16),
+                                      "tilt": share(0.36, 0.25, 0.47), "dynamics": share(0.08, -0.03, 0.19)},
+                          "one_at_a_time": {"resolution": share(0.0, -0.01, 0.01), "sensor": share(0.05, -0.02, 0.12),
+                                            "tilt": share(0.33, 0.21, 0.46), "dynamics": share(-0.07, -0.15, 0.02)},
+                          "interaction": share(0.21, 0.09, 0.34)},
         "tandem/air": {"n_groups": 7, "n_dropped": 1, "as_observed": stats(0.43), "at_rest": stats(0.0),
-                       "causes": {"resolution": share(0.0, 0.0, 0.0), "sensor": share(0.43, 0.14, 0.71),
-                                  "tilt": share(0.0, 0.0, 0.0), "dynamics": share(0.14, 0.0, 0.29)}},
+                       "total": share(0.43, 0.14, 0.71),
+                       "shapley": {"resolution": share(0.0, 0.0, 0.0), "sensor": share(0.29, 0.0, 0.57),
+                                   "tilt": share(0.0, 0.0, 0.0), "dynamics": share(0.14, 0.0, 0.29)},
+                       "one_at_a_time": {"resolution": share(0.0, 0.0, 0.0), "sensor": share(0.43, 0.14, 0.71),
+                                         "tilt": share(0.0, 0.0, 0.0), "dynamics": share(0.14, 0.0, 0.29)},
+                       "interaction": share(-0.14, -0.29, 0.0)},
     }  # fmt: skip
 
 
@@ -359,16 +378,24 @@ def test_the_attribution_gives_a_page_of_each_causes_share_with_its_interval(tmp
     fig = pages[-1].figure
     header, *rows = table_cells(fig)
     assert header == list(calibration.CAUSE_HEADER)
-    # tri-axles first, as the bars; outside 5 % in % of groups, each cause's share (interval), at rest
-    assert rows == [
-        ["tri-axle, steel", "21", "81", "+0 (-1 to +1)", "+5 (-2 to +12)", "+33 (+21 to +46)", "-7 (-15 to +2)", "29"],
-        ["tandem, air", "7", "43", "+0 (+0 to +0)", "+43 (+14 to +71)", "+0 (+0 to +0)", "+14 (+0 to +29)", "0"],
-    ]
+    # tri-axles first, as the bars; outside 5 % in % of groups: each cause's Shapley share above its interval and at
+    # rest, below each cause's one-at-a-time share and the interaction beside them
+    assert [[" ".join(cell.split()) for cell in row] for row in rows] == [
+        ["tri-axle, steel", "21", "81", "Shapley", "+0 (-1 to +1)", "+8 (+1 to +16)", "+36 (+25 to +47)",
+         "+8 (-3 to +19)", "-", "29"],
+        ["", "", "", "one at a time", "+0 (-1 to +1)", "+5 (-2 to +12)", "+33 (+21 to +46)", "-7 (-15 to +2)",
+         "+21 (+9 to +34)", ""],
+        ["tandem, air", "7", "43", "Shapley", "+0 (+0 to +0)", "+29 (+0 to +57)", "+0 (+0 to +0)", "+14 (+0 to +29)",
+         "-", "0"],
+        ["", "", "", "one at a time", "+0 (+0 to +0)", "+43 (+14 to +71)", "+0 (+0 to +0)", "+14 (+0 to +29)",
+         "-14 (-29 to +0)", ""],
+    ]  # fmt: skip
     bars = [ax for ax in fig.get_axes() if not ax.tables and ax.get_visible() and ax.axison]
     assert [ax.get_ylabel() for ax in bars] == [label for _, label, _ in calibration.CAUSE_STATS]
     assert all(ax.has_data() for ax in bars)
     page = " ".join(figure_text(fig).split())
-    assert "switching that one cause off removes" in page and "90 % interval from a paired bootstrap" in page
+    assert "the four shares add up exactly to as observed minus at rest" in page
+    assert "what switching that one cause off removes" in page and "90 % interval from a paired bootstrap" in page
     assert_text_above_the_footer(fig)
 
 
@@ -405,3 +432,35 @@ def test_the_checks_page_offers_the_fitted_values_to_the_fleet_study(tmp_path):
     assert "The calibrated fleet in the fleet study" in page
     assert "dvc exp run -S fleet.suspension_mix.triaxle.air=0.4156 (contact_roll_radius_mean_mm have no" in page
     assert_text_above_the_footer(fig)
+
+
+def test_the_fit_table_gives_each_quantitys_rhat_and_ess_and_the_page_says_an_unconverged_posterior(tmp_path):
+    # issue 43 Must 5: R-hat; bulk/tail ESS in the fit table's last column ("-" where the metrics have none, as an
+    # older stage's), and the advice in words when the posterior did not converge
+    metrics = fitted_metrics()
+    post = metrics["posterior"]
+    quantities = post["quantities"]
+    quantities["chassis_tilt_mean_deg"].update(rhat=1.0031, ess_bulk=2234.7, ess_tail=1876.2)
+    quantities["chassis_tilt_sd_deg"].update(rhat=1.0712, ess_bulk=61.4, ess_tail=None)
+    advice = ("unconverged (thresholds: R-hat < 1.01, bulk and tail ESS >= 400; Vehtari et al. 2021): "
+              "chassis_tilt_sd_deg short; raise posterior_draws (params.yaml calibrate.posterior_draws) from 3000 "
+              "to 20000")  # fmt: skip
+    post.update(chains=4, converged=False, advice=advice,
+                thresholds={"rhat_below": 1.01, "ess_bulk_and_tail_at_least": 400.0, "source": "Vehtari"})  # fmt: skip
+    fig = pages_of(*written(tmp_path / "a", metrics, fitted_tables()))[0].figure
+    header, *rows = table_cells(fig)
+    assert header[-1] == "R-hat; ESS\nbulk/tail"
+    cell = {row[0]: row[-1] for row in rows}
+    label = calibration.quantity_label
+    assert cell[label("chassis_tilt_mean_deg")] == "1.003; 2235/1876"
+    assert cell[label("chassis_tilt_sd_deg")] == "1.071; 61/n/a"
+    assert cell[label("air_share")] == "-" and cell[label("site_iri_m_km")] == "-"  # no posterior; fixed
+    page = " ".join(figure_text(fig).split())
+    assert "4 chains, the first from the prior-free minimum, the others from points drawn within the bounds" in page
+    assert "converged when R-hat is below 1.01 and both are at least 400, which NOT every quantity is" in page
+    assert "The posterior has not converged: its medians and intervals are provisional" in page
+    assert f"The posterior is {advice}." in page
+    assert_text_above_the_footer(fig)
+    post.update(converged=True, advice=None)
+    page = " ".join(figure_text(pages_of(*written(tmp_path / "b", metrics, fitted_tables()))[0].figure).split())
+    assert "both are at least 400, as every quantity is." in page and "has not converged" not in page

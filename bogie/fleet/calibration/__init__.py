@@ -7,8 +7,11 @@
 - :mod:`.table`: the calibration fleet, its common random numbers and its table of readings over any executor;
 - :mod:`.priors`, :mod:`.posterior`, :mod:`.fitting`: the priors, the synthetic-likelihood posterior, differential
   evolution and the bootstrap (:func:`calibrate`);
+- :mod:`.convergence`: whether the posterior's chains converged (R-hat, bulk and tail ESS) and what to change;
 - :mod:`.attribution`: what each cause explains;
-- :mod:`.checks`: the calibrated fleet simulated directly, the held-out half, the ablation, :func:`calibrate_survey`.
+- :mod:`.checks`: the calibrated fleet simulated directly, the posterior predictive, the held-out half, the ablation,
+  :func:`calibrate_survey`;
+- :mod:`.synthetic`: :func:`write_csv_survey`, simulated groups as a survey file.
 
 Names load on first use (:mod:`bogie.lazy`).
 """
@@ -21,6 +24,7 @@ EXPORTS: dict[str, str] = {
     **dict.fromkeys(("Observed", "make_problem", "observed_groups"), "problem"),
     **dict.fromkeys(("Table", "base_values", "build_table"), "table"),
     "calibrate": "fitting",
-    **dict.fromkeys(("calibrate_survey", "simulate_fleet", "write_csv_survey"), "checks"),
+    **dict.fromkeys(("calibrate_survey", "simulate_fleet"), "checks"),
+    "write_csv_survey": "synthetic",
 }
 __getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="problem")

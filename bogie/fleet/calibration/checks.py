@@ -12,14 +12,13 @@ from __future__ import annotations
 import math
 from collections.abc import Callable, Mapping
 from concurrent.futures import Executor
-from pathlib import Path
 from typing import Any
 
 import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.attribution import attribution
-from bogie.fleet.calibration.fitting import calibrate, priors_for
+from bogie.fleet.calibration.fitting import PRIOR_FREE, calibrate, priors_for
 from bogie.fleet.calibration.posterior import posterior
 from bogie.fleet.calibration.problem import (
     SIZES,
@@ -35,6 +34,9 @@ from bogie.fleet.calibration.problem import (
     make_problem,
     observed_quantities,
 )
+
+# the synthetic survey's writer, in its own module; its names are still found here
+from bogie.fleet.calibration.synthetic import SYNTHETIC_TRACTOR, write_csv_survey
 from bogie.fleet.calibration.table import (
     _quiet,
     _summary,
@@ -45,11 +47,11 @@ from bogie.fleet.calibration.table import (
 )
 from bogie.fleet.weighing.observed import by_size
 from bogie.fleet.weighing.settings import StaticProtocol
+from bogie.intervals import percentile_interval
 from bogie.metrics import max_deviation
 from bogie.params import INHIBITORS
 from bogie.rounding import json_number
 from bogie.weighings.stats import at_resolution, group_inequality, survey_statistics
-from bogie.weighings.writers import write_weighings
 
 __all__ = [
     "SYNTHETIC_TRACTOR", "ablation", "calibrate_survey", "filtered", "frame_distance", "frame_stats", "groups_stats",
@@ -188,16 +190,23 @@ def held_out(
     min_group_load_kg: float, executor: Executor | Mapper | None = None,
     progress: Callable[[str], None] | None = None,
 ) -> dict[str, Any]:  # fmt: skip
-    """A fit on the even records, the odd ones held against the fleet it calibrates (values rounded for a metrics
-    file): the half's fitted values, its distance, the held-out distance of the odd half to the fleet simulated
-    directly and the distance between the halves (its floor), the odd half's and the calibrated fleet's statistics.
-    With a ``reason`` instead when the half cannot be fitted."""
+    """A calibration on the even records, the odd ones held against the fleet it calibrates (values rounded for a
+    metrics file): the half's fitted values (its posterior's medians, as the whole survey's; the prior-free minimum
+    without a posterior), their distance, the held-out distance of the odd half to that fleet simulated directly and
+    the distance between the halves (its floor), the odd half's and the calibrated fleet's statistics. With a
+    ``reason`` instead when the half cannot be fitted."""
     even, odd = observed.half(0), observed.half(1)
     held: dict[str, Any] = {"fit_on": "even records", "held_out": "odd records"}
     try:
         half = make_problem(table, even, settings.fit, base, min_group_load_kg)
-        theta, d_half, _ = fit(half, settings.seed, settings.maxiter, settings.popsize, progress=progress,
-                               label="half fit")  # fmt: skip
+        theta, _, _ = fit(half, settings.seed, settings.maxiter, settings.popsize, progress=progress,
+                          label="half fit")  # fmt: skip
+        post = None
+        if settings.posterior_draws:  # the half's posterior: its medians are the fleet it calibrates
+            post = posterior(half, priors_for(half, settings), theta, settings.posterior_draws, settings.seed,
+                             settings.confidence_level, chains=settings.chains)  # fmt: skip
+            theta = np.array([post.summary[q]["median"] for q in half.fitted])
+        d_half = half.objective(half.unit_weights(), None)(theta)
         values_half = _values(theta, half.fitted, half.base)
         step = observed.weight_step_kg
         direct_half = filtered(
@@ -212,9 +221,11 @@ def held_out(
             groups=groups_stats(odd.loads),
             calibrated_groups=frame_stats(direct_half),
         )
-        if settings.posterior_draws:  # the half fit's posterior: a held-out check with one piled is no check
-            post = posterior(half, priors_for(half, settings), theta, settings.posterior_draws, settings.seed,
-                             settings.confidence_level)  # fmt: skip
+        held["source"] = "posterior" if post is not None else PRIOR_FREE
+        if post is not None:  # the held-out check's posterior predictive; one piled at a bound is no check
+            held["posterior_predictive"] = posterior_predictive(
+                table, post, values_half, min_group_load_kg, step, settings.confidence_level, executor
+            )
             held["posterior"] = _summary(post.summary)
             held["posterior_piled"] = {q: e["piled"] for q, e in post.summary.items() if e["piled"]}
     except CalibrationError as exc:
@@ -227,7 +238,8 @@ def calibrate_survey(
     min_group_load_kg: float = 0.0, executor: Executor | Mapper | None = None,
     progress: Callable[[str], None] | None = None, static: StaticProtocol | None = None,
 ) -> tuple[dict[str, Any], dict[str, pd.DataFrame]]:  # fmt: skip
-    """The whole calibration of an observed survey: the fit, its intervals and trade-offs, and its checks.
+    """The whole calibration of an observed survey: the posterior (the calibrated fleet), the prior-free minimum and
+    its bootstrap (a diagnostic), the trade-offs, and the checks.
 
     Parameters
     ----------
@@ -252,18 +264,14 @@ def calibrate_survey(
     Returns
     -------
     metrics : dict
-        JSON-ready, values rounded: ``protocol``, ``method``, ``fitted`` (value, interval, bounds), ``fixed``,
-        ``distance``, ``distance_direct``, the table's size, the observed, calibrated and held-out statistics, the
-        ablation (``docs/calibration.md``, ``docs/outputs.md``).
+        JSON-ready, values rounded: ``fitted`` (the posterior's), ``prior_free_minimum``, the distances, the table,
+        the observed, calibrated and held-out statistics, the ablation (``docs/calibration.md``, ``docs/outputs.md``).
     tables : dict
         DataFrames by name: ``bootstrap``, ``valley``, ``profiles``, ``calibrated`` (the calibrated fleet simulated
         directly and filtered), ``ablation``, and ``posterior`` (with posterior draws) and ``attribution`` (a WIM
         calibration with a static protocol); the calibrate stage writes each as ``<name>.csv``.
 
-    Raises
-    ------
-    CalibrationError
-        If the arguments are not what :func:`bogie.fleet.calibration.problem.make_problem` wants.
+    Raises :class:`CalibrationError` if the arguments are not what :func:`make_problem` wants.
     """
     progress = progress or _quiet
     problem = make_problem(table, observed, settings.fit, base, min_group_load_kg)
@@ -274,11 +282,13 @@ def calibrate_survey(
     abl = ablation(table, result.values, min_group_load_kg, executor)
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
     metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
+    if result.posterior is not None:  # the statistics the posterior predicts, beside those at its medians
+        metrics["calibrated"]["posterior_predictive"] = posterior_predictive(table, result.posterior, result.values,
+            min_group_load_kg, step, settings.confidence_level, executor)  # fmt: skip
     by_cause = None
     if static is not None and table.protocol == "wim":
-        by_cause = _attribute(
-            table, result.values, min_group_load_kg, static, step, executor, settings, progress, metrics
-        )
+        by_cause = _attribute(table, result.values, min_group_load_kg, static, step, executor, settings, progress,
+                              metrics)  # fmt: skip
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
     return metrics, _tables(result, direct, abl, by_cause)
 
@@ -317,22 +327,22 @@ def _metrics(
     """The metrics of :func:`calibrate_survey`."""
     return {
         "protocol": table.protocol,
-        "method": "differential evolution on the energy distance, common random numbers, tabulated readings",
-        "fitted": {
-            q: {
-                k: (json_number(v) if not isinstance(v, list) else v)
-                for k, v in e.items()
-                if k not in ("at_bound", "posterior")
-            }
-            for q, e in result.fitted.items()
-        },  # fmt: skip
-        # a fit (or posterior) piled against a bound is a finding about the model, not a value of the fleet
-        "at_bounds": {
-            q: {k: (v if isinstance(v, str) else json_number(v)) for k, v in e["at_bound"].items()}
-            for q, e in result.fitted.items()
-            if e.get("at_bound")
-        },  # fmt: skip
+        "method": "the posterior (the priors times a synthetic likelihood of the survey's summaries), sampled from "
+        "the minimum of the energy distance found by differential evolution; common random numbers, tabulated "
+        "readings",
+        # the calibrated fleet: each value the posterior's median, priors included, with its credible interval
+        "fitted": _entries(result.fitted),
+        # a value (or the posterior's draws) piled against a bound: a finding about the model, not a value of the fleet
+        "at_bounds": _findings(result.fitted),
         "posterior": _posterior_metrics(result.posterior, settings.confidence_level),
+        # the diagnostic: the distance's minimum without the priors, with its bootstrap; not the calibrated fleet
+        "prior_free_minimum": {
+            "note": "a diagnostic, not the calibrated fleet: the energy distance's minimum without the priors (the "
+            "posterior's starting point), its bootstrap intervals and the values piled at bounds",
+            "fitted": _entries(result.prior_free),
+            "at_bounds": _findings(result.prior_free),
+            "distance": json_number(result.prior_free_distance, 5),
+        },
         "fixed": {q: json_number(v) for q, v in result.values.items() if q not in result.fitted},
         "confidence_level": settings.confidence_level,
         "bootstrap_resamples": settings.bootstrap_resamples,
@@ -363,6 +373,62 @@ def _metrics(
     }
 
 
+#: posterior draws the posterior predictive statistics simulate the calibration fleet at, evenly spaced through the
+#: kept draws [-]: a convention (each is a direct simulation of the whole calibration fleet)
+PREDICTIVE_DRAWS = 8
+#: the survey statistics the posterior predictive summarises, per size
+PREDICTIVE_STATISTICS: tuple[str, ...] = (
+    "mean_spread_kg", "median_spread_pct", "share_outside_5pct", "share_over_10pct",
+)  # fmt: skip
+
+
+def posterior_predictive(
+    table: Table, post: Any, base: Mapping[str, float], min_group_load_kg: float, weight_step_kg: float | None,
+    confidence_level: float, executor: Executor | Mapper | None = None, draws: int = PREDICTIVE_DRAWS,
+) -> dict[str, Any]:  # fmt: skip
+    """The survey statistics the posterior predicts (issue 43 Must 1): the calibration fleet simulated directly
+    (:func:`simulate_fleet`, filtered as the survey) at ``draws`` posterior draws evenly spaced through the kept
+    ones, each statistic of :data:`PREDICTIVE_STATISTICS` per size as its median over the draws and the
+    equal-tailed interval at ``confidence_level`` (with so few draws, the range they span)."""
+    kept = post.draws
+    picks = np.unique(np.linspace(0, len(kept) - 1, max(min(draws, len(kept)), 1)).round().astype(int))
+    fitted = [c for c in kept.columns if c in base]
+    per_size: dict[str, dict[str, list[float]]] = {}
+    for i in picks:
+        values = {**base, **{q: float(kept[q].iloc[i]) for q in fitted}}
+        stats = frame_stats(filtered(simulate_fleet(table, values, weight_step_kg=weight_step_kg, executor=executor),
+                                     min_group_load_kg))  # fmt: skip
+        for size, entry in stats.items():
+            for s in PREDICTIVE_STATISTICS:
+                if entry.get(s) is not None:
+                    per_size.setdefault(size, {}).setdefault(s, []).append(float(entry[s]))
+    out: dict[str, Any] = {"draws": len(picks), "credible_level": confidence_level}
+    for size, stats_ in per_size.items():
+        out[size] = {}
+        for s, xs in stats_.items():
+            low, high = percentile_interval(np.asarray(xs), confidence_level)
+            out[size][s] = {"median": json_number(float(np.median(xs))), "low": json_number(low),
+                            "high": json_number(high)}  # fmt: skip
+    return out
+
+
+def _entries(fitted: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """Per quantity its value, interval, bounds and source, for a metrics file."""
+    return {
+        q: {k: (json_number(v) if isinstance(v, float | int) else v) for k, v in e.items() if k != "at_bound"}
+        for q, e in fitted.items()
+    }  # fmt: skip
+
+
+def _findings(fitted: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
+    """The quantities at a bound, each finding for a metrics file."""
+    return {
+        q: {k: (v if isinstance(v, str) or v is None else json_number(v)) for k, v in e["at_bound"].items()}
+        for q, e in fitted.items()
+        if e.get("at_bound")
+    }  # fmt: skip
+
+
 def _faithful(table: float | None, direct: float | None, halves: float | None) -> dict[str, Any]:
     """Issue 30 Must 4: the table is faithful when the calibrated fleet simulated directly is as far from the survey
     as the table said, within the sampling floor (the distance between the survey's two halves)."""
@@ -372,50 +438,23 @@ def _faithful(table: float | None, direct: float | None, halves: float | None) -
 
 
 def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
-    """The posterior's summary per quantity, its priors, draws and acceptance (None: no posterior)."""
+    """The posterior's summary per quantity (with its R-hat and bulk and tail ESS), its priors, draws, chains and
+    acceptance, whether it converged, what to change if not and the thresholds (None: no posterior)."""
     if post is None:
         return None
     return {
-        "method": "random-walk Metropolis (adapted in burn-in) on the priors times a synthetic likelihood of the "
-        "survey's summaries over the table (bogie.fleet.calibration.posterior)",
+        "method": "random-walk Metropolis (adapted in burn-in), several chains, on the priors times a synthetic "
+        "likelihood of the survey's summaries over the table (bogie.fleet.calibration.posterior)",
         "credible_level": level,
         "draws": len(post.draws),
+        "chains": post.chains,
         "acceptance": json_number(post.acceptance),
-        "quantities": _summary(post.summary),
+        "converged": post.converged,
+        "advice": post.advice,
+        "thresholds": post.thresholds,
+        "quantities": {
+            q: {**e, **{k: json_number(e[k], 1) for k in ("ess_bulk", "ess_tail")}}
+            for q, e in _summary(post.summary).items()
+        },  # fmt: skip
         "priors": post.priors,
     }
-
-
-# ---- a synthetic survey -----------------------------------------------------------------------------------------
-#: the tractor a synthetic survey puts in front of each simulated group (:func:`write_csv_survey`): a 4x2 tractor,
-#: steer and drive axle [kg] and the spacings steer-drive and drive-group [m]. Placeholders that make the group the
-#: vehicle's third, a trailer group (bogie.weighings.groups); single axles, so no statistic of tandems or tri-axles
-#: reads them
-SYNTHETIC_TRACTOR = {"loads_kg": (6500.0, 10500.0), "spacings_m": (3.6, 6.0)}
-
-
-def write_csv_survey(frame: pd.DataFrame, path: str | Path, speed_kmh: float = 80.0, spacing_m: float = 1.31) -> None:
-    """Write simulated groups (:func:`simulate_fleet`'s wide loads [kg]) as a survey in the ``csv`` weighings format
-    (``docs/weighings.md``), one semi-trailer a record, a second apart, at ``speed_kmh`` [km/h] and axle spacing
-    ``spacing_m`` [m] within the group: a synthetic survey read as a real one
-    (:func:`bogie.weighings.survey.observed_survey`). Each group is the trailer group of a vehicle behind
-    :data:`SYNTHETIC_TRACTOR`; loads in whole kilograms."""
-    steer, drive = SYNTHETIC_TRACTOR["loads_kg"]
-    n_group = frame["n_axles"].to_numpy(dtype=np.int64)
-    width = 2 + int(n_group.max()) if len(frame) else 5
-    vehicles = pd.DataFrame({
-        "timestamp": pd.Timestamp("2026-01-05T06:00:00") + pd.to_timedelta(np.arange(len(frame)), unit="s"),
-        "speed": speed_kmh / 3.6, "lane": 1, "n_axles": 2 + n_group,
-    })  # fmt: skip
-    for i in range(width):
-        if i < 2:
-            load = np.full(len(frame), (steer, drive)[i])
-        else:
-            column = frame[f"axle_load_{i - 1}"].to_numpy(dtype=float) if i - 2 < 3 else np.zeros(len(frame))
-            load = np.where(n_group > i - 2, np.round(column), np.nan)
-        vehicles[f"axle_load_{i + 1}"] = load
-    for i in range(width - 1):
-        gap = SYNTHETIC_TRACTOR["spacings_m"][i] if i < 2 else spacing_m
-        vehicles[f"spacing_{i + 1}"] = np.where(2 + n_group - 1 > i, gap, np.nan)
-    Path(path).parent.mkdir(parents=True, exist_ok=True)
-    write_weighings(vehicles, path, "csv")

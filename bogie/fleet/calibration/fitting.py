@@ -1,8 +1,12 @@
-"""The calibration and what bounds it: the fit, its bootstrap intervals, a fit piled against a bound, the
-trade-offs between fitted quantities, the valley of the most correlated pair and each quantity's profile.
+"""The calibration and what bounds it: the posterior (the answer), the prior-free minimum of the distance with its
+bootstrap intervals (a diagnostic), a value piled against a bound, the trade-offs between fitted quantities, the
+valley of the most correlated pair and each quantity's profile.
 
-:func:`calibrate` runs them on a :class:`~bogie.fleet.calibration.problem.Problem` (``docs/calibration.md``). A fit at a
-bound of its range, or bootstrap refits piled against one, is flagged (:func:`bound_finding`): a finding about the
+:func:`calibrate` runs them on a :class:`~bogie.fleet.calibration.problem.Problem` (``docs/calibration.md``). The
+calibrated fleet is the posterior's (issue 43 Must 1): each fitted value is its posterior median, priors included,
+with its credible interval; the differential evolution's minimum of the distance, without the priors, starts the
+sampler and is kept as a diagnostic (``prior_free``), never offered as the fleet. A value at a bound of its range,
+or bootstrap refits or posterior draws piled against one, is flagged (:func:`bound_finding`): a finding about the
 model (the data ask for a value the range excludes, or the quantity absorbs what the model misstates), not a value
 of the fleet.
 """
@@ -27,8 +31,8 @@ from bogie.intervals import percentile_interval
 from bogie.rounding import json_number
 
 __all__ = [
-    "AT_BOUND", "PILED", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound", "bound_finding",
-    "calibrate", "priors_for",
+    "AT_BOUND", "PILED", "PRIOR_FREE", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound",
+    "bound_finding", "calibrate", "posterior_fitted", "priors_for",
 ]  # fmt: skip
 
 #: the distance over the valley's pair of quantities is evaluated on this many points per side [-]
@@ -48,10 +52,16 @@ class Calibration:
     Attributes
     ----------
     fitted
-        Per fitted quantity: ``value``, the interval ``low`` and ``high`` (None without a bootstrap of 2 or more) and
-        its ``bounds``, in the unit of its name.
-    distance, evaluations, seconds_per_evaluation
-        The best distance [-], the evaluations of the fit [-] and the wall time of one [s].
+        Per fitted quantity, the calibrated fleet's: ``value`` (the posterior median), the credible interval ``low``
+        and ``high``, its ``bounds``, ``at_bound`` (:func:`bound_finding`, or None) and ``source`` (``posterior``; the
+        prior-free minimum's, named so, only when no posterior was drawn: ``posterior_draws`` 0), in the unit of its
+        name.
+    prior_free
+        The diagnostic: per fitted quantity the distance's minimum without the priors (``value``, the bootstrap
+        interval ``low``, ``high``, None without a bootstrap of 2 or more, ``bounds``, ``at_bound``).
+    distance, prior_free_distance, evaluations, seconds_per_evaluation
+        The distance [-] at the fitted values and at the prior-free minimum, the evaluations of the minimisation [-]
+        and the wall time of one [s].
     bootstrap
         One row per resample: ``resample``, each fitted quantity and the ``distance``.
     correlation, trade_offs
@@ -65,8 +75,10 @@ class Calibration:
         The posterior (:func:`bogie.fleet.calibration.posterior.posterior`); None with ``posterior_draws`` 0.
     """
 
-    fitted: dict[str, dict[str, float]]
+    fitted: dict[str, dict[str, Any]]
+    prior_free: dict[str, dict[str, Any]]
     distance: float
+    prior_free_distance: float
     evaluations: int
     seconds_per_evaluation: float
     bootstrap: pd.DataFrame
@@ -145,7 +157,8 @@ def _trade_offs(fitted: Sequence[str], corr: pd.DataFrame) -> list[dict[str, Any
 def calibrate(
     problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None] | None = None
 ) -> Calibration:
-    """Fit, then the bootstrap intervals, the trade-offs, the valley and the profiles.
+    """The prior-free minimum and its bootstrap intervals, the trade-offs, the valley and the profiles, then the
+    posterior from that minimum: the fitted values (:class:`Calibration`).
 
     Parameters
     ----------
@@ -162,7 +175,7 @@ def calibrate(
     best, dist_best, evaluations = fit(problem, settings.seed, settings.maxiter, settings.popsize, progress=progress)
     per_eval = (time.perf_counter() - start) / max(evaluations, 1)
     boot = _bootstrap(problem, settings, progress)
-    fitted = _intervals(problem, best, boot, settings.confidence_level)
+    prior_free = _intervals(problem, best, boot, settings.confidence_level)
     corr = boot[list(problem.fitted)].corr() if len(boot) >= 3 else pd.DataFrame()
     trade = _trade_offs(problem.fitted, corr)
     pair = _valley_pair(problem.fitted, corr)
@@ -173,11 +186,15 @@ def calibrate(
     if settings.posterior_draws:
         progress(f"calibrate: posterior, {settings.posterior_draws} draws")
         priors = priors_for(problem, settings)
-        post = posterior(problem, priors, best, settings.posterior_draws, settings.seed, settings.confidence_level)
-        _posterior_findings(fitted, post)
+        post = posterior(problem, priors, best, settings.posterior_draws, settings.seed, settings.confidence_level,
+                         chains=settings.chains)  # fmt: skip
+        fitted = posterior_fitted(prior_free, post)
+    else:  # no posterior asked for: the minimum is all there is, and says so
+        fitted = {q: {**e, "source": PRIOR_FREE} for q, e in prior_free.items()}
+    theta = np.array([fitted[q]["value"] for q in problem.fitted])
     return Calibration(
-        fitted, dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
-        _values(best, problem.fitted, problem.base), post,
+        fitted, prior_free, float(f(theta)), dist_best, evaluations, per_eval, boot, corr, trade, valley, profiles,
+        _values(theta, problem.fitted, problem.base), post,
     )  # fmt: skip
 
 
@@ -189,20 +206,27 @@ def priors_for(problem: Problem, settings: CalibrationSettings) -> dict[str, Any
     return default_priors(problem.base, {q: t.mean_range() for q, t in problem.table.tilted.items()})
 
 
-def _posterior_findings(fitted: dict[str, dict[str, Any]], post: Posterior) -> None:
-    """Each fitted quantity's posterior summary; a posterior piled against a bound flagged as a fit at it is."""
-    for q, entry in fitted.items():
+#: the ``source`` of a fitted value that is not the posterior's (``posterior_draws`` 0)
+PRIOR_FREE = "prior-free minimum of the distance (posterior_draws = 0: no posterior, no priors)"
+
+
+def posterior_fitted(prior_free: dict[str, dict[str, Any]], post: Posterior) -> dict[str, dict[str, Any]]:
+    """The fitted values from the posterior: per quantity its median, credible interval and bounds, flagged when the
+    median lies at a bound or the draws pile against one (:func:`at_bound`, :data:`PILED`)."""
+    fitted = {}
+    for q, entry in prior_free.items():
         summary = post.summary[q]
-        entry["posterior"] = summary
-        side = summary["piled"]
-        share = {"low": summary["share_at_low"], "high": summary["share_at_high"]}
-        finding = entry.get("at_bound")
-        if finding is None and side is not None:
-            limit = entry["bounds"][0] if side == "low" else entry["bounds"][1]
-            finding = {"bound": side, "value": summary["median"], "limit": float(limit), "share_of_refits": None}
-        if finding is not None:
-            finding["share_of_posterior"] = share[finding["bound"]]
-        entry["at_bound"] = finding
+        bounds = entry["bounds"]
+        side = at_bound(summary["median"], bounds) or summary["piled"]
+        finding = None
+        if side is not None:
+            finding = {"bound": side, "value": summary["median"], "limit": float(bounds[0 if side == "low" else 1]),
+                       "share_of_posterior": summary[f"share_at_{side}"]}  # fmt: skip
+        fitted[q] = {
+            "value": summary["median"], "low": summary["low"], "high": summary["high"], "bounds": bounds,
+            "at_bound": finding, "source": "posterior",
+        }  # fmt: skip
+    return fitted
 
 
 def _valley_pair(fitted: Sequence[str], corr: pd.DataFrame) -> tuple[str, str] | None:

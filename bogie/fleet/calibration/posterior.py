@@ -10,8 +10,12 @@ bootstrap of the observed groups (the survey's sampling error) plus under a boot
 the fit (the table's Monte Carlo error), both estimated once. A fixed covariance is the usual simplification; the
 summaries' covariance changes little across the posterior's width.
 
-The sampler: random-walk Metropolis from the fit, its proposal adapted (Haario et al. 2001) over the first quarter
-of the draws, which are then dropped; the rest are the posterior's draws. Seeded: same arguments, same draws.
+The sampler: several chains of random-walk Metropolis (:data:`CHAINS` by default), the first from the fit, the others
+from points drawn uniformly within the bounds (over-dispersed, as R-hat needs); each chain's proposal adapted
+(Haario et al. 2001) over its own first quarter, which is then dropped; the rest are the posterior's draws, all
+chains pooled. Chain k is seeded by spawn key (3, k) of the seed, so its draws do not depend on the other chains nor
+on how many run. Whether they converged: :mod:`bogie.fleet.calibration.convergence` (R-hat and the bulk and tail
+effective sample sizes per quantity, and what to change). Seeded: same arguments, same draws.
 """
 
 from __future__ import annotations
@@ -25,17 +29,23 @@ import numpy as np
 import pandas as pd
 
 from bogie import numerics
+from bogie.fleet.calibration.convergence import ESS_MIN, RHAT_MAX, THRESHOLDS_SOURCE, advice, diagnostics
 from bogie.fleet.calibration.priors import Prior, log_prior
 from bogie.fleet.calibration.problem import Problem, _values, simulated
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
 
-__all__ = ["BOOTSTRAP", "Posterior", "posterior", "summaries", "synthetic_likelihood"]
+__all__ = ["BOOTSTRAP", "CHAINS", "START_TRIES", "Posterior", "posterior", "summaries", "synthetic_likelihood"]
 
 #: bootstrap resamples of each side for the summaries' covariance [-]; a convention (no source), like the sampler's
 #: first proposal (a fiftieth of each bound's width) and its burn-in (a quarter of the draws); the adapted
 #: proposal's scale 2.38^2 / d is Gelman, Roberts and Gilks 1996's optimal scaling, as Haario et al. 2001 use it
 BOOTSTRAP = 200
+#: chains of the sampler unless told (``CalibrationSettings.chains``'s default): Vehtari et al. 2021's four [-]
+CHAINS = 4
+#: points drawn within the bounds for a chain's start before it starts from the fit instead (all without posterior
+#: density: the likelihood NaN there) [-]; a convention
+START_TRIES = 100
 
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
@@ -113,14 +123,25 @@ def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> Synth
 
 @dataclass
 class Posterior:
-    """The posterior's draws (one row each: the fitted quantities, ``log_likelihood``), the acceptance rate [-], and
-    per quantity its ``median``, the equal-tailed credible interval ``low``, ``high``, the shares of the draws
-    within :data:`~bogie.fleet.constants.AT_BOUND` of each bound, and ``piled`` (``low``/``high``/None)."""
+    """The posterior's draws (one row each: ``chain``, the fitted quantities, ``log_likelihood``; chain by chain), the
+    acceptance rate [-], and per quantity its ``median``, the equal-tailed credible interval ``low``, ``high`` (all
+    chains' draws pooled), the shares of the draws within :data:`~bogie.fleet.constants.AT_BOUND` of each bound,
+    ``piled`` (``low``/``high``/None), ``rhat``, ``ess_bulk`` and ``ess_tail``
+    (:func:`bogie.fleet.calibration.convergence.diagnostics`); the number of ``chains``, whether every quantity meets
+    the thresholds (``converged``) and, when not, what to change (``advice``)."""
 
     draws: pd.DataFrame
     acceptance: float
     summary: dict[str, dict[str, Any]]
     priors: dict[str, str]
+    chains: int
+    converged: bool
+    advice: str | None
+
+    @property
+    def thresholds(self) -> dict[str, Any]:
+        """What ``converged`` asks of every quantity, and its source."""
+        return {"rhat_below": RHAT_MAX, "ess_bulk_and_tail_at_least": ESS_MIN, "source": THRESHOLDS_SOURCE}
 
 
 def _log_post(like, priors, problem, theta) -> tuple[float, float]:
@@ -133,49 +154,88 @@ def _log_post(like, priors, problem, theta) -> tuple[float, float]:
     return lp + ll, ll
 
 
-def posterior(
-    problem: Problem, priors: Mapping[str, Prior], best: np.ndarray, draws: int, seed: int, confidence_level: float
-) -> Posterior:
-    """Sample the posterior of ``problem``'s fitted quantities: ``draws`` Metropolis steps from ``best``, the first
-    quarter adapting the proposal and dropped; credible intervals at ``confidence_level``."""
-    like = synthetic_likelihood(problem, best, seed)
-    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3,)))
+def _start(target, problem: Problem, best: np.ndarray, chain: int, rng: np.random.Generator) -> np.ndarray:
+    """Chain 0 starts at the fit (at the bounds' centre if the fit has no posterior density); every other chain at a
+    point drawn uniformly within the bounds from its own ``rng``, the first of :data:`START_TRIES` with a density (if
+    none has, at chain 0's start)."""
+    low, high = (np.array([b[i] for b in problem.bounds]) for i in (0, 1))
+    if chain > 0:
+        for _ in range(START_TRIES):
+            theta = low + (high - low) * rng.random(len(low))
+            if math.isfinite(target(theta)[0]):
+                return theta
+    theta = np.asarray(best, dtype=float).copy()
+    if not math.isfinite(target(theta)[0]):  # the fit itself has no prior density (a bound): the bounds' centre
+        theta = (low + high) / 2
+    return theta
+
+
+def _chain(target, problem: Problem, best: np.ndarray, draws: int, seed: int, k: int) -> tuple[np.ndarray, list, int]:
+    """Chain ``k``: ``draws`` kept Metropolis steps after a burn-in of a quarter of them that adapts the proposal;
+    its draws, their log-likelihoods and the accepted kept steps. Seeded by spawn key (3, k) of ``seed`` alone."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(3, k)))
     d = len(best)
     width = np.array([hi - lo for lo, hi in problem.bounds])
     cov = np.diag((width / 50.0) ** 2)
-    theta = np.asarray(best, dtype=float).copy()
-    lp, ll = _log_post(like, priors, problem, theta)
-    if not math.isfinite(lp):  # the fit itself has no prior density (a bound): start at the bounds' centre
-        theta = np.array([(lo + hi) / 2 for lo, hi in problem.bounds])
-        lp, ll = _log_post(like, priors, problem, theta)
+    theta = _start(target, problem, best, k, rng)
+    lp, ll = target(theta)
     burn = max(draws // 4, 1)
     chain, lls, accepted = [], [], 0
     for step in range(burn + draws):
         if step < burn and step >= 100 and step % 50 == 0:  # Haario's adaptive proposal, during burn-in only
-            past = np.asarray(chain[-min(len(chain), 2000) :])
+            past = np.asarray(chain[max(len(chain) // 2, len(chain) - 2000) :])  # not the way in from a far start
             cov = (2.38**2 / d) * numerics.cov(past.reshape(len(past), d)) + np.diag((width * 1e-4) ** 2)
         proposal = numerics.multivariate_normal(rng, theta, cov)
-        lp_new, ll_new = _log_post(like, priors, problem, proposal)
+        lp_new, ll_new = target(proposal)
         if math.log(rng.random()) < lp_new - lp:
             theta, lp, ll = proposal, lp_new, ll_new
             accepted += step >= burn
         chain.append(theta.copy())
         lls.append(ll)
-    kept = np.asarray(chain[burn:])
-    frame = pd.DataFrame(kept, columns=list(problem.fitted))
-    frame["log_likelihood"] = lls[burn:]
-    summary = {}
-    for i, q in enumerate(problem.fitted):
-        x, (lo, hi) = kept[:, i], problem.bounds[i]
-        margin = AT_BOUND * (hi - lo)
-        share_low, share_high = float(np.mean(x <= lo + margin)), float(np.mean(x >= hi - margin))
-        piled = "low" if share_low >= PILED else "high" if share_high >= PILED else None
-        low, high = percentile_interval(x, confidence_level)
-        summary[q] = {
-            "median": float(np.median(x)), "low": float(low), "high": float(high),
-            "share_at_low": share_low, "share_at_high": share_high,
-            "piled": piled,
-        }  # fmt: skip
+    return np.asarray(chain[burn:]).reshape(draws, d), lls[burn:], accepted
+
+
+def _quantity(x: np.ndarray, bounds: tuple[float, float], confidence_level: float) -> dict[str, Any]:
+    """One quantity's summary of its draws ``x`` (chains, draws): over them all pooled, and its diagnostics."""
+    pooled, (lo, hi) = x.ravel(), bounds
+    margin = AT_BOUND * (hi - lo)
+    share_low, share_high = float(np.mean(pooled <= lo + margin)), float(np.mean(pooled >= hi - margin))
+    piled = "low" if share_low >= PILED else "high" if share_high >= PILED else None
+    low, high = percentile_interval(pooled, confidence_level)
+    return {
+        "median": float(np.median(pooled)), "low": float(low), "high": float(high),
+        "share_at_low": share_low, "share_at_high": share_high,
+        "piled": piled, **diagnostics(x),
+    }  # fmt: skip
+
+
+def posterior(
+    problem: Problem, priors: Mapping[str, Prior], best: np.ndarray, draws: int, seed: int, confidence_level: float,
+    chains: int = CHAINS,
+) -> Posterior:  # fmt: skip
+    """Sample the posterior of ``problem``'s fitted quantities: ``draws`` Metropolis steps kept in all, in ``chains``
+    chains of ``ceil(draws / chains)`` each (:func:`_start`, :func:`_chain`), each chain's burn-in of a quarter of
+    its draws adapting its proposal and dropped; credible intervals at ``confidence_level`` over all chains; R-hat and
+    ESS per quantity, whether they meet :data:`~bogie.fleet.calibration.convergence.RHAT_MAX` and
+    :data:`~bogie.fleet.calibration.convergence.ESS_MIN`, and what to change if not."""
+    if isinstance(chains, bool) or not isinstance(chains, int) or chains < 1:
+        raise ValueError(f"chains = {chains!r}: must be a whole number >= 1")
+    like = synthetic_likelihood(problem, best, seed)
+
+    def target(theta: np.ndarray) -> tuple[float, float]:
+        return _log_post(like, priors, problem, theta)
+
+    per_chain = -(-draws // chains)
+    runs = [_chain(target, problem, best, per_chain, seed, k) for k in range(chains)]
+    kept = np.stack([r[0] for r in runs])  # (chains, draws, quantities)
+    frame = pd.DataFrame(kept.reshape(chains * per_chain, -1), columns=list(problem.fitted))
+    frame.insert(0, "chain", np.repeat(np.arange(chains), per_chain))
+    frame["log_likelihood"] = [ll for r in runs for ll in r[1]]
+    summary = {
+        q: _quantity(kept[:, :, i], problem.bounds[i], confidence_level) for i, q in enumerate(problem.fitted)
+    }  # fmt: skip
+    said = advice(summary, draws, chains)
     flat = "flat over the bounds (no prior given)"
     described = {q: priors[q].describe() if q in priors else flat for q in problem.fitted}
-    return Posterior(frame, accepted / draws, summary, described)
+    acceptance = sum(r[2] for r in runs) / (chains * per_chain)
+    return Posterior(frame, acceptance, summary, described, chains, said is None, said)

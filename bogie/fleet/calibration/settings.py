@@ -75,9 +75,16 @@ class CalibrationSettings:
         8, unit="-", low=2, whole=True, doc="Population of the differential evolution, per fitted quantity."
     )
     posterior_draws: int = setting(
-        4000, unit="-", low=0, whole=True,
-        doc="Metropolis draws of the posterior kept, a quarter more adapting the sampler first (0: no posterior; "
+        16_000, unit="-", low=0, whole=True,
+        doc="Metropolis draws of the posterior kept, in all chains together (each chain keeps an equal share, rounded "
+        "up), a quarter more in each chain adapting its sampler first (0: no posterior; "
         "bogie.fleet.calibration.posterior).",
+    )  # fmt: skip
+    chains: int = setting(
+        4, unit="-", low=1, whole=True,
+        doc="Chains of the posterior's sampler, the first from the fit, the others from points drawn within the "
+        "bounds; their R-hat and effective sample sizes say whether it converged "
+        "(bogie.fleet.calibration.convergence).",
     )  # fmt: skip
     priors: Mapping[str, Any] | None = None
 

@@ -27,8 +27,8 @@ from pipeline.report.style import GROUP_COLOR, GROUP_LABEL, GROUPS, factor_label
 from pipeline.report.style import QUANTITY as SAMPLED_QUANTITY
 
 __all__ = [
-    "CAUSE_HEADER", "CHECK_SIDES", "QUANTITY", "SIZES", "cause_page", "cause_rows", "check_page", "fit_page",
-    "fit_rows", "page", "quantity_label", "skipped_page", "stats_rows",
+    "CAUSE_HEADER", "CHECK_SIDES", "QUANTITY", "SIZES", "cause_page", "cause_rows", "check_page", "convergence_cell",
+    "fit_page", "fit_rows", "page", "quantity_label", "skipped_page", "stats_rows",
 ]  # fmt: skip
 
 #: the group sizes compared
@@ -77,28 +77,49 @@ def _nothing(ax, what: str) -> None:
 
 
 # ---- the fit ------------------------------------------------------------------------------------------------------
+def _interval(e: Mapping[str, Any]) -> str:
+    return "none" if e.get("low") is None or e.get("high") is None else f"{_g(e['low'])} to {_g(e['high'])}"
+
+
 def fit_rows(m: Mapping[str, Any]) -> list[list[str]]:
-    """The fit table: each fitted quantity (value, interval, bounds), then each fixed one (its value)."""
+    """The fit table: each fitted quantity (the calibrated fleet's value and interval, the posterior's; the prior-free
+    minimum and its bootstrap interval beside it, a diagnostic; the bounds), then each fixed one (its value)."""
     rows = []
+    free = (m.get("prior_free_minimum") or {}).get("fitted", {})
     post = (m.get("posterior") or {}).get("quantities", {})
     for q, e in m["fitted"].items():
-        interval = "none" if e["low"] is None or e["high"] is None else f"{_g(e['low'])} to {_g(e['high'])}"
-        p = post.get(q)
-        posterior = "-" if p is None else f"{_g(p['median'])} ({_g(p['low'])} to {_g(p['high'])})"
-        rows.append([quantity_label(q), "fitted", _g(e["value"]), interval, posterior, " to ".join(
-            _g(b) for b in e["bounds"])])  # fmt: skip
+        f = free.get(q)
+        diagnostic = "-" if f is None else f"{_g(f['value'])} ({_interval(f)})"
+        kind = "fitted" if e.get("source", "posterior") == "posterior" else "minimum"
+        rows.append([quantity_label(q), kind, _g(e["value"]), _interval(e), diagnostic, " to ".join(
+            _g(b) for b in e["bounds"]), convergence_cell(post.get(q))])  # fmt: skip
     for q, v in (m.get("fixed") or {}).items():
         if v is not None:
-            rows.append([quantity_label(q), "fixed", _g(v), "-", "-", "-"])
+            rows.append([quantity_label(q), "fixed", _g(v), "-", "-", "-", "-"])
     return rows
 
 
+def convergence_cell(p: Mapping[str, Any] | None) -> str:
+    """A quantity's R-hat and its bulk and tail effective sample sizes, ``1.003; 2235/1876`` ("-": none, as in an
+    older stage's metrics; "n/a": undefined)."""
+    if p is None or "rhat" not in p:
+        return "-"
+    rhat = "n/a" if p["rhat"] is None else f"{p['rhat']:.3f}"
+    ess = "/".join("n/a" if p.get(k) is None else f"{p[k]:.0f}" for k in ("ess_bulk", "ess_tail"))
+    return f"{rhat}; {ess}"
+
+
 #: the fit table's header and column widths
-FIT_HEADER = ("quantity", "", "value", "bootstrap interval", "posterior median (interval)", "bounds")
-FIT_WIDTHS = (0.27, 0.07, 0.09, 0.18, 0.25, 0.14)
+FIT_HEADER = (
+    "quantity", "", "posterior\nmedian", "credible\ninterval", "prior-free minimum\n(bootstrap interval)", "bounds",
+    "R-hat; ESS\nbulk/tail",
+)  # fmt: skip
+FIT_WIDTHS = (0.28, 0.06, 0.09, 0.15, 0.21, 0.09, 0.12)
 
 
-def _valley(ax, cax, valley: pd.DataFrame, boot: pd.DataFrame, fitted: Mapping[str, Any]) -> None:
+def _valley(
+    ax, cax, valley: pd.DataFrame, boot: pd.DataFrame, fitted: Mapping[str, Any], free: Mapping[str, Any]
+) -> None:
     qx, qy = valley["quantity_x"].iloc[0], valley["quantity_y"].iloc[0]
     grid = valley.pivot_table(index="y", columns="x", values="distance")
     x, y, z = grid.columns.to_numpy(float), grid.index.to_numpy(float), grid.to_numpy(float)
@@ -107,20 +128,26 @@ def _valley(ax, cax, valley: pd.DataFrame, boot: pd.DataFrame, fitted: Mapping[s
     ax.contour(x, y, z, levels=np.unique(levels), colors="white", linewidths=0.6, alpha=0.8)
     if len(boot) and qx in boot and qy in boot:
         ax.plot(boot[qx], boot[qy], "o", ms=4.5, mfc="none", mec="C1", mew=1.2, label="bootstrap refits")
-    ax.plot(fitted[qx]["value"], fitted[qy]["value"], "*", ms=12, color="C3", mec="white", mew=0.8, label="fitted")
+    ax.plot(fitted[qx]["value"], fitted[qy]["value"], "*", ms=12, color="C3", mec="white", mew=0.8,
+            label="posterior median")  # fmt: skip
+    if qx in free and qy in free:
+        ax.plot(free[qx]["value"], free[qy]["value"], "X", ms=8, color="0.15", mec="white", mew=0.8,
+                label="prior-free minimum")  # fmt: skip
     ax.set_xlabel(quantity_label(qx))
     ax.set_ylabel(quantity_label(qy))
-    ax.set_title("Valley: distance over the most correlated pair (others at the fit)", fontsize=9)
+    ax.set_title("Valley: distance over the most correlated pair (others at the prior-free minimum)", fontsize=9)
     ax.grid(False)
     ax.legend(loc="upper right", framealpha=0.85)
     cax.figure.colorbar(mesh, cax=cax, label="distance [-]")
 
 
-def _profile(ax, profile: pd.DataFrame, q: str, entry: Mapping[str, Any], legend: bool) -> None:
+def _profile(ax, profile: pd.DataFrame, q: str, entry: Mapping[str, Any], free: Any, legend: bool) -> None:
     ax.plot(profile["value"], profile["distance"], color="0.2", lw=1.2)
     if entry["low"] is not None and entry["high"] is not None:
-        ax.axvspan(entry["low"], entry["high"], color="C0", alpha=0.2, lw=0, label="interval")
-    ax.axvline(entry["value"], color="C3", lw=1.2, label="fitted")
+        ax.axvspan(entry["low"], entry["high"], color="C0", alpha=0.2, lw=0, label="credible interval")
+    ax.axvline(entry["value"], color="C3", lw=1.2, label="posterior median")
+    if free is not None:
+        ax.axvline(free["value"], color="0.15", lw=1.0, ls="--", label="prior-free minimum")
     ax.set_xlim(*entry["bounds"])
     ax.set_xlabel(quantity_label(q), fontsize=8)
     ax.set_ylabel("distance [-]", fontsize=8)
@@ -131,6 +158,7 @@ def _profile(ax, profile: pd.DataFrame, q: str, entry: Mapping[str, Any], legend
 def fit_page(m: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], caption: Sequence[str]) -> Figure:
     """The valley and the profiles above the fit table and ``caption``."""
     fitted, valley, profiles = m["fitted"], tables["valley.csv"], tables["profiles.csv"]
+    free = (m.get("prior_free_minimum") or {}).get("fitted", {})
     boot, names = tables["bootstrap.csv"], list(m["fitted"])
     rows = fit_rows(m)
 
@@ -146,10 +174,10 @@ def fit_page(m: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], caption: 
         ]
         if has_valley:
             inner = grid[0:2, 0:2].subgridspec(1, 2, width_ratios=(1, 0.045), wspace=0.02)
-            _valley(fig.add_subplot(inner[0]), fig.add_subplot(inner[1]), valley, boot, fitted)
+            _valley(fig.add_subplot(inner[0]), fig.add_subplot(inner[1]), valley, boot, fitted, free)
         for k, q in enumerate(names):
             ax = fig.add_subplot(grid[slots[k]])
-            _profile(ax, profiles[profiles["quantity"] == q], q, fitted[q], legend=k == 0)
+            _profile(ax, profiles[profiles["quantity"] == q], q, fitted[q], free.get(q), legend=k == 0)
         top = table_axes(fig, bottom - 0.02, FIT_HEADER, rows, FIT_WIDTHS, size=type_size)
         return fig, text_block(fig, top - 0.012, caption, size=type_size)
 
@@ -300,7 +328,8 @@ def _group_key_label(key: str) -> str:
 
 
 def _causes(ax, attribution: Mapping[str, Any], stat: str, ylabel: str, factor: float, legend: bool) -> None:
-    """Per size and suspension: the readings as observed, the suspension at rest, and each cause's share."""
+    """Per size and suspension: the readings as observed, the suspension at rest, each cause's Shapley share (bars,
+    with their intervals) and its one-at-a-time share (open diamonds)."""
     keys = [k for k in ("triaxle/steel", "triaxle/air", "tandem/steel", "tandem/air") if k in attribution]
     bars = ["as_observed", *CAUSE_LABEL, "at_rest"]
     width = 0.8 / len(bars)
@@ -312,38 +341,51 @@ def _causes(ax, attribution: Mapping[str, Any], stat: str, ylabel: str, factor: 
             color, label = ("0.15", "as observed") if bar == "as_observed" else ("0.7", "at rest (all off)")
             ax.bar(pos, values, 0.9 * width, color=color, label=label)
             continue
-        entries = [attribution[k]["causes"][bar][stat] for k in keys]
+        entries = [attribution[k]["shapley"][bar][stat] for k in keys]
         values = np.array([factor * e["value"] for e in entries])
         err = np.array([[factor * (e["value"] - e["low"]), factor * (e["high"] - e["value"])] for e in entries]).T
         ax.bar(pos, values, 0.9 * width, color=CAUSE_LABEL[bar][1], label=f"{CAUSE_LABEL[bar][0]}'s share")
         ax.errorbar(pos, values, yerr=np.maximum(err, 0.0), fmt="none", ecolor="0.2", elinewidth=0.8, capsize=1.5)
+        single = [factor * attribution[k]["one_at_a_time"][bar][stat]["value"] for k in keys]
+        ax.plot(pos, single, "D", ms=3.5, mfc="white", mec="0.1", mew=0.8, ls="none",
+                label="one at a time" if j == len(bars) - 2 else None)  # fmt: skip
     ax.axhline(0.0, color="0.3", lw=0.7)
     ax.set_xticks(x, [f"{_group_key_label(k)}\n({attribution[k]['n_groups']} groups)" for k in keys])
     ax.set_ylabel(ylabel)
     if legend:
         low, high = ax.get_ylim()
         ax.set_ylim(low, high + 0.45 * (high - low))  # headroom for the legend
-        ax.legend(loc="upper right", ncol=3, fontsize=7)
+        handles, labels = ax.get_legend_handles_labels()
+        last = labels.index("one at a time")  # the marker after the bars, whatever order matplotlib keeps
+        order = [i for i in range(len(labels)) if i != last] + [last]
+        ax.legend([handles[i] for i in order], [labels[i] for i in order], loc="upper right", ncol=4, fontsize=7)
+
+
+def _share(e: Mapping[str, Any]) -> str:
+    """A share of groups [-] in % above its interval: ``+33`` and ``(+21 to +46)``."""
+    return f"{100 * e['value']:+.0f}\n({100 * e['low']:+.0f} to {100 * e['high']:+.0f})"
 
 
 def cause_rows(attribution: Mapping[str, Any]) -> list[list[str]]:
-    """The table under the bars: per size and suspension, outside 5 % as observed, each cause's share with its
-    interval and at rest, in % of groups."""
+    """The table under the bars: per size and suspension, outside 5 % as observed, each cause's Shapley share with
+    its interval, the suspension at rest; below, each cause's one-at-a-time share and their interaction, in % of
+    groups."""
     rows = []
     for key in (k for k in ("triaxle/steel", "triaxle/air", "tandem/steel", "tandem/air") if k in attribution):
         entry, stat = attribution[key], "share_outside_5pct"
-        cells = [_group_key_label(key), str(entry["n_groups"]), f"{100 * entry['as_observed'][stat]:.0f}"]
-        for cause in CAUSE_LABEL:
-            e = entry["causes"][cause][stat]
-            cells.append(f"{100 * e['value']:+.0f} ({100 * e['low']:+.0f} to {100 * e['high']:+.0f})")
-        cells.append(f"{100 * entry['at_rest'][stat]:.0f}")
-        rows.append(cells)
+        shapley = [_share(entry["shapley"][cause][stat]) for cause in CAUSE_LABEL]
+        single = [_share(entry["one_at_a_time"][cause][stat]) for cause in CAUSE_LABEL]
+        rows.append([_group_key_label(key), str(entry["n_groups"]), f"{100 * entry['as_observed'][stat]:.0f}",
+                     "Shapley", *shapley, "-", f"{100 * entry['at_rest'][stat]:.0f}"])  # fmt: skip
+        rows.append(["", "", "", "one at\na time", *single, _share(entry["interaction"][stat]), ""])
     return rows
 
 
 #: the cause table's header and widths
-CAUSE_HEADER = ("group", "groups", "observed", "resolution", "sensor", "tilt", "dynamics", "at rest")
-CAUSE_WIDTHS = (0.15, 0.07, 0.09, 0.155, 0.155, 0.155, 0.155, 0.07)
+CAUSE_HEADER = (
+    "group", "groups", "observed", "shares", "resolution", "sensor", "tilt", "dynamics", "interaction", "at rest",
+)  # fmt: skip
+CAUSE_WIDTHS = (0.125, 0.06, 0.08, 0.1, 0.11, 0.11, 0.11, 0.11, 0.11, 0.065)
 
 
 def cause_page(m: Mapping[str, Any], caption: Sequence[str]) -> Figure:
