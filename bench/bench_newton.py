@@ -47,8 +47,6 @@ from bogie.presets import triaxle_stage1
 from bogie.road import ISO8608Profile, wim
 from bogie.steel import nonlinear as nl
 from bogie.steel import phases
-from bogie.steel.force import core
-from bogie.steel.newmark import consistent_acceleration
 from bogie.steel.phases import _core as pc
 
 ROOT = Path(__file__).resolve().parent.parent
@@ -81,18 +79,9 @@ def drive_inputs(bogie: Bogie, phase: phases.Phase, dt: float) -> nl.Inputs:
 
 def start_state(bogie: Bogie, inputs: nl.Inputs) -> nl.State:
     """The static equilibrium at the first row (friction relaxed) with consistent accelerations, as ``simulate``
-    starts from rest."""
-    mass, data_f, data_i = nl.pack(bogie)
-    drive = inputs.drive(bogie)
-    state = nl.equilibrium(bogie, drive[0])
-    n = bogie.n_axles
-    f0 = np.zeros(2 * n)
-    core.force(
-        state.u, state.v, drive[0], data_f, data_i, state.history, state.history.copy(), f0,
-        np.zeros((2 * n, 2 * n)), np.zeros((2 * n, 2 * n)), np.zeros(core.record_length(n)), False, False,
-        np.zeros(nl.work_size(bogie)),
-    )  # fmt: skip
-    return nl.State(state.u, state.v, consistent_acceleration(mass, f0), state.history)
+    starts from rest (bench_nonlinear's :meth:`KernelCall.prepare`)."""
+    call = KernelCall.prepare(bogie, inputs)
+    return nl.State(call.state.u, call.state.v, call.a0, call.state.history)
 
 
 def one_ulp(state: nl.State) -> nl.State:

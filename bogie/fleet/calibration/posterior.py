@@ -32,6 +32,7 @@ from bogie import numerics
 from bogie.fleet.calibration.convergence import ESS_MIN, RHAT_MAX, THRESHOLDS_SOURCE, advice, diagnostics
 from bogie.fleet.calibration.priors import Prior, log_prior
 from bogie.fleet.calibration.problem import Problem, _values, simulated
+from bogie.fleet.calibration.settings import CalibrationSettings
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
 
@@ -41,8 +42,9 @@ __all__ = ["BOOTSTRAP", "CHAINS", "START_TRIES", "Posterior", "posterior", "summ
 #: first proposal (a fiftieth of each bound's width) and its burn-in (a quarter of the draws); the adapted
 #: proposal's scale 2.38^2 / d is Gelman, Roberts and Gilks 1996's optimal scaling, as Haario et al. 2001 use it
 BOOTSTRAP = 200
-#: chains of the sampler unless told (``CalibrationSettings.chains``'s default): Vehtari et al. 2021's four [-]
-CHAINS = 4
+#: chains of the sampler unless told: ``CalibrationSettings.chains``' default (Vehtari et al. 2021's four), declared
+#: there once [-]
+CHAINS: int = CalibrationSettings.__dataclass_fields__["chains"].default
 #: points drawn within the bounds for a chain's start before it starts from the fit instead (all without posterior
 #: density: the likelihood NaN there) [-]; a convention
 START_TRIES = 100
@@ -154,20 +156,25 @@ def _log_post(like, priors, problem, theta) -> tuple[float, float]:
     return lp + ll, ll
 
 
-def _start(target, problem: Problem, best: np.ndarray, chain: int, rng: np.random.Generator) -> np.ndarray:
+def _start(
+    target, problem: Problem, best: np.ndarray, chain: int, rng: np.random.Generator
+) -> tuple[np.ndarray, float, float]:
     """Chain 0 starts at the fit (at the bounds' centre if the fit has no posterior density); every other chain at a
     point drawn uniformly within the bounds from its own ``rng``, the first of :data:`START_TRIES` with a density (if
-    none has, at chain 0's start)."""
+    none has, at chain 0's start). The start, with its log posterior and log likelihood (``target``'s)."""
     low, high = (np.array([b[i] for b in problem.bounds]) for i in (0, 1))
     if chain > 0:
         for _ in range(START_TRIES):
             theta = low + (high - low) * rng.random(len(low))
-            if math.isfinite(target(theta)[0]):
-                return theta
+            lp, ll = target(theta)
+            if math.isfinite(lp):
+                return theta, lp, ll
     theta = np.asarray(best, dtype=float).copy()
-    if not math.isfinite(target(theta)[0]):  # the fit itself has no prior density (a bound): the bounds' centre
+    lp, ll = target(theta)
+    if not math.isfinite(lp):  # the fit itself has no prior density (a bound): the bounds' centre
         theta = (low + high) / 2
-    return theta
+        lp, ll = target(theta)
+    return theta, lp, ll
 
 
 def _chain(target, problem: Problem, best: np.ndarray, draws: int, seed: int, k: int) -> tuple[np.ndarray, list, int]:
@@ -177,8 +184,7 @@ def _chain(target, problem: Problem, best: np.ndarray, draws: int, seed: int, k:
     d = len(best)
     width = np.array([hi - lo for lo, hi in problem.bounds])
     cov = np.diag((width / 50.0) ** 2)
-    theta = _start(target, problem, best, k, rng)
-    lp, ll = target(theta)
+    theta, lp, ll = _start(target, problem, best, k, rng)
     burn = max(draws // 4, 1)
     chain, lls, accepted = [], [], 0
     for step in range(burn + draws):
