@@ -184,7 +184,8 @@ def fleet_study_overrides(values: Mapping[str, float], config: Config) -> dict[s
     """The fitted values as params.yaml settings for the fleet study (issue 31: offer to feed them back): ``set``
     (key -> value), ``command`` (the ``dvc exp run -S ...`` line that runs the study with them) and ``not_settable``
     (the fitted means of the inhibitor distributions: an exponential tilt of the fleet's uniform or log-uniform, a
-    kind params.yaml has no form for; the fleet study keeps its own)."""
+    kind params.yaml has no form for; the fleet study keeps its own; and the site's bias, a property of the surveyed
+    site, not of the fleet: the fleet study's WIM site reads without one)."""
     settings, not_settable = {}, []
     for quantity, value in values.items():
         keys = PARAMS_KEYS.get(quantity)

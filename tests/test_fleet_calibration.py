@@ -178,6 +178,20 @@ def test_the_table_of_real_weighings_is_the_same_on_worker_processes():
     assert (np.abs(np.diff(here.loads[:, :, :, 0, 0], axis=2)) > 1.0).all()
 
 
+def test_the_bootstrap_refits_are_the_same_bits_on_worker_processes():
+    # issue 43 Must 8: the refits run on the executor; each is seeded by its number, its resample drawn here in order
+    table, observed = analytic_table(200), synthetic_observed(300)
+    problem = L.make_problem(table, observed, FIT, L.base_values(TILT, 0.0, None))
+    chosen = L.CalibrationSettings(FIT, seed=3, maxiter=5, popsize=5, bootstrap_resamples=4)
+    said = []
+    here = F._bootstrap(problem, chosen, said.append)
+    with ProcessPoolExecutor(2) as pool:
+        there = F._bootstrap(problem, chosen, lambda text: None, pool)
+    assert there.equals(here) and len(here) == 4 and here["resample"].tolist() == [0, 1, 2, 3]
+    assert said[0] == "calibrate: bootstrap, 4 refits on the executor" and len(said) == 5
+    assert here[list(FIT)].nunique().min() == 4  # four different resamples, four different refits
+
+
 def settings(**changes):
     return L.CalibrationSettings(**{"fit": FIT, "seed": 1, **changes})
 

@@ -50,6 +50,8 @@ CALIBRATION_QUANTITIES: dict[str, tuple[float, float, str]] = {
     "contact_roll_radius_mean_mm": (0.0, 500.0, "mm"),
     # the geometric mean of distributions.bush_stiffness (log-uniform), moved the same way
     "bush_stiffness_geomean": (1e-3, 1e7, "N m/rad"),
+    # the WIM site's calibration bias: every reading times 1 + b / 100 (bogie.fleet.calibration.site)
+    "site_bias_pct": (-30.0, 30.0, "%"),
 }
 #: the fitted quantities that move a fleet distribution of an inhibitor (bogie.fleet.sampling.tilted): the sample column
 #: each moves, and the factor from its SI unit to the unit of the fitted mean
@@ -68,7 +70,7 @@ PILED = 0.25
 #: site classes end at 4 m/km, so no WIM site is rougher than 10
 SITE_IRI_RANGE: tuple[float, float] = CALIBRATION_QUANTITIES["site_iri_m_km"][:2]
 #: the quantities that belong to the WIM protocol
-WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct")
+WIM_QUANTITIES: tuple[str, ...] = ("site_iri_m_km", "sensor_error_pct", "site_bias_pct")
 
 # PAIR_TOLERANCE (VSB 11: no axle more than 5 % from any other) and SHARE_TOLERANCE (no axle more than 10 % over its
 # equal share) are the survey statistics' (bogie.weighings.stats): one home for simulated and observed groups

@@ -27,14 +27,23 @@ from pipeline.config import ConfigError, parse_config
 
 ROOT = Path(__file__).resolve().parents[2]
 #: the known fleet of the synthetic survey (site roughness: the protocol's own, not fitted here)
+#: the synthetic survey is read at its own WIM site (issue 43 Must 2): another seed's road, and a calibration bias of
+#: +3 % on every reading
 TRUTH = {
     "chassis_tilt_mean_deg": 0.8, "chassis_tilt_sd_deg": 0.5, "air_share": 0.4, "site_iri_m_km": 1.3,
-    "sensor_error_pct": 3.0,
+    "sensor_error_pct": 3.0, "site_bias_pct": 3.0,
 }  # fmt: skip
 FIT = {
     "chassis_tilt_mean_deg": [-1.0, 1.5], "chassis_tilt_sd_deg": [0.1, 1.5], "air_share": [0.0, 1.0],
-    "sensor_error_pct": [0.0, 8.0],
+    "sensor_error_pct": [0.0, 8.0], "site_bias_pct": [-15.0, 15.0],
 }  # fmt: skip
+
+
+#: the calibration fleet of the recovery: the survey is on its own site (another seed's), the table on another, and
+#: the between-site covariance comes from 2 x 32 of these bogies weighed on 16 more. Measured on 2026-12-06: with 60
+#: bogies the posterior was unconverged and missed the sensor's truth (4.2 [3.2, 5.0] % against 3.0); with 150 it
+#: converged and held every truth (tilt centre 0.72 [0.30, 1.05] degree, sensor 3.1 [2.2, 3.9] %). The default is 300.
+RECOVERY_BOGIES = 150
 
 
 def raw_params(n_bogies=60, **calibrate):
@@ -86,7 +95,7 @@ def recovered(tmp_path_factory):
     attribute = A.attribute_loads
     with pytest.MonkeyPatch.context() as patch:
         patch.setattr(A, "attribute_loads", attribute_loads)
-        assert C.main(project(root, raw_params())) == 0
+        assert C.main(project(root, raw_params(RECOVERY_BOGIES))) == 0
     metrics = json.loads((root / "metrics" / "calibration.json").read_text())
     return root, metrics
 
@@ -167,7 +176,8 @@ def test_the_fitted_values_are_offered_as_the_fleet_studys_settings_and_parse_to
     # issue 31 item 8: the fitted values could not feed the fleet study
     _, metrics = recovered
     offer = metrics["fleet_study"]
-    assert offer["not_settable"] == [] and offer["command"].startswith("dvc exp run -S ")
+    # the site's bias is the surveyed site's, not the fleet's: not offered (issue 43 Must 2)
+    assert offer["not_settable"] == ["site_bias_pct"] and offer["command"].startswith("dvc exp run -S ")
     raw = raw_params()
     for arg in offer["command"].removeprefix("dvc exp run ").split(" -S "):
         key, value = arg.removeprefix("-S ").split("=")

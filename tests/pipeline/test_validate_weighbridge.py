@@ -23,8 +23,9 @@ from pipeline.config.schema import Params
 
 PARAMS = Path(__file__).resolve().parents[2] / "params.yaml"
 NOTE = (
-    "a static calibration (observed.kind is weighbridge): calibrate.fit's site_iri_m_km, sensor_error_pct left out, a "
-    "weighbridge has no WIM site or sensor; fitting chassis_tilt_mean_deg, chassis_tilt_sd_deg, air_share"
+    "a static calibration (observed.kind is weighbridge): calibrate.fit's site_iri_m_km, sensor_error_pct, "
+    "site_bias_pct left out, a weighbridge has no WIM site or sensor; fitting chassis_tilt_mean_deg, "
+    "chassis_tilt_sd_deg, air_share"
 )
 
 

@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.problem import SIZES, CalibrationError, Mapper, Table
-from bogie.fleet.calibration.table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
+from bogie.fleet.calibration.table import bogie_tilts, moved_samples, protocol_spec, weigh_readings, wim_task
 from bogie.fleet.weighing.settings import StaticProtocol
 from bogie.intervals import percentile_interval
 from bogie.rounding import json_number
@@ -175,11 +175,12 @@ def scenario_loads(
         ("static_level", "static", static, True),
     ):  # fmt: skip
         tasks = [
-            ({**row, "suspension": kinds[i], "chassis_tilt": 0.0 if level else float(tilt[i])}, protocol, spec)
+            wim_task({**row, "suspension": kinds[i], "chassis_tilt": 0.0 if level else float(tilt[i])}, spec,
+                     table.site, None if table.speeds is None else table.speeds[i], protocol)
             for i, row in enumerate(rows)
         ]  # fmt: skip
         weighed[name] = weigh_readings(tasks, executor)
-    factors = (1.0 + 0.01 * values["sensor_error_pct"] * table.z) * table.pass_factors()[:, None]
+    factors = table.reading_factors(values)
     return combination_loads(weighed, factors, weight_step_kg), kinds
 
 

@@ -18,8 +18,9 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.attribution import attribution
-from bogie.fleet.calibration.fitting import PRIOR_FREE, calibrate, priors_for
+from bogie.fleet.calibration.fitting import PRIOR_FREE, calibrate, priors_for, sensor_finding
 from bogie.fleet.calibration.posterior import posterior
+from bogie.fleet.calibration.prior_sensitivity import prior_sensitivity
 from bogie.fleet.calibration.problem import (
     SIZES,
     CalibrationError,
@@ -66,7 +67,8 @@ def simulate_fleet(
 ) -> pd.DataFrame:  # fmt: skip
     """The calibration fleet with the quantities ``values``, weighed directly (no table): one row per group kept
     (``slot``, ``group``, ``n_axles``, ``suspension``, ``tilt_deg`` [degree], wide loads ``axle_load_1..3`` [kg]),
-    with the sensor's error, before the filters.
+    with the site's bias and the sensor's error, before the filters; WIM on the table's site, each bogie at its
+    speed (:meth:`~bogie.fleet.calibration.table.Table.task`).
 
     ``variant`` removes an inhibitor of the steel groups (:data:`bogie.params.INHIBITORS`, or ``all``);
     ``weight_step_kg`` reads the loads at the observed file's resolution [kg] (None: as they are; the ablation's
@@ -88,12 +90,9 @@ def simulate_fleet(
             for name, ideal in INHIBITORS.items():
                 if variant in (name, "all"):
                     sample[name] = ideal
-        tasks.append((sample, table.protocol, spec))
+        tasks.append(table.task(i, sample, spec))
         keep.append(i)
-    loads = weigh_readings(tasks, executor)
-    if table.protocol == "wim":
-        factors = (1.0 + 0.01 * values["sensor_error_pct"] * table.z[keep]) * table.pass_factors()[keep, None]
-        loads = loads * factors
+    loads = weigh_readings(tasks, executor) * table.reading_factors(values, np.asarray(keep, dtype=int))
     loads = at_resolution(loads, weight_step_kg)
     frame = pd.DataFrame({
         "slot": keep, "group": table.size[keep], "n_axles": [SIZES[s] for s in table.size[keep]],
@@ -204,7 +203,8 @@ def held_out(
         post = None
         if settings.posterior_draws:  # the half's posterior: its medians are the fleet it calibrates
             post = posterior(half, priors_for(half, settings), theta, settings.posterior_draws, settings.seed,
-                             settings.confidence_level, chains=settings.chains)  # fmt: skip
+                             settings.confidence_level, chains=settings.chains, sites=settings.sites,
+                             executor=executor)  # fmt: skip
             theta = np.array([post.summary[q]["median"] for q in half.fitted])
         d_half = half.objective(half.unit_weights(), None)(theta)
         values_half = _values(theta, half.fitted, half.base)
@@ -275,13 +275,15 @@ def calibrate_survey(
     """
     progress = progress or _quiet
     problem = make_problem(table, observed, settings.fit, base, min_group_load_kg)
-    result = calibrate(problem, settings, progress)
+    result = calibrate(problem, settings, progress, executor)
     step = observed.weight_step_kg
     direct = filtered(simulate_fleet(table, result.values, weight_step_kg=step, executor=executor), min_group_load_kg)
     held = held_out(table, observed, settings, base, min_group_load_kg, executor, progress)
     abl = ablation(table, result.values, min_group_load_kg, executor)
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
     metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
+    if result.posterior is not None:  # does the answer depend on the tilt prior? (issue 43 Must 6)
+        metrics["prior_sensitivity"] = _prior_sensitivity(problem, settings, result, progress)
     if result.posterior is not None:  # the statistics the posterior predicts, beside those at its medians
         metrics["calibrated"]["posterior_predictive"] = posterior_predictive(table, result.posterior, result.values,
             min_group_load_kg, step, settings.confidence_level, executor)  # fmt: skip
@@ -291,6 +293,17 @@ def calibrate_survey(
                               metrics)  # fmt: skip
     progress(f"calibrate: {result.evaluations} evaluations of {result.seconds_per_evaluation * 1e3:.1f} ms")
     return metrics, _tables(result, direct, abl, by_cause)
+
+
+def _prior_sensitivity(
+    problem: Any, settings: CalibrationSettings, result: Any, progress: Callable[[str], None]
+) -> dict[str, Any] | None:
+    """:func:`bogie.fleet.calibration.prior_sensitivity.prior_sensitivity` of the calibration, rounded."""
+    progress("calibrate: prior sensitivity, the posterior with the tilt prior's sd halved and doubled")
+    best = np.array([result.prior_free[q]["value"] for q in problem.fitted])
+    return _rounded(prior_sensitivity(problem, priors_for(problem, settings), result.posterior, best,
+                                      settings.posterior_draws, settings.seed, settings.confidence_level,
+                                      settings.chains))  # fmt: skip
 
 
 def _attribute(
@@ -335,6 +348,8 @@ def _metrics(
         # a value (or the posterior's draws) piled against a bound: a finding about the model, not a value of the fleet
         "at_bounds": _findings(result.fitted),
         "posterior": _posterior_metrics(result.posterior, settings.confidence_level),
+        # the per-axle sensor error against a strip sensor's whole error (issue 43 Must 4), in words when above it
+        "sensor_per_axle": sensor_finding(result.fitted),
         # the diagnostic: the distance's minimum without the priors, with its bootstrap; not the calibrated fleet
         "prior_free_minimum": {
             "note": "a diagnostic, not the calibrated fleet: the energy distance's minimum without the priors (the "
@@ -412,6 +427,15 @@ def posterior_predictive(
     return out
 
 
+def _rounded(x: Any) -> Any:
+    """``x`` with every float rounded for a metrics file (:func:`bogie.rounding.json_number`), containers walked."""
+    if isinstance(x, dict):
+        return {k: _rounded(v) for k, v in x.items()}
+    if isinstance(x, list | tuple):
+        return [_rounded(v) for v in x]
+    return json_number(x) if isinstance(x, float) else x
+
+
 def _entries(fitted: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
     """Per quantity its value, interval, bounds and source, for a metrics file."""
     return {
@@ -450,6 +474,9 @@ def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
         "chains": post.chains,
         "acceptance": json_number(post.acceptance),
         "converged": post.converged,
+        # the likelihood's covariance by source, each summary in its own units (issue 43 Must 2: between sites)
+        "covariance_sites": post.sites,
+        "covariance_shares": _rounded(post.covariance_shares),
         "advice": post.advice,
         "thresholds": post.thresholds,
         "quantities": {

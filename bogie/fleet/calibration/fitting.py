@@ -15,7 +15,7 @@ from __future__ import annotations
 
 import math
 import time
-from collections.abc import Callable, Sequence
+from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -25,14 +25,15 @@ import pandas as pd
 from bogie.fleet.calibration.posterior import Posterior, posterior
 from bogie.fleet.calibration.priors import default_priors
 from bogie.fleet.calibration.problem import CalibrationSettings, Problem, _values, fit
-from bogie.fleet.calibration.table import _quiet
+from bogie.fleet.calibration.table import _quiet, map_tasks
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
+from bogie.road.wim import STRIP_SENSOR_RMS_PCT
 from bogie.rounding import json_number
 
 __all__ = [
     "AT_BOUND", "PILED", "PRIOR_FREE", "PROFILE_POINTS", "TRADE_OFF", "VALLEY_POINTS", "Calibration", "at_bound",
-    "bound_finding", "calibrate", "posterior_fitted", "priors_for",
+    "bound_finding", "calibrate", "posterior_fitted", "priors_for", "sensor_finding",
 ]  # fmt: skip
 
 #: the distance over the valley's pair of quantities is evaluated on this many points per side [-]
@@ -90,18 +91,33 @@ class Calibration:
     posterior: Posterior | None = None
 
 
-def _bootstrap(problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None]) -> pd.DataFrame:
-    """The fit on each resample of the observed groups and of the calibration bogies together."""
+def _refit(task: tuple) -> tuple[np.ndarray, float]:
+    """One bootstrap refit (a module-level function: it runs on the executor's workers)."""
+    problem, seed, maxiter, popsize, obs_w, slots = task
+    theta, d, _ = fit(problem, seed, maxiter, popsize, obs_w, slots)
+    return theta, d
+
+
+def _bootstrap(
+    problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None], executor: Any = None
+) -> pd.DataFrame:
+    """The fit on each resample of the observed groups and of the calibration bogies together: the resamples drawn
+    here, in order, the refits on ``executor`` (:func:`~bogie.fleet.calibration.table.map_tasks`; each refit seeded
+    by its number alone, so the same refits wherever they run)."""
     seed = settings.seed
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(1,)))
-    rows = []
+    tasks = []
     for b in range(settings.bootstrap_resamples):
         obs_w = {
             k: rng.multinomial(len(v), np.full(len(v), 1.0 / len(v))).astype(float) for k, v in problem.obs.items()
         }
         n = len(problem.table.size)
         slots = rng.multinomial(n, np.full(n, 1.0 / n)).astype(float)
-        theta, d, _ = fit(problem, seed + 1 + b, settings.maxiter, settings.popsize, obs_w, slots)
+        tasks.append((problem, seed + 1 + b, settings.maxiter, settings.popsize, obs_w, slots))
+    if tasks:
+        progress(f"calibrate: bootstrap, {len(tasks)} refits on the executor")
+    rows = []
+    for b, (theta, d) in enumerate(map_tasks(_refit, tasks, executor)):
         rows.append({"resample": b, **dict(zip(problem.fitted, theta)), "distance": d})
         progress(f"calibrate: bootstrap {b + 1}/{settings.bootstrap_resamples}: distance {d:.5f}")
     return pd.DataFrame(rows, columns=["resample", *problem.fitted, "distance"])
@@ -155,8 +171,9 @@ def _trade_offs(fitted: Sequence[str], corr: pd.DataFrame) -> list[dict[str, Any
 
 
 def calibrate(
-    problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None] | None = None
-) -> Calibration:
+    problem: Problem, settings: CalibrationSettings, progress: Callable[[str], None] | None = None,
+    executor: Any = None,
+) -> Calibration:  # fmt: skip
     """The prior-free minimum and its bootstrap intervals, the trade-offs, the valley and the profiles, then the
     posterior from that minimum: the fitted values (:class:`Calibration`).
 
@@ -169,12 +186,15 @@ def calibrate(
         problem).
     progress
         Told each generation of the fit and each resample (None: nothing).
+    executor
+        Where the bootstrap's refits and the posterior's between-site weighings run (an Executor or a map-like
+        callable, :func:`~bogie.fleet.calibration.table.map_tasks`; None: here).
     """
     progress = progress or _quiet
     start = time.perf_counter()
     best, dist_best, evaluations = fit(problem, settings.seed, settings.maxiter, settings.popsize, progress=progress)
     per_eval = (time.perf_counter() - start) / max(evaluations, 1)
-    boot = _bootstrap(problem, settings, progress)
+    boot = _bootstrap(problem, settings, progress, executor)
     prior_free = _intervals(problem, best, boot, settings.confidence_level)
     corr = boot[list(problem.fitted)].corr() if len(boot) >= 3 else pd.DataFrame()
     trade = _trade_offs(problem.fitted, corr)
@@ -187,7 +207,7 @@ def calibrate(
         progress(f"calibrate: posterior, {settings.posterior_draws} draws")
         priors = priors_for(problem, settings)
         post = posterior(problem, priors, best, settings.posterior_draws, settings.seed, settings.confidence_level,
-                         chains=settings.chains)  # fmt: skip
+                         chains=settings.chains, sites=settings.sites, executor=executor)  # fmt: skip
         fitted = posterior_fitted(prior_free, post)
     else:  # no posterior asked for: the minimum is all there is, and says so
         fitted = {q: {**e, "source": PRIOR_FREE} for q, e in prior_free.items()}
@@ -227,6 +247,26 @@ def posterior_fitted(prior_free: dict[str, dict[str, Any]], post: Posterior) -> 
             "at_bound": finding, "source": "posterior",
         }  # fmt: skip
     return fitted
+
+
+def sensor_finding(fitted: Mapping[str, Mapping[str, Any]]) -> dict[str, Any] | None:
+    """Issue 43 Must 4: the fitted per-axle sensor error ``sensor_error_pct`` against the most a strip sensor's whole
+    error reaches (:data:`bogie.road.wim.STRIP_SENSOR_RMS_PCT`, Cebon and Winkler 1991): its value, interval, the
+    bound, whether it exceeds it and, if so, what that says in words. None when it is not fitted."""
+    entry = fitted.get("sensor_error_pct")
+    if entry is None:
+        return None
+    value, bound = float(entry["value"]), STRIP_SENSOR_RMS_PCT
+    exceeds = value > bound
+    words = None
+    if exceeds:
+        words = (
+            f"the per-axle sensor error is fitted at {value:.3g} %, above the {bound:g} % RMS a strip sensor's whole "
+            "error reaches against an instrumented vehicle (Cebon and Winkler 1991): it is per-axle scatter the model "
+            "lacks (dynamics, tyres, loading the fleet does not have), taken up by the sensor, not the sensor's error"
+        )
+    return {"value": value, "low": entry.get("low"), "high": entry.get("high"), "bound_pct": bound,
+            "exceeds": exceeds, "finding": words}  # fmt: skip
 
 
 def _valley_pair(fitted: Sequence[str], corr: pd.DataFrame) -> tuple[str, str] | None:

@@ -7,8 +7,10 @@ mean and sd of the spread). Their sampling distribution is taken as normal (Wood
 et al. 2018): ``s_obs ~ N(s(theta), S)``, ``s(theta)`` the calibration fleet's summaries at ``theta`` (from the
 table, :func:`bogie.fleet.calibration.problem.simulated`), and ``S = S_obs + S_sim`` the summaries' covariance under a
 bootstrap of the observed groups (the survey's sampling error) plus under a bootstrap of the calibration bogies at
-the fit (the table's Monte Carlo error), both estimated once. A fixed covariance is the usual simplification; the
-summaries' covariance changes little across the posterior's width.
+the fit (the table's Monte Carlo error), both estimated once; for a WIM table on a shared site, plus twice the
+summaries' covariance between sites (:func:`site_covariance`: the survey's site and the table's are two draws of the
+sites it could have been made at; issue 43 Must 2). A fixed covariance is the usual simplification; the summaries'
+covariance changes little across the posterior's width.
 
 The sampler: several chains of random-walk Metropolis (:data:`CHAINS` by default), the first from the fit, the others
 from points drawn uniformly within the bounds (over-dispersed, as R-hat needs); each chain's proposal adapted
@@ -22,6 +24,7 @@ from __future__ import annotations
 
 import math
 from collections.abc import Mapping
+from concurrent.futures import Executor
 from dataclasses import dataclass
 from typing import Any
 
@@ -33,10 +36,15 @@ from bogie.fleet.calibration.convergence import ESS_MIN, RHAT_MAX, THRESHOLDS_SO
 from bogie.fleet.calibration.priors import Prior, log_prior
 from bogie.fleet.calibration.problem import Problem, _values, simulated
 from bogie.fleet.calibration.settings import CalibrationSettings
+from bogie.fleet.calibration.site import site_of
+from bogie.fleet.calibration.table import Mapper, bogie_tilts, moved_samples, protocol_spec, weigh_readings, wim_task
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
 
-__all__ = ["BOOTSTRAP", "CHAINS", "START_TRIES", "Posterior", "posterior", "summaries", "synthetic_likelihood"]
+__all__ = [
+    "BOOTSTRAP", "CHAINS", "SITE_BOGIES", "START_TRIES", "Posterior", "posterior", "site_bogies", "site_covariance",
+    "summaries", "synthetic_likelihood",
+]  # fmt: skip
 
 #: bootstrap resamples of each side for the summaries' covariance [-]; a convention (no source), like the sampler's
 #: first proposal (a fiftieth of each bound's width) and its burn-in (a quarter of the draws); the adapted
@@ -48,6 +56,11 @@ CHAINS: int = CalibrationSettings.__dataclass_fields__["chains"].default
 #: points drawn within the bounds for a chain's start before it starts from the fit instead (all without posterior
 #: density: the likelihood NaN there) [-]; a convention
 START_TRIES = 100
+#: calibration bogies of each size weighed on every other site for the between-site covariance (the first of each
+#: size, each as its steel and its air group) [-]: a convention, the cost of a site 4 x SITE_BOGIES weighings; the
+#: covariance of so few bogies' summaries across sites includes their own interaction with the site, so it is, if
+#: anything, too wide (docs/calibration.md, "The site")
+SITE_BOGIES = 32
 
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
@@ -84,6 +97,8 @@ class SyntheticLikelihood:
     precision: np.ndarray
     covariance_obs: np.ndarray
     covariance_sim: np.ndarray
+    covariance_site: np.ndarray  # between sites, of one site's summaries (entered twice: the survey's and the table's)
+    sites: int = 0  # the other sites it was estimated on
 
     def simulated(self, theta: np.ndarray) -> np.ndarray:
         p = self.problem
@@ -97,9 +112,74 @@ class SyntheticLikelihood:
         return -0.5 * float(numerics.matmul(numerics.matmul(r, self.precision), r))
 
 
-def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> SyntheticLikelihood:
+def site_bogies(table: Any) -> np.ndarray:
+    """The calibration bogies weighed on the other sites: the first :data:`SITE_BOGIES` of each size."""
+    return np.sort(np.concatenate([np.flatnonzero(table.size == size)[:SITE_BOGIES] for size in np.unique(table.size)]))
+
+
+def site_covariance(
+    problem: Problem, best: np.ndarray, sites: int, executor: Executor | Mapper | None = None
+) -> tuple[np.ndarray, int]:
+    """The covariance of the survey's summaries between WIM sites, at the fit ``best``, and the sites it came from:
+    :func:`site_bogies` weighed directly (their fitted tilts, steel and air) on each of ``sites`` other sites
+    (:func:`bogie.fleet.calibration.site.site_of`, numbers 1 to ``sites``: their own roads, the bogies' own speeds),
+    the same bogies, sensor errors and bias on each, so that only the site differs; a site whose summaries are not
+    all defined (a size without a group) left out. Over the sites, a summary of m bogies varies by the site's own
+    departure ``d`` and by the bogies' interaction with the site (variance ``g / m``, which the bootstraps of the
+    survey and of the table already hold); the difference of two halves' summaries has no ``d`` and variance
+    ``4 g / m``, so the site's own variance is the whole's less a quarter of the halves' difference's (at least 0),
+    its correlations the whole's (a covariance, positive semi-definite). Zeros (and 0 sites) for a static table, a
+    table without a shared site or fewer than two sites."""
+    table, d = problem.table, len(summaries(problem.obs, problem.unit_weights()))
+    if table.protocol != "wim" or table.site is None or sites < 2:
+        return np.zeros((d, d)), 0
+    values = _values(best, problem.fitted, problem.base)
+    rows = site_bogies(table)
+    tilt = np.radians(bogie_tilts(table, values))
+    samples = moved_samples(table, values).to_dict("records")
+    spec = protocol_spec(table, values["site_iri_m_km"])
+    classes = list(table.samples["road_class"].astype(str))
+    tasks = [
+        wim_task({**samples[i], "suspension": kind, "chassis_tilt": float(tilt[i])}, spec,
+                 site_of(table.seed, table.study, classes, r), float(table.speeds[i]))
+        for r in range(1, sites + 1) for kind in ("steel", "air") for i in rows
+    ]  # fmt: skip
+    loads = weigh_readings(tasks, executor).reshape(sites, 2, len(rows), 3)
+    loads = loads * table.reading_factors(values, rows)[None, None]
+    # the two halves of the bogies: alternate ones of each size
+    order = np.zeros(len(rows), dtype=int)
+    for size in np.unique(table.size[rows]):
+        at = np.flatnonzero(table.size[rows] == size)
+        order[at] = np.arange(len(at))
+    halves = [order % 2 == 0, order % 2 == 1]
+
+    def of(r: int, keep: np.ndarray) -> np.ndarray:
+        sim = simulated(table, values, problem.min_group_load_kg, None, problem.weight_step_kg, loads[r][:, keep],
+                        rows[keep])  # fmt: skip
+        return _sim_summaries(problem, sim)
+
+    whole, gap = [], []
+    for r in range(sites):
+        full, first, second = of(r, np.ones(len(rows), dtype=bool)), of(r, halves[0]), of(r, halves[1])
+        if np.all(np.isfinite(full)) and np.all(np.isfinite(first - second)):
+            whole.append(full)
+            gap.append(first - second)
+    if len(whole) < 2:
+        return np.zeros((d, d)), len(whole)
+    total = numerics.cov(np.asarray(whole))
+    # the site's own variance: the whole's less the bogies' interaction with the site, a quarter of the halves' gap's
+    own = np.maximum(np.diag(total) - np.diag(numerics.cov(np.asarray(gap))) / 4.0, 0.0)
+    sd = np.sqrt(np.diag(total))
+    corr = total / np.outer(np.where(sd > 0.0, sd, 1.0), np.where(sd > 0.0, sd, 1.0))
+    return corr * np.outer(np.sqrt(own), np.sqrt(own)), len(whole)
+
+
+def synthetic_likelihood(
+    problem: Problem, best: np.ndarray, seed: int, sites: int = 0, executor: Executor | Mapper | None = None
+) -> SyntheticLikelihood:
     """The synthetic likelihood of ``problem``'s survey, its covariance from :data:`BOOTSTRAP` resamples of the
-    observed groups and of the calibration bogies at ``best`` (the fit), seeded by ``seed``."""
+    observed groups and of the calibration bogies at ``best`` (the fit), seeded by ``seed``, and twice the
+    between-site covariance over ``sites`` other sites (:func:`site_covariance`, weighed on ``executor``)."""
     rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(2,)))
     ones = problem.unit_weights()
     s_obs = summaries(problem.obs, ones)
@@ -115,12 +195,13 @@ def synthetic_likelihood(problem: Problem, best: np.ndarray, seed: int) -> Synth
         sim = simulated(problem.table, values, problem.min_group_load_kg, slots, problem.weight_step_kg)
         sim_draws.append(_sim_summaries(problem, sim))
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
-    cov = c_obs + c_sim
+    c_site, n_sites = site_covariance(problem, best, sites, executor)
+    cov = c_obs + c_sim + 2.0 * c_site
     cov = cov + np.eye(len(cov)) * 1e-9 * max(float(np.trace(cov)) / len(cov), 1e-30)  # a ridge against rounding
     # a summary that is NaN in a resample (a size with no weight in it) leaves the covariance NaN: the precision is NaN
     # then, as numpy's inverse gave it, every likelihood NaN and no proposal accepted (issue 43 is to treat it)
     precision = numerics.inv(cov) if np.all(np.isfinite(cov)) else np.full_like(cov, np.nan)
-    return SyntheticLikelihood(problem, s_obs, precision, c_obs, c_sim)
+    return SyntheticLikelihood(problem, s_obs, precision, c_obs, c_sim, c_site, n_sites)
 
 
 @dataclass
@@ -139,6 +220,11 @@ class Posterior:
     chains: int
     converged: bool
     advice: str | None
+    #: the other sites the between-site covariance came from (0: none), and each source's share of the likelihood's
+    #: covariance (its trace in the summaries' units over the total's): survey, table, between sites
+    sites: int = 0
+    covariance_shares: dict[str, float] | None = None
+    likelihood: Any = None  # the synthetic likelihood it sampled (SyntheticLikelihood), for another prior
 
     @property
     def thresholds(self) -> dict[str, Any]:
@@ -217,16 +303,20 @@ def _quantity(x: np.ndarray, bounds: tuple[float, float], confidence_level: floa
 
 def posterior(
     problem: Problem, priors: Mapping[str, Prior], best: np.ndarray, draws: int, seed: int, confidence_level: float,
-    chains: int = CHAINS,
+    chains: int = CHAINS, sites: int = 0, executor: Executor | Mapper | None = None,
+    likelihood: SyntheticLikelihood | None = None,
 ) -> Posterior:  # fmt: skip
     """Sample the posterior of ``problem``'s fitted quantities: ``draws`` Metropolis steps kept in all, in ``chains``
     chains of ``ceil(draws / chains)`` each (:func:`_start`, :func:`_chain`), each chain's burn-in of a quarter of
     its draws adapting its proposal and dropped; credible intervals at ``confidence_level`` over all chains; R-hat and
     ESS per quantity, whether they meet :data:`~bogie.fleet.calibration.convergence.RHAT_MAX` and
-    :data:`~bogie.fleet.calibration.convergence.ESS_MIN`, and what to change if not."""
+    :data:`~bogie.fleet.calibration.convergence.ESS_MIN`, and what to change if not. The likelihood's covariance
+    includes the between-site covariance over ``sites`` other sites (:func:`site_covariance`, weighed on
+    ``executor``; 0: none); ``likelihood``: one already made for ``problem`` (:attr:`Posterior.likelihood` of
+    another posterior of it; then ``sites`` and ``executor`` are not used), None: made here."""
     if isinstance(chains, bool) or not isinstance(chains, int) or chains < 1:
         raise ValueError(f"chains = {chains!r}: must be a whole number >= 1")
-    like = synthetic_likelihood(problem, best, seed)
+    like = likelihood if likelihood is not None else synthetic_likelihood(problem, best, seed, sites, executor)
 
     def target(theta: np.ndarray) -> tuple[float, float]:
         return _log_post(like, priors, problem, theta)
@@ -244,4 +334,11 @@ def posterior(
     flat = "flat over the bounds (no prior given)"
     described = {q: priors[q].describe() if q in priors else flat for q in problem.fitted}
     acceptance = sum(r[2] for r in runs) / (chains * per_chain)
-    return Posterior(frame, acceptance, summary, described, chains, said is None, said)
+    parts = {"survey": like.covariance_obs, "table": like.covariance_sim, "between_sites": 2.0 * like.covariance_site}
+    # each summary in its own units: the trace of the covariance scaled by the total's diagonal
+    scale = np.diag(sum(parts.values()))
+    varies = scale > 0.0  # a summary that never varies (a spread read at a coarse resolution) has no share to give
+    shares = {k: float(np.mean(np.diag(v)[varies] / scale[varies])) for k, v in parts.items()} if varies.any() else None
+    return Posterior(
+        frame, acceptance, summary, described, chains, said is None, said, like.sites, shares, like
+    )  # fmt: skip

@@ -133,20 +133,26 @@ class Simulated:
 
 def simulated(
     table: Table, values: Mapping[str, float], min_group_load_kg: float, slot_counts: np.ndarray | None = None,
-    weight_step_kg: float | None = None,
+    weight_step_kg: float | None = None, readings: np.ndarray | None = None, bogies: np.ndarray | None = None,
 ) -> Simulated:  # fmt: skip
     """The simulated survey: the calibration groups that pass the filters (every axle read and loaded, the group at
     least ``min_group_load_kg`` [kg]), weighted (1 - a) steel and a air (a: ``values["air_share"]``; times each bogie's
     bootstrap count ``slot_counts``, None: 1; a steel group also by its density ratio under the fitted inhibitor
     distributions, :func:`~bogie.fleet.calibration.table.steel_weights`); every reading first read at the observed
-    file's resolution ``weight_step_kg`` [kg] (None: as it is)."""
-    readings = at_resolution(fleet_readings(table, values), weight_step_kg)
+    file's resolution ``weight_step_kg`` [kg] (None: as it is).
+
+    ``readings`` (2, m, 3) [kg], the readings of the calibration bogies ``bogies`` (m indices) weighed otherwise
+    (on another site: :func:`bogie.fleet.calibration.posterior.site_covariance`), with the site's and the sensor's
+    factors; None: every bogie's from the table (:func:`fleet_readings`)."""
+    rows = np.arange(len(table.size)) if bogies is None else np.asarray(bogies, dtype=int)
+    readings = at_resolution(fleet_readings(table, values) if readings is None else readings, weight_step_kg)
     share = values["air_share"]
-    counts = np.ones(len(table.size)) if slot_counts is None else slot_counts
-    moved = steel_weights(table, values)
+    counts = np.ones(len(rows)) if slot_counts is None else slot_counts[rows]
+    moved = steel_weights(table, values)[rows]
+    sizes = table.size[rows]
     quantities, weights = {}, {}
     for size, n in SIZES.items():
-        sel = table.size == size
+        sel = sizes == size
         loads = readings[:, sel, :n].reshape(-1, n)
         # the steel groups reweighted to the fitted inhibitor distributions, normalised so that steel keeps its share
         steel = counts[sel] * moved[sel]

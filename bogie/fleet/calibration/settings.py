@@ -86,6 +86,12 @@ class CalibrationSettings:
         "bounds; their R-hat and effective sample sizes say whether it converged "
         "(bogie.fleet.calibration.convergence).",
     )  # fmt: skip
+    sites: int = setting(
+        16, unit="-", low=0, whole=True,
+        doc="Other WIM sites the calibration bogies are weighed on, at the fit, for the summaries' covariance between "
+        "sites in the posterior's likelihood (a WIM table on a shared site; 0 or 1: none; "
+        "bogie.fleet.calibration.posterior.site_covariance).",
+    )  # fmt: skip
     priors: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:

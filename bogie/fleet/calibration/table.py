@@ -22,6 +22,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.settings import CalibrationError
+from bogie.fleet.calibration.site import SPEED_SD_M_S, Site, bogie_speeds, on_site, site_of
 from bogie.fleet.constants import TILTED_QUANTITIES
 from bogie.fleet.sampling.distributions import Distribution, TruncNormal, truncated_standard_normal_cdf
 from bogie.fleet.sampling.sample import bogie_from_sample, suspension_draw
@@ -36,8 +37,8 @@ from bogie.settings import check_value
 
 __all__ = [
     "SIZES", "CalibrationError", "Mapper", "Table", "base_values", "bogie_tilts", "build_table", "crn_table",
-    "fleet_readings", "moved_samples", "protocol_spec", "steel_weights", "tilted_families", "weigh_reading",
-    "weigh_readings",
+    "fleet_readings", "map_tasks", "moved_samples", "protocol_spec", "steel_weights", "tilted_families",
+    "weigh_reading", "weigh_readings", "wim_task",
 ]  # fmt: skip
 
 #: the axle groups a calibration covers, and their axles
@@ -88,6 +89,10 @@ class Table:
     z_pass: np.ndarray | None = None  # (n,) the sensor's standard normal common to a pass's axles
     #: quantity of TILTED_QUANTITIES -> the family its fleet distribution moves in (those that can be fitted)
     tilted: Mapping[str, Tilted] = dataclasses.field(default_factory=dict)
+    site: Site | None = None  # the WIM site every calibration bogie crosses (None: each its own road; static)
+    speeds: np.ndarray | None = None  # (n,) each bogie's speed over the site [m/s] (None: the protocol's)
+    seed: int = 0  # the fleet's master seed and study: the other sites' roads (bogie.fleet.calibration.site)
+    study: str = "fleet"
 
     def column(self, name: str) -> np.ndarray:
         """A sample column as floats, read once (the fit reads the inhibitors' columns at every evaluation)."""
@@ -102,6 +107,32 @@ class Table:
         if self.protocol != "wim" or self.z_pass is None or not isinstance(self.settings, WimProtocol):
             return np.ones(len(self.size))
         return 1.0 + self.settings.vehicle_error_sd * self.z_pass
+
+    def reading_factors(self, values: Mapping[str, float], bogies: np.ndarray | None = None) -> np.ndarray:
+        """(n, 3) the factors a WIM reading of each bogie's axles is its force times (rows ``bogies``, None: all):
+        the site's bias ``1 + b`` (``site_bias_pct`` / 100, 0 if absent), each axle's own sensor error
+        ``1 + s_a z_i`` (``sensor_error_pct`` / 100) and the pass's, :meth:`pass_factors`; ones for static."""
+        rows = np.arange(len(self.size)) if bogies is None else np.asarray(bogies)
+        if self.protocol != "wim":
+            return np.ones((len(rows), 3))
+        bias = 1.0 + 0.01 * values.get("site_bias_pct", 0.0)
+        return bias * (1.0 + 0.01 * values["sensor_error_pct"] * self.z[rows]) * self.pass_factors()[rows, None]
+
+    def task(self, i: int, sample: Mapping[str, Any], spec: Any) -> tuple[dict, str, Any]:
+        """The weighing task of bogie ``i`` (:func:`weigh_reading`): for WIM, ``sample`` on the table's site at the
+        bogie's speed (:func:`bogie.fleet.calibration.site.on_site`); static as given."""
+        return wim_task(sample, spec, self.site, None if self.speeds is None else self.speeds[i], self.protocol)
+
+
+def wim_task(
+    sample: Mapping[str, Any], spec: Any, site: Site | None, speed: float | None, protocol: str = "wim"
+) -> tuple[dict, str, Any]:
+    """A weighing task ``(sample, protocol, settings)``: a WIM one on ``site`` at ``speed`` [m/s]
+    (:func:`bogie.fleet.calibration.site.on_site`), a static one as given."""
+    if protocol != "wim":
+        return dict(sample), protocol, spec
+    moved, moved_spec = on_site(sample, spec, site, speed)
+    return moved, protocol, moved_spec
 
 
 def tilted_families(inhibitor_distributions: Mapping[str, Distribution] | None) -> dict[str, Tilted]:
@@ -147,6 +178,7 @@ def base_values(
         "chassis_tilt_sd_deg": math.degrees(getattr(tilt_distribution, "sd", 1.0)),
         "air_share": float(air_share),
         "site_iri_m_km": math.nan if wim_settings is None else wim_settings.site_iri,
+        "site_bias_pct": math.nan if wim_settings is None else 0.0,
         "sensor_error_pct": math.nan if wim_settings is None else 100.0 * wim_settings.axle_error_sd,
         **moved,
     }  # fmt: skip
@@ -182,6 +214,18 @@ def weigh_reading(task: tuple[Mapping[str, Any], str, Any]) -> np.ndarray:
     return _weigh_kg(*task)
 
 
+def map_tasks(func: Callable[[Any], Any], tasks: Sequence[Any], executor: Executor | Mapper | None = None) -> list:
+    """``func(task)`` of every task, in the tasks' order: in this process (``executor`` None), over a
+    :class:`concurrent.futures.Executor`'s workers in chunks, or through a map-like callable (:data:`Mapper`, e.g. the
+    pipeline's). ``func`` must be importable (a module-level function) for the last two. The same results whichever."""
+    if executor is None:
+        return list(map(func, tasks))
+    if isinstance(executor, Executor):
+        workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
+        return list(executor.map(func, tasks, chunksize=max(1, len(tasks) // (8 * workers))))
+    return list(executor(func, tasks))
+
+
 def weigh_readings(tasks: Sequence[tuple[dict, str, Any]], executor: Executor | Mapper | None = None) -> np.ndarray:
     """Each task's readings [kg], shape (tasks, 3), in the tasks' order.
 
@@ -189,14 +233,7 @@ def weigh_readings(tasks: Sequence[tuple[dict, str, Any]], executor: Executor | 
     workers in chunks; a map-like callable (:data:`Mapper`, e.g. the pipeline's, which chunks and checks its
     workers itself) is called as ``executor(weigh_reading, tasks)``. The same numbers whichever.
     """
-    if executor is None:
-        results: Iterable[Any] = map(weigh_reading, tasks)
-    elif isinstance(executor, Executor):
-        workers = getattr(executor, "_max_workers", None) or os.cpu_count() or 1
-        results = executor.map(weigh_reading, tasks, chunksize=max(1, len(tasks) // (8 * workers)))
-    else:
-        results = executor(weigh_reading, tasks)
-    out = [np.asarray(r, dtype=float) for r in results]
+    out = [np.asarray(r, dtype=float) for r in map_tasks(weigh_reading, tasks, executor)]
     return np.array(out).reshape(len(tasks), 3) if out else np.zeros((0, 3))
 
 
@@ -213,7 +250,10 @@ def _increasing(name: str, values: Any, unit: str, positive: bool = False) -> np
 _CRN_COLUMNS: tuple[str, ...] = ("sample_id", "group", "chassis_tilt", "sensor_seed")
 
 
-def _check_fleet(samples: pd.DataFrame, tilt_distribution: Any, protocol: str, settings: Any) -> None:
+def _check_fleet(
+    samples: pd.DataFrame, tilt_distribution: Any, protocol: str, settings: Any,
+    inhibitor_distributions: Mapping[str, Distribution] | None = None,
+) -> None:  # fmt: skip
     kinds = {"static": StaticProtocol, "wim": WimProtocol}
     if protocol not in kinds:
         raise CalibrationError(f"protocol = {protocol!r}: must be one of {', '.join(kinds)}")
@@ -228,12 +268,17 @@ def _check_fleet(samples: pd.DataFrame, tilt_distribution: Any, protocol: str, s
     sizes = set(samples["group"].astype(str))
     if not sizes <= set(SIZES):
         raise CalibrationError(f"samples['group'] has {sorted(sizes - set(SIZES))}: must be {' or '.join(SIZES)}")
+    for quantity in tilted_families(inhibitor_distributions):
+        column = TILTED_QUANTITIES[quantity][0]
+        if column not in samples.columns:
+            raise CalibrationError(f"samples: no column {column!r} for inhibitor_distributions[{column!r}]")
 
 
 def crn_table(
     samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
     study: str = "fleet", inhibitor_distributions: Mapping[str, Distribution] | None = None,
+    shared_site: bool = True, speed_sd_m_s: float = SPEED_SD_M_S,
 ) -> Table:  # fmt: skip
     """The calibration fleet and its common random numbers, with no reading yet (``loads`` zeros).
 
@@ -259,18 +304,22 @@ def crn_table(
     inhibitor_distributions
         The fleet's distributions (SI) of ``contact_roll_radius`` and ``bush_stiffness``, the sample columns whose
         mean a fit may move (:func:`tilted_families`); None: neither can be fitted.
+    shared_site, speed_sd_m_s
+        ``wim``: every bogie on one site's road (True; :mod:`bogie.fleet.calibration.site`), each at its own speed
+        (sd ``speed_sd_m_s`` [m/s]); False: each on its own road at the protocol's speed.
 
     Raises
     ------
     CalibrationError
         If an argument is not of the kind or in the range said above (named, with its value and unit).
     """
-    _check_fleet(samples, tilt_distribution, protocol, settings)
+    _check_fleet(samples, tilt_distribution, protocol, settings, inhibitor_distributions)
     _whole("seed", seed, 0)
     grid = _increasing("tilts", tilts, "degree")
     iris = _increasing("site_iri_levels", site_iri_levels, "m/km", True) if protocol == "wim" else [np.nan]
-    # each bogie's rank under its own distribution: the uniform a refitted distribution maps to its tilt
-    tilt = samples["chassis_tilt"].to_numpy(dtype=float)
+    shared = protocol == "wim" and shared_site
+    site, speeds = _site(samples, seed, study, settings, speed_sd_m_s) if shared else (None, None)
+    tilt = samples["chassis_tilt"].to_numpy(dtype=float)  # its rank: the uniform a refitted distribution maps
     truncated = isinstance(tilt_distribution, TruncNormal)
     tilt_u = np.clip(_cdf(tilt_distribution, tilt), 1e-12, 1 - 1e-12) if truncated else np.full(len(tilt), np.nan)
     air_u = np.array([suspension_draw(seed, study, int(i)) for i in samples["sample_id"]])
@@ -281,21 +330,32 @@ def crn_table(
     size = samples["group"].astype(str).to_numpy()
     loads = np.zeros((2, len(samples), len(grid), len(iris), 3))
     families = tilted_families(inhibitor_distributions)
-    for quantity in families:
-        column = TILTED_QUANTITIES[quantity][0]
-        if column not in samples.columns:
-            raise CalibrationError(f"samples: no column {column!r} for inhibitor_distributions[{column!r}]")
     return Table(
         samples, size, tilt_u, air_u, z, grid, np.asarray(iris, dtype=float), loads, 0, protocol, settings,
-        tilt_distribution, z_pass, families,
+        tilt_distribution, z_pass, families, site, speeds, int(seed), study,
     )  # fmt: skip
+
+
+def _site(
+    samples: pd.DataFrame, seed: int, study: str, settings: WimProtocol, speed_sd_m_s: float
+) -> tuple[Site, np.ndarray]:
+    """The table's shared WIM site and each bogie's speed over it [m/s] (:mod:`bogie.fleet.calibration.site`)."""
+    if "road_class" not in samples.columns:
+        raise CalibrationError("samples: no column 'road_class' (the site's road class) for shared_site = True")
+    site = site_of(seed, study, list(samples["road_class"].astype(str)))
+    try:
+        speeds = bogie_speeds(seed, study, samples["sample_id"].to_numpy(), settings.speed, speed_sd_m_s)
+    except ValueError as err:
+        raise CalibrationError(str(err)) from None
+    return site, speeds
 
 
 def build_table(
     samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
     executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None, study: str = "fleet",
-    inhibitor_distributions: Mapping[str, Distribution] | None = None,
+    inhibitor_distributions: Mapping[str, Distribution] | None = None, shared_site: bool = True,
+    speed_sd_m_s: float = SPEED_SD_M_S,
 ) -> Table:  # fmt: skip
     """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs.
 
@@ -309,16 +369,17 @@ def build_table(
     """
     progress = progress or _quiet
     base = crn_table(
-        samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study, inhibitor_distributions
-    )
+        samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study, inhibitor_distributions,
+        shared_site, speed_sd_m_s,
+    )  # fmt: skip
     n, tilts, iris = len(base.size), base.tilts, base.iris
     tasks, records = [], base.samples.to_dict("records")
     for kind in ("steel", "air"):
-        for row in records:
+        for i, row in enumerate(records):
             for tilt in tilts:
                 for iri in iris:
                     sample = {**row, "suspension": kind, "chassis_tilt": math.radians(float(tilt))}
-                    tasks.append((sample, protocol, protocol_spec(base, iri)))
+                    tasks.append(base.task(i, sample, protocol_spec(base, iri)))
     progress(
         f"calibrate: weighing {len(tasks)} calibration groups ({n} bogies x steel, air x {len(tilts)} tilts x "
         f"{len(iris)} site roughnesses)"
@@ -390,8 +451,9 @@ def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:
 
     Each bogie's tilt is :func:`bogie_tilts`, its readings interpolated linearly in tilt and in site roughness
     (``site_iri_m_km`` [m/km], clipped to the table's levels), then, for WIM, multiplied by the sensor's factors
-    ``(1 + s_v z_v) (1 + s_a z_i)`` (``s_a`` each axle's own error, ``sensor_error_pct`` / 100, fitted; ``s_v`` the
-    part common to the pass, :meth:`Table.pass_factors`; z the bogie's normals).
+    ``(1 + b) (1 + s_v z_v) (1 + s_a z_i)`` (:meth:`Table.reading_factors`: ``b`` the site's bias,
+    ``site_bias_pct`` / 100; ``s_a`` each axle's own error, ``sensor_error_pct`` / 100, fitted; ``s_v`` the part
+    common to the pass, :meth:`Table.pass_factors`; z the bogie's normals).
     """
     tilt = bogie_tilts(table, values)
     grid = table.tilts
@@ -407,5 +469,5 @@ def fleet_readings(table: Table, values: Mapping[str, float]) -> np.ndarray:
     else:
         at = at[:, :, 0]
     if not math.isnan(table.iris[0]):
-        at = at * (1.0 + 0.01 * values["sensor_error_pct"] * table.z[None, :, :]) * table.pass_factors()[None, :, None]
+        at = at * table.reading_factors(values)[None, :, :]
     return at

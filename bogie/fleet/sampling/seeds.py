@@ -13,6 +13,8 @@ _STREAM_DESIGN = 0
 _STREAM_ROAD = 1
 _STREAM_SENSOR = 2
 _STREAM_SUSPENSION = 3
+_STREAM_SPEED = 4
+_STREAM_SITE = 5
 
 
 # ---- seeds -----------------------------------------------------------------------------------------------------
@@ -67,6 +69,18 @@ def suspension_draw(seed: int, study: str, sample_id: int) -> float:
     share turns steel groups into air ones and never the other way (common random numbers for ``calibrate``).
     """
     return float(np.random.default_rng(_seed_sequence(seed, study, _STREAM_SUSPENSION, sample_id)).random())
+
+
+def speed_normal(seed: int, study: str, sample_id: int) -> float:
+    """One bogie's standard normal draw of its speed over a WIM site (:mod:`bogie.fleet.calibration.site`) [-]: a
+    stream of its own, like :func:`suspension_draw`, so that the fleet's design and every other draw are as before."""
+    return float(np.random.default_rng(_seed_sequence(seed, study, _STREAM_SPEED, sample_id)).standard_normal())
+
+
+def site_seed(seed: int, study: str, site: int) -> int:
+    """Seed of the approach road of WIM site number ``site`` of a calibration (0: the table's own; 1, 2, ...: the
+    other sites of the between-site covariance, :mod:`bogie.fleet.calibration.site`) [-]."""
+    return _seed_int(_seed_sequence(seed, study, _STREAM_SITE, site))
 
 
 def suspensions(draws: np.ndarray, groups: np.ndarray, mix: Mapping[str, Mapping[str, float]]) -> np.ndarray:

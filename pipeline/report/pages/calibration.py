@@ -40,9 +40,10 @@ QUANTITY: dict[str, tuple[str, str]] = {
     "chassis_tilt_sd_deg": (f"{_TILT.name}, spread (sd)", _TILT.unit),
     "air_share": ("air-sprung share", "-"),
     "site_iri_m_km": ("WIM site roughness (IRI)", "m/km"),
-    "sensor_error_pct": ("sensor error (sd)", "%"),
+    "sensor_error_pct": ("sensor error per axle (sd)", "%"),
     "contact_roll_radius_mean_mm": ("contact-roll radius, mean", "mm"),
     "bush_stiffness_geomean": ("bush stiffness, geometric mean", "N m/rad"),
+    "site_bias_pct": ("WIM site's calibration bias", "%"),
 }
 #: the sides of the checks page: (label, where in metrics/calibration.json, colour)
 CHECK_SIDES: tuple[tuple[str, tuple[str, ...], str], ...] = (
