@@ -7,7 +7,10 @@
 - :mod:`.table`: the calibration fleet, its common random numbers and its table of readings over any executor;
 - :mod:`.priors`, :mod:`.posterior`, :mod:`.fitting`: the priors, the synthetic-likelihood posterior, differential
   evolution and the bootstrap (:func:`calibrate`);
+- :mod:`.site`: the WIM site in the observation model, its road shared by a survey's vehicles at their own speeds
+  (:class:`Site`); its bias and the covariance between sites are :mod:`.table`'s and :mod:`.posterior`'s;
 - :mod:`.convergence`: whether the posterior's chains converged (R-hat, bulk and tail ESS) and what to change;
+- :mod:`.prior_sensitivity`: the posterior again with the tilt's prior sd halved and doubled;
 - :mod:`.attribution`: what each cause explains;
 - :mod:`.checks`: the calibrated fleet simulated directly, the posterior predictive, the held-out half, the ablation,
   :func:`calibrate_survey`;
@@ -26,5 +29,6 @@ EXPORTS: dict[str, str] = {
     "calibrate": "fitting",
     **dict.fromkeys(("calibrate_survey", "simulate_fleet"), "checks"),
     "write_csv_survey": "synthetic",
+    "Site": "site",
 }
 __getattr__, __dir__ = lazy_names(__name__, EXPORTS, former="problem")
