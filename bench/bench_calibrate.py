@@ -105,8 +105,9 @@ def main(argv: list[str] | None = None) -> None:
 def report(metrics: dict) -> None:
     """Each quantity against its truth, the trade-offs, the table's faithfulness and the held-out margins."""
     post = (metrics.get("posterior") or {}).get("quantities", {})
-    print("quantity                     truth    fitted  bootstrap interval     posterior median (interval)")
-    for q, e in metrics["fitted"].items():
+    free = (metrics.get("prior_free_minimum") or {}).get("fitted") or metrics["fitted"]
+    print("quantity                     truth  prior-free min., bootstrap interval   posterior median (interval)")
+    for q, e in free.items():
         p = post.get(q, {})
         inside = [e["low"] <= TRUTH[q] <= e["high"], p.get("low", 1e300) <= TRUTH[q] <= p.get("high", -1e300)]
         nan = float("nan")
