@@ -389,7 +389,8 @@ def _outputs(root: Path) -> dict[str, bytes]:
 
 
 def test_the_calibration_is_the_same_bits_with_one_worker_two_or_a_dask_cluster(tmp_path):
-    # every output: the fitted values, the posterior's draws and intervals, the bootstrap, the attribution, the tables
+    # every output: the fitted values, the posterior's draws and intervals, the bootstrap, the attribution, the tables;
+    # the table, the bootstrap's refits and the between-site weighings all run on the executor (issue 43 Must 8)
     from dask.distributed import LocalCluster
 
     survey = tmp_path / "survey.csv"
