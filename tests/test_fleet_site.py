@@ -9,13 +9,16 @@ with a site bias on another site is tests/pipeline/test_calibrate.py's.
 
 import dataclasses
 import math
+from types import SimpleNamespace
 
 import numpy as np
+import pandas as pd
 import pytest
 from _fleets import DISTS, fleet
 from test_fleet_calibration import FIT, TILT, analytic_table, synthetic_observed
 
 import bogie.fleet as bf
+from bogie.fleet.calibration import checks as K
 from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import posterior as P
 from bogie.fleet.calibration import problem as L
@@ -199,3 +202,22 @@ def test_a_large_survey_does_not_depend_on_the_tilt_prior_and_a_small_one_does()
     _, small = sensitivity(12)  # 12 tri-axles: the prior, not the survey, holds the tilt
     assert small["depends"] and any(small["moves"][q] > DEPENDS for q in small["depends_on_prior"])
     assert "the answer depends on the tilt prior" in small["sentence"] and "degree" in small["sentence"]
+
+
+def test_the_posterior_predictive_kilograms_carry_the_site_bias(monkeypatch):
+    # every axle reads 8 t before the site's and the sensor's factors; the posterior's draws differ by the bias alone
+    monkeypatch.setattr(K, "weigh_readings", lambda tasks, executor=None: np.full((len(tasks), 3), 8000.0))
+    table = wim_table()
+    base = {**L.base_values(WIM_TILT, 0.0, WIM), "sensor_error_pct": 0.0}
+    draws = pd.DataFrame({"chain": 0, "site_bias_pct": [-5.0, 0.0, 5.0]})
+    out = K.posterior_predictive(table, SimpleNamespace(draws=draws), base, 0.0, None, 0.9, draws=3)
+    tri = out["triaxle"]["mean_group_load_kg"]
+    # the same groups at each draw (no filter): the mean load scales by 1 + b, the pass's factor averaged alike; the
+    # 90 % interval of three draws is their 5th and 95th percentiles, linear between: 1 + b of 0.955 and 1.045
+    assert tri["high"] / tri["low"] == pytest.approx(1.045 / 0.955, rel=1e-6)  # rel: the metrics' rounding
+    assert tri["median"] / tri["low"] == pytest.approx(1.0 / 0.955, rel=1e-6)
+    factors = table.pass_factors()[table.size == "triaxle"]
+    assert tri["median"] == pytest.approx(3 * 8000.0 * factors.mean(), rel=1e-6)
+    # the load shares do not see it: one value over the draws
+    share = out["triaxle"]["share_over_10pct"]
+    assert share["low"] == share["high"]

@@ -393,7 +393,7 @@ def _metrics(
 PREDICTIVE_DRAWS = 8
 #: the survey statistics the posterior predictive summarises, per size
 PREDICTIVE_STATISTICS: tuple[str, ...] = (
-    "mean_spread_kg", "median_spread_pct", "share_outside_5pct", "share_over_10pct",
+    "mean_spread_kg", "median_spread_pct", "share_outside_5pct", "share_over_10pct", "mean_group_load_kg",
 )  # fmt: skip
 
 
@@ -404,16 +404,20 @@ def posterior_predictive(
     """The survey statistics the posterior predicts (issue 43 Must 1): the calibration fleet simulated directly
     (:func:`simulate_fleet`, filtered as the survey) at ``draws`` posterior draws evenly spaced through the kept
     ones, each statistic of :data:`PREDICTIVE_STATISTICS` per size as its median over the draws and the
-    equal-tailed interval at ``confidence_level`` (with so few draws, the range they span)."""
+    equal-tailed interval at ``confidence_level`` (with so few draws, the range they span). The kilogram figures carry
+    the site's bias drawn with the rest (issue 43 Must 2)."""
     kept = post.draws
     picks = np.unique(np.linspace(0, len(kept) - 1, max(min(draws, len(kept)), 1)).round().astype(int))
     fitted = [c for c in kept.columns if c in base]
     per_size: dict[str, dict[str, list[float]]] = {}
     for i in picks:
         values = {**base, **{q: float(kept[q].iloc[i]) for q in fitted}}
-        stats = frame_stats(filtered(simulate_fleet(table, values, weight_step_kg=weight_step_kg, executor=executor),
-                                     min_group_load_kg))  # fmt: skip
+        kept_groups = filtered(simulate_fleet(table, values, weight_step_kg=weight_step_kg, executor=executor),
+                               min_group_load_kg)  # fmt: skip
+        stats = frame_stats(kept_groups)
         for size, entry in stats.items():
+            if isinstance(entry, dict):  # a kilogram figure the site's bias moves one for one (issue 43 Must 2)
+                entry["mean_group_load_kg"] = _mean_group_load(kept_groups, size)
             for s in PREDICTIVE_STATISTICS:
                 if entry.get(s) is not None:
                     per_size.setdefault(size, {}).setdefault(s, []).append(float(entry[s]))
@@ -434,6 +438,12 @@ def _rounded(x: Any) -> Any:
     if isinstance(x, list | tuple):
         return [_rounded(v) for v in x]
     return json_number(x) if isinstance(x, float) else x
+
+
+def _mean_group_load(frame: pd.DataFrame, size: str) -> float | None:
+    """The mean load [kg] of the ``size`` groups of a filtered simulated frame (None: none)."""
+    rows = frame.loc[frame["group"] == size, [f"axle_load_{i + 1}" for i in range(SIZES[size])]].to_numpy()
+    return float(rows.sum(axis=1).mean()) if len(rows) else None
 
 
 def _entries(fitted: Mapping[str, Mapping[str, Any]]) -> dict[str, dict[str, Any]]:
