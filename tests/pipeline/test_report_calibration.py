@@ -493,3 +493,19 @@ def test_the_fit_page_says_the_sites_share_the_prior_sensitivity_and_a_sensor_ab
     metrics["posterior"].update(covariance_sites=0, covariance_shares=None)
     page = " ".join(figure_text(pages_of(*written(tmp_path / "b", metrics, fitted_tables()))[0].figure).split())
     assert "strip sensor reaches" not in page and "between WIM sites" not in page
+
+
+def test_the_checks_page_gives_what_the_posterior_predicts_with_the_mean_group_load(tmp_path):
+    metrics = fitted_metrics()
+    entry = {"median": 0.5, "low": 0.4, "high": 0.6}
+    metrics["calibrated"]["posterior_predictive"] = {
+        "draws": 8, "credible_level": 0.9,
+        "triaxle": {"share_outside_5pct": entry, "mean_spread_kg": {"median": 981.6, "low": 900.2, "high": 1050.0},
+                    "mean_group_load_kg": {"median": 20140.0, "low": 19220.0, "high": 21060.0}},
+    }  # fmt: skip
+    fig = pages_of(*written(tmp_path, metrics, fitted_tables()))[1].figure
+    page = " ".join(figure_text(fig).split())
+    assert "What the posterior predicts (the calibration fleet simulated at 8 posterior draws" in page
+    assert ("tri-axles outside 5 % 50.0 % (40.0 to 60.0), mean spread 982 kg (900 to 1050), mean group load 20.1 t "
+            "(19.2 to 21.1, the site's bias included).") in page  # fmt: skip
+    assert_text_above_the_footer(fig)
