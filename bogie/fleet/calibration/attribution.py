@@ -41,7 +41,7 @@ import numpy as np
 import pandas as pd
 
 from bogie.fleet.calibration.problem import SIZES, CalibrationError, Mapper, Table
-from bogie.fleet.calibration.table import bogie_tilts, moved_samples, protocol_spec, weigh_readings, wim_task
+from bogie.fleet.calibration.table import bogie_tilts, moved_samples, protocol_spec, weigh_readings
 from bogie.fleet.weighing.settings import StaticProtocol
 from bogie.intervals import percentile_interval
 from bogie.rounding import json_number
@@ -175,8 +175,8 @@ def scenario_loads(
         ("static_level", "static", static, True),
     ):  # fmt: skip
         tasks = [
-            wim_task({**row, "suspension": kinds[i], "chassis_tilt": 0.0 if level else float(tilt[i])}, spec,
-                     table.site, None if table.speeds is None else table.speeds[i], protocol)
+            table.task(i, {**row, "suspension": kinds[i], "chassis_tilt": 0.0 if level else float(tilt[i])}, spec,
+                       protocol)
             for i, row in enumerate(rows)
         ]  # fmt: skip
         weighed[name] = weigh_readings(tasks, executor)

@@ -416,8 +416,7 @@ def posterior_predictive(
                                min_group_load_kg)  # fmt: skip
         stats = frame_stats(kept_groups)
         for size, entry in stats.items():
-            if isinstance(entry, dict):  # a kilogram figure the site's bias moves one for one (issue 43 Must 2)
-                entry["mean_group_load_kg"] = _mean_group_load(kept_groups, size)
+            entry["mean_group_load_kg"] = _mean_group_load(kept_groups, size)  # moved by the site's bias one for one
             for s in PREDICTIVE_STATISTICS:
                 if entry.get(s) is not None:
                     per_size.setdefault(size, {}).setdefault(s, []).append(float(entry[s]))

@@ -139,10 +139,10 @@ def site_covariance(
     samples = moved_samples(table, values).to_dict("records")
     spec = protocol_spec(table, values["site_iri_m_km"])
     classes = list(table.samples["road_class"].astype(str))
+    others = [site_of(table.seed, table.study, classes, r) for r in range(1, sites + 1)]  # once each, not per task
     tasks = [
-        wim_task({**samples[i], "suspension": kind, "chassis_tilt": float(tilt[i])}, spec,
-                 site_of(table.seed, table.study, classes, r), float(table.speeds[i]))
-        for r in range(1, sites + 1) for kind in ("steel", "air") for i in rows
+        wim_task({**samples[i], "suspension": kind, "chassis_tilt": float(tilt[i])}, spec, site, float(table.speeds[i]))
+        for site in others for kind in ("steel", "air") for i in rows
     ]  # fmt: skip
     loads = weigh_readings(tasks, executor).reshape(sites, 2, len(rows), 3)
     loads = loads * table.reading_factors(values, rows)[None, None]

@@ -118,10 +118,12 @@ class Table:
         bias = 1.0 + 0.01 * values.get("site_bias_pct", 0.0)
         return bias * (1.0 + 0.01 * values["sensor_error_pct"] * self.z[rows]) * self.pass_factors()[rows, None]
 
-    def task(self, i: int, sample: Mapping[str, Any], spec: Any) -> tuple[dict, str, Any]:
-        """The weighing task of bogie ``i`` (:func:`weigh_reading`): for WIM, ``sample`` on the table's site at the
-        bogie's speed (:func:`bogie.fleet.calibration.site.on_site`); static as given."""
-        return wim_task(sample, spec, self.site, None if self.speeds is None else self.speeds[i], self.protocol)
+    def task(self, i: int, sample: Mapping[str, Any], spec: Any, protocol: str | None = None) -> tuple[dict, str, Any]:
+        """The weighing task of bogie ``i`` (:func:`weigh_reading`) by ``protocol`` (None: the table's): for WIM,
+        ``sample`` on the table's site at the bogie's speed (:func:`bogie.fleet.calibration.site.on_site`); static as
+        given."""
+        speed = None if self.speeds is None else self.speeds[i]
+        return wim_task(sample, spec, self.site, speed, protocol or self.protocol)
 
 
 def wim_task(
