@@ -2,15 +2,17 @@
 hand, the posterior around the truth of a known fleet, and a posterior piled against a bound flagged."""
 
 import math
+from pathlib import Path
 
 import numpy as np
 import pytest
+import yaml
 from test_fleet_tilted import BUSH, FIT, RADIUS, TILT, TRUTH, radius_survey, radius_table
 
 from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import posterior as P
 from bogie.fleet.calibration import problem as L
-from bogie.fleet.calibration.priors import Prior, default_priors, log_prior
+from bogie.fleet.calibration.priors import TILT_MIX, TILT_PRIOR_SD_DEG, Prior, default_priors, log_prior, tilt_mixture
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, PILED
 
 
@@ -22,6 +24,33 @@ def test_every_fittable_quantity_has_a_prior_with_a_source():
     # the sensor's prior is centred on the type's error; without a WIM protocol, on the quartz strip's 2 %
     assert priors["sensor_error_pct"].a == 2.0 and priors["sensor_error_pct"].b == pytest.approx(math.log(2.0))
     assert priors["contact_roll_radius_mean_mm"].describe().startswith("uniform(low 0, high 120): no source")
+
+
+def test_the_tilt_prior_is_its_pairings_sd_and_the_default_fleet_sits_at_its_centre():
+    # by hand, 8.1 m: 1 mm is 0.0070737 degree; matched: uniform +-85 mm, sd 85 / sqrt(3) = 49.07 mm = 0.3471 degree
+    # (its own sd); low-deck: mean -250 mm = -1.7684 degree, sd 180 / sqrt(12) = 51.96 mm; mega: +250 mm, sd 28.87 mm
+    only_matched = {"matched": (1.0, -85.0, 85.0)}
+    assert tilt_mixture(only_matched) == pytest.approx((0.0, 0.34713), abs=1e-4)
+    # E[theta] = (0.07 (-250) + 0.03 (250)) mm = -10 mm = -0.070737 degree; E[dh^2] = 0.9 (2408.3) + 0.07 (62500 +
+    # 2700) + 0.03 (62500 + 833.3) = 2167.5 + 4564 + 1900 = 8631.5 mm^2, var 8631.5 - 100 = 8531.5: sd 92.37 mm
+    mean, sd = tilt_mixture()
+    assert mean == pytest.approx(-0.070737, abs=1e-5) and sd == pytest.approx(92.366 * 0.0070737, abs=1e-4)
+    assert sum(w for w, _, _ in TILT_MIX.values()) == pytest.approx(1.0, abs=1e-12)
+    # docs/calibration.md: 57 % beyond Meritor's 1 in 200 (0.29 degree), 10 % beyond one degree (each range uniform)
+    per_mm = math.degrees(1e-3 / 8.1)
+
+    def beyond(angle: float) -> float:
+        # each range's length beyond +angle and below -angle over its whole length, by its share
+        return sum(w * (max(hi - max(lo, angle / per_mm), 0.0) + max(min(hi, -angle / per_mm) - lo, 0.0)) / (hi - lo)
+                   for w, lo, hi in TILT_MIX.values())  # fmt: skip
+
+    assert round(100 * beyond(math.degrees(math.atan(1 / 200)))) == 57 and round(100 * beyond(1.0)) == 10
+    # the priors' scale is the mixture's sd to 0.05 degree, and params.yaml's fleet is centred on the priors
+    assert abs(sd - TILT_PRIOR_SD_DEG) <= 0.025
+    tilt = yaml.safe_load((Path(__file__).parents[1] / "params.yaml").read_text())["distributions"]["chassis_tilt_deg"]
+    priors = default_priors({})
+    assert tilt["kind"] == "truncnormal" and tilt["mean"] == priors["chassis_tilt_mean_deg"].a
+    assert tilt["sd"] == priors["chassis_tilt_sd_deg"].b == TILT_PRIOR_SD_DEG
 
 
 def test_the_priors_log_densities_are_their_closed_forms():

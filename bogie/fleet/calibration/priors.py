@@ -14,7 +14,17 @@ from dataclasses import dataclass
 
 from bogie.fleet.constants import CALIBRATION_QUANTITIES
 
-__all__ = ["KINDS", "SITE_BIAS_SD_PCT", "Prior", "default_priors", "log_prior"]
+__all__ = [
+    "KINGPIN_TO_BOGIE_M",
+    "KINDS",
+    "SITE_BIAS_SD_PCT",
+    "TILT_MIX",
+    "TILT_PRIOR_SD_DEG",
+    "Prior",
+    "default_priors",
+    "log_prior",
+    "tilt_mixture",
+]
 
 #: the kinds of prior, and their two parameters ``a``, ``b``
 KINDS: dict[str, str] = {
@@ -62,6 +72,41 @@ class Prior:
         return f"{self.kind}({names[0]} {self.a:g}, {names[1]} {self.b:g}): {self.source}"
 
 
+#: kingpin to the centre of a 13.6 m semi-trailer's tri-axle bogie [m]: "the centre axle situated at around 8.1
+#: metres from the kingpin" (Transport Engineer, "Long is beautiful"); 97/27/EC's turning rule caps it near 8.135 m
+#: for a 2.55 m-wide trailer (Don-Bur, "Trailer turning circle requirements")
+KINGPIN_TO_BOGIE_M = 8.1
+#: the pairings of tractor and trailer, each with its assumed share of a fleet [-] and the range of its kingpin height
+#: off the trailer's design height, dh [mm], read as uniform (docs/calibration.md, "The chassis tilt"). Heights: UK
+#: fifth wheels 1,250 mm (Don-Bur, Commercial Motor 26 Apr 2017), trailers built for 1,150 mm (Krone Profi-liner), a
+#: make at 1,285 mm rising to 1,335 mm with its lift axle up (transport.law.blog, 13 May 2024), low-deck tractors
+#: 910-990 mm (eurotransport.de; Commercial Motor 13 Feb 1992), bought 100-150 a year in the UK, "a niche" (Transport
+#: Engineer 2021), mega trailers 10-15 % of Krone's curtainsiders (eurotransport.de 2022). The shares are
+#: ASSUMPTIONS (no survey of pairings found); the ranges follow from the heights
+TILT_MIX: dict[str, tuple[float, float, float]] = {
+    "matched": (0.90, -85.0, 85.0),  # 1,250 against 1,335 mm either way; the UK/continental gap (1,250/1,150) 100 mm
+    "standard trailer, low-deck tractor": (0.07, -340.0, -160.0),  # 910-990 mm under a 1,150-1,250 mm trailer
+    "mega trailer, standard tractor": (0.03, 200.0, 300.0),  # a low trailer on a 1,250 mm fifth wheel (UK only)
+}
+
+
+def tilt_mixture(
+    mix: Mapping[str, tuple[float, float, float]] = TILT_MIX, length_m: float = KINGPIN_TO_BOGIE_M
+) -> tuple[float, float]:
+    """The mean and sd [degree] of the chassis tilt ``atan(dh / length_m)`` over the pairings ``mix`` (share, dh
+    range [mm] read as uniform), nose up positive; small angles (``dh / length_m`` below 0.05: an error under 0.1 %)."""
+    per_mm = math.degrees(1e-3 / length_m)
+    mean = sum(w * (lo + hi) / 2.0 for w, lo, hi in mix.values()) * per_mm
+    square = sum(w * ((lo + hi) ** 2 / 4.0 + (hi - lo) ** 2 / 12.0) for w, lo, hi in mix.values()) * per_mm**2
+    return mean, math.sqrt(square - mean**2)
+
+
+#: sd of the chassis tilt priors, the fleet's tilt mean's normal and its spread's half-normal [degree]; the source in
+#: :func:`default_priors`, the derivation in docs/calibration.md ("The chassis tilt"); params.yaml's default fleet
+#: (distributions.chassis_tilt_deg) is truncnormal(0, this, -2, 2): the priors' centre (issue 43 Must 7). The sd of
+#: :func:`tilt_mixture` to 0.05 degree (tests/test_fleet_calibration.py holds it); the matched pairings alone: 0.35
+TILT_PRIOR_SD_DEG = 0.65
+
 #: sd of a WIM site's calibration bias, the prior of ``site_bias_pct`` [%]: its source in :func:`default_priors`
 SITE_BIAS_SD_PCT = 4.0
 
@@ -91,17 +136,20 @@ def default_priors(
     in the quantity's unit): its mean's prior is flat over it (None or absent: no prior for it)."""
     priors = {
         "chassis_tilt_mean_deg": Prior(
-            "normal", 0.0, 0.6,
-            "an assumption: no survey of fifth-wheel mismatch found (searched); a trade table (not a standard) gives "
-            "tractors' fifth-wheel heights spanning about 150 mm by trailer type (1143-1346 mm), so a trailer behind "
-            "another tractor is up to about +-150 mm out over an assumed kingpin-to-bogie length near 8 m: up to "
-            "about 1.1 degree either way; a normal of sd 0.6 degree puts 93 % within that, centred on level (no "
-            "direction preferred); the reference studied 0-2 degree",
+            "normal", 0.0, TILT_PRIOR_SD_DEG,
+            "an assumption built on sourced geometry (docs/calibration.md, 'The chassis tilt'): no survey of "
+            "trailer pitch found (searched); a tilt is atan(dh / 8.1 m), dh the kingpin's height off the trailer's "
+            "design height, 8.1 m the kingpin-to-bogie distance of a 13.6 m semi-trailer (Transport Engineer; "
+            "97/27/EC's 8,135 mm limit, Don-Bur); UK tractors at 1,250 mm (Don-Bur 2017), trailers built for 1,150 "
+            "mm (Krone), one make 1,285-1,335 mm (2024): a fleet's pairing can sit about 100 mm (0.7 degree) off "
+            "either way; sd that of the fleet's tilts (tilt_mixture), centred on level (no direction sourced)",
         ),
         "chassis_tilt_sd_deg": Prior(
-            "normal", 0.0, 0.6,
-            "the same argument for the spread across a fleet: a half-normal of scale 0.6 degree (truncated at the "
-            "fit's lower bound)",
+            "normal", 0.0, TILT_PRIOR_SD_DEG,
+            "the same argument for the spread across a fleet: matched pairs within about +-85 mm (+-0.6 degree), a "
+            "standard trailer behind a low-deck tractor (910-990 mm) -160 to -340 mm (-1.1 to -2.4 degree); an "
+            "assumed mix of 90 % matched, 7 % low-deck, 3 % mega trailers has sd 0.6 degree; a half-normal of that "
+            "scale (truncated at the fit's lower bound)",
         ),
         "air_share": Prior("uniform", 0.0, 1.0, "no source for the surveyed fleet's share of air-sprung groups: flat"),
         "site_iri_m_km": Prior(
