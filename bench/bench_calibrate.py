@@ -16,7 +16,7 @@ interval), the trade-offs, the table's faithfulness (``distance_direct`` against
 ``distance_halves``) and the held-out check against the issue's margins. Absolute times depend on the machine and
 its load (printed).
 
-Run alone: ``python -m bench.bench_calibrate [--vehicles N] [--survey-seed S]``.
+Run alone: ``python -m bench.bench_calibrate [--vehicles N] [--survey-seed S] [--table-sites K]``.
 """
 
 from __future__ import annotations
@@ -60,9 +60,13 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--vehicles", type=int, default=N_VEHICLES, help=f"survey size (default {N_VEHICLES})")
     parser.add_argument("--survey-seed", type=int, default=SURVEY_SEED,
                         help=f"master seed of the survey's fleet and site (default {SURVEY_SEED})")  # fmt: skip
+    parser.add_argument("--table-sites", type=int, default=None,
+                        help="calibrate.table_sites: sites the table's bogies are spread over")  # fmt: skip
     args = parser.parse_args(argv)
     raw = yaml.safe_load((ROOT / "params.yaml").read_text())
     raw["calibrate"]["fit"] = copy.deepcopy(FIT)
+    if args.table_sites is not None:
+        raw["calibrate"]["table_sites"] = args.table_sites
     truth_raw = copy.deepcopy(raw)
     truth_raw["seed"] = args.survey_seed
     truth_raw["fleet"]["n_bogies"] = args.vehicles
@@ -120,6 +124,8 @@ def report(metrics: dict) -> None:
               f"{p.get('high', nan):8.3f}] {'in' if inside[1] else 'OUT'}")  # fmt: skip
     print(f"at bounds: {metrics.get('at_bounds') or 'none'}")
     posterior = metrics.get("posterior") or {}
+    worst = {q: (e.get("rhat"), e.get("ess_bulk"), e.get("ess_tail")) for q, e in post.items()}
+    print(f"posterior R-hat, bulk and tail ESS per quantity: {worst}; advice: {posterior.get('advice')}")
     print(f"posterior converged: {posterior.get('converged')}; the likelihood's covariance by source: "
           f"{posterior.get('covariance_shares')} ({posterior.get('covariance_sites')} other sites)")  # fmt: skip
     print(f"prior sensitivity: {(metrics.get('prior_sensitivity') or {}).get('sentence')}")

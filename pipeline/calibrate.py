@@ -92,6 +92,7 @@ def _fleet(config: Config) -> dict[str, Any]:
         "samples": calibration_samples(config), "tilt_distribution": config.distributions["chassis_tilt"],
         "seed": config.seed, "protocol": cal.protocol, "settings": settings, "tilts": _tilt_grid(config),
         "site_iri_levels": cal.site_iri_levels, "study": "fleet", "inhibitor_distributions": _inhibitors(config),
+        "table_sites": cal.table_sites,
     }  # fmt: skip
 
 

@@ -67,11 +67,16 @@ def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
     return np.sqrt(np.maximum((w[:, None] * (x - mean) ** 2).sum(axis=0) / w.sum(), 0.0))
 
 
-def summaries(quantities: Mapping[str, np.ndarray], weights: Mapping[str, np.ndarray]) -> np.ndarray:
+def summaries(
+    quantities: Mapping[str, np.ndarray], weights: Mapping[str, np.ndarray],
+    sites: Mapping[str, np.ndarray] | None = None,
+) -> np.ndarray:  # fmt: skip
     """The summaries of a survey, per size in the order of ``quantities`` (rows: groups; columns: each axle
     position's load share, then the spread [%]; ``weights`` per group): the mean share of each position but the
     last (the shares' mean is 1), the sd of each position's share (a tandem's first only: its two are equal), the
-    spread's mean and sd. NaN where a size has no weight."""
+    spread's mean and sd. NaN where a size has no weight. With ``sites`` (per size, each row's WIM site: a table
+    spread over several), each sd is about the row's own site's weighted mean (pooled within sites), so that it is
+    one site's sd, as a survey's is, not widened by the sites' differences."""
     out = []
     for size, q in quantities.items():
         n, w = q.shape[1] - 1, weights[size]
@@ -79,13 +84,20 @@ def summaries(quantities: Mapping[str, np.ndarray], weights: Mapping[str, np.nda
             out.extend([math.nan] * (n - 1 + (n if n > 2 else 1) + 2))
             continue
         mean = (w[:, None] * q).sum(axis=0) / w.sum()
-        sd = _weighted_sd(q, w, mean)
+        about = mean
+        if sites is not None:
+            about = np.empty_like(q)
+            for k in np.unique(sites[size]):
+                at = sites[size] == k
+                about[at] = (w[at, None] * q[at]).sum(axis=0) / w[at].sum() if w[at].sum() > 0.0 else 0.0
+        sd = _weighted_sd(q, w, about)
         out.extend([*mean[: n - 1], *sd[: (n if n > 2 else 1)], mean[n], sd[n]])
     return np.asarray(out, dtype=float)
 
 
 def _sim_summaries(problem: Problem, sim: Any) -> np.ndarray:
-    return summaries({k: sim.quantities[k] for k in problem.obs}, {k: sim.weights[k] for k in problem.obs})
+    sites = None if sim.sites is None else {k: sim.sites[k] for k in problem.obs}
+    return summaries({k: sim.quantities[k] for k in problem.obs}, {k: sim.weights[k] for k in problem.obs}, sites)
 
 
 @dataclass
@@ -97,7 +109,8 @@ class SyntheticLikelihood:
     precision: np.ndarray
     covariance_obs: np.ndarray
     covariance_sim: np.ndarray
-    covariance_site: np.ndarray  # between sites, of one site's summaries (entered twice: the survey's and the table's)
+    covariance_site: np.ndarray  # between sites, of one site's summaries (entered 1 + 1/K times: the survey's site and
+    # the table's K sites' mean)
     sites: int = 0  # the other sites it was estimated on
 
     def simulated(self, theta: np.ndarray) -> np.ndarray:
@@ -122,14 +135,14 @@ def site_covariance(
 ) -> tuple[np.ndarray, int]:
     """The covariance of the survey's summaries between WIM sites, at the fit ``best``, and the sites it came from:
     :func:`site_bogies` weighed directly (their fitted tilts, steel and air) on each of ``sites`` other sites
-    (:func:`bogie.fleet.calibration.site.site_of`, numbers 1 to ``sites``: their own roads, the bogies' own speeds),
-    the same bogies, sensor errors and bias on each, so that only the site differs; a site whose summaries are not
-    all defined (a size without a group) left out. Over the sites, a summary of m bogies varies by the site's own
-    departure ``d`` and by the bogies' interaction with the site (variance ``g / m``, which the bootstraps of the
-    survey and of the table already hold); the difference of two halves' summaries has no ``d`` and variance
-    ``4 g / m``, so the site's own variance is the whole's less a quarter of the halves' difference's (at least 0),
-    its correlations the whole's (a covariance, positive semi-definite). Zeros (and 0 sites) for a static table, a
-    table without a shared site or fewer than two sites."""
+    (:func:`bogie.fleet.calibration.site.site_of`, numbers K to K + ``sites`` - 1 after the table's K: their own
+    roads, the bogies' own speeds), the same bogies, sensor errors and bias on each, so that only the site differs;
+    a site whose summaries are not all defined (a size without a group) left out. Over the sites, a summary of m
+    bogies varies by the site's own departure ``d`` and by the bogies' interaction with the site (variance ``g /
+    m``, which the bootstraps of the survey and of the table already hold); the difference of two halves' summaries
+    has no ``d`` and variance ``4 g / m``, so the site's own variance is the whole's less a quarter of the halves'
+    difference's (at least 0), its correlations the whole's (a covariance, positive semi-definite). Zeros (and 0
+    sites) for a static table, a table without a shared site or fewer than two sites."""
     table, d = problem.table, len(summaries(problem.obs, problem.unit_weights()))
     if table.protocol != "wim" or table.site is None or sites < 2:
         return np.zeros((d, d)), 0
@@ -139,7 +152,8 @@ def site_covariance(
     samples = moved_samples(table, values).to_dict("records")
     spec = protocol_spec(table, values["site_iri_m_km"])
     classes = list(table.samples["road_class"].astype(str))
-    others = [site_of(table.seed, table.study, classes, r) for r in range(1, sites + 1)]  # once each, not per task
+    first = table.sites  # the table's own are sites 0 .. table.sites - 1
+    others = [site_of(table.seed, table.study, classes, first + r) for r in range(sites)]  # once each, not per task
     tasks = [
         wim_task({**samples[i], "suspension": kind, "chassis_tilt": float(tilt[i])}, spec, site, float(table.speeds[i]))
         for site in others for kind in ("steel", "air") for i in rows
@@ -196,7 +210,10 @@ def synthetic_likelihood(
         sim_draws.append(_sim_summaries(problem, sim))
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
     c_site, n_sites = site_covariance(problem, best, sites, executor)
-    cov = c_obs + c_sim + 2.0 * c_site
+    # the survey's one site departs from the population of sites by c_site, the table's mean over its K sites by
+    # c_site / K (docs/calibration.md, "The site")
+    table_part = 1.0 / problem.table.sites
+    cov = c_obs + c_sim + (1.0 + table_part) * c_site
     cov = cov + np.eye(len(cov)) * 1e-9 * max(float(np.trace(cov)) / len(cov), 1e-30)  # a ridge against rounding
     # a summary that is NaN in a resample (a size with no weight in it) leaves the covariance NaN: the precision is NaN
     # then, as numpy's inverse gave it, every likelihood NaN and no proposal accepted (issue 43 is to treat it)
@@ -334,7 +351,8 @@ def posterior(
     flat = "flat over the bounds (no prior given)"
     described = {q: priors[q].describe() if q in priors else flat for q in problem.fitted}
     acceptance = sum(r[2] for r in runs) / (chains * per_chain)
-    parts = {"survey": like.covariance_obs, "table": like.covariance_sim, "between_sites": 2.0 * like.covariance_site}
+    between = (1.0 + 1.0 / problem.table.sites) * like.covariance_site
+    parts = {"survey": like.covariance_obs, "table": like.covariance_sim, "between_sites": between}
     # each summary in its own units: the trace of the covariance scaled by the total's diagonal
     scale = np.diag(sum(parts.values()))
     varies = scale > 0.0  # a summary that never varies (a spread read at a coarse resolution) has no share to give

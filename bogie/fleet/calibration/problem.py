@@ -129,6 +129,7 @@ class Simulated:
 
     quantities: Mapping[str, np.ndarray]
     weights: Mapping[str, np.ndarray]
+    sites: Mapping[str, np.ndarray] | None = None  # per size, each row's WIM site (a table over several; else None)
 
 
 def simulated(
@@ -143,14 +144,17 @@ def simulated(
 
     ``readings`` (2, m, 3) [kg], the readings of the calibration bogies ``bogies`` (m indices) weighed otherwise
     (on another site: :func:`bogie.fleet.calibration.posterior.site_covariance`), with the site's and the sensor's
-    factors; None: every bogie's from the table (:func:`fleet_readings`)."""
+    factors; None: every bogie's from the table (:func:`fleet_readings`), each row labelled with its bogie's site
+    when the table spreads them over several (:meth:`~bogie.fleet.calibration.table.Table.site_labels`)."""
     rows = np.arange(len(table.size)) if bogies is None else np.asarray(bogies, dtype=int)
+    readings_given = readings is not None  # another site's readings: one site for all, no labels
     readings = at_resolution(fleet_readings(table, values) if readings is None else readings, weight_step_kg)
     share = values["air_share"]
     counts = np.ones(len(rows)) if slot_counts is None else slot_counts[rows]
     moved = steel_weights(table, values)[rows]
     sizes = table.size[rows]
-    quantities, weights = {}, {}
+    quantities, weights, sites = {}, {}, {}
+    labels = table.site_labels(rows) if readings_given is False else None
     for size, n in SIZES.items():
         sel = sizes == size
         loads = readings[:, sel, :n].reshape(-1, n)
@@ -164,7 +168,9 @@ def simulated(
         keep &= w > 0.0
         quantities[size] = observed_quantities(loads[keep]) if keep.any() else np.zeros((0, n + 1))
         weights[size] = w[keep]
-    return Simulated(quantities, weights)
+        if labels is not None:
+            sites[size] = np.concatenate([labels[sel], labels[sel]])[keep]  # steel then air, as the loads
+    return Simulated(quantities, weights, sites if labels is not None else None)
 
 
 def distance(

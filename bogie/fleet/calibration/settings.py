@@ -92,6 +92,13 @@ class CalibrationSettings:
         "sites in the posterior's likelihood (a WIM table on a shared site; 0 or 1: none; "
         "bogie.fleet.calibration.posterior.site_covariance).",
     )  # fmt: skip
+    table_sites: int = setting(
+        1, unit="-", low=1, whole=True,
+        doc="WIM sites the calibration bogies are spread over in the table (bogie i on site i mod table_sites), so "
+        "that the table stands for the population of sites and not one: the between-site covariance then enters "
+        "the likelihood 1 + 1/table_sites times (a WIM table on a shared site; 1: every bogie on one site; "
+        "docs/calibration.md, 'The site').",
+    )  # fmt: skip
     priors: Mapping[str, Any] | None = None
 
     def __post_init__(self) -> None:

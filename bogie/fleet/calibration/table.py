@@ -93,6 +93,7 @@ class Table:
     speeds: np.ndarray | None = None  # (n,) each bogie's speed over the site [m/s] (None: the protocol's)
     seed: int = 0  # the fleet's master seed and study: the other sites' roads (bogie.fleet.calibration.site)
     study: str = "fleet"
+    sites: int = 1  # the WIM sites the bogies are spread over: bogie i on site i mod sites (``site`` is site 0)
 
     def column(self, name: str) -> np.ndarray:
         """A sample column as floats, read once (the fit reads the inhibitors' columns at every evaluation)."""
@@ -123,7 +124,22 @@ class Table:
         ``sample`` on the table's site at the bogie's speed (:func:`bogie.fleet.calibration.site.on_site`); static as
         given."""
         speed = None if self.speeds is None else self.speeds[i]
-        return wim_task(sample, spec, self.site, speed, protocol or self.protocol)
+        return wim_task(sample, spec, self.site_for(i), speed, protocol or self.protocol)
+
+    def site_for(self, i: int) -> Site | None:
+        """Bogie ``i``'s WIM site: site ``i mod sites`` of :func:`~bogie.fleet.calibration.site.site_of` (None: no
+        shared site)."""
+        if self.site is None or self.sites == 1:
+            return self.site
+        made = self.__dict__.setdefault("_sites", {})
+        if not made:
+            classes = list(self.samples["road_class"].astype(str))
+            made.update({k: site_of(self.seed, self.study, classes, k) for k in range(self.sites)})
+        return made[i % self.sites]
+
+    def site_labels(self, bogies: np.ndarray) -> np.ndarray | None:
+        """The site number of each of ``bogies`` (None: one site, or none, for all)."""
+        return None if self.site is None or self.sites == 1 else np.asarray(bogies, dtype=int) % self.sites
 
 
 def wim_task(
@@ -280,7 +296,7 @@ def crn_table(
     samples: pd.DataFrame, tilt_distribution: Distribution, seed: int, protocol: str,
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
     study: str = "fleet", inhibitor_distributions: Mapping[str, Distribution] | None = None,
-    shared_site: bool = True, speed_sd_m_s: float = SPEED_SD_M_S,
+    shared_site: bool = True, speed_sd_m_s: float = SPEED_SD_M_S, table_sites: int = 1,
 ) -> Table:  # fmt: skip
     """The calibration fleet and its common random numbers, with no reading yet (``loads`` zeros).
 
@@ -306,9 +322,11 @@ def crn_table(
     inhibitor_distributions
         The fleet's distributions (SI) of ``contact_roll_radius`` and ``bush_stiffness``, the sample columns whose
         mean a fit may move (:func:`tilted_families`); None: neither can be fitted.
-    shared_site, speed_sd_m_s
+    shared_site, speed_sd_m_s, table_sites
         ``wim``: every bogie on one site's road (True; :mod:`bogie.fleet.calibration.site`), each at its own speed
-        (sd ``speed_sd_m_s`` [m/s]); False: each on its own road at the protocol's speed.
+        (sd ``speed_sd_m_s`` [m/s]); False: each on its own road at the protocol's speed. ``table_sites`` (whole, at
+        least 1): the bogies spread over that many sites, bogie i on site i mod ``table_sites``, so that the table
+        stands for the population of sites rather than one (docs/calibration.md, "The site").
 
     Raises
     ------
@@ -317,6 +335,7 @@ def crn_table(
     """
     _check_fleet(samples, tilt_distribution, protocol, settings, inhibitor_distributions)
     _whole("seed", seed, 0)
+    _whole("table_sites", table_sites, 1)
     grid = _increasing("tilts", tilts, "degree")
     iris = _increasing("site_iri_levels", site_iri_levels, "m/km", True) if protocol == "wim" else [np.nan]
     shared = protocol == "wim" and shared_site
@@ -334,7 +353,7 @@ def crn_table(
     families = tilted_families(inhibitor_distributions)
     return Table(
         samples, size, tilt_u, air_u, z, grid, np.asarray(iris, dtype=float), loads, 0, protocol, settings,
-        tilt_distribution, z_pass, families, site, speeds, int(seed), study,
+        tilt_distribution, z_pass, families, site, speeds, int(seed), study, int(table_sites),
     )  # fmt: skip
 
 
@@ -357,7 +376,7 @@ def build_table(
     settings: StaticProtocol | WimProtocol, tilts: Sequence[float], site_iri_levels: Sequence[float] = (),
     executor: Executor | Mapper | None = None, progress: Callable[[str], None] | None = None, study: str = "fleet",
     inhibitor_distributions: Mapping[str, Distribution] | None = None, shared_site: bool = True,
-    speed_sd_m_s: float = SPEED_SD_M_S,
+    speed_sd_m_s: float = SPEED_SD_M_S, table_sites: int = 1,
 ) -> Table:  # fmt: skip
     """Weigh the calibration fleet on the grid of tilts (and site roughnesses): the one simulation the fit needs.
 
@@ -372,7 +391,7 @@ def build_table(
     progress = progress or _quiet
     base = crn_table(
         samples, tilt_distribution, seed, protocol, settings, tilts, site_iri_levels, study, inhibitor_distributions,
-        shared_site, speed_sd_m_s,
+        shared_site, speed_sd_m_s, table_sites,
     )  # fmt: skip
     n, tilts, iris = len(base.size), base.tilts, base.iris
     tasks, records = [], base.samples.to_dict("records")
