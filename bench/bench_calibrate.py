@@ -69,6 +69,7 @@ def main(argv: list[str] | None = None) -> None:
         raw["calibrate"]["table_sites"] = args.table_sites
     truth_raw = copy.deepcopy(raw)
     truth_raw["seed"] = args.survey_seed
+    truth_raw["calibrate"]["table_sites"] = 1  # the survey is made at one site, whatever the table's
     truth_raw["fleet"]["n_bogies"] = args.vehicles
     truth_raw["ablation"]["n_bogies"] = min(raw["ablation"]["n_bogies"], args.vehicles // 4)
     truth_raw["calibrate"]["n_bogies"] = args.vehicles
