@@ -37,6 +37,18 @@ def wim_table(n=40, seed=5, shared_site=True):
     return L.crn_table(samples, WIM_TILT, seed, "wim", WIM, [-2.0, 0.0, 2.0], [1.0, 3.0], shared_site=shared_site)
 
 
+def recording(monkeypatch, module):
+    """``module.weigh_readings`` replaced by one that reads 8000 kg on every axle and keeps the tasks it was given."""
+    seen = []
+
+    def fake(tasks, executor=None):
+        seen.extend(tasks)
+        return np.full((len(tasks), 3), 8000.0)
+
+    monkeypatch.setattr(module, "weigh_readings", fake)
+    return seen
+
+
 # ---- speeds and sites --------------------------------------------------------------------------------------------
 def test_each_bogie_has_its_own_speed_by_hand_and_sites_their_own_roads():
     ids = [0, 7, 3]
@@ -59,13 +71,7 @@ def test_each_bogie_has_its_own_speed_by_hand_and_sites_their_own_roads():
 
 
 def test_the_calibration_bogies_cross_one_site_at_their_own_speeds(monkeypatch):
-    seen = []
-
-    def fake(tasks, executor=None):
-        seen.extend(tasks)
-        return np.full((len(tasks), 3), 8000.0)
-
-    monkeypatch.setattr(T, "weigh_readings", fake)
+    seen = recording(monkeypatch, T)
     table = T.build_table(wim_table().samples, WIM_TILT, 5, "wim", WIM, [-2.0, 0.0, 2.0], [1.0, 3.0])
     assert table.site == site_of(5, "fleet", list(table.samples["road_class"]))
     assert {(s["road_class"], s["road_seed"]) for s, _, _ in seen} == {(table.site.road_class, table.site.road_seed)}
@@ -80,13 +86,7 @@ def test_the_calibration_bogies_cross_one_site_at_their_own_speeds(monkeypatch):
 
 
 def test_a_table_over_several_sites_puts_bogie_i_on_site_i_mod_k_and_the_others_after_them(monkeypatch):
-    seen = []
-
-    def fake(tasks, executor=None):
-        seen.extend(tasks)
-        return np.full((len(tasks), 3), 8000.0)
-
-    monkeypatch.setattr(T, "weigh_readings", fake)
+    seen = recording(monkeypatch, T)
     samples = wim_table().samples
     table = T.build_table(samples, WIM_TILT, 5, "wim", WIM, [-2.0, 0.0, 2.0], [1.0, 3.0], table_sites=3)
     classes, n = list(table.samples["road_class"]), len(table.size)
@@ -101,6 +101,14 @@ def test_a_table_over_several_sites_puts_bogie_i_on_site_i_mod_k_and_the_others_
     assert one.site_for(7) == own[0] and one.site_labels(np.arange(4)) is None
     with pytest.raises(T.CalibrationError, match="table_sites"):
         T.crn_table(samples, WIM_TILT, 5, "wim", WIM, [-2.0, 0.0, 2.0], [1.0, 3.0], table_sites=0)
+    # the between-site covariance's other sites come after the table's three: sites 3 and 4
+    others = recording(monkeypatch, P)
+    rng = np.random.default_rng(1)
+    observed = L.Observed({"tandem": rng.uniform(7e3, 9e3, (30, 2)), "triaxle": rng.uniform(7e3, 9e3, (30, 3))},
+                          {"tandem": np.arange(30), "triaxle": np.arange(30)})  # fmt: skip
+    problem = L.make_problem(table, observed, {"air_share": (0.0, 1.0)}, L.base_values(WIM_TILT, 0.0, WIM))
+    P.site_covariance(problem, np.array([0.0]), 2)
+    assert {s["road_seed"] for s, _, _ in others} == {site_of(5, "fleet", classes, k).road_seed for k in (3, 4)}
 
 
 def test_the_summaries_of_a_table_over_several_sites_take_each_sd_within_its_site():
