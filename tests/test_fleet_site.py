@@ -252,8 +252,12 @@ def test_a_large_survey_does_not_depend_on_the_tilt_prior_and_a_small_one_does()
     )
     assert large["moves"][q] == pytest.approx(by_hand)
     assert not large["depends"] and large["sentence"].endswith("the answer does not depend on the tilt prior.")
-    _, small = sensitivity(12)  # 12 tri-axles: the prior, not the survey, holds the tilt
+    # 10 tri-axles, the fewest a fit takes: the prior, not the survey, holds the tilt. Measured 7 December 2026 with
+    # the tilt priors' sd 0.65 degree: the tilt centre's median moves by 0.257 of its interval with 10, 0.146 with 11
+    # and 0.215 with 12 (with sd 0.6, 12 were enough); with 1,500, by far less
+    _, small = sensitivity(10)
     assert small["depends"] and any(small["moves"][q] > DEPENDS for q in small["depends_on_prior"])
+    assert small["moves"]["chassis_tilt_mean_deg"] > 2.0 * large["moves"]["chassis_tilt_mean_deg"]
     assert "the answer depends on the tilt prior" in small["sentence"] and "degree" in small["sentence"]
 
 

@@ -3,9 +3,10 @@
 The rows in ``tests/data/protocol_identity/reference.json`` were written by ``make_reference.py`` beside it with the
 protocols as issue 15 left them (phases in one compiled call, adaptive steps in the static protocol,
 ``docs/phases.md``): three tandem and three tri-axle bogies of the params.yaml fleet, each weighed by the static and
-the WIM protocol (the WIM rows rewritten on 3 December 2026 for issue 30's sensor model, the static rows
-unchanged). Floats are stored as ``float.hex()`` and compared with ``==`` (NaN with NaN), every other field
-(flags, status, message) as is. A change meant to change results rewrites the file on purpose.
+the WIM protocol (the WIM rows rewritten on 3 December 2026 for issue 30's sensor model; every row on 7 December
+2026, when issue 43 Must 7 moved params.yaml's tilt distribution and so the bogies' sampled tilts). Floats are
+stored as ``float.hex()`` and compared with ``==`` (NaN with NaN), every other field (flags, status, message) as
+is. A change meant to change results rewrites the file on purpose.
 
 Bits are defined on the machine that wrote the file (its CPU and library facts, ``tests/_fingerprint.py``, are stored
 in it): on another, every float must agree within ``FOREIGN_RTOL`` of its scale (loads of the group load, the rest

@@ -324,18 +324,14 @@ def crn_table(
         mean a fit may move (:func:`tilted_families`); None: neither can be fitted.
     shared_site, speed_sd_m_s, table_sites
         ``wim``: every bogie on one site's road (True; :mod:`bogie.fleet.calibration.site`), each at its own speed
-        (sd ``speed_sd_m_s`` [m/s]); False: each on its own road at the protocol's speed. ``table_sites`` (whole, at
-        least 1): the bogies spread over that many sites, bogie i on site i mod ``table_sites``, so that the table
-        stands for the population of sites rather than one (docs/calibration.md, "The site").
+        (sd ``speed_sd_m_s`` [m/s]); False: each on its own road at the protocol's speed. ``table_sites`` (>= 1):
+        bogie i on site i mod ``table_sites``, the table for the population of sites (docs/calibration.md).
 
-    Raises
-    ------
-    CalibrationError
-        If an argument is not of the kind or in the range said above (named, with its value and unit).
+    Raises :class:`CalibrationError` if an argument is not of the kind or in the range said above (named, with its
+    value and unit).
     """
     _check_fleet(samples, tilt_distribution, protocol, settings, inhibitor_distributions)
-    _whole("seed", seed, 0)
-    _whole("table_sites", table_sites, 1)
+    _whole("seed", seed, 0), _whole("table_sites", table_sites, 1)
     grid = _increasing("tilts", tilts, "degree")
     iris = _increasing("site_iri_levels", site_iri_levels, "m/km", True) if protocol == "wim" else [np.nan]
     shared = protocol == "wim" and shared_site

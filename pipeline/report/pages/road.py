@@ -59,9 +59,12 @@ def wear_bars(ax, m: Mapping[str, Any]) -> list[str]:
     x = np.arange(len(kinds))
     width = 0.8 / max(len(sides), 1)
     for j, (label, entry, colour) in enumerate(sides):
-        value = np.array([100.0 * (entry.get(f"extra_wear_{k}") or np.nan) for k in kinds])
-        low = np.array([100.0 * (entry.get(f"extra_wear_{k}_low") or np.nan) for k in kinds])
-        high = np.array([100.0 * (entry.get(f"extra_wear_{k}_high") or np.nan) for k in kinds])
+        # a missing figure is NaN (no bar); a zero is a bar of zero, not a missing one
+        value, low, high = (
+            np.array([100.0 * (np.nan if entry.get(f"extra_wear_{k}{tail}") is None else entry[f"extra_wear_{k}{tail}"])
+                      for k in kinds])
+            for tail in ("", "_low", "_high")
+        )  # fmt: skip
         err = np.clip(np.vstack([value - low, high - value]), 0.0, None)
         ax.bar(x + (j - (len(sides) - 1) / 2) * width, value, width * 0.92, yerr=np.nan_to_num(err), color=colour,
                label=f"{label} (n = {entry['n_groups']})", error_kw={"lw": 0.7, "capsize": 1.5})  # fmt: skip
