@@ -2,6 +2,7 @@
 hand, the posterior around the truth of a known fleet, and a posterior piled against a bound flagged."""
 
 import math
+from concurrent.futures import ProcessPoolExecutor
 from pathlib import Path
 
 import numpy as np
@@ -138,6 +139,17 @@ def test_each_chain_is_its_own_same_bits_whatever_the_number_of_chains(radius_pr
     # the pooled median is over every chain's draws
     q = problem.fitted[1]
     assert four.summary[q]["median"] == float(np.median(four.draws[q]))
+
+
+def test_the_chains_on_a_process_pool_are_the_same_bits_as_in_this_process(radius_problem):
+    # the chains run one task each on the executor (the stage's workers); each is seeded alone, so the draws, their
+    # log-likelihoods and the acceptance do not depend on where they ran; the pool's processes import bogie afresh
+    problem, priors, best = radius_problem
+    here = P.posterior(problem, priors, best, 480, 4, 0.9, chains=3)
+    with ProcessPoolExecutor(2) as pool:
+        there = P.posterior(problem, priors, best, 480, 4, 0.9, chains=3, executor=pool)
+    assert np.array_equal(here.draws.to_numpy(), there.draws.to_numpy())
+    assert here.acceptance == there.acceptance and here.summary == there.summary
 
 
 def test_a_short_posterior_is_called_unconverged_and_told_to_draw_more(radius_problem):

@@ -194,21 +194,21 @@ def test_the_between_site_covariance_holds_the_sites_own_variance_not_the_bogies
     base = {**L.base_values(WIM_TILT, 0.0, WIM), "sensor_error_pct": 0.0}
     problem = L.make_problem(table, observed, {"air_share": (0.0, 1.0)}, base)
     monkeypatch.setattr(P, "weigh_readings", site_weighings(SITE_SD))
-    cov, sites = P.site_covariance(problem, np.array([0.0]), 400)
+    cov, sites, _ = P.site_covariance(problem, np.array([0.0]), 400)
     assert sites == 400 and np.all(np.linalg.eigvalsh(cov) > -1e-15)  # a covariance
     # the tri-axle's mean front share (summary 4) varies across sites by SITE_SD^2 = 4.0e-4 and by the 32 bogies'
     # interaction, INTERACTION_SD^2 / 32 = 0.8e-4, which the bootstraps already hold: the estimate keeps the first
     # (400 sites: the estimate's relative sd about 7 %, a tolerance of about 3 sd; uncorrected: 4.8e-4, 20 % high)
     assert cov[4, 4] == pytest.approx(SITE_SD**2, rel=0.2)
     monkeypatch.setattr(P, "weigh_readings", site_weighings(0.0))
-    none, _ = P.site_covariance(problem, np.array([0.0]), 400)
+    none, _, _ = P.site_covariance(problem, np.array([0.0]), 400)
     assert none[4, 4] < 0.25 * INTERACTION_SD**2 / 32  # no site effect: only the correction's noise is left
     # fewer than two sites, or a static table: none
     assert not P.site_covariance(problem, np.array([0.0]), 1)[0].any()
     static = L.make_problem(analytic_table(20), synthetic_observed(40), {"air_share": (0.0, 1.0)},
                             L.base_values(TILT, 0.0, None))  # fmt: skip
-    zeros, n = P.site_covariance(static, np.array([0.5]), 16)
-    assert n == 0 and not zeros.any()
+    zeros, n, shrink = P.site_covariance(static, np.array([0.5]), 16)
+    assert n == 0 and not zeros.any() and shrink == 0.0
 
 
 # ---- the sensor's per-axle error (Must 4) ------------------------------------------------------------------------
@@ -278,3 +278,52 @@ def test_the_posterior_predictive_kilograms_carry_the_site_bias(monkeypatch):
     # the load shares do not see it: one value over the draws
     share = out["triaxle"]["share_over_10pct"]
     assert share["low"] == share["high"]
+
+
+def test_the_shrinkage_of_the_between_site_correlations_by_hand():
+    # Schaefer and Strimmer 2005, target D. Two variables over 4 draws, deviations from their means (-1.5, -0.5, 0.5,
+    # 1.5) and (-1.5, 0.5, -0.5, 1.5), both of variance 5/3: r = (2.25 - 0.25 - 0.25 + 2.25) / 5 = 0.8; the
+    # standardised products w_k = d1 d2 / (5/3) = (1.35, -0.15, -0.15, 1.35), mean 0.6, so Var(r) = 4 / 27 x 4 x
+    # 0.75^2 = 1/3, and lambda = 2 x (1/3) / (2 x 0.8^2) = 0.52083...
+    x = np.array([[1.0, 1.0], [2.0, 3.0], [3.0, 2.0], [4.0, 4.0]])
+    assert P.shrinkage_intensity(x) == pytest.approx((1 / 3) / 0.64, rel=1e-12)
+    # exactly correlated variables (a column that never varies left out): r = 1, w_k = d1^2 / (5/3) = (1.35, 0.15,
+    # 0.15, 1.35), mean 0.75, so Var(r) = 4 / 27 x 4 x 0.6^2 = 0.21333 and lambda the same (the estimate's own noise)
+    line = np.column_stack([x[:, 0], 2.0 * x[:, 0] + 1.0, np.full(4, 7.0)])
+    assert P.shrinkage_intensity(line) == pytest.approx(4 / 27 * 4 * 0.36, rel=1e-12)
+    assert P.shrinkage_intensity(np.column_stack([x[:, 0], np.full(4, 7.0)])) == 1.0
+    # 16 draws of 11 independent variables (as 16 sites and 11 summaries): what correlations they show is noise, so
+    # most of it is shrunk away (measured 0.85 on this seed); 400 draws of 11 strongly correlated keep theirs (0.006)
+    rng = np.random.default_rng(5)
+    assert P.shrinkage_intensity(rng.standard_normal((16, 11))) > 0.8
+    common = rng.standard_normal((400, 1))
+    assert P.shrinkage_intensity(common + 0.3 * rng.standard_normal((400, 11))) < 0.05
+
+
+def test_the_between_site_covariance_is_placed_where_a_first_pass_finds_the_posterior(monkeypatch):
+    # the covariance at the fit may sit where the site matters little (a prior-free minimum at a corner): a first pass
+    # of a quarter of the draws is run with it, then the covariance is the mean over that pass's chains' middle draws.
+    # A stand-in covariance that grows with the first quantity tells where it was evaluated
+    problem = L.make_problem(analytic_table(), synthetic_observed(400), FIT, L.base_values(TILT, 0.0, None))
+    d = len(P.summaries(problem.obs, problem.unit_weights()))
+    priors = F.priors_for(problem, L.CalibrationSettings(FIT, seed=3))
+    best = np.array([0.9 * problem.bounds[0][1], 0.5, 0.5])  # near the upper bound of the first quantity
+    where = []
+
+    def stand_in(problem_, theta, sites, executor=None):
+        where.append(np.array(theta, dtype=float))
+        return np.eye(d) * 1e-6 * (1.0 + float(theta[0]) ** 2), sites, 0.25
+
+    monkeypatch.setattr(P, "site_covariance", stand_in)
+    post = P.posterior(problem, priors, best, 800, 3, 0.9, chains=4, sites=16)
+    assert len(where) == 5 and np.array_equal(where[0], best)  # at the fit, then at the 4 chains' middle draws
+    # the first pass again: 200 draws, 50 a chain, from the likelihood at the fit
+    first, _ = P._sample(P.synthetic_likelihood(problem, best, 3, 16), priors, problem, best, 200, 3, 4, None)
+    assert all(np.array_equal(w, first[k, 25]) for k, w in enumerate(where[1:5]))
+    assert not any(np.array_equal(w, best) for w in where[1:5])
+    expected = sum(np.eye(d) * 1e-6 * (1.0 + float(w[0]) ** 2) for w in where[1:5]) / 4
+    assert np.array_equal(post.likelihood.covariance_site, expected) and post.likelihood.points == 4
+    assert post.likelihood.shrinkage == 0.25 and post.sites == 16
+    # a likelihood given is used as it is: no first pass, no other covariance
+    again = P.posterior(problem, priors, best, 800, 3, 0.9, chains=4, likelihood=post.likelihood)
+    assert len(where) == 6 and again.likelihood is post.likelihood

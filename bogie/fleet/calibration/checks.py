@@ -283,7 +283,7 @@ def calibrate_survey(
     metrics = _metrics(table, observed, settings, result, problem.obs, problem.scales, direct, held, abl)
     metrics["table_faithful"] = _faithful(metrics["distance"], metrics["distance_direct"], held.get("distance_halves"))
     if result.posterior is not None:  # does the answer depend on the tilt prior? (issue 43 Must 6)
-        metrics["prior_sensitivity"] = _prior_sensitivity(problem, settings, result, progress)
+        metrics["prior_sensitivity"] = _prior_sensitivity(problem, settings, result, progress, executor)
     if result.posterior is not None:  # the statistics the posterior predicts, beside those at its medians
         metrics["calibrated"]["posterior_predictive"] = posterior_predictive(table, result.posterior, result.values,
             min_group_load_kg, step, settings.confidence_level, executor)  # fmt: skip
@@ -296,14 +296,14 @@ def calibrate_survey(
 
 
 def _prior_sensitivity(
-    problem: Any, settings: CalibrationSettings, result: Any, progress: Callable[[str], None]
+    problem: Any, settings: CalibrationSettings, result: Any, progress: Callable[[str], None], executor: Any = None
 ) -> dict[str, Any] | None:
     """:func:`bogie.fleet.calibration.prior_sensitivity.prior_sensitivity` of the calibration, rounded."""
     progress("calibrate: prior sensitivity, the posterior with the tilt prior's sd halved and doubled")
     best = np.array([result.prior_free[q]["value"] for q in problem.fitted])
     return _rounded(prior_sensitivity(problem, priors_for(problem, settings), result.posterior, best,
                                       settings.posterior_draws, settings.seed, settings.confidence_level,
-                                      settings.chains))  # fmt: skip
+                                      settings.chains, executor))  # fmt: skip
 
 
 def _attribute(
@@ -486,6 +486,8 @@ def _posterior_metrics(post: Any, level: float) -> dict[str, Any] | None:
         # the likelihood's covariance by source, each summary in its own units (issue 43 Must 2: between sites)
         "covariance_sites": post.sites,
         "covariance_shares": _rounded(post.covariance_shares),
+        # how far the between-site correlations were shrunk towards none (Schaefer-Strimmer; 0: not at all)
+        "covariance_site_shrinkage": json_number(post.likelihood.shrinkage) if post.likelihood is not None else None,
         "advice": post.advice,
         "thresholds": post.thresholds,
         "quantities": {

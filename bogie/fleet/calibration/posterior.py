@@ -22,6 +22,7 @@ effective sample sizes per quantity, and what to change). Seeded: same arguments
 
 from __future__ import annotations
 
+import dataclasses
 import math
 from collections.abc import Mapping
 from concurrent.futures import Executor
@@ -37,13 +38,21 @@ from bogie.fleet.calibration.priors import Prior, log_prior
 from bogie.fleet.calibration.problem import Problem, _values, simulated
 from bogie.fleet.calibration.settings import CalibrationSettings
 from bogie.fleet.calibration.site import site_of
-from bogie.fleet.calibration.table import Mapper, bogie_tilts, moved_samples, protocol_spec, weigh_readings, wim_task
+from bogie.fleet.calibration.table import (
+    Mapper,
+    bogie_tilts,
+    map_tasks,
+    moved_samples,
+    protocol_spec,
+    weigh_readings,
+    wim_task,
+)
 from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
 
 __all__ = [
-    "BOOTSTRAP", "CHAINS", "SITE_BOGIES", "START_TRIES", "Posterior", "posterior", "site_bogies", "site_covariance",
-    "summaries", "synthetic_likelihood",
+    "BOOTSTRAP", "CHAINS", "FIRST_PASS", "SITE_BOGIES", "START_TRIES", "Posterior", "posterior", "shrinkage_intensity",
+    "site_bogies", "site_covariance", "site_part", "summaries", "synthetic_likelihood",
 ]  # fmt: skip
 
 #: bootstrap resamples of each side for the summaries' covariance [-]; a convention (no source), like the sampler's
@@ -61,6 +70,9 @@ START_TRIES = 100
 #: covariance of so few bogies' summaries across sites includes their own interaction with the site, so it is, if
 #: anything, too wide (docs/calibration.md, "The site")
 SITE_BOGIES = 32
+#: the first pass's draws, a share of the posterior's, whose chains' middle draws place the between-site covariance
+#: (:func:`posterior`) [-]: a convention (enough to leave the fit; a chain's middle draw is past its burn-in)
+FIRST_PASS = 0.25
 
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
@@ -112,6 +124,8 @@ class SyntheticLikelihood:
     covariance_site: np.ndarray  # between sites, of one site's summaries (entered 1 + 1/K times: the survey's site and
     # the table's K sites' mean)
     sites: int = 0  # the other sites it was estimated on
+    shrinkage: float = 0.0  # how far its correlations were shrunk towards none (shrinkage_intensity) [-]
+    points: int = 1  # the posterior draws it was averaged over (1: at the fit alone; see posterior)
 
     def simulated(self, theta: np.ndarray) -> np.ndarray:
         p = self.problem
@@ -125,6 +139,30 @@ class SyntheticLikelihood:
         return -0.5 * float(numerics.matmul(numerics.matmul(r, self.precision), r))
 
 
+def shrinkage_intensity(samples: np.ndarray) -> float:
+    """How far to shrink the correlations of ``samples`` (rows: draws; columns: variables) towards none [0, 1]:
+    Schaefer and Strimmer 2005's estimate for their target D (the diagonal of unequal variances; Statistical
+    Applications in Genetics and Molecular Biology 4(1), art. 32, table 1), ``lambda = sum_{i != j} Var(r_ij) /
+    sum_{i != j} r_ij^2``, ``r_ij`` the sample correlation, ``Var(r_ij) = n / (n - 1)^3 sum_k (w_kij - mean_k
+    w_kij)^2`` with ``w_kij`` the product of draw k's standardised variables i and j; cut to [0, 1]. A variable
+    that never varies is left out; 1 (no correlation kept) when fewer than two vary or none correlate."""
+    x = np.asarray(samples, dtype=float)
+    n = len(x)
+    sd = np.sqrt(np.diag(numerics.cov(x))) if n >= 2 else np.zeros(x.shape[1])
+    keep = sd > 0.0
+    if keep.sum() < 2:
+        return 1.0
+    z = (x[:, keep] - x[:, keep].mean(axis=0)) / sd[keep]
+    w = z[:, :, None] * z[:, None, :]
+    w_mean = w.mean(axis=0)
+    r = n / (n - 1) * w_mean
+    gap = w - w_mean
+    var_r = n / ((n - 1) * (n - 1) * (n - 1)) * (gap * gap).sum(axis=0)
+    off = ~np.eye(z.shape[1], dtype=bool)
+    squares = float((r[off] * r[off]).sum())
+    return 1.0 if squares <= 0.0 else min(1.0, max(0.0, float(var_r[off].sum()) / squares))
+
+
 def site_bogies(table: Any) -> np.ndarray:
     """The calibration bogies weighed on the other sites: the first :data:`SITE_BOGIES` of each size."""
     return np.sort(np.concatenate([np.flatnonzero(table.size == size)[:SITE_BOGIES] for size in np.unique(table.size)]))
@@ -132,7 +170,7 @@ def site_bogies(table: Any) -> np.ndarray:
 
 def site_covariance(
     problem: Problem, best: np.ndarray, sites: int, executor: Executor | Mapper | None = None
-) -> tuple[np.ndarray, int]:
+) -> tuple[np.ndarray, int, float]:
     """The covariance of the survey's summaries between WIM sites, at the fit ``best``, and the sites it came from:
     :func:`site_bogies` weighed directly (their fitted tilts, steel and air) on each of ``sites`` other sites
     (:func:`bogie.fleet.calibration.site.site_of`, numbers K to K + ``sites`` - 1 after the table's K: their own
@@ -141,11 +179,12 @@ def site_covariance(
     bogies varies by the site's own departure ``d`` and by the bogies' interaction with the site (variance ``g /
     m``, which the bootstraps of the survey and of the table already hold); the difference of two halves' summaries
     has no ``d`` and variance ``4 g / m``, so the site's own variance is the whole's less a quarter of the halves'
-    difference's (at least 0), its correlations the whole's (a covariance, positive semi-definite). Zeros (and 0
-    sites) for a static table, a table without a shared site or fewer than two sites."""
+    difference's (at least 0), its correlations the whole's shrunk towards none by :func:`shrinkage_intensity` (a
+    covariance, positive semi-definite); returned with the sites it came from and the shrinkage. Zeros (and 0
+    sites, no shrinkage) for a static table, a table without a shared site or fewer than two sites."""
     table, d = problem.table, len(summaries(problem.obs, problem.unit_weights()))
     if table.protocol != "wim" or table.site is None or sites < 2:
-        return np.zeros((d, d)), 0
+        return np.zeros((d, d)), 0, 0.0
     values = _values(best, problem.fitted, problem.base)
     rows = site_bogies(table)
     tilt = np.radians(bogie_tilts(table, values))
@@ -179,13 +218,16 @@ def site_covariance(
             whole.append(full)
             gap.append(first - second)
     if len(whole) < 2:
-        return np.zeros((d, d)), len(whole)
+        return np.zeros((d, d)), len(whole), 0.0
     total = numerics.cov(np.asarray(whole))
     # the site's own variance: the whole's less the bogies' interaction with the site, a quarter of the halves' gap's
     own = np.maximum(np.diag(total) - np.diag(numerics.cov(np.asarray(gap))) / 4.0, 0.0)
     sd = np.sqrt(np.diag(total))
     corr = total / np.outer(np.where(sd > 0.0, sd, 1.0), np.where(sd > 0.0, sd, 1.0))
-    return corr * np.outer(np.sqrt(own), np.sqrt(own)), len(whole)
+    # so few sites estimate the correlations badly and their inverse worse: shrunk towards none (Schaefer-Strimmer)
+    shrink = shrinkage_intensity(np.asarray(whole))
+    corr = (1.0 - shrink) * corr + shrink * np.diag(np.diag(corr))
+    return corr * np.outer(np.sqrt(own), np.sqrt(own)), len(whole), shrink
 
 
 def synthetic_likelihood(
@@ -209,16 +251,28 @@ def synthetic_likelihood(
         sim = simulated(problem.table, values, problem.min_group_load_kg, slots, problem.weight_step_kg)
         sim_draws.append(_sim_summaries(problem, sim))
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
-    c_site, n_sites = site_covariance(problem, best, sites, executor)
+    c_site, n_sites, shrink = site_covariance(problem, best, sites, executor)
+    return SyntheticLikelihood(problem, s_obs, *_precision(c_obs, c_sim, c_site, problem.table.sites), n_sites, shrink)
+
+
+def site_part(table_sites: int) -> float:
+    """How many times the between-site covariance enters the likelihood's: ``1 + 1 / table_sites`` (the survey's site
+    departs from the population of sites by it, the table's mean over its ``table_sites`` sites by a ``1 /
+    table_sites`` of it; docs/calibration.md, "The site")."""
+    return 1.0 + 1.0 / table_sites
+
+
+def _precision(c_obs: np.ndarray, c_sim: np.ndarray, c_site: np.ndarray, table_sites: int) -> tuple:
+    """The likelihood's precision from its covariance's parts, and the parts: ``(precision, c_obs, c_sim,
+    c_site)``."""
     # the survey's one site departs from the population of sites by c_site, the table's mean over its K sites by
     # c_site / K (docs/calibration.md, "The site")
-    table_part = 1.0 / problem.table.sites
-    cov = c_obs + c_sim + (1.0 + table_part) * c_site
+    cov = c_obs + c_sim + site_part(table_sites) * c_site
     cov = cov + np.eye(len(cov)) * 1e-9 * max(float(np.trace(cov)) / len(cov), 1e-30)  # a ridge against rounding
     # a summary that is NaN in a resample (a size with no weight in it) leaves the covariance NaN: the precision is NaN
     # then, as numpy's inverse gave it, every likelihood NaN and no proposal accepted (issue 43 is to treat it)
     precision = numerics.inv(cov) if np.all(np.isfinite(cov)) else np.full_like(cov, np.nan)
-    return SyntheticLikelihood(problem, s_obs, precision, c_obs, c_sim, c_site, n_sites)
+    return precision, c_obs, c_sim, c_site
 
 
 @dataclass
@@ -304,6 +358,42 @@ def _chain(target, problem: Problem, best: np.ndarray, draws: int, seed: int, k:
     return np.asarray(chain[burn:]).reshape(draws, d), lls[burn:], accepted
 
 
+def _chain_task(task: tuple) -> tuple[np.ndarray, list, int]:
+    """:func:`_chain` of one task ``(likelihood, priors, problem, best, draws, seed, k)``, importable (executors)."""
+    like, priors, problem, best, draws, seed, k = task
+
+    def target(theta: np.ndarray) -> tuple[float, float]:
+        return _log_post(like, priors, problem, theta)
+
+    return _chain(target, problem, best, draws, seed, k)
+
+
+def _sample(
+    like: SyntheticLikelihood, priors: Mapping[str, Prior], problem: Problem, best: np.ndarray, draws: int, seed: int,
+    chains: int, executor: Executor | Mapper | None,
+) -> tuple[np.ndarray, list]:  # fmt: skip
+    """``chains`` chains of ``ceil(draws / chains)`` kept draws each on ``executor``: the draws (chains, draws,
+    quantities) and each chain's :func:`_chain` result."""
+    per_chain = -(-draws // chains)
+    tasks = [(like, dict(priors), problem, best, per_chain, seed, k) for k in range(chains)]
+    runs = map_tasks(_chain_task, tasks, executor)  # each chain on its own seed: the same bits wherever it runs
+    return np.stack([r[0] for r in runs]), runs
+
+
+def _relocated(
+    like: SyntheticLikelihood, problem: Problem, kept: np.ndarray, sites: int, executor: Executor | Mapper | None
+) -> SyntheticLikelihood:  # fmt: skip
+    """``like`` with its between-site covariance the mean of :func:`site_covariance` over ``sites`` other sites at
+    each chain's middle draw of ``kept`` (chains, draws, quantities): where the posterior is, not at the fit, which
+    may sit where the site matters little (docs/calibration.md, "The site")."""
+    points = kept[:, kept.shape[1] // 2]
+    parts = [site_covariance(problem, theta, sites, executor) for theta in points]
+    c_site = sum(part[0] for part in parts) / len(parts)
+    precision = _precision(like.covariance_obs, like.covariance_sim, c_site, problem.table.sites)[0]
+    shrink = float(np.mean([part[2] for part in parts]))
+    return dataclasses.replace(like, precision=precision, covariance_site=c_site, shrinkage=shrink, points=len(points))
+
+
 def _quantity(x: np.ndarray, bounds: tuple[float, float], confidence_level: float) -> dict[str, Any]:
     """One quantity's summary of its draws ``x`` (chains, draws): over them all pooled, and its diagnostics."""
     pooled, (lo, hi) = x.ravel(), bounds
@@ -330,17 +420,22 @@ def posterior(
     :data:`~bogie.fleet.calibration.convergence.ESS_MIN`, and what to change if not. The likelihood's covariance
     includes the between-site covariance over ``sites`` other sites (:func:`site_covariance`, weighed on
     ``executor``; 0: none); ``likelihood``: one already made for ``problem`` (:attr:`Posterior.likelihood` of
-    another posterior of it; then ``sites`` and ``executor`` are not used), None: made here."""
+    another posterior of it; then ``sites`` is not used), None: made here. The chains run on ``executor`` too, one
+    task each (:func:`~bogie.fleet.calibration.table.map_tasks`; None: here, one after another): each is seeded
+    alone, so the draws are the same bits wherever they run."""
     if isinstance(chains, bool) or not isinstance(chains, int) or chains < 1:
         raise ValueError(f"chains = {chains!r}: must be a whole number >= 1")
-    like = likelihood if likelihood is not None else synthetic_likelihood(problem, best, seed, sites, executor)
-
-    def target(theta: np.ndarray) -> tuple[float, float]:
-        return _log_post(like, priors, problem, theta)
-
-    per_chain = -(-draws // chains)
-    runs = [_chain(target, problem, best, per_chain, seed, k) for k in range(chains)]
-    kept = np.stack([r[0] for r in runs])  # (chains, draws, quantities)
+    like = likelihood
+    if like is None:
+        like = synthetic_likelihood(problem, best, seed, sites, executor)
+        if (
+            like.sites >= 2
+        ):  # a first, shorter pass finds where the posterior is, the between-site covariance is put there
+            first, _ = _sample(like, priors, problem, best, max(int(draws * FIRST_PASS), 8 * chains), seed, chains,
+                               executor)  # fmt: skip
+            like = _relocated(like, problem, first, sites, executor)
+    kept, runs = _sample(like, priors, problem, best, draws, seed, chains, executor)
+    per_chain = kept.shape[1]
     frame = pd.DataFrame(kept.reshape(chains * per_chain, -1), columns=list(problem.fitted))
     frame.insert(0, "chain", np.repeat(np.arange(chains), per_chain))
     frame["log_likelihood"] = [ll for r in runs for ll in r[1]]
@@ -351,7 +446,7 @@ def posterior(
     flat = "flat over the bounds (no prior given)"
     described = {q: priors[q].describe() if q in priors else flat for q in problem.fitted}
     acceptance = sum(r[2] for r in runs) / (chains * per_chain)
-    between = (1.0 + 1.0 / problem.table.sites) * like.covariance_site
+    between = site_part(problem.table.sites) * like.covariance_site
     parts = {"survey": like.covariance_obs, "table": like.covariance_sim, "between_sites": between}
     # each summary in its own units: the trace of the covariance scaled by the total's diagonal
     scale = np.diag(sum(parts.values()))

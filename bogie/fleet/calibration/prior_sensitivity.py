@@ -44,10 +44,11 @@ def scaled_priors(priors: Mapping[str, Prior], factor: float) -> dict[str, Prior
 
 def prior_sensitivity(
     problem: Problem, priors: Mapping[str, Prior], post: Posterior, best: np.ndarray, draws: int, seed: int,
-    confidence_level: float, chains: int,
+    confidence_level: float, chains: int, executor: Any = None,
 ) -> dict[str, Any] | None:  # fmt: skip
     """The posterior ``post`` of ``problem`` drawn again with the tilt's priors scaled by each of
-    :data:`PRIOR_SCALES` (:func:`scaled_priors`; the same likelihood, seed, ``draws`` and ``chains``): per scale each
+    :data:`PRIOR_SCALES` (:func:`scaled_priors`; the same likelihood, seed, ``draws`` and ``chains``, the chains on
+    ``executor``): per scale each
     fitted quantity's median and interval and whether it converged; per quantity the largest move of its median in
     units of ``post``'s interval width (``moves``); the quantities that move by more than :data:`DEPENDS`
     (``depends_on_prior``), whether any does (``depends``) and a sentence that says so. None when neither tilt prior
@@ -58,7 +59,7 @@ def prior_sensitivity(
     fits, moves = {}, dict.fromkeys(problem.fitted, 0.0)
     for name, factor in PRIOR_SCALES.items():
         again = posterior(problem, scaled_priors(priors, factor), best, draws, seed, confidence_level, chains,
-                          likelihood=post.likelihood)  # fmt: skip
+                          executor=executor, likelihood=post.likelihood)  # fmt: skip
         fits[name] = {
             "tilt_prior_sd_deg": {q: priors[q].b * factor for q in scaled},
             "converged": again.converged,

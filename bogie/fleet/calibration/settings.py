@@ -75,7 +75,7 @@ class CalibrationSettings:
         8, unit="-", low=2, whole=True, doc="Population of the differential evolution, per fitted quantity."
     )
     posterior_draws: int = setting(
-        16_000, unit="-", low=0, whole=True,
+        160_000, unit="-", low=0, whole=True,
         doc="Metropolis draws of the posterior kept, in all chains together (each chain keeps an equal share, rounded "
         "up), a quarter more in each chain adapting its sampler first (0: no posterior; "
         "bogie.fleet.calibration.posterior).",
