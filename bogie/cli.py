@@ -131,23 +131,27 @@ def _weighings_table(survey) -> str:
     road = survey.to_dict()["road"]
     legal = survey.to_dict()["settings"].get("legal_loads_kg", {})
     limits = (
-        f"axles over {legal.get('axle', 10_000.0) / 1000:g} t in groups within their legal load (tandem "
-        f"{legal.get('tandem', 18_000.0) / 1000:g} t, tri-axle {legal.get('triaxle', 24_000.0) / 1000:g} t)"
+        f"axles above the single-axle limit ({legal.get('axle', 10_000.0) / 1000:g} t) within legal groups (tandem "
+        f"{legal.get('tandem', 18_000.0) / 1000:g} t, tri-axle {legal.get('triaxle', 24_000.0) / 1000:g} t): an "
+        "indicator, not an offence (the law weighs a group's axles as one)"
     )
-    lines += ["", "what unequal sharing costs the road (docs/pavement.md): extra pavement wear over the same groups "
-              f"shared equally (k = 4, the fourth power; k = 12, cemented layers), and {limits}:",
-              f"{'group':<8} {'n':>5} {'extra wear k=4':>15} {'k=12':>7} {'per 1000 groups k=4':>20} "
-              f"{'over legal group':>17} {'hidden overload':>16}",
-              f"{'':<8} {'':>5} {'[%]':>15} {'[%]':>7} {'[80 kN axles]':>20} {'[%]':>17} {'[%]':>16}"]  # fmt: skip
+    lines += ["", "what unequal sharing costs the road (docs/pavement.md): its extra pavement wear as a share of "
+              "Austroads' group count (SAR per group, 135 kN a tandem, 181 kN a tri-axle; k = 4 the headline, "
+              "k = 12 cemented layers), the same per axle against equal sharing beside it, and the " + limits + ":",
+              f"{'group':<8} {'n':>5} {'extra k=4':>10} {'per axle':>9} {'k=12':>7} {'per axle':>9} "
+              f"{'per 1000 k=4':>13} {'over legal group':>17} {'axle over in legal':>19}",
+              f"{'':<8} {'':>5} {'[% ESA]':>10} {'[%]':>9} {'[% SAR]':>7} {'[%]':>9} {'[80 kN axles]':>13} "
+              f"{'[%]':>17} {'[%]':>19}"]  # fmt: skip
     for size in SURVEYED:
         e = road[size]
         if not e.get("n_groups"):
-            lines.append(f"{size:<8} {0:>5} {'-':>15} {'-':>7} {'-':>20} {'-':>17} {'-':>16}")
+            lines.append(f"{size:<8} {0:>5} " + " ".join(f"{'-':>{w}}" for w in (10, 9, 7, 9, 13, 17, 19)))
             continue
         lines.append(
-            f"{size:<8} {e['n_groups']:>5} {num(e['extra_wear_overall'], 100, '.2f'):>15} "
-            f"{num(e['extra_wear_cemented'], 100, '.1f'):>7} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>20} "
-            f"{num(e.get('share_group_over'), 100):>17} {num(e['share_hidden_overload'], 100):>16}"
+            f"{size:<8} {e['n_groups']:>5} {num(e.get('extra_wear_group_overall'), 100, '.2f'):>10} "
+            f"{num(e['extra_wear_overall'], 100, '.2f'):>9} {num(e.get('extra_wear_group_cemented'), 100, '.1f'):>7} "
+            f"{num(e['extra_wear_cemented'], 100, '.1f'):>9} {num(e['extra_sa_per_1000_overall'], fmt='.1f'):>13} "
+            f"{num(e.get('share_group_over'), 100):>17} {num(e['share_hidden_overload'], 100):>19}"
         )
     if legal:
         lines.append(f"legal loads: {legal.get('source', '')}")
@@ -178,6 +182,17 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     except OSError as exc:
         print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
         return 2
+    if args.sharing_factors is not None:
+        from bogie.weighings.pavement import sharing_factors, write_sharing_factors
+        from bogie.weighings.wear import DAMAGE_EXPONENTS
+
+        factors = sharing_factors(survey.road, DAMAGE_EXPONENTS, source="observed", position=args.position,
+                                  suspension="as observed")  # fmt: skip
+        try:
+            write_sharing_factors(factors, args.sharing_factors)
+        except OSError as exc:
+            print(f"bogie: error: --sharing-factors {args.sharing_factors}: {exc.strerror or exc}", file=sys.stderr)
+            return 2
     if args.json:
         print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
         return 0
@@ -335,6 +350,9 @@ def _add_weighings(sub) -> None:
         "loads, tolerant of a one-unit offset, and reported with its evidence)",
     )  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
+    weigh.add_argument("--sharing-factors", metavar="FILE", default=None,
+                       help="also write the file's sharing factors for pavement design tools to FILE (csv with a "
+                       "header saying what each column is; docs/pavement.md, 'Sharing factors')")  # fmt: skip
     weigh.set_defaults(func=_cmd_weighings, parser=weigh)
 
 

@@ -9,6 +9,9 @@ survey) and the design experiment (``data/design_runs``, ``data/design``; none w
   laden groups, and the overloads hidden in legal groups, all with intervals
   (:func:`bogie.weighings.wear.wear_statistics`, one definition for both sources; ``observed_wear.csv`` the
   observed side's, by size and position);
+- ``data/road/sharing_factors.csv``: the sharing factors for pavement design tools, per source, protocol, size,
+  position and suspension, at each exponent, with their intervals and a header that says what each column is
+  (:func:`bogie.weighings.pavement.sharing_factors`, ``docs/pavement.md``, "Sharing factors");
 - ``data/road/savings.csv``: what acting would save against today's typical design, paired over the design
   experiment's conditions (:func:`bogie.fleet.road.design_savings`): the best steel design, air suspension, the
   chassis tilt held within the typical design's tolerance;
@@ -32,6 +35,7 @@ import pandas as pd
 from bogie.fleet.road import design_savings, fleet_wear
 from bogie.params import GRAVITY
 from bogie.rounding import json_number
+from bogie.weighings.pavement import sharing_factors, write_sharing_factors
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
@@ -39,7 +43,7 @@ from pipeline.config import load_config
 from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, read_runs
 
-__all__ = ["CONFIDENCE", "RESAMPLES", "main", "observed_wear", "road_metrics"]
+__all__ = ["CONFIDENCE", "RESAMPLES", "factors_table", "main", "observed_wear", "road_metrics"]
 
 #: bootstrap resamples of every interval of the stage [-]
 RESAMPLES = 1000
@@ -56,6 +60,17 @@ def observed_wear(groups: pd.DataFrame, legal_group: Mapping[str, float], legal_
     surveyed = surveyed.assign(group=surveyed["group"].astype(str), position=surveyed["position"].astype(str))
     return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES,
                            confidence_level=CONFIDENCE, seed=seed)  # fmt: skip
+
+
+def factors_table(simulated: pd.DataFrame, observed: pd.DataFrame, observed_kind: str) -> pd.DataFrame:
+    """``data/road/sharing_factors.csv``'s rows (:func:`bogie.weighings.pavement.sharing_factors`): the simulated
+    fleet's trailer groups by protocol, size and suspension, then the observed survey's by size and position (its
+    protocol ``observed_kind``, its suspension as observed)."""
+    parts = [sharing_factors(simulated, DAMAGE_EXPONENTS, source="simulated", position="trailer")]
+    if len(observed):
+        parts.append(sharing_factors(observed, DAMAGE_EXPONENTS, source="observed", protocol=observed_kind,
+                                     suspension="as observed"))  # fmt: skip
+    return pd.concat(parts, ignore_index=True)
 
 
 def road_metrics(
@@ -144,6 +159,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         if len(observed):
             observed.assign(source="observed").to_csv(tmp_dir / "observed_wear.csv", index=False, float_format="%.6g")
         savings.to_csv(tmp_dir / "savings.csv", index=False, float_format="%.6g")
+        write_sharing_factors(factors_table(simulated, observed, config.observed.kind), tmp_dir / "sharing_factors.csv")
     told = "no observed survey" if not len(observed) else f"{int(observed['n_groups'].sum())} observed groups"
     print(
         f"road: {int(simulated['n_groups'].sum())} simulated laden readings, {told}; wrote {args.out}, {args.metrics}"

@@ -3,6 +3,7 @@
 import json
 from pathlib import Path
 
+import pandas as pd
 import pytest
 
 from bogie.cli import main
@@ -67,7 +68,22 @@ def test_the_json_and_the_table_give_what_unequal_sharing_costs_the_road(tmp_pat
     assert main(["weighings", str(path)]) == 0
     table = capsys.readouterr().out
     assert "what unequal sharing costs the road" in table
-    assert f"triaxle      2 {100 * expected:>15.2f}" in table
+    # the headline against Austroads' group count (the per-axle share times 3^-3 (181 / 80)^4 = 0.9705), the per-axle
+    # share beside it
+    group = expected * 3.0**-3 * (181.0 / 80.0) ** 4
+    assert tri["extra_wear_group_overall"] == pytest.approx(group, abs=5e-5)
+    assert f"triaxle      2 {100 * group:>10.2f} {100 * expected:>9.2f}" in table
+    assert "an indicator, not an offence" in table
+    # the sharing factors for pavement tools (issue 44 Must 5): 1 + the extra wear, per axle and against the guide
+    out = tmp_path / "factors.csv"
+    assert main(["weighings", str(path), "--sharing-factors", str(out)]) == 0
+    capsys.readouterr()
+    factors = pd.read_csv(out, comment="#")
+    assert list(factors["group"]) == ["triaxle"] and factors.loc[0, "position"] == "all"
+    assert factors.loc[0, "factor_k4"] == pytest.approx(1.0 + expected, rel=1e-5)
+    assert factors.loc[0, "guide_factor_k4"] == pytest.approx(1.0 + group, rel=1e-5)
+    assert main(["weighings", str(path), "--sharing-factors", str(tmp_path / "no" / "such.csv")]) == 2
+    assert "--sharing-factors" in capsys.readouterr().err and not (tmp_path / "no").exists()
 
 
 def test_the_json_follows_the_filters(capsys):

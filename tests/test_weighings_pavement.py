@@ -1,10 +1,21 @@
 """AASHTO 1993's flexible-pavement load equivalence factors against the guide's published values (issue 44 Must 2),
 and the refusals of bad arguments."""
 
+import math
+
 import numpy as np
+import pandas as pd
 import pytest
 
-from bogie.weighings.pavement import AUSTROADS_GROUP_LOAD_KN, KIPS_PER_KG, aashto_flexible_lef
+from bogie.weighings.pavement import (
+    AUSTROADS_GROUP_LOAD_KN,
+    KIPS_PER_KG,
+    aashto_flexible_lef,
+    group_baseline_factor,
+    sharing_factors,
+    write_sharing_factors,
+)  # fmt: skip
+from bogie.weighings.wear import DAMAGE_EXPONENTS, wear_statistics
 
 
 @pytest.mark.parametrize(
@@ -57,3 +68,48 @@ def test_units_and_the_group_loads():
 def test_bad_arguments_are_refused_by_name(args, words):
     with pytest.raises(ValueError, match=words.replace("(", r"\(").replace(")", r"\)").replace("[", r"\[")):
         aashto_flexible_lef(*args)
+
+
+def test_the_extra_wear_against_austroads_group_baseline_by_hand():
+    # a tandem of 10 t and 8 t: per axle at k = 4 its damage is (98.1 / 80)^4 + (78.48 / 80)^4 = 3.18726 standard axles,
+    # shared equally 2 (88.29 / 80)^4 = 2.96700, so 7.42 % more than equal sharing; Austroads counts the group as
+    # (176.58 / 135)^4 = 2.92703 standard axle repetitions, so the extra is 0.22026 / 2.92703 = 7.53 % of that
+    groups = pd.DataFrame({"group": ["tandem"], "n_axles": [2], "axle_load_1": [10_000.0], "axle_load_2": [8_000.0]})
+    row = wear_statistics(groups, {"tandem": 18_000.0}, 10_000.0, resamples=0).iloc[0]
+    kn = np.array([10_000.0, 8_000.0]) * 9.81 / 1000.0
+    damage, equal = ((kn / 80.0) ** 4).sum(), 2 * (kn.mean() / 80.0) ** 4
+    by_hand = (damage - equal) / (kn.sum() / 135.0) ** 4
+    assert by_hand == pytest.approx(0.07525, abs=5e-5)
+    assert row["extra_wear_group_overall"] == pytest.approx(by_hand, rel=1e-12)
+    assert row["extra_wear_overall"] == pytest.approx(damage / equal - 1.0, rel=1e-12)
+    # at k = 12 the group's count is far above the per-axle equal-sharing baseline: the share is a quarter of it
+    assert group_baseline_factor("tandem", 12) == pytest.approx(2.0**-11 * (135 / 80) ** 12, rel=1e-12)
+    assert group_baseline_factor("tandem", 12) == pytest.approx(0.260, abs=1e-3)
+    assert group_baseline_factor("triaxle", 12) == pytest.approx(0.102, abs=1e-3)
+    assert math.isnan(group_baseline_factor("single", 4))
+
+
+def test_the_sharing_factors_by_hand_and_their_file(tmp_path):
+    # the tandem of 10 t and 8 t: per axle D / D_eq = ((10/9)^4 + (8/9)^4) / 2 = 1.07425; against Austroads' count
+    # 1 + 0.07525 (above)
+    groups = pd.DataFrame({"group": ["tandem"], "n_axles": [2], "axle_load_1": [10_000.0], "axle_load_2": [8_000.0]})
+    wear = wear_statistics(groups, {"tandem": 18_000.0}, 10_000.0, resamples=0)
+    factors = sharing_factors(wear, DAMAGE_EXPONENTS, source="observed", position="trailer", suspension="as observed")
+    row = factors.iloc[0]
+    assert list(factors.columns[:6]) == ["source", "group", "position", "suspension", "n_groups", "factor_k4"]
+    assert row["factor_k4"] == pytest.approx(((10 / 9) ** 4 + (8 / 9) ** 4) / 2, rel=1e-12)
+    assert row["guide_factor_k4"] == pytest.approx(1.07525, abs=5e-5)
+    # at k = 12 the per-axle factor is far above the guide's: the equal-shared baseline is 0.26 of Austroads' count
+    per_axle_12 = ((10 / 9) ** 12 + (8 / 9) ** 12) / 2
+    assert row["factor_k12"] == pytest.approx(per_axle_12, rel=1e-12)
+    assert row["guide_factor_k12"] == pytest.approx(1 + (per_axle_12 - 1) * group_baseline_factor("tandem", 12))
+    path = tmp_path / "factors.csv"
+    write_sharing_factors(factors, path)
+    text = path.read_text()
+    assert text.startswith("# Sharing factors of axle groups") and "guide_factor_k<k> [-]" in text
+    back = pd.read_csv(path, comment="#")
+    assert back.loc[0, "factor_k4"] == pytest.approx(row["factor_k4"], rel=1e-5)  # 6 significant digits
+    assert not list(tmp_path.glob("*.partial"))
+    # an empty survey: the header and the columns, no rows
+    empty = sharing_factors(pd.DataFrame(columns=["group"]), DAMAGE_EXPONENTS, source="observed")
+    assert len(empty) == 0 and "factor_k12_high" in empty.columns

@@ -27,6 +27,7 @@ import pandas as pd
 from numba import njit
 
 from bogie.group_names import GROUP_AXLES, GROUP_NAMES
+from bogie.weighings.pavement import with_group_baseline
 from bogie.weighings.stats import QUANTILES, group_inequality
 from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _LargeCell, _small_cell
 
@@ -350,4 +351,4 @@ def spilled_wear(
             loads, n, legal_of = (np.concatenate(p) for p in zip(*small[c]))
             row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence_level))
         rows.append(row)
-    return pd.DataFrame(rows)
+    return with_group_baseline(pd.DataFrame(rows), exponents)

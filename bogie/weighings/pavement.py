@@ -24,26 +24,36 @@ repetitions at damage exponent ``m``; again the group's total alone.
 from __future__ import annotations
 
 import math
+import os
+from collections.abc import Mapping
+from pathlib import Path
 
 import numpy as np
+import pandas as pd
 from numpy.typing import ArrayLike, NDArray
 
 from bogie import numerics
+from bogie.group_names import GROUP_AXLES
 from bogie.params import GRAVITY
 from bogie.settings import check_value
 
 __all__ = [
     "AUSTROADS_GROUP_LOAD_KN",
-    "GROUP_AXLES",
     "KIPS_PER_KG",
+    "STANDARD_AXLE_KN",
+    "SHARING_FACTORS_HEADER",
     "aashto_flexible_lef",
+    "group_baseline_factor",
+    "sharing_factors",
+    "with_group_baseline",
+    "write_sharing_factors",
 ]
 
 #: Austroads' standard load of each axle group with dual tyres, AGPT02 chapter 7 (Austroads 2006 as tabulated by
 #: weighinmotion.net; the table's number in the guide not read): single 80, tandem 135, tri-axle 181 kN [kN]
 AUSTROADS_GROUP_LOAD_KN: dict[str, float] = {"single": 80.0, "tandem": 135.0, "triaxle": 181.0}
-#: axles of each group, AASHTO's L_2 [-]
-GROUP_AXLES: dict[str, int] = {"single": 1, "tandem": 2, "triaxle": 3}
+#: the standard single axle with dual tyres, AASHO's 18 kips and Austroads' 80 kN [kN]
+STANDARD_AXLE_KN: float = 80.0
 #: a kilogram's weight in kips at the project's g (:data:`bogie.params.GRAVITY`; 1 lbf = 4.4482216152605 N) [kip/kg]
 KIPS_PER_KG: float = GRAVITY / 4448.2216152605
 
@@ -80,3 +90,85 @@ def aashto_flexible_lef(
         + g / _beta(load, axles, structural_number) - g / _beta(np.asarray(18.0), 1, structural_number)
     )  # fmt: skip
     return numerics.power(10.0, -log_ratio)
+
+
+def group_baseline_factor(size: str, k: float) -> float:
+    """What the per-axle equal-sharing damage of a group of ``size`` (``tandem``, ``triaxle``) is in Austroads'
+    group standard axle repetitions at exponent ``k``, whatever its load ``W`` [-]:
+
+        D_eq / D_group = n (W / n / W_s)^k / (W / W_group)^k = n^(1 - k) (W_group / W_s)^k,
+
+    ``W_s`` 80 kN, ``W_group`` :data:`AUSTROADS_GROUP_LOAD_KN`. 1.014 (tandem) and 0.971 (tri-axle) at k = 4, 0.26
+    and 0.10 at k = 12 (``docs/pavement.md``). NaN for a size with no group standard load."""
+    if size not in GROUP_AXLES:
+        return math.nan
+    n = GROUP_AXLES[size]
+    return math.pow(n, 1.0 - k) * math.pow(AUSTROADS_GROUP_LOAD_KN[size] / STANDARD_AXLE_KN, k)
+
+
+def with_group_baseline(frame: pd.DataFrame, exponents: Mapping[str, float]) -> pd.DataFrame:
+    """``frame`` (:func:`bogie.weighings.wear.wear_statistics`' table, with a ``group`` column) with the extra wear
+    against Austroads' group baseline: per exponent name ``<k>``, ``extra_wear_group_<k>`` (and ``_low``, ``_high``)
+    = ``extra_wear_<k>`` x :func:`group_baseline_factor` of the row's group: the extra damage of unequal sharing as a
+    share of what the guide counts for the same groups [-]. Exact for a cell of one size (D - D_eq and D_eq both sum
+    over its groups and D_group = D_eq / the factor for every one of them); NaN for a size with no group load or
+    without a ``group`` column."""
+    out = frame.copy()
+    sizes = out["group"] if "group" in out.columns else pd.Series([None] * len(out), index=out.index)
+    for name, k in exponents.items():
+        factor = np.array([group_baseline_factor(str(g), float(k)) for g in sizes], dtype=float)
+        for tail in ("", "_low", "_high"):
+            column = f"extra_wear_{name}{tail}"
+            values = out[column].to_numpy(dtype=float) if column in out.columns else np.full(len(out), math.nan)
+            out[f"extra_wear_group_{name}{tail}"] = values * factor
+    return out
+
+
+#: the words at the head of a sharing-factors file (:func:`write_sharing_factors`), each line written after "# "
+SHARING_FACTORS_HEADER: tuple[str, ...] = (
+    "Sharing factors of axle groups for pavement design tools (bogie; docs/pavement.md, 'Sharing factors').",
+    "A design tool bins a group's total load (load spectra, ESA/SAR counts) and cannot see how the group shares it.",
+    "factor_k<k> [-]: the group's damage as it shares its load over the same group shared equally, each axle counted",
+    "  as a load of its own, sum_i (W_i/80 kN)^k / (n (W_mean/80 kN)^k), over the groups of the row (ratio of sums).",
+    "guide_factor_k<k> [-]: what multiplies the group's count in Austroads' SAR_k (group loads 135 kN tandem, 181 kN",
+    "  tri-axle): 1 + (D - D_eq) / D_group. At k = 4 the two agree within 3 %; at k = 12 the guide factor is the one",
+    "  to apply to a SAR12 count. _low, _high: the 95 % interval over the groups (bootstrap, or the delta method).",
+    "k: 4 overall (ESA), 5 asphalt fatigue, 7 subgrade rutting, 12 cemented layers (Austroads AGPT02 chapter 7).",
+    "source: simulated (the fleet of params.yaml), observed (a WIM or weighbridge file); protocol: static or wim;",
+    "suspension: steel or air (simulated), 'as observed' (a survey does not say); n_groups [-]: laden groups.",
+    "Limits: a factor holds for the groups, loads and pavements it came from; multiply a group's equivalent damage",
+    "  by it, not its load.",
+)
+
+
+def sharing_factors(wear: pd.DataFrame, exponents: Mapping[str, float], **labels: str) -> pd.DataFrame:
+    """The sharing factors of a wear table by group (:func:`with_group_baseline`'s columns): per row its key
+    columns, ``labels`` as constant columns (e.g. ``source="observed"``), ``n_groups`` and per exponent name with
+    value ``k``: ``factor_k<k>`` = 1 + ``extra_wear_<name>`` (D / D_eq) and ``guide_factor_k<k>`` = 1 +
+    ``extra_wear_group_<name>``, each with ``_low`` and ``_high`` [-] (``SHARING_FACTORS_HEADER`` says what each
+    is)."""
+    keys = [c for c in ("source", "protocol", "group", "position", "suspension") if c in wear.columns or c in labels]
+    out = pd.DataFrame({c: labels[c] if c in labels else wear[c].astype(str) for c in keys}, index=wear.index)
+    out["n_groups"] = wear["n_groups"].to_numpy() if "n_groups" in wear.columns else np.zeros(len(wear), dtype=int)
+    for name, k in exponents.items():
+        for prefix, column in (("factor", f"extra_wear_{name}"), ("guide_factor", f"extra_wear_group_{name}")):
+            for tail in ("", "_low", "_high"):
+                values = wear[column + tail] if column + tail in wear.columns else math.nan
+                out[f"{prefix}_k{k:g}{tail}"] = 1.0 + pd.to_numeric(values)
+    return out.reset_index(drop=True)
+
+
+def write_sharing_factors(frame: pd.DataFrame, path: str | Path) -> None:
+    """Write ``frame`` (:func:`sharing_factors`) to ``path`` as csv after :data:`SHARING_FACTORS_HEADER`, each line
+    a comment ("# "), numbers to 6 significant digits (a spreadsheet shows the comments as the first rows; pandas
+    reads it with ``comment="#"``); written to a ``.partial`` file renamed at the end, so that a failure leaves no
+    partial file."""
+    target = Path(path)
+    partial = target.with_name(target.name + ".partial")  # written whole, then renamed: no partial file is left
+    try:
+        with open(partial, "w", encoding="utf-8", newline="") as fh:
+            fh.writelines(f"# {line}\n" for line in SHARING_FACTORS_HEADER)
+            frame.to_csv(fh, index=False, float_format="%.6g", lineterminator="\n")
+        os.replace(partial, target)
+    finally:
+        partial.unlink(missing_ok=True)

@@ -42,6 +42,7 @@ from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.settings import check_value, refusal
 from bogie.weighings._records import REL_TOL
+from bogie.weighings.pavement import with_group_baseline
 from bogie.weighings.stats import _width, axle_columns
 
 __all__ = [
@@ -205,14 +206,17 @@ def wear_statistics(
         One row per ``by`` value (sorted): ``n_groups`` (groups used), ``n_failed`` (rows left out); per exponent
         name ``<k>``: ``extra_wear_<k>`` (sum D / sum D_eq - 1, the extra wear as a share of the equal-shared
         groups' [-]) and ``extra_sa_per_1000_<k>`` (1000 x the mean of D - D_eq: the extra standard axles of 80 kN
-        per 1,000 groups [-]), each with ``_low`` and ``_high``; ``n_hidden``, ``share_hidden_overload`` (groups
+        per 1,000 groups [-]), each with ``_low`` and ``_high``; when ``by`` has ``group``, ``extra_wear_group_<k>``
+        with ``_low`` and ``_high``, the extra wear against Austroads' group baseline
+        (:func:`bogie.weighings.pavement.with_group_baseline`) [-]; ``n_hidden``, ``share_hidden_overload`` (groups
         within their legal load with an axle over the axle's) with ``_low`` and ``_high``, ``share_group_over``.
     """
     keys = [by] if isinstance(by, str) else list(by)
     width = _checked_width(groups, confidence_level, resamples)
     ok, cell_arrays = _cell_source(groups, width, legal_group, unit_per_kg)
     figures = (exponents, legal_axle, resamples, confidence_level, bootstrap_max_groups)
-    return pd.DataFrame(_cell_rows(groups, keys, ok, cell_arrays, seed, figures))
+    frame = pd.DataFrame(_cell_rows(groups, keys, ok, cell_arrays, seed, figures))
+    return with_group_baseline(frame, exponents) if "group" in keys else frame
 
 
 def _checked_width(groups: pd.DataFrame, confidence_level: float, resamples: int) -> int:

@@ -154,7 +154,7 @@ def simulated(
     moved = steel_weights(table, values)[rows]
     sizes = table.size[rows]
     quantities, weights, sites = {}, {}, {}
-    labels = table.site_labels(rows) if readings_given is False else None
+    labels = None if readings_given else table.site_labels(rows)
     for size, n in SIZES.items():
         sel = sizes == size
         loads = readings[:, sel, :n].reshape(-1, n)

@@ -1,4 +1,5 @@
-"""The page "What unequal sharing costs the road": extra pavement wear and hidden overloads, and what acting saves.
+"""The page "What unequal sharing costs the road": extra pavement wear, axles over the single-axle limit in legal
+groups, and what acting saves.
 
 Everything comes from metrics/road.json (the road stage, ``docs/pavement.md``): the simulated fleet's laden steel
 groups per protocol, the observed survey's (when one is given) and the design experiment's scenarios.
@@ -23,7 +24,7 @@ __all__ = ["DAMAGE_LABEL", "SCENARIO_LABEL", "page", "road_page", "wear_bars"]
 TITLE = "What unequal sharing costs the road"
 #: the damage kinds in the chart's order, with their labels
 DAMAGE_LABEL = {
-    "overall": "overall\n(k = 4, ESA)",
+    "overall": "overall, the headline\n(k = 4, ESA)",
     "asphalt": "asphalt fatigue\n(k = 5)",
     "subgrade": "subgrade rutting\n(k = 7)",
     "cemented": "cemented layers\n(k = 12)",
@@ -51,8 +52,8 @@ def _at(tree: Mapping[str, Any] | None, path: Sequence[str]) -> Mapping[str, Any
 
 
 def wear_bars(ax, m: Mapping[str, Any]) -> list[str]:
-    """The extra wear [%] of each side (:data:`SIDES` present in ``m``) at each damage kind, with its interval;
-    returns the labels drawn."""
+    """The extra wear against Austroads' group baseline [%] of each side (:data:`SIDES` present in ``m``) at each
+    damage kind, with its interval; returns the labels drawn."""
     sides = [(label, _at(m, path), colour) for label, path, colour in SIDES]
     sides = [s for s in sides if s[1] is not None]
     kinds = [k for k in DAMAGE_LABEL if k in m.get("exponents", {})]
@@ -61,16 +62,16 @@ def wear_bars(ax, m: Mapping[str, Any]) -> list[str]:
     for j, (label, entry, colour) in enumerate(sides):
         # a missing figure is NaN (no bar); a zero is a bar of zero, not a missing one
         value, low, high = (
-            np.array([100.0 * (np.nan if entry.get(f"extra_wear_{k}{tail}") is None else entry[f"extra_wear_{k}{tail}"])
-                      for k in kinds])
+            np.array([100.0 * (np.nan if entry.get(f"extra_wear_group_{k}{tail}") is None
+                               else entry[f"extra_wear_group_{k}{tail}"]) for k in kinds])
             for tail in ("", "_low", "_high")
         )  # fmt: skip
         err = np.clip(np.vstack([value - low, high - value]), 0.0, None)
         ax.bar(x + (j - (len(sides) - 1) / 2) * width, value, width * 0.92, yerr=np.nan_to_num(err), color=colour,
                label=f"{label} (n = {entry['n_groups']})", error_kw={"lw": 0.7, "capsize": 1.5})  # fmt: skip
     ax.set_xticks(x, [DAMAGE_LABEL[k] for k in kinds])
-    ax.set_ylabel("extra wear over equal sharing [%]")
-    ax.set_title("Extra pavement wear of laden steel groups, by kind of damage")
+    ax.set_ylabel("extra wear, share of the group count [%]")
+    ax.set_title("Extra wear of unequal sharing, share of Austroads' group count (SAR per group)")
     ax.legend(loc="upper left", fontsize=7)
     ax.grid(axis="y", lw=0.4, alpha=0.6)
     return [s[0] for s in sides]
