@@ -252,7 +252,8 @@ def synthetic_likelihood(
         sim_draws.append(_sim_summaries(problem, sim))
     c_obs, c_sim = (numerics.cov(np.asarray(d)) for d in (obs_draws, sim_draws))
     c_site, n_sites, shrink = site_covariance(problem, best, sites, executor)
-    return SyntheticLikelihood(problem, s_obs, *_precision(c_obs, c_sim, c_site, problem.table.sites), n_sites, shrink)
+    precision = _precision(c_obs, c_sim, c_site, problem.table.sites)
+    return SyntheticLikelihood(problem, s_obs, precision, c_obs, c_sim, c_site, n_sites, shrink)
 
 
 def site_part(table_sites: int) -> float:
@@ -262,9 +263,8 @@ def site_part(table_sites: int) -> float:
     return 1.0 + 1.0 / table_sites
 
 
-def _precision(c_obs: np.ndarray, c_sim: np.ndarray, c_site: np.ndarray, table_sites: int) -> tuple:
-    """The likelihood's precision from its covariance's parts, and the parts: ``(precision, c_obs, c_sim,
-    c_site)``."""
+def _precision(c_obs: np.ndarray, c_sim: np.ndarray, c_site: np.ndarray, table_sites: int) -> np.ndarray:
+    """The likelihood's precision from its covariance's parts."""
     # the survey's one site departs from the population of sites by c_site, the table's mean over its K sites by
     # c_site / K (docs/calibration.md, "The site")
     cov = c_obs + c_sim + site_part(table_sites) * c_site
@@ -272,7 +272,7 @@ def _precision(c_obs: np.ndarray, c_sim: np.ndarray, c_site: np.ndarray, table_s
     # a summary that is NaN in a resample (a size with no weight in it) leaves the covariance NaN: the precision is NaN
     # then, as numpy's inverse gave it, every likelihood NaN and no proposal accepted (issue 43 is to treat it)
     precision = numerics.inv(cov) if np.all(np.isfinite(cov)) else np.full_like(cov, np.nan)
-    return precision, c_obs, c_sim, c_site
+    return precision
 
 
 @dataclass
@@ -389,7 +389,7 @@ def _relocated(
     points = kept[:, kept.shape[1] // 2]
     parts = [site_covariance(problem, theta, sites, executor) for theta in points]
     c_site = sum(part[0] for part in parts) / len(parts)
-    precision = _precision(like.covariance_obs, like.covariance_sim, c_site, problem.table.sites)[0]
+    precision = _precision(like.covariance_obs, like.covariance_sim, c_site, problem.table.sites)
     shrink = float(np.mean([part[2] for part in parts]))
     return dataclasses.replace(like, precision=precision, covariance_site=c_site, shrinkage=shrink, points=len(points))
 
