@@ -13,7 +13,15 @@ from test_fleet_tilted import BUSH, FIT, RADIUS, TILT, TRUTH, radius_survey, rad
 from bogie.fleet.calibration import fitting as F
 from bogie.fleet.calibration import posterior as P
 from bogie.fleet.calibration import problem as L
-from bogie.fleet.calibration.priors import TILT_MIX, TILT_PRIOR_SD_DEG, Prior, default_priors, log_prior, tilt_mixture
+from bogie.fleet.calibration.priors import (
+    TILT_MIX,
+    TILT_PRIOR_SD_DEG,
+    Prior,
+    default_priors,
+    log_prior,
+    prior_draws,
+    tilt_mixture,
+)
 from bogie.fleet.constants import CALIBRATION_QUANTITIES, PILED
 
 
@@ -67,6 +75,37 @@ def test_the_priors_log_densities_are_their_closed_forms():
     for bad in (("normal", 0.0, 0.0), ("uniform", 1.0, 1.0), ("loguniform", 0.0, 1.0), ("beta", 1.0, 2.0)):
         with pytest.raises(ValueError, match="must be one of"):
             Prior(*bad, "s")
+
+
+def test_points_drawn_from_the_priors_follow_them_within_the_bounds():
+    # 40,000 points of four quantities, each against its truncated distribution's closed form: a normal N(0, 0.65)
+    # cut to [-1.5, 1.5] (alpha = 2.308: mean 0, variance 0.65^2 (1 - 2 alpha phi(alpha) / (2 Phi(alpha) - 1)) =
+    # 0.3728, sd 0.6106); a log-uniform on [3, 3000] within bounds [10, 100] (ln x uniform on [ln 10, ln 100]: mean
+    # 3.4539, sd (ln 10) / sqrt 12 = 0.6647); a log-normal of median 2 and sigma 0.5 cut to [1, 4] (ln(x/2) ~ N(0,
+    # 0.5) cut at -+ln 2 = -+1.386 sd: mean 0 in the log); a quantity without a prior: uniform on [0, 1]
+    priors = {
+        "a": Prior("normal", 0.0, 0.65, "test"),
+        "b": Prior("loguniform", 3.0, 3000.0, "test"),
+        "c": Prior("lognormal", 2.0, 0.5, "test"),
+    }
+    names, bounds = ["a", "b", "c", "d"], [(-1.5, 1.5), (10.0, 100.0), (1.0, 4.0), (0.0, 1.0)]
+    x = prior_draws(priors, names, bounds, 40_000, np.random.default_rng(1))
+    assert all(np.all((x[:, i] >= lo) & (x[:, i] <= hi)) for i, (lo, hi) in enumerate(bounds))
+    se = 1.0 / math.sqrt(40_000)  # a mean's standard error per unit sd
+    alpha = 1.5 / 0.65
+    phi, big_phi = math.exp(-alpha * alpha / 2) / math.sqrt(2 * math.pi), 0.5 * (1 + math.erf(alpha / math.sqrt(2)))
+    sd_a = 0.65 * math.sqrt(1 - 2 * alpha * phi / (2 * big_phi - 1))
+    assert abs(x[:, 0].mean()) < 4 * se * sd_a and x[:, 0].std() == pytest.approx(sd_a, rel=0.02)
+    logs = np.log(x[:, 1])
+    assert abs(logs.mean() - math.log(1000.0) / 2) < 4 * se * 0.6647 and logs.std() == pytest.approx(0.6647, rel=0.02)
+    assert abs(np.log(x[:, 2] / 2.0).mean()) < 4 * se * 0.5
+    assert abs(x[:, 3].mean() - 0.5) < 4 * se * math.sqrt(1 / 12)
+    # seeded: the same points again; bounds that hold none of a prior's mass are an error that names the quantity
+    assert np.array_equal(x[:5], prior_draws(priors, names, bounds, 5, np.random.default_rng(1)))
+    with pytest.raises(ValueError, match="b: its bounds \\[4000, 5000\\] hold none of its prior loguniform"):
+        prior_draws(priors, ["b"], [(4000.0, 5000.0)], 1, np.random.default_rng(1))
+    with pytest.raises(ValueError, match="a: its bounds \\[20, 30\\]"):
+        prior_draws(priors, ["a"], [(20.0, 30.0)], 1, np.random.default_rng(1))
 
 
 def test_the_summaries_by_hand():

@@ -24,7 +24,7 @@ from bogie.fleet.calibration import posterior as P
 from bogie.fleet.calibration import problem as L
 from bogie.fleet.calibration import table as T
 from bogie.fleet.calibration.prior_sensitivity import DEPENDS, prior_sensitivity, scaled_priors
-from bogie.fleet.calibration.priors import SITE_BIAS_SD_PCT, default_priors
+from bogie.fleet.calibration.priors import SITE_BIAS_SD_PCT, default_priors, prior_draws
 from bogie.fleet.calibration.site import SPEED_CLIP, SPEED_SD_M_S, Site, bogie_speeds, on_site, site_of
 from bogie.fleet.sampling.seeds import site_seed, speed_normal
 
@@ -300,10 +300,10 @@ def test_the_shrinkage_of_the_between_site_correlations_by_hand():
     assert P.shrinkage_intensity(common + 0.3 * rng.standard_normal((400, 11))) < 0.05
 
 
-def test_the_between_site_covariance_is_placed_where_a_first_pass_finds_the_posterior(monkeypatch):
-    # the covariance at the fit may sit where the site matters little (a prior-free minimum at a corner): a first pass
-    # of a quarter of the draws is run with it, then the covariance is the mean over that pass's chains' middle draws.
-    # A stand-in covariance that grows with the first quantity tells where it was evaluated
+def test_the_between_site_covariance_is_averaged_over_points_drawn_from_the_priors(monkeypatch):
+    # the covariance at the fit may sit where the site matters little (a prior-free minimum at a corner): it is the
+    # mean over SITE_POINTS points drawn from the priors, wherever the fit is. A stand-in covariance that grows with
+    # the first quantity tells where it was evaluated
     problem = L.make_problem(analytic_table(), synthetic_observed(400), FIT, L.base_values(TILT, 0.0, None))
     d = len(P.summaries(problem.obs, problem.unit_weights()))
     priors = F.priors_for(problem, L.CalibrationSettings(FIT, seed=3))
@@ -311,19 +311,26 @@ def test_the_between_site_covariance_is_placed_where_a_first_pass_finds_the_post
     where = []
 
     def stand_in(problem_, theta, sites, executor=None):
+        if sites < 2:  # the likelihood at the fit, made without a site (the real one gives zeros)
+            return np.zeros((d, d)), 0, 0.0
         where.append(np.array(theta, dtype=float))
-        return np.eye(d) * 1e-6 * (1.0 + float(theta[0]) ** 2), sites, 0.25
+        return np.eye(d) * 1e-6 * (1.0 + float(theta[0]) ** 2), sites - len(where) % 2, 0.25 + 0.01 * len(where)
 
     monkeypatch.setattr(P, "site_covariance", stand_in)
     post = P.posterior(problem, priors, best, 800, 3, 0.9, chains=4, sites=16)
-    assert len(where) == 5 and np.array_equal(where[0], best)  # at the fit, then at the 4 chains' middle draws
-    # the first pass again: 200 draws, 50 a chain, from the likelihood at the fit
-    first, _ = P._sample(P.synthetic_likelihood(problem, best, 3, 16), priors, problem, best, 200, 3, 4, None)
-    assert all(np.array_equal(w, first[k, 25]) for k, w in enumerate(where[1:5]))
-    assert not any(np.array_equal(w, best) for w in where[1:5])
-    expected = sum(np.eye(d) * 1e-6 * (1.0 + float(w[0]) ** 2) for w in where[1:5]) / 4
-    assert np.array_equal(post.likelihood.covariance_site, expected) and post.likelihood.points == 4
-    assert post.likelihood.shrinkage == 0.25 and post.sites == 16
+    assert len(where) == P.SITE_POINTS == 8 and not any(np.array_equal(w, best) for w in where)
+    rng = np.random.default_rng(np.random.SeedSequence(3, spawn_key=(5,)))
+    drawn = prior_draws(priors, list(problem.fitted), list(problem.bounds), 8, rng)
+    assert np.array_equal(np.asarray(where), drawn)
+    assert len({round(float(w[0]), 9) for w in where}) == 8  # eight different fleets, not one
+    expected = sum(np.eye(d) * 1e-6 * (1.0 + float(w[0]) ** 2) for w in where) / 8
+    assert np.array_equal(post.likelihood.covariance_site, expected) and post.likelihood.points == 8
+    # the mean shrinkage, and the fewest sites any point kept (15 at the odd calls)
+    assert post.likelihood.shrinkage == pytest.approx(0.25 + 0.01 * 4.5, rel=1e-12) and post.sites == 15
+    # the precision is the one of the covariance's parts with the averaged site's
+    like = post.likelihood
+    precision = P._precision(like.covariance_obs, like.covariance_sim, expected, problem.table.sites)
+    assert np.array_equal(like.precision, precision)
     # a likelihood given is used as it is: no first pass, no other covariance
     again = P.posterior(problem, priors, best, 800, 3, 0.9, chains=4, likelihood=post.likelihood)
-    assert len(where) == 6 and again.likelihood is post.likelihood
+    assert len(where) == 8 and again.likelihood is post.likelihood

@@ -7,9 +7,10 @@ mean and sd of the spread). Their sampling distribution is taken as normal (Wood
 et al. 2018): ``s_obs ~ N(s(theta), S)``, ``s(theta)`` the calibration fleet's summaries at ``theta`` (from the
 table, :func:`bogie.fleet.calibration.problem.simulated`), and ``S = S_obs + S_sim`` the summaries' covariance under a
 bootstrap of the observed groups (the survey's sampling error) plus under a bootstrap of the calibration bogies at
-the fit (the table's Monte Carlo error), both estimated once; for a WIM table on a shared site, plus twice the
-summaries' covariance between sites (:func:`site_covariance`: the survey's site and the table's are two draws of the
-sites it could have been made at; issue 43 Must 2). A fixed covariance is the usual simplification; the summaries'
+the fit (the table's Monte Carlo error), both estimated once; for a WIM table on a shared site, plus ``1 + 1/K``
+times the summaries' covariance between sites (:func:`site_covariance`: the survey's site and the table's K are
+draws of the sites it could have been made at; issue 43 Must 2), averaged over points drawn from the priors
+(:func:`prior_site_covariance`). A fixed covariance is the usual simplification; the summaries'
 covariance changes little across the posterior's width.
 
 The sampler: several chains of random-walk Metropolis (:data:`CHAINS` by default), the first from the fit, the others
@@ -34,7 +35,7 @@ import pandas as pd
 
 from bogie import numerics
 from bogie.fleet.calibration.convergence import ESS_MIN, RHAT_MAX, THRESHOLDS_SOURCE, advice, diagnostics
-from bogie.fleet.calibration.priors import Prior, log_prior
+from bogie.fleet.calibration.priors import Prior, log_prior, prior_draws
 from bogie.fleet.calibration.problem import Problem, _values, simulated
 from bogie.fleet.calibration.settings import CalibrationSettings
 from bogie.fleet.calibration.site import site_of
@@ -51,8 +52,8 @@ from bogie.fleet.constants import AT_BOUND, PILED
 from bogie.intervals import percentile_interval
 
 __all__ = [
-    "BOOTSTRAP", "CHAINS", "FIRST_PASS", "SITE_BOGIES", "START_TRIES", "Posterior", "posterior", "shrinkage_intensity",
-    "site_bogies", "site_covariance", "site_part", "summaries", "synthetic_likelihood",
+    "BOOTSTRAP", "CHAINS", "SITE_BOGIES", "SITE_POINTS", "START_TRIES", "Posterior", "posterior", "shrinkage_intensity",
+    "prior_site_covariance", "site_bogies", "site_covariance", "site_part", "summaries", "synthetic_likelihood",
 ]  # fmt: skip
 
 #: bootstrap resamples of each side for the summaries' covariance [-]; a convention (no source), like the sampler's
@@ -70,9 +71,10 @@ START_TRIES = 100
 #: covariance of so few bogies' summaries across sites includes their own interaction with the site, so it is, if
 #: anything, too wide (docs/calibration.md, "The site")
 SITE_BOGIES = 32
-#: the first pass's draws, a share of the posterior's, whose chains' middle draws place the between-site covariance
-#: (:func:`posterior`) [-]: a convention (enough to leave the fit; a chain's middle draw is past its burn-in)
-FIRST_PASS = 0.25
+#: points drawn from the priors at which the between-site covariance is estimated, its mean over them entering the
+#: likelihood (:func:`prior_site_covariance`) [-]: a convention, measured on the bench's three surveys
+#: (bench/README.md); each costs a site study (2 x SITE_BOGIES bogies x 2 suspensions x ``sites`` weighings)
+SITE_POINTS = 8
 
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
@@ -125,7 +127,7 @@ class SyntheticLikelihood:
     # the table's K sites' mean)
     sites: int = 0  # the other sites it was estimated on
     shrinkage: float = 0.0  # how far its correlations were shrunk towards none (shrinkage_intensity) [-]
-    points: int = 1  # the posterior draws it was averaged over (1: at the fit alone; see posterior)
+    points: int = 1  # the points drawn from the priors it was averaged over (1: at the fit alone; see posterior)
 
     def simulated(self, theta: np.ndarray) -> np.ndarray:
         p = self.problem
@@ -380,18 +382,22 @@ def _sample(
     return np.stack([r[0] for r in runs]), runs
 
 
-def _relocated(
-    like: SyntheticLikelihood, problem: Problem, kept: np.ndarray, sites: int, executor: Executor | Mapper | None
-) -> SyntheticLikelihood:  # fmt: skip
-    """``like`` with its between-site covariance the mean of :func:`site_covariance` over ``sites`` other sites at
-    each chain's middle draw of ``kept`` (chains, draws, quantities): where the posterior is, not at the fit, which
-    may sit where the site matters little (docs/calibration.md, "The site")."""
-    points = kept[:, kept.shape[1] // 2]
-    parts = [site_covariance(problem, theta, sites, executor) for theta in points]
+def prior_site_covariance(
+    problem: Problem, priors: Mapping[str, Prior], sites: int, seed: int, executor: Executor | Mapper | None = None,
+    points: int = SITE_POINTS,
+) -> tuple[np.ndarray, int, float, np.ndarray]:  # fmt: skip
+    """The between-site covariance averaged over the fleets the priors allow: the mean of :func:`site_covariance`
+    over ``sites`` other sites at ``points`` points drawn from ``priors`` within ``problem``'s bounds
+    (:func:`bogie.fleet.calibration.priors.prior_draws`, seeded by spawn key (5,) of ``seed``). The site's effect
+    depends on the fleet (air-sprung groups share equally on any road), and at the fit, a prior-free minimum, it
+    may be a quarter of its size at the truth (docs/calibration.md, "The site"); averaged over the prior it does not
+    depend on where the fit lands. Returned with the fewest sites any point kept, the mean shrinkage and the
+    points."""
+    rng = np.random.default_rng(np.random.SeedSequence(seed, spawn_key=(5,)))
+    at = prior_draws(priors, list(problem.fitted), list(problem.bounds), points, rng)
+    parts = [site_covariance(problem, theta, sites, executor) for theta in at]
     c_site = sum(part[0] for part in parts) / len(parts)
-    precision = _precision(like.covariance_obs, like.covariance_sim, c_site, problem.table.sites)
-    shrink = float(np.mean([part[2] for part in parts]))
-    return dataclasses.replace(like, precision=precision, covariance_site=c_site, shrinkage=shrink, points=len(points))
+    return c_site, min(part[1] for part in parts), float(np.mean([part[2] for part in parts])), at
 
 
 def _quantity(x: np.ndarray, bounds: tuple[float, float], confidence_level: float) -> dict[str, Any]:
@@ -418,22 +424,23 @@ def posterior(
     its draws adapting its proposal and dropped; credible intervals at ``confidence_level`` over all chains; R-hat and
     ESS per quantity, whether they meet :data:`~bogie.fleet.calibration.convergence.RHAT_MAX` and
     :data:`~bogie.fleet.calibration.convergence.ESS_MIN`, and what to change if not. The likelihood's covariance
-    includes the between-site covariance over ``sites`` other sites (:func:`site_covariance`, weighed on
-    ``executor``; 0: none); ``likelihood``: one already made for ``problem`` (:attr:`Posterior.likelihood` of
-    another posterior of it; then ``sites`` is not used), None: made here. The chains run on ``executor`` too, one
+    includes the between-site covariance over ``sites`` other sites averaged over :data:`SITE_POINTS` points drawn
+    from the priors (:func:`prior_site_covariance`, weighed on ``executor``; 0: none); ``likelihood``: one already
+    made for ``problem`` (:attr:`Posterior.likelihood` of another posterior of it; then ``sites`` is not used), None:
+    made here. The chains run on ``executor`` too, one
     task each (:func:`~bogie.fleet.calibration.table.map_tasks`; None: here, one after another): each is seeded
     alone, so the draws are the same bits wherever they run."""
     if isinstance(chains, bool) or not isinstance(chains, int) or chains < 1:
         raise ValueError(f"chains = {chains!r}: must be a whole number >= 1")
     like = likelihood
     if like is None:
-        like = synthetic_likelihood(problem, best, seed, sites, executor)
-        if (
-            like.sites >= 2
-        ):  # a first, shorter pass finds where the posterior is, the between-site covariance is put there
-            first, _ = _sample(like, priors, problem, best, max(int(draws * FIRST_PASS), 8 * chains), seed, chains,
-                               executor)  # fmt: skip
-            like = _relocated(like, problem, first, sites, executor)
+        like = synthetic_likelihood(problem, best, seed, 0, executor)
+        if sites >= 2:  # (a table without a shared site gives zeros: site_covariance)
+            c_site, n_sites, shrink, at = prior_site_covariance(problem, priors, sites, seed, executor)
+            precision = _precision(like.covariance_obs, like.covariance_sim, c_site, problem.table.sites)
+            like = dataclasses.replace(
+                like, precision=precision, covariance_site=c_site, sites=n_sites, shrinkage=shrink, points=len(at)
+            )  # fmt: skip
     kept, runs = _sample(like, priors, problem, best, draws, seed, chains, executor)
     per_chain = kept.shape[1]
     frame = pd.DataFrame(kept.reshape(chains * per_chain, -1), columns=list(problem.fitted))
