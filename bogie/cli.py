@@ -130,10 +130,14 @@ def _weighings_table(survey) -> str:
             lines.append(f"{size:<8} {axle.removeprefix('axle_'):>4} {values}")
     road = survey.to_dict()["road"]
     legal = survey.to_dict()["settings"].get("legal_loads_kg", {})
+    axle = f"{legal['axle'] / 1000:g} t" if "axle" in legal else "10 t, 11.5 t in a drive group"
+    groups = (
+        f"tandem {legal['tandem'] / 1000:g} t, tri-axle {legal['triaxle'] / 1000:g} t" if "tandem" in legal
+        else "96/53/EC's by each group's position and spacing"
+    )  # fmt: skip
     limits = (
-        f"axles above the single-axle limit ({legal.get('axle', 10_000.0) / 1000:g} t) within legal groups (tandem "
-        f"{legal.get('tandem', 18_000.0) / 1000:g} t, tri-axle {legal.get('triaxle', 24_000.0) / 1000:g} t): an "
-        "indicator, not an offence (the law weighs a group's axles as one)"
+        f"axles above the single-axle limit ({axle}) within legal groups ({groups}): an indicator, not an offence "
+        "(the law weighs a group's axles as one)"
     )
     lines += ["", "what unequal sharing costs the road (docs/pavement.md): its extra pavement wear as a share of "
               "Austroads' group count (SAR per group, 135 kN a tandem, 181 kN a tri-axle; k = 4 the headline, "
@@ -159,7 +163,8 @@ def _weighings_table(survey) -> str:
 
 
 def _legal_groups(args: argparse.Namespace) -> dict[str, float] | None:
-    """The legal group loads given on the command line, the directive's for a size not given; None if none was."""
+    """The legal group loads given on the command line, the directive's trailer limit for a size not given (a stated
+    single limit for each size); None if none was: 96/53/EC's by each group's position and spacing."""
     from bogie.weighings.wear import EU_LEGAL_GROUP_KG
 
     given = {"tandem": args.legal_tandem_kg, "triaxle": args.legal_triaxle_kg}
@@ -336,13 +341,14 @@ def _add_weighings(sub) -> None:
     for size, what in (("tandem", "a tandem group's"), ("triaxle", "a tri-axle group's")):
         weigh.add_argument(
             f"--legal-{size}-kg", type=_range(f"--legal-{size}-kg", 1000.0, 100_000.0, "kg"), default=None,
-            help=f"{what} legal load for the overload figures [kg] (default: Directive 96/53/EC's trailer limit, "
-            f"{'18,000' if size == 'tandem' else '24,000'} kg)",
+            help=f"{what} legal load, one for every position and spacing [kg] (default: Directive 96/53/EC's by each "
+            "group's position and spacing, docs/pavement.md; given for one size only, the other is the directive's "
+            f"trailer limit, {'24,000' if size == 'tandem' else '18,000'} kg)",
         )  # fmt: skip
     weigh.add_argument(
-        "--legal-axle-kg", type=_range("--legal-axle-kg", 1000.0, 50_000.0, "kg"), default=10_000.0,
-        help="a single axle's legal load for the hidden overloads [kg] (default: Directive 96/53/EC's 10,000 kg); "
-        "a US file: 23 CFR 658.17's 20,000 lb is 9,071.847 kg",
+        "--legal-axle-kg", type=_range("--legal-axle-kg", 1000.0, 50_000.0, "kg"), default=None,
+        help="a single axle's legal load, one for every position [kg] (default: Directive 96/53/EC's, 11,500 kg in "
+        "a drive group, 10,000 kg elsewhere); a US file: 23 CFR 658.17's 20,000 lb is 9,071.847 kg",
     )  # fmt: skip
     weigh.add_argument(
         "--resolution-kg", type=_range("--resolution-kg", 0.0, 1000.0, "kg"), default=None,

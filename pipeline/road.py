@@ -6,7 +6,8 @@ survey) and the design experiment (``data/design_runs``, ``data/design``; none w
 - ``data/road/wear.csv``: per source (``simulated`` with its protocol, ``observed``), group size, position and
   suspension: the extra pavement wear that unequal sharing causes over the same groups shared equally, at each
   damage exponent (:data:`bogie.weighings.wear.DAMAGE_EXPONENTS`), as a share and as extra standard axles per 1,000
-  laden groups, and the overloads hidden in legal groups, all with intervals
+  laden groups, and the axles above the single-axle limit within legal groups (an indicator, not an offence), all
+  with intervals
   (:func:`bogie.weighings.wear.wear_statistics`, one definition for both sources; ``observed_wear.csv`` the
   observed side's, by size and position);
 - ``data/road/sharing_factors.csv``: the sharing factors for pavement design tools, per source, protocol, size,
@@ -16,6 +17,11 @@ survey) and the design experiment (``data/design_runs``, ``data/design``; none w
   experiment's conditions (:func:`bogie.fleet.road.design_savings`): the best steel design, air suspension, the
   chassis tilt held within the typical design's tolerance;
 - ``metrics/road.json``: the same figures, nested, with the legal loads and exponents used.
+
+The legal loads are Directive 96/53/EC's by each group's position and spacing (:mod:`bogie.weighings.legal`): an
+observed group's from its own; the simulated fleet's are semi-trailer bogies, judged as trailer groups at their base
+bogie's axle spacing (``fleet.presets``). ``fleet.legal_group_load_t`` is the load the fleet is laden to (its design
+payload), not the limit it is judged against (the two agree for the default presets, 1.31 m apart: 18 and 24 t).
 
 Laden groups are those of at least ``observed.min_group_load_t``, the filter the observed page applies to both
 sides. The method, sources and assumptions are in ``docs/pavement.md``.
@@ -30,11 +36,13 @@ from collections.abc import Mapping, Sequence
 from pathlib import Path
 from typing import Any
 
+import numpy as np
 import pandas as pd
 
+from bogie.bogie_file import base_bogie
 from bogie.fleet.road import design_savings, fleet_wear
-from bogie.params import GRAVITY
 from bogie.rounding import json_number
+from bogie.weighings.legal import EU_SOURCE, group_limits, spacing_step_m
 from bogie.weighings.pavement import sharing_factors, write_sharing_factors
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
@@ -43,7 +51,7 @@ from pipeline.config import load_config
 from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, read_runs
 
-__all__ = ["CONFIDENCE", "RESAMPLES", "factors_table", "main", "observed_wear", "road_metrics"]
+__all__ = ["CONFIDENCE", "RESAMPLES", "factors_table", "fleet_limits", "main", "observed_wear", "road_metrics"]
 
 #: bootstrap resamples of every interval of the stage [-]
 RESAMPLES = 1000
@@ -51,15 +59,28 @@ RESAMPLES = 1000
 CONFIDENCE = 0.95
 
 
-def observed_wear(groups: pd.DataFrame, legal_group: Mapping[str, float], legal_axle: float, seed: int) -> pd.DataFrame:
+def fleet_limits(presets: Mapping[str, str]) -> tuple[dict[str, float], float]:
+    """The legal group load of each size of a simulated fleet of semi-trailer bogies and its single-axle limit [kg]:
+    96/53/EC's for a trailer group at its base bogie's axle spacing (``presets``: size -> preset or bogie file)."""
+    rows = []
+    for group, name in presets.items():
+        gaps = np.diff(base_bogie(name).axle_x)
+        rows.append({"group": group, "position": "trailer", "spacing_1": float(gaps[0]),
+                     "spacing_2": float(gaps[1]) if len(gaps) > 1 else float("nan")})  # fmt: skip
+    group_kg, axle_kg = group_limits(pd.DataFrame(rows))
+    return dict(zip(presets, (float(v) for v in group_kg))), float(axle_kg[0])
+
+
+def observed_wear(groups: pd.DataFrame, seed: int, spacing_step: float = 0.0) -> pd.DataFrame:
     """:func:`bogie.weighings.wear.wear_statistics` of the observed tandems and tri-axles (loads in kg), by size and
-    position; an empty table without a survey."""
+    position, judged by 96/53/EC's limits by position and spacing (read at ``spacing_step`` [m]:
+    :func:`bogie.weighings.formats.spacing_step_m`); an empty table without a survey."""
     surveyed = groups[groups["group"].astype(str).isin(SURVEYED)] if len(groups) else groups
     if not len(surveyed):
         return pd.DataFrame()
     surveyed = surveyed.assign(group=surveyed["group"].astype(str), position=surveyed["position"].astype(str))
-    return wear_statistics(surveyed, legal_group, legal_axle, by=["group", "position"], resamples=RESAMPLES,
-                           confidence_level=CONFIDENCE, seed=seed)  # fmt: skip
+    return wear_statistics(surveyed, None, None, by=["group", "position"], resamples=RESAMPLES,
+                           confidence_level=CONFIDENCE, seed=seed, spacing_step_m=spacing_step)  # fmt: skip
 
 
 def factors_table(simulated: pd.DataFrame, observed: pd.DataFrame, observed_kind: str) -> pd.DataFrame:
@@ -82,10 +103,16 @@ def road_metrics(
     min_group_load: float,
     design_note: str | None,
 ) -> dict[str, Any]:
-    """metrics/road.json: the settings, the simulated and observed figures and the savings, NaN as null."""
+    """metrics/road.json: the settings, the simulated and observed figures and the savings, NaN as null;
+    ``legal_group``, ``legal_axle``: the simulated fleet's limits [kg] (:func:`fleet_limits`)."""
     return {
         "legal_group_load_kg": {k: json_number(v, 1) for k, v in legal_group.items()},
         "legal_axle_load_kg": json_number(legal_axle, 1),
+        "legal_loads": {
+            "source": EU_SOURCE,
+            "simulated": "trailer groups at the base bogie's axle spacing",
+            "observed": "each group by its own position and spacing",
+        },  # fmt: skip
         "min_group_load_kg": json_number(min_group_load, 1),
         "standard_axle_kg": json_number(STANDARD_AXLE_KG, 1),
         "exponents": dict(DAMAGE_EXPONENTS),
@@ -95,6 +122,16 @@ def road_metrics(
         "savings": wear_dict(savings, ["group", "scenario"]) if len(savings) else None,
         "savings_note": design_note,
     }
+
+
+def _spacing_step(path: Path) -> float:
+    """The step the observed file's spacings were read at [m]: its format's, as the observed stage's metrics name it
+    (a KeyError naming the key, or OSError, if they do not)."""
+    with open(path, encoding="utf-8") as fh:
+        read = json.load(fh).get("observed") or {}
+    if "format" not in read:
+        raise KeyError(f"{path}: observed.format (the format the survey was read in): rerun the observed stage")
+    return spacing_step_m(read["format"])
 
 
 def _design_inputs(config, design_runs: Path, design_dir: Path) -> tuple[pd.DataFrame, pd.DataFrame, Any] | None:
@@ -118,6 +155,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--observed", default="data/observed", help="observed groups (default: data/observed)")
     parser.add_argument("--design-runs", default="data/design_runs", help="default: data/design_runs")
     parser.add_argument("--design", default="data/design", help="design tables (default: data/design)")
+    parser.add_argument("--observed-metrics", default="metrics/observed.json",
+                        help="the observed stage's metrics, for the format its file was read in (default: "
+                        "metrics/observed.json)")  # fmt: skip
     parser.add_argument("--out", default="data/road", help="output directory (default: data/road)")
     parser.add_argument("--metrics", default="metrics/road.json", help="default: metrics/road.json")
     args = parser.parse_args(argv)
@@ -128,8 +168,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     """The stage's work while it owns its outputs: read, compute, write; the exit code."""
     with stage_inputs("road", KeyError):
         config = load_config(args.params)
-        legal_group = {g: float(v) / GRAVITY for g, v in config.fleet.legal_group_load.items()}
-        legal_axle = float(config.fleet.legal_axle_load) / GRAVITY
+        legal_group, legal_axle = fleet_limits(config.fleet.presets)
         min_load = float(config.observed.min_group_load)
         groups_file = Path(args.observed) / "groups.parquet"
         if config.observed.path is not None and not groups_file.is_file():
@@ -140,10 +179,11 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         runs = read_runs(args.runs, SURVEY_STUDY)
         rerun = "delete it and rerun the observed stage"
         groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
+        step = _spacing_step(Path(args.observed_metrics)) if len(groups) else 0.0
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
     simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence_level=CONFIDENCE,
                            seed=config.seed)  # fmt: skip
-    observed = observed_wear(groups, legal_group, legal_axle, config.seed)
+    observed = observed_wear(groups, config.seed, step)
     if design is None:
         savings, note = pd.DataFrame(), "design is null in params.yaml: no design experiment to compare designs over"
     else:

@@ -7,6 +7,7 @@ import pandas as pd
 import pytest
 
 from bogie.cli import main
+from bogie.weighings.legal import EU_SOURCE
 
 DATA = Path(__file__).parent / "data" / "weighings"
 
@@ -19,7 +20,7 @@ def test_json_has_exactly_the_issues_shape_with_shares_as_fractions(capsys):
     assert (settings["format"], settings["format_asked"]) == ("mon", "mon")
     assert settings["filters"] == {"min_group_load_kg": 15000.0, "position": "all", "speed_kmh": None}
     assert settings["grouping"] == "spacing: consecutive axles at most 2 m apart"
-    assert settings["legal_loads_kg"]["tandem"] == 18_000.0 and settings["legal_loads_kg"]["axle"] == 10_000.0
+    assert settings["legal_loads_kg"] == {"source": EU_SOURCE}  # the directive's by position and spacing
     assert settings["damage_exponents"] == {"overall": 4, "asphalt": 5, "subgrade": 7, "cemented": 12}
     assert settings["resolution"].startswith("weight resolution 100 kg (detected: 21 of 21 axle loads")
     resolution = out["records"].pop("resolution")
@@ -84,6 +85,41 @@ def test_the_json_and_the_table_give_what_unequal_sharing_costs_the_road(tmp_pat
     assert factors.loc[0, "guide_factor_k4"] == pytest.approx(1.0 + group, rel=1e-5)
     assert main(["weighings", str(path), "--sharing-factors", str(tmp_path / "no" / "such.csv")]) == 2
     assert "--sharing-factors" in capsys.readouterr().err and not (tmp_path / "no").exists()
+
+
+def test_the_legal_limits_go_by_the_groups_position_and_spacing_unless_stated(tmp_path, capsys):
+    # three tractor-semi-trailers (steer | drive tandem | trailer tri-axle), worked by hand against 96/53/EC Annex I
+    # (bogie.weighings.legal): 1. a drive tandem 1.35 m apart, 11,000 + 6,500 kg: within a motor tandem's 18 t and a
+    # driving axle's 11.5 t; tri-axle 3 x 8,000 at 1.31 m (24 t band); 2. a drive tandem 1.0 m apart, 2 x 9,000: over
+    # its 16 t; tri-axle 7,500 + 7,500 + 7,600 = 22,600 kg at 1.25 m: over its 21 t; 3. a tri-axle at 1.4 m of
+    # 10,500 + 6,500 + 6,500 = 23,500 kg: within 24 t with an axle over 10 t (the indicator)
+    path = tmp_path / "three.csv"
+    header = ("timestamp,speed_kmh,lane,n_axles," + ",".join(f"axle_load_{i}" for i in range(1, 7)) + ","
+              + ",".join(f"spacing_{i}" for i in range(1, 6)))  # fmt: skip
+    path.write_text(
+        header + "\n"
+        "2026-01-05T06:00:00,80,1,6,6000,11000,6500,8000,8000,8000,3.2,1.35,5.0,1.31,1.31\n"
+        "2026-01-05T06:00:05,80,1,6,6000,9000,9000,7500,7500,7600,3.2,1.0,5.0,1.25,1.25\n"
+        "2026-01-05T06:00:09,80,1,6,6000,9000,8500,10500,6500,6500,3.2,1.35,5.0,1.4,1.4\n"
+    )
+    assert main(["weighings", str(path), "--json"]) == 0
+    road = json.loads(capsys.readouterr().out)["road"]
+    tandem, tri = road["tandem"], road["triaxle"]
+    third = pytest.approx(1 / 3, abs=5e-5)  # the JSON's four decimals
+    assert (tandem["n_groups"], tandem["n_hidden"], tandem["share_group_over"]) == (3, 0, third)
+    assert (tri["n_groups"], tri["n_hidden"], tri["share_group_over"]) == (3, 1, third)
+    # stated single limits (one for every position and spacing): the drive tandem's 11 t axle is over 10 t within
+    # 18 t, the 18 t tandem at its limit is within it, the 22.6 t tri-axle within 24 t
+    stated = ["--legal-axle-kg", "10000", "--legal-tandem-kg", "18000", "--legal-triaxle-kg", "24000"]
+    assert main(["weighings", str(path), "--json", *stated]) == 0
+    out = json.loads(capsys.readouterr().out)
+    tandem, tri = out["road"]["tandem"], out["road"]["triaxle"]
+    assert (tandem["n_hidden"], tandem["share_group_over"], tri["n_hidden"], tri["share_group_over"]) == (1, 0, 1, 0)
+    assert out["settings"]["legal_loads_kg"] == {
+        "tandem": 18_000.0, "triaxle": 24_000.0, "axle": 10_000.0, "source": "given by the caller"}  # fmt: skip
+    # the table says which limits it judged by
+    assert main(["weighings", str(path)]) == 0
+    assert "within legal groups (96/53/EC's by each group's position and spacing)" in capsys.readouterr().out
 
 
 def test_the_json_follows_the_filters(capsys):

@@ -10,12 +10,14 @@ import pytest
 
 from bogie.weighings import _spill
 from bogie.weighings._spill import GroupSpill, spilled_statistics, spilled_wear
+from bogie.weighings.legal import POSITIONS
 from bogie.weighings.stats import survey_statistics
-from bogie.weighings.wear import EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_statistics
+from bogie.weighings.wear import wear_statistics
 
 
 def groups(m: int, seed: int, step: float, stations: int = 1) -> pd.DataFrame:
-    """``m`` tandems and tri-axles, loads at ``step`` kg (at 100 kg many ties), ``stations`` station codes."""
+    """``m`` tandems and tri-axles, loads at ``step`` kg (at 100 kg many ties), ``stations`` station codes, each at a
+    position and spacings across 96/53/EC's bands (so that the limits differ from group to group)."""
     rng = np.random.default_rng(seed)
     loads = (rng.normal(8000.0, 900.0, (m, 3)) / step).round() * step
     n = rng.integers(2, 4, m)
@@ -23,6 +25,8 @@ def groups(m: int, seed: int, step: float, stations: int = 1) -> pd.DataFrame:
     return pd.DataFrame({
         "group": np.where(n == 2, "tandem", "triaxle"), "n_axles": n, "station_code": rng.integers(0, stations, m),
         **{f"axle_load_{i + 1}": loads[:, i] for i in range(3)},
+        "position": rng.choice(["steer", "drive", "trailer"], m),
+        "spacing_1": rng.choice([0.9, 1.2, 1.3, 1.5, 1.9], m), "spacing_2": rng.choice([1.3, 1.4], m),
     })  # fmt: skip
 
 
@@ -30,8 +34,13 @@ def spilled(table: pd.DataFrame) -> GroupSpill:
     spill = GroupSpill()
     for part in np.array_split(np.arange(len(table)), 7):  # chunks as a stream gives them
         rows = table.iloc[part]
-        spill.append(rows["n_axles"].to_numpy(), rows["station_code"].to_numpy(),
-                     rows[["axle_load_1", "axle_load_2", "axle_load_3"]].to_numpy())  # fmt: skip
+        spill.append(
+            rows["n_axles"].to_numpy(),
+            rows["station_code"].to_numpy(),
+            rows[["axle_load_1", "axle_load_2", "axle_load_3"]].to_numpy(),
+            rows["position"].map(POSITIONS.index).to_numpy(),
+            rows[["spacing_1", "spacing_2"]].to_numpy(),
+        )
     return spill
 
 
@@ -73,10 +82,15 @@ def test_the_road_figures_of_the_spill_are_the_tables(monkeypatch, largest):
     table = groups(4_000, seed=8, step=100.0)
     monkeypatch.setattr(_spill, "SPILL_BLOCK", 900)
     spill = spilled(table)
-    got = spilled_wear(spill, EU_LEGAL_GROUP_KG, EU_LEGAL_AXLE_KG, resamples=200, bootstrap_max_groups=largest)
+    got = spilled_wear(spill, spacing_step_m=0.1, resamples=200, bootstrap_max_groups=largest)
+    stated = spilled_wear(spill, {"tandem": 17_000.0, "triaxle": 23_000.0}, 9_000.0, resamples=200)
     spill.close()
-    want = wear_statistics(table.drop(columns="station_code"), EU_LEGAL_GROUP_KG, EU_LEGAL_AXLE_KG, resamples=200,
-                           bootstrap_max_groups=largest)  # fmt: skip
+    kept = table.drop(columns="station_code")
+    want = wear_statistics(kept, spacing_step_m=0.1, resamples=200, bootstrap_max_groups=largest)
+    same = wear_statistics(kept, {"tandem": 17_000.0, "triaxle": 23_000.0}, 9_000.0, resamples=200)
+    for column in same.columns:
+        np.testing.assert_array_equal(stated[column].to_numpy(), same[column].to_numpy(), err_msg=column)
+    assert 0 < want["n_hidden"].sum() < want["n_groups"].sum()  # the limits by position and spacing judge some
     assert list(got.columns) == list(want.columns)
     for column in want.columns:
         np.testing.assert_array_equal(got[column].to_numpy(), want[column].to_numpy(), err_msg=column)
@@ -86,7 +100,8 @@ def test_an_order_statistic_is_found_among_ties_and_extremes():
     # ranks at a bin's first and last value, among ties, and a value far from the rest (one wide bin)
     table = pd.DataFrame({"group": "tandem", "n_axles": 2, "station_code": 0, "axle_load_3": np.nan,
                           "axle_load_1": [5000.0] * 6 + [5001.0, 5002.0, 9000.0, 40000.0],
-                          "axle_load_2": 5000.0})  # fmt: skip
+                          "axle_load_2": 5000.0, "position": "trailer", "spacing_1": 1.3,
+                          "spacing_2": np.nan})  # fmt: skip
     spill = spilled(table)
     got = spilled_statistics(spill)
     spill.close()

@@ -2,7 +2,8 @@
 Must 4: memory independent of the file's length).
 
 - **The spill.** :class:`GroupSpill` appends each chunk's kept tandems and tri-axles (the size as a code, the
-  station's code, the three loads, NaN past a tandem's two) to files in a temporary directory, 29 bytes a group, and
+  station's code, the three loads, NaN past a tandem's two, the position's code and the two spacings, what
+  :func:`bogie.weighings.legal.group_limits` judges by) to files in a temporary directory, 46 bytes a group, and
   reads them back in blocks of :data:`SPILL_BLOCK` groups, in file order; the values whose order statistics are
   sought (the spread and the shares, 32 bytes a group) are written beside them by the first pass.
 - **The statistics.** :func:`spilled_statistics` is :func:`bogie.weighings.stats.survey_statistics` of the spilled
@@ -27,6 +28,7 @@ import pandas as pd
 from numba import njit
 
 from bogie.group_names import GROUP_AXLES, GROUP_NAMES
+from bogie.weighings.legal import POSITIONS, group_limits
 from bogie.weighings.pavement import with_group_baseline
 from bogie.weighings.stats import QUANTILES, group_inequality
 from bogie.weighings.wear import BOOTSTRAP_MAX_GROUPS, DAMAGE_EXPONENTS, _LargeCell, _small_cell
@@ -41,7 +43,7 @@ _BINS_TOTAL = 1 << 21
 SPILLED = GROUP_NAMES
 # the spill's size code is the axles less two: a group of another size, or another order, would be miscounted
 assert all(GROUP_AXLES[name] == code + 2 for code, name in enumerate(SPILLED))
-_COLUMNS = ("size", "station", "loads")  # int8, int32, three float64 a group
+_COLUMNS = ("size", "station", "loads", "position", "spacings")  # int8, int32, 3 float64, int8, 2 float64 a group
 
 
 class GroupSpill:
@@ -56,9 +58,13 @@ class GroupSpill:
         self.stations = 0
         self.sizes = np.zeros(2, np.int64)  # the tandems and tri-axles spilled
 
-    def append(self, n_axles: np.ndarray, station: np.ndarray | None, loads: np.ndarray) -> None:
-        """Add groups of 2 or 3 axles: their axles, station codes (None: no station) and loads, shape (m, 3), in
-        file order."""
+    def append(
+        self, n_axles: np.ndarray, station: np.ndarray | None, loads: np.ndarray, position: np.ndarray,
+        spacings: np.ndarray,
+    ) -> None:  # fmt: skip
+        """Add groups of 2 or 3 axles: their axles, station codes (None: no station), loads, shape (m, 3), position
+        codes (the index in :data:`bogie.weighings.legal.POSITIONS`) and spacings [m], shape (m, 2), in file
+        order."""
         m = len(n_axles)
         station = np.zeros(m, np.int32) if station is None else np.asarray(station, np.int32)
         if m:
@@ -66,12 +72,25 @@ class GroupSpill:
         (np.asarray(n_axles) - 2).astype(np.int8).tofile(self._files["size"])
         station.tofile(self._files["station"])
         np.ascontiguousarray(loads, np.float64).tofile(self._files["loads"])
+        np.asarray(position).astype(np.int8).tofile(self._files["position"])
+        np.ascontiguousarray(spacings, np.float64).reshape(m, 2).tofile(self._files["spacings"])
         self.count += m
         self.sizes += np.bincount(np.asarray(n_axles, np.int64) - 2, minlength=2)[:2]
 
     def blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, loads (m, 3)) of :data:`SPILL_BLOCK` groups at a time, in file order."""
         return self._read("loads", 3)
+
+    def shape_blocks(self) -> Iterator[pd.DataFrame]:
+        """What the legal limits go by (:func:`bogie.weighings.legal.group_limits`): ``group``, ``position``,
+        ``spacing_1`` and ``spacing_2`` of :data:`SPILL_BLOCK` groups at a time, in file order."""
+        with open(self.dir / "position", "rb") as positions:
+            for size, _station, spacings in self._read("spacings", 2):
+                where = np.fromfile(positions, np.int8, len(size))
+                yield pd.DataFrame({
+                    "group": np.asarray(SPILLED, dtype=object)[size], "position": np.asarray(POSITIONS, object)[where],
+                    "spacing_1": spacings[:, 0], "spacing_2": spacings[:, 1],
+                })  # fmt: skip
 
     def value_blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, values (m, 4): :func:`_values`' spread and shares) of :data:`SPILL_BLOCK`
@@ -315,8 +334,9 @@ def _order_statistics(spill, by_station, n_cells, wanted, valid, low, high, leve
 
 def spilled_wear(
     spill: GroupSpill,
-    legal_group: Mapping[str, float],
-    legal_axle: float,
+    legal_group: Mapping[str, float] | None = None,
+    legal_axle: float | None = None,
+    spacing_step_m: float = 0.0,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
     resamples: int = 1000,
     confidence_level: float = 0.95,
@@ -325,19 +345,21 @@ def spilled_wear(
 ) -> pd.DataFrame:
     """:func:`bogie.weighings.wear.wear_statistics` of the spilled groups by ``group``, the same figures to the bit:
     a size of at most ``bootstrap_max_groups`` groups gathered and bootstrapped, a larger one's moments summed block
-    by block in file order, the order of the table's way."""
+    by block in file order, the order of the table's way; the legal limits as
+    :func:`bogie.weighings.legal.group_limits` gives them (``legal_group``, ``legal_axle``, ``spacing_step_m``)."""
     count = spill.sizes
     present = [c for c in range(2) if count[c]]
-    legal = {c: float(legal_group.get(SPILLED[c], math.nan)) for c in present}
-    large = {c: _LargeCell(exponents, legal_axle, confidence_level) for c in present
+    large = {c: _LargeCell(exponents, confidence_level) for c in present
              if resamples and count[c] > bootstrap_max_groups}  # fmt: skip
     small: dict[int, list] = {c: [] for c in present if c not in large}
-    for size, _station, loads in spill.blocks():  # one pass: each size's groups in file order
+    for (size, _station, loads), shape in zip(spill.blocks(), spill.shape_blocks()):  # each size in file order
+        limits = np.column_stack(group_limits(shape, legal_group, legal_axle, spacing_step_m))
         for c in present:
             mine = size == c
             m = int(mine.sum())
             if m:
-                part = (np.nan_to_num(loads[mine], nan=0.0), np.full(m, c + 2, np.int64), np.full(m, legal[c]))
+                part = (np.nan_to_num(loads[mine], nan=0.0), np.full(m, c + 2, np.int64), limits[mine, 0],
+                        limits[mine, 1])  # fmt: skip
                 if c in large:
                     large[c].add(*part)
                 else:
@@ -348,7 +370,7 @@ def spilled_wear(
         if c in large:
             row.update(large[c].figures())
         else:
-            loads, n, legal_of = (np.concatenate(p) for p in zip(*small[c]))
-            row.update(_small_cell(loads, n, legal_of, stream, exponents, legal_axle, resamples, confidence_level))
+            loads, n, legal_of, axle_of = (np.concatenate(p) for p in zip(*small[c]))
+            row.update(_small_cell(loads, n, legal_of, axle_of, stream, exponents, resamples, confidence_level))
         rows.append(row)
     return with_group_baseline(pd.DataFrame(rows), exponents)

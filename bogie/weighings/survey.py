@@ -41,9 +41,11 @@ from bogie.weighings.groups import (
     filter_groups,
     grouping_rule,
 )
+from bogie.weighings.legal import EU_SOURCE, spacing_step_m
+from bogie.weighings.legal import POSITIONS as LEGAL_POSITIONS
 from bogie.weighings.readers import ReadResult, stream_weighings
 from bogie.weighings.stats import STATISTICS_COLUMNS, axle_columns, statistics_dict, survey_statistics
-from bogie.weighings.wear import DAMAGE_EXPONENTS, EU_LEGAL_AXLE_KG, EU_LEGAL_GROUP_KG, wear_dict, wear_statistics
+from bogie.weighings.wear import DAMAGE_EXPONENTS, wear_dict, wear_statistics
 
 __all__ = ["SURVEYED", "ObservedSurvey", "observed_survey"]
 
@@ -130,7 +132,7 @@ def observed_survey(
     position: str = "all",
     speed_kmh: Sequence[float] | None = None,
     legal_group_kg: dict[str, float] | None = None,
-    legal_axle_kg: float = EU_LEGAL_AXLE_KG,
+    legal_axle_kg: float | None = None,
     resolution_kg: float | None = None,
     grouping: str = "spacing",
     chunk_bytes: int = CHUNK_BYTES,
@@ -148,8 +150,9 @@ def observed_survey(
     position, speed_kmh
         ``all``, ``steer``, ``drive`` or ``trailer``; (lowest, highest) speed kept [km/h], None keeping every speed.
     legal_group_kg, legal_axle_kg
-        Legal load of each group size and of one axle, for the hidden overloads [kg]; None: Directive 96/53/EC's
-        (:data:`bogie.weighings.wear.EU_LEGAL_GROUP_KG`, 10 t an axle).
+        Legal load of each group size and of one axle, stated single limits for the axles above the single-axle
+        limit within legal groups [kg]; None: Directive 96/53/EC's by each group's position and spacing
+        (:func:`bogie.weighings.legal.group_limits`).
     resolution_kg
         The file's weight resolution [kg]; None: detected from its loads
         (:func:`bogie.weighings.readers.read_weighings`).
@@ -169,33 +172,37 @@ def observed_survey(
     ValueError
         A file refused by the reader, or a parameter out of its range (named, with its unit).
     """
-    tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink)
-    legal = dict(EU_LEGAL_GROUP_KG if legal_group_kg is None else legal_group_kg)
+    legal = (None if legal_group_kg is None else dict(legal_group_kg), legal_axle_kg)
+    tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink, legal)
     try:
         # the groups held in memory: a file past MAX_FILE_BYTES refused; spilled to disk: any length
         cap = _records.MAX_FILE_BYTES if keep_groups else None
         read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap)
-        groups, statistics, road, stations = _survey_tables(tally, legal, legal_axle_kg)
+        groups, statistics, road, stations = _survey_tables(tally, spacing_step_m(read.format))
     finally:
         tally.close()
-    settings = _settings(path, fmt, read, tally, legal, legal_group_kg, legal_axle_kg)
+    settings = _settings(path, fmt, read, tally)
     return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
 
 
-def _survey_tables(tally: _Tally, legal: dict[str, float], legal_axle_kg: float) -> tuple:
+def _survey_tables(tally: _Tally, step_m: float) -> tuple:
     """The groups, statistics, road figures and stations of a read file's ``tally``: from the groups held in memory,
-    or (``keep_groups`` False) from those spilled to disk, in bounded memory."""
+    or (``keep_groups`` False) from those spilled to disk, in bounded memory; ``step_m`` the file's spacing step
+    (:func:`bogie.weighings.legal.group_limits`)."""
     if tally.keep_groups:
         groups, surveyed = tally.groups(), tally.surveyed()
         statistics = survey_statistics(surveyed, by="group") if len(surveyed) else pd.DataFrame(columns=["group"])
-        road = wear_statistics(surveyed, legal, legal_axle_kg) if len(surveyed) else pd.DataFrame(columns=["group"])
+        road = (
+            wear_statistics(surveyed, *tally.legal, spacing_step_m=step_m) if len(surveyed)
+            else pd.DataFrame(columns=["group"])
+        )  # fmt: skip
         stations = tally.stations(surveyed)
     else:  # from the groups spilled to disk, in bounded memory
         groups = pd.DataFrame(columns=list(_COMPACT[:-1]))
         spill = tally.spill
         if spill.count:  # two independent reads of the spill: the wear on a second thread (compiled, no GIL)
             with ThreadPoolExecutor(1) as pool:
-                wear = pool.submit(spilled_wear, spill, legal, legal_axle_kg)
+                wear = pool.submit(spilled_wear, spill, *tally.legal, step_m)
                 statistics = spilled_statistics(spill)
                 road = wear.result()
         else:
@@ -204,19 +211,12 @@ def _survey_tables(tally: _Tally, legal: dict[str, float], legal_axle_kg: float)
     return groups, statistics, road, stations
 
 
-def _settings(
-    path: str | Path,
-    fmt: str,
-    read: ReadResult,
-    tally: _Tally,
-    legal: dict[str, float],
-    legal_group_kg: dict[str, float] | None,
-    legal_axle_kg: float,
-) -> dict[str, Any]:
+def _settings(path: str | Path, fmt: str, read: ReadResult, tally: _Tally) -> dict[str, Any]:
     """What the survey was computed with (:attr:`ObservedSurvey.settings`): the file, its format, the resolution's
     source, the filters and grouping rule of ``tally``, the legal loads and the damage exponents."""
     min_group_load_kg, position, speed_kmh = tally.filters
     group_spacing_m, grouping = tally.grouping
+    legal_group_kg, legal_axle_kg = tally.legal
     return {
         "file": str(path), "format": read.format, "format_asked": fmt,
         "resolution": read.describe_resolution(),
@@ -224,10 +224,11 @@ def _settings(
                     "speed_kmh": None if speed_kmh is None else [float(v) for v in speed_kmh]},
         "grouping": grouping_rule(grouping, group_spacing_m),
         "legal_loads_kg": {
-            **{size: float(legal[size]) for size in SURVEYED if size in legal}, "axle": float(legal_axle_kg),
-            "source": "Directive 96/53/EC Annex I (trailer tandem 1.3-1.8 m apart 18 t, trailer tri-axle 1.3-1.4 m "
-            "24 t, single non-driving axle 10 t), one limit per size whatever the group's position and spacing"
-            if legal_group_kg is None and legal_axle_kg == EU_LEGAL_AXLE_KG else "given by the caller",
+            **{size: float(legal_group_kg[size]) for size in SURVEYED if size in (legal_group_kg or {})},
+            **({} if legal_axle_kg is None else {"axle": float(legal_axle_kg)}),
+            "source": EU_SOURCE if legal_group_kg is None and legal_axle_kg is None else
+            "given by the caller" + ("" if legal_group_kg is not None and legal_axle_kg is not None else
+                                     "; the rest " + EU_SOURCE),
         },
         "damage_exponents": dict(DAMAGE_EXPONENTS),
     }  # fmt: skip
@@ -238,8 +239,11 @@ class _Tally:
     ``keep_groups`` False, the surveyed sizes' axles, loads and station written to a spill on disk), and the
     stations."""
 
-    def __init__(self, min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink) -> None:
+    def __init__(
+        self, min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink, legal=(None, None)
+    ) -> None:  # fmt: skip
         self.filters = (min_group_load_kg, position, speed_kmh)
+        self.legal = legal  # (legal group loads by size, single-axle limit) [kg]; None: by position and spacing
         self.grouping = (group_spacing_m, grouping)
         self.keep_groups = keep_groups
         self.sink = sink
@@ -352,10 +356,18 @@ class _Tally:
 _COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")
 
 
+# the position codes _spill writes (the group's index less one, capped) index the legal table's positions
+assert LEGAL_POSITIONS == ("steer", "drive", "trailer")
+
+
 def _spill(spill: GroupSpill, groups: pd.DataFrame) -> None:
-    """Write the tandems and tri-axles of a chunk's kept ``groups`` to the spill: axles, station code, three loads."""
+    """Write the tandems and tri-axles of a chunk's kept ``groups`` to the spill: axles, station code, three loads,
+    position code and two spacings."""
     axles = groups["n_axles"].to_numpy()
     surveyed = (axles == 2) | (axles == 3)
     loads = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in axle_columns(3)])
     station = groups["station_code"].to_numpy()[surveyed] if "station_code" in groups else None
-    spill.append(axles[surveyed], station, loads)
+    # the position's code by the group's index, as axle_groups labels it (1 steer, 2 drive, 3 and on trailer)
+    position = np.minimum(groups["group_index"].to_numpy()[surveyed], 3) - 1
+    spacings = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in ("spacing_1", "spacing_2")])
+    spill.append(axles[surveyed], station, loads, position, spacings)

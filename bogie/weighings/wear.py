@@ -21,8 +21,10 @@ same fleet with every group shared equally.
 multi-axle group's load as one (Austroads' group standard loads) sees no effect of sharing within the group at all;
 the per-axle sum is the reading under which sharing matters, as the AASHO equivalence of single axles does.
 
-**Overloads hidden in legal groups.** A group whose load is within its legal group load while one of its axles is
-over the legal load of a single axle: a weighing of the group alone passes what an axle weighing would not.
+**Axles above the single-axle limit within legal groups** (an indicator, not an offence: the law weighs a group's
+axles as one, docs/pavement.md). A group whose load is within its legal group load while one of its axles is over
+the limit of a single axle; the limits by each group's position and spacing from Directive 96/53/EC
+(:func:`bogie.weighings.legal.group_limits`) unless single limits are given.
 """
 
 from __future__ import annotations
@@ -42,6 +44,7 @@ from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.settings import check_value, refusal
 from bogie.weighings._records import REL_TOL
+from bogie.weighings.legal import group_limits
 from bogie.weighings.pavement import with_group_baseline
 from bogie.weighings.stats import _width, axle_columns
 
@@ -128,7 +131,7 @@ def group_wear(loads: ArrayLike, n_axles: ArrayLike, k: float, standard_axle: fl
 
 
 def hidden_overloads(
-    loads: ArrayLike, n_axles: ArrayLike, legal_group: ArrayLike, legal_axle: float
+    loads: ArrayLike, n_axles: ArrayLike, legal_group: ArrayLike, legal_axle: ArrayLike
 ) -> dict[str, NDArray]:
     """Which groups are within their legal group load while an axle is over the legal load of one axle.
 
@@ -141,7 +144,7 @@ def hidden_overloads(
     legal_group
         Each group's legal group load (one value, or one per group), in the loads' unit.
     legal_axle
-        The legal load of one axle, in the loads' unit.
+        The legal load of one axle (one value, or one per group), in the loads' unit.
 
     Returns
     -------
@@ -156,14 +159,14 @@ def hidden_overloads(
     heaviest = np.where(present, w, -np.inf).max(axis=1)
     # a load at its legal limit is within it (REL_TOL: a sum of loads read at a file's resolution rounds in a last bit)
     group_over = total > np.broadcast_to(np.asarray(legal_group, dtype=float), total.shape) * (1.0 + REL_TOL)
-    axle_over = heaviest > legal_axle * (1.0 + REL_TOL)
+    axle_over = heaviest > np.broadcast_to(np.asarray(legal_axle, dtype=float), total.shape) * (1.0 + REL_TOL)
     return {"group_over": group_over, "axle_over": axle_over, "hidden": axle_over & ~group_over}
 
 
 def wear_statistics(
     groups: pd.DataFrame,
-    legal_group: Mapping[str, float],
-    legal_axle: float,
+    legal_group: Mapping[str, float] | None = None,
+    legal_axle: float | None = None,
     by: str | Sequence[str] = "group",
     unit_per_kg: float = 1.0,
     exponents: Mapping[str, float] = DAMAGE_EXPONENTS,
@@ -171,6 +174,7 @@ def wear_statistics(
     confidence_level: float = 0.95,
     seed: int = 0,
     bootstrap_max_groups: int = BOOTSTRAP_MAX_GROUPS,
+    spacing_step_m: float = 0.0,
 ) -> pd.DataFrame:
     """What unequal sharing costs the road, per value of ``by``: extra wear and hidden overloads, with intervals.
 
@@ -180,10 +184,10 @@ def wear_statistics(
         Wide table, one row per group: ``group`` (``tandem``, ``triaxle``, ...: the key of ``legal_group``),
         ``n_axles``, ``axle_load_1 ..`` (front first) and the ``by`` columns; an optional ``status`` column leaves
         out (and counts in ``n_failed``) every row whose status is not ``"ok"``.
-    legal_group
-        Legal group load of each ``group`` value [kg]; a group size it does not name has no overload figures (NaN).
-    legal_axle
-        Legal load of one axle [kg].
+    legal_group, legal_axle
+        Stated single limits [kg]: each ``group`` value's legal load (a size not named: no overload figures) and one
+        axle's; None (default): Directive 96/53/EC's by each row's ``position`` and spacings
+        (:func:`bogie.weighings.legal.group_limits`, read at ``spacing_step_m``).
     by
         Column(s) to tabulate by, e.g. ``["group", "position", "suspension"]``.
     unit_per_kg
@@ -195,10 +199,11 @@ def wear_statistics(
     confidence_level
         Level of the intervals (percentile bootstrap; Wilson's for the overload share) [-].
     seed
-        Seed of the bootstrap (numpy's default generator; each cell draws from its own child stream) [-].
+        Seed of the bootstrap (each cell draws from its own child stream) [-].
     bootstrap_max_groups
-        A cell of more groups gets the delta method's normal intervals instead of the bootstrap's
-        (:data:`BOOTSTRAP_MAX_GROUPS`) [-].
+        A cell of more groups gets the delta method's normal intervals (:data:`BOOTSTRAP_MAX_GROUPS`) [-].
+    spacing_step_m
+        The step the spacings were read at (0: as read) [m].
 
     Returns
     -------
@@ -213,8 +218,9 @@ def wear_statistics(
     """
     keys = [by] if isinstance(by, str) else list(by)
     width = _checked_width(groups, confidence_level, resamples)
-    ok, cell_arrays = _cell_source(groups, width, legal_group, unit_per_kg)
-    figures = (exponents, legal_axle, resamples, confidence_level, bootstrap_max_groups)
+    limits = group_limits(groups, legal_group, legal_axle, spacing_step_m)
+    ok, cell_arrays = _cell_source(groups, width, limits, unit_per_kg)
+    figures = (exponents, resamples, confidence_level, bootstrap_max_groups)
     frame = pd.DataFrame(_cell_rows(groups, keys, ok, cell_arrays, seed, figures))
     return with_group_baseline(frame, exponents) if "group" in keys else frame
 
@@ -234,20 +240,20 @@ def _checked_width(groups: pd.DataFrame, confidence_level: float, resamples: int
 
 
 def _cell_source(
-    groups: pd.DataFrame, width: int, legal_group: Mapping[str, float], unit_per_kg: float
-) -> tuple[np.ndarray, Callable[[np.ndarray], tuple[np.ndarray, np.ndarray, np.ndarray]]]:
+    groups: pd.DataFrame, width: int, limits: tuple[np.ndarray, np.ndarray], unit_per_kg: float
+) -> tuple[np.ndarray, Callable[[np.ndarray], tuple[np.ndarray, ...]]]:
     """Whether each row of ``groups`` is used (its ``status`` ``"ok"``, or no ``status`` column), and the function
-    giving the (loads [kg], axles, legal group load [kg]) of the rows of a cell."""
+    giving the (loads [kg], axles, legal group load [kg], single-axle limit [kg]) of the rows of a cell; ``limits``
+    each row's two limits (:func:`bogie.weighings.legal.group_limits`)."""
     ok = groups["status"].astype(str).eq("ok").to_numpy() if "status" in groups.columns else np.ones(len(groups), bool)
     columns = [groups[c].to_numpy() for c in axle_columns(width)]  # as stored (float32 where exact), no copy
     n_all = groups["n_axles"].to_numpy()
-    legal_of = groups["group"].map(dict(legal_group))
-    legal_all = np.asarray(legal_of.to_numpy(dtype=float, na_value=math.nan), dtype=float)
+    legal_all, axle_all = limits
 
-    def cell_arrays(rows: np.ndarray) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    def cell_arrays(rows: np.ndarray) -> tuple[np.ndarray, ...]:
         # a failed row (null loads) is carried as zeros and never used: its cell counts it in n_failed
         loads = np.nan_to_num(np.column_stack([c[rows] for c in columns]).astype(float), nan=0.0) / unit_per_kg
-        return loads, n_all[rows].astype(np.int64), legal_all[rows]
+        return loads, n_all[rows].astype(np.int64), legal_all[rows], axle_all[rows]
 
     return ok, cell_arrays
 
@@ -256,9 +262,9 @@ def _cell_rows(
     groups: pd.DataFrame, keys: list, ok: np.ndarray, cell_arrays: Callable, seed: int, figures: tuple
 ) -> list[dict]:
     """:func:`wear_statistics`' rows, one per cell of ``groups`` by ``keys`` (sorted), each cell's bootstrap drawn
-    from its own child stream of ``seed``; ``figures``: (exponents, legal_axle, resamples, confidence_level,
+    from its own child stream of ``seed``; ``figures``: (exponents, resamples, confidence_level,
     bootstrap_max_groups)."""
-    exponents, legal_axle, resamples, confidence_level, bootstrap_max_groups = figures
+    exponents, resamples, confidence_level, bootstrap_max_groups = figures
     root = np.random.SeedSequence(seed)
     rows = []
     cells = groups.groupby(keys, observed=True, sort=True).indices
@@ -271,15 +277,15 @@ def _cell_rows(
         row["n_failed"] = int(len(rows_all) - len(index))
         if resamples and len(index) > bootstrap_max_groups:
             blocks = (cell_arrays(index[start : start + WEAR_BLOCK]) for start in range(0, len(index), WEAR_BLOCK))
-            row.update(_large_cell(blocks, exponents, legal_axle, confidence_level))
+            row.update(_large_cell(blocks, exponents, confidence_level))
         else:
-            row.update(_small_cell(*cell_arrays(index), stream, exponents, legal_axle, resamples, confidence_level))
+            row.update(_small_cell(*cell_arrays(index), stream, exponents, resamples, confidence_level))
         rows.append(row)
     return rows
 
 
-def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.SeedSequence,
-                exponents: Mapping[str, float], legal_axle: float, resamples: int,
+def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, legal_axle: NDArray, stream: np.random.SeedSequence,
+                exponents: Mapping[str, float], resamples: int,
                 confidence_level: float) -> dict[str, float]:  # fmt: skip
     """The figures of a cell of :data:`BOOTSTRAP_MAX_GROUPS` groups or fewer (or of any size without resamples):
     the extra wear with its percentile bootstrap intervals (drawn from ``stream``), and the hidden overloads."""
@@ -319,7 +325,7 @@ def _small_cell(loads: NDArray, n: NDArray, legal: NDArray, stream: np.random.Se
             for col in (f"extra_wear_{name}", f"extra_sa_per_1000_{name}"):
                 row[f"{col}_low"] = row[f"{col}_high"] = math.nan
     known = np.isfinite(legal)
-    over = hidden_overloads(loads[known], n[known], legal[known], legal_axle)
+    over = hidden_overloads(loads[known], n[known], legal[known], legal_axle[known])
     row.update(_overload_figures(int(over["hidden"].sum()), int(over["group_over"].sum()), int(known.sum()),
                                  confidence_level))  # fmt: skip
     return row
@@ -368,36 +374,36 @@ def _wear_moments(loads, n, exponents, standard_axle, moments):  # pragma: no co
 WEAR_BLOCK = 1 << 18
 
 
-def _large_cell(blocks: Iterable[tuple[NDArray, NDArray, NDArray]], exponents: Mapping[str, float],
-                legal_axle: float, confidence_level: float) -> dict[str, float]:  # fmt: skip
+def _large_cell(blocks: Iterable[tuple[NDArray, ...]], exponents: Mapping[str, float],
+                confidence_level: float) -> dict[str, float]:  # fmt: skip
     """The figures of a cell of more than :data:`BOOTSTRAP_MAX_GROUPS` groups, from its ``blocks`` of (loads [kg],
-    axles, legal group load [kg]) in order, in bounded memory:
+    axles, legal group load [kg], single-axle limit [kg]) in order, in bounded memory:
     the extra wear R = sum D / sum E - 1 and 1000 mean(D - E), with the delta method's normal intervals
     (docs/pavement.md, "Intervals": R's linearisation is (1 / (m mean E)) sum (D_i - (R + 1) E_i), so its standard
     error is sd(D - (R + 1) E) / (sqrt(m) mean E), Cochran, Sampling Techniques, 3rd ed. 1977, section 6.3, the
     ratio estimator; the mean's is sd(D - E) / sqrt(m)), and the hidden overloads. The moments are Welford's, one
     group at a time in a compiled loop (:func:`_wear_moments`)."""
-    cell = _LargeCell(exponents, legal_axle, confidence_level)
-    for loads, n, legal in blocks:
-        cell.add(loads, n, legal)
+    cell = _LargeCell(exponents, confidence_level)
+    for loads, n, legal, legal_axle in blocks:
+        cell.add(loads, n, legal, legal_axle)
     return cell.figures()
 
 
 class _LargeCell:
     """:func:`_large_cell`'s sums, a block at a time (:meth:`add`), and its figures (:meth:`figures`)."""
 
-    def __init__(self, exponents: Mapping[str, float], legal_axle: float, confidence_level: float) -> None:
+    def __init__(self, exponents: Mapping[str, float], confidence_level: float) -> None:
         self.names = list(exponents)
         self.ks = np.array([float(exponents[name]) for name in self.names])
         self.moments = np.zeros((len(self.names), 6))
         self.hidden = self.group_over = self.judged = 0
-        self.legal_axle, self.confidence_level = legal_axle, confidence_level
+        self.confidence_level = confidence_level
 
-    def add(self, loads: NDArray, n: NDArray, legal: NDArray) -> None:
-        """Add the groups of a block, in order: loads [kg], axles, legal group load [kg]."""
+    def add(self, loads: NDArray, n: NDArray, legal: NDArray, legal_axle: NDArray) -> None:
+        """Add the groups of a block, in order: loads [kg], axles, legal group load and single-axle limit [kg]."""
         _wear_moments(np.ascontiguousarray(loads), n, self.ks, STANDARD_AXLE_KG, self.moments)
         known = np.isfinite(legal)
-        over = hidden_overloads(loads[known], n[known], legal[known], self.legal_axle)
+        over = hidden_overloads(loads[known], n[known], legal[known], legal_axle[known])
         self.hidden += int(over["hidden"].sum())
         self.group_over += int(over["group_over"].sum())
         self.judged += int(known.sum())
