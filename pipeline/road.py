@@ -40,10 +40,12 @@ import numpy as np
 import pandas as pd
 
 from bogie.bogie_file import base_bogie
-from bogie.fleet.road import design_savings, fleet_wear
+from bogie.fleet.road import design_savings, fleet_wear, sensor_free
+from bogie.group_names import GROUP_AXLES
+from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.weighings.legal import EU_SOURCE, group_limits, spacing_step_m
-from bogie.weighings.pavement import sharing_factors, write_sharing_factors
+from bogie.weighings.pavement import aashto_view, sharing_factors, write_sharing_factors
 from bogie.weighings.survey import SURVEYED
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, wear_dict, wear_statistics
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
@@ -51,7 +53,10 @@ from pipeline.config import load_config
 from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, read_runs
 
-__all__ = ["CONFIDENCE", "RESAMPLES", "factors_table", "fleet_limits", "main", "observed_wear", "road_metrics"]
+__all__ = [
+    "AASHTO_PAVEMENT", "CONFIDENCE", "RESAMPLES", "aashto_means", "dynamics_and_sensor", "factors_table",
+    "fleet_limits", "main", "observed_wear", "road_metrics",
+]  # fmt: skip
 
 #: bootstrap resamples of every interval of the stage [-]
 RESAMPLES = 1000
@@ -92,6 +97,52 @@ def factors_table(simulated: pd.DataFrame, observed: pd.DataFrame, observed_kind
         parts.append(sharing_factors(observed, DAMAGE_EXPONENTS, source="observed", protocol=observed_kind,
                                      suspension="as observed"))  # fmt: skip
     return pd.concat(parts, ignore_index=True)
+
+
+#: the figures of a split of the WIM reading's (:func:`dynamics_and_sensor`)
+SPLIT_FIGURES: tuple[str, ...] = (
+    "n_groups", "n_hidden", "share_hidden_overload", "share_group_over", "extra_wear_overall",
+    "extra_wear_group_overall",
+)  # fmt: skip
+
+
+def dynamics_and_sensor(
+    runs: pd.DataFrame, legal_group: Mapping[str, float], legal_axle: float, min_group_load: float, wim: Any
+) -> dict[str, Any]:
+    """The WIM side's laden groups as a sensor without error would read them (:func:`bogie.fleet.road.sensor_free`
+    with the ``wim`` protocol's error sizes), by size and suspension: the same groups as the WIM figures (laden by
+    their reading), so that static, this and WIM split what unequal sharing, the dynamics at the sensor and the
+    sensor's error each add (issue 44 Must 3); no interval (the figures are the split's, beside the WIM's)."""
+    is_wim = runs["protocol"].astype(str).eq("wim")
+    laden = runs["group_load"].astype(float) / GRAVITY >= min_group_load
+    kept = runs[is_wim & (laden | ~runs["status"].astype(str).eq("ok"))]
+    free = fleet_wear(sensor_free(kept, wim.vehicle_error_sd, wim.axle_error_sd), legal_group, legal_axle, 0.0,
+                      resamples=0)  # fmt: skip
+    out = wear_dict(free, ["protocol", "group", "suspension"], digits=4).get("wim", {}) if len(free) else {}
+    return {g: {k: {f: e[f] for f in SPLIT_FIGURES} for k, e in sus.items()} for g, sus in out.items()}
+
+
+#: the flexible pavement AASHTO's factors are read on (:func:`aashto_means`): the guide's worked example's structural
+#: number 5 and terminal serviceability 2.5 (Appendix D, Table D.5) [-]
+AASHTO_PAVEMENT = {"structural_number": 5.0, "terminal_serviceability": 2.5}
+
+
+def aashto_means(runs: pd.DataFrame, min_group_load: float) -> dict[str, Any]:
+    """What AASHTO 1993 says about the fleet's laden steel groups (:func:`bogie.weighings.pavement.aashto_view` on
+    :data:`AASHTO_PAVEMENT`), per protocol and size: the mean group factor (a tandem's or tridem's total: its sharing
+    not in it), and the mean of its axles' factors as single axles as shared and as shared equally [-], with the
+    groups counted (issue 44 Must 2)."""
+    out: dict[str, Any] = {"pavement": dict(AASHTO_PAVEMENT)}
+    ok = runs["status"].astype(str).eq("ok") & runs["suspension"].astype(str).eq("steel")
+    laden = ok & (runs["group_load"].astype(float) / GRAVITY >= min_group_load)
+    for (protocol, group), rows in runs[laden].groupby(["protocol", "group"], observed=True, sort=True):
+        n = GROUP_AXLES[str(group)]
+        loads = rows[[f"axle_load_{i + 1}" for i in range(n)]].to_numpy(dtype=float) / GRAVITY
+        view = aashto_view(loads, **AASHTO_PAVEMENT)
+        out.setdefault(str(protocol), {})[str(group)] = {
+            "n_groups": len(rows), **{k: json_number(float(np.mean(v)), 4) for k, v in view.items()}
+        }  # fmt: skip
+    return out
 
 
 def road_metrics(
@@ -183,6 +234,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
     simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence_level=CONFIDENCE,
                            seed=config.seed)  # fmt: skip
+    split = dynamics_and_sensor(runs, legal_group, legal_axle, min_load, config.protocol.wim)
+    aashto = aashto_means(runs, min_load)
     observed = observed_wear(groups, config.seed, step)
     if design is None:
         savings, note = pd.DataFrame(), "design is null in params.yaml: no design experiment to compare designs over"
@@ -191,6 +244,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
                                  seed=config.seed)  # fmt: skip
         note = None
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
+    metrics["wim_without_sensor_error"] = split
+    metrics["aashto"] = aashto
     with atomic_outputs(files=[args.metrics], dirs=[args.out], stage="road", own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)

@@ -11,6 +11,7 @@ from bogie.weighings.pavement import (
     AUSTROADS_GROUP_LOAD_KN,
     KIPS_PER_KG,
     aashto_flexible_lef,
+    aashto_view,
     group_baseline_factor,
     sharing_factors,
     write_sharing_factors,
@@ -43,6 +44,24 @@ def test_the_standard_axle_is_one_on_every_pavement_and_a_group_factor_is_not_it
     assert singles == pytest.approx(3.025, abs=0.001) and float(aashto_flexible_lef(40.0, 2)) < 0.7 * singles
     unequal = float(aashto_flexible_lef(24.0, 1)) + float(aashto_flexible_lef(16.0, 1))
     assert unequal > singles  # per axle, unequal sharing costs more; the tandem's group factor cannot show it
+
+
+def test_what_aashto_says_about_groups_as_they_share():
+    # a 40-kip tandem shared 20 + 20 and 24 + 16 kips: the guide's 2.08 for both (Table D.5); its axles as singles
+    # 3.03 equally shared (1.51 twice, Table D.4's row), 3.03 + 0.40 as the second shares it
+    view = aashto_view(np.array([[20.0, 20.0], [24.0, 16.0]]) / KIPS_PER_KG)
+    assert view["group"] == pytest.approx([2.08, 2.08], abs=0.006)
+    assert view["single_axles_equal"] == pytest.approx([3.025, 3.025], abs=0.001)
+    assert view["single_axles"][0] == pytest.approx(3.025, abs=0.001)
+    second = float(aashto_flexible_lef(24.0, 1)) + float(aashto_flexible_lef(16.0, 1))
+    assert view["single_axles"][1] == pytest.approx(second, rel=1e-12) and second > 3.4
+    # a tridem: its total's factor, on another pavement too
+    tri = aashto_view([[8000.0, 8000.0, 8000.0]], 3.0, 2.0)
+    assert tri["group"][0] == pytest.approx(float(aashto_flexible_lef(24_000 * KIPS_PER_KG, 3, 3.0, 2.0)), rel=1e-12)
+    with pytest.raises(ValueError, match=r"loads_kg of shape \(1, 4\): must be groups of 2 or 3"):
+        aashto_view([[1.0, 2.0, 3.0, 4.0]])
+    with pytest.raises(ValueError, match="positive, finite"):
+        aashto_view([[1.0, 0.0]])
 
 
 def test_units_and_the_group_loads():

@@ -24,14 +24,16 @@ from collections.abc import Mapping, Sequence
 import numpy as np
 import pandas as pd
 
-from bogie.fleet.constants import GROUP_AXLES
+from bogie.fleet.constants import GROUP_AXLES, MAX_AXLES
 from bogie.fleet.design.analysis import FLEET_SLOT
+from bogie.fleet.weighing.runs import RESULT_COLUMNS
 from bogie.intervals import percentile_interval
 from bogie.params import GRAVITY
+from bogie.road.wim import sensor_factors
 from bogie.weighings.stats import axle_columns
 from bogie.weighings.wear import DAMAGE_EXPONENTS, STANDARD_AXLE_KG, group_wear, hidden_overloads, wear_statistics
 
-__all__ = ["FLEET_SLOT", "SCENARIOS", "design_savings", "fleet_wear", "scenario_runs"]
+__all__ = ["FLEET_SLOT", "SCENARIOS", "design_savings", "fleet_wear", "scenario_runs", "sensor_free"]
 
 #: the ways of acting :func:`design_savings` compares with today's typical design, in order
 SCENARIOS: tuple[str, ...] = ("best", "air", "tilt_held")
@@ -75,6 +77,29 @@ def fleet_wear(
         kept, legal_group, legal_axle, by=["protocol", "group", "suspension"], unit_per_kg=GRAVITY,
         exponents=exponents, resamples=resamples, confidence_level=confidence_level, seed=seed,
     )  # fmt: skip
+
+
+def sensor_free(runs: pd.DataFrame, vehicle_sd: float, axle_sd: float) -> pd.DataFrame:
+    """The WIM rows of a fleet's ``runs`` as a sensor without error would read them: the reading of the sharing and
+    the dynamics at the sensor alone (issue 44 Must 3, docs/pavement.md). The sensor's error is a factor per axle,
+    ``(1 + s_v z_v) (1 + s_a z_i)`` of the row's ``sensor_seed`` (:func:`bogie.road.wim.sensor_factors`; ``vehicle_sd``
+    and ``axle_sd`` the fractions the WIM protocol read with), so each succeeded row's axle loads are divided by
+    theirs and its ``group_load`` is their sum; the other result columns are left out (they were the read ones').
+    Failed rows are kept as they are."""
+    wim = runs[runs["protocol"].astype(str).eq("wim")].reset_index(drop=True)
+    columns = [f"axle_load_{i + 1}" for i in range(MAX_AXLES)]
+    loads = np.array(wim[columns].to_numpy(dtype=float), copy=True)  # a view may be read-only
+    ok = wim["status"].astype(str).eq("ok").to_numpy()
+    n_axles, seeds = wim["n_axles"].to_numpy(dtype=int), wim["sensor_seed"].to_numpy()
+    for row in np.flatnonzero(ok):
+        n = int(n_axles[row])
+        loads[row, :n] = loads[row, :n] / sensor_factors(vehicle_sd, axle_sd, int(seeds[row]), n)
+    keep = [c for c in wim.columns if c not in columns and c not in RESULT_COLUMNS]
+    out = wim[keep].copy()
+    for i, column in enumerate(columns):
+        out[column] = loads[:, i]
+    out["group_load"] = np.where(ok, np.nansum(loads, axis=1), np.nan)
+    return out
 
 
 def _nearest_level(tilts: np.ndarray, low: float, high: float, target: float) -> float:

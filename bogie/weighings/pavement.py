@@ -26,6 +26,7 @@ from __future__ import annotations
 import math
 import os
 from collections.abc import Mapping
+from functools import partial
 from pathlib import Path
 
 import numpy as np
@@ -43,6 +44,7 @@ __all__ = [
     "STANDARD_AXLE_KN",
     "SHARING_FACTORS_HEADER",
     "aashto_flexible_lef",
+    "aashto_view",
     "group_baseline_factor",
     "sharing_factors",
     "with_group_baseline",
@@ -90,6 +92,31 @@ def aashto_flexible_lef(
         + g / _beta(load, axles, structural_number) - g / _beta(np.asarray(18.0), 1, structural_number)
     )  # fmt: skip
     return numerics.power(10.0, -log_ratio)
+
+
+def aashto_view(
+    loads_kg: ArrayLike, structural_number: float = 5.0, terminal_serviceability: float = 2.5
+) -> dict[str, NDArray[np.float64]]:
+    """What AASHTO 1993 says about groups of axle loads ``loads_kg`` (groups, axles: 2 or 3 columns, every one
+    loaded) [kg], on a flexible pavement (:func:`aashto_flexible_lef`'s ``structural_number`` and
+    ``terminal_serviceability``):
+    ``group``, each group's factor as the guide counts it (a tandem's or tridem's total load: its sharing not in it);
+    ``single_axles``, the sum of its axles' factors as single axles, as they share the load; ``single_axles_equal``,
+    the same with the load shared equally [-]. The last two differ only by the sharing; the first is what a design
+    built on the guide counts (docs/pavement.md, "What the design guides count")."""
+    w = np.atleast_2d(np.asarray(loads_kg, dtype=float))
+    if w.shape[1] not in (2, 3) or not np.all(np.isfinite(w)) or np.any(w <= 0.0):
+        raise ValueError(f"loads_kg of shape {w.shape}: must be groups of 2 or 3 positive, finite axle loads [kg]")
+    kips = w * KIPS_PER_KG
+    n = w.shape[1]
+    lef = partial(aashto_flexible_lef, structural_number=structural_number,
+                  terminal_serviceability=terminal_serviceability)  # fmt: skip
+    mean = kips.sum(axis=1) / n
+    return {
+        "group": lef(kips.sum(axis=1), n),
+        "single_axles": sum(lef(kips[:, i], 1) for i in range(n)),
+        "single_axles_equal": n * lef(mean, 1),
+    }
 
 
 def group_baseline_factor(size: str, k: float) -> float:

@@ -4,8 +4,10 @@ import dataclasses
 from pathlib import Path
 
 import numpy as np
+import pandas as pd
 import pytest
 
+from bogie.fleet.road import sensor_free
 from bogie.fleet.sampling.sample import bogie_from_sample
 from bogie.fleet.weighing.protocols import wim_pass
 from bogie.fleet.weighing.weigher import weigh
@@ -90,6 +92,15 @@ def test_each_axle_reading_carries_the_sensors_error_drawn_from_the_samples_sens
     factors = sensor_factors(0.015, 0.02, sample["sensor_seed"], bogie.n_axles)
     assert run.reading == pytest.approx(run.reading_error_free * factors, rel=1e-14)
     assert [row[f"axle_load_{i + 1}"] for i in range(bogie.n_axles)] == pytest.approx(2.0 * run.reading)
+    # the road stage's split of the dynamics from the sensor (issue 44 Must 3): the row as a sensor without error
+    # reads it is twice the pass's error-free wheel readings, its group load their sum; a static row is not kept
+    rows = pd.DataFrame([{**sample, **row}, {**sample, **weigh(bogie, sample, "static", config.protocol.static)}])
+    free = sensor_free(rows, spec.vehicle_error_sd, spec.axle_error_sd)
+    assert len(free) == 1 and "load_share_1" not in free.columns
+    got = [free.loc[0, f"axle_load_{i + 1}"] for i in range(bogie.n_axles)]
+    assert got == pytest.approx(2.0 * run.reading_error_free, rel=1e-14)
+    assert free.loc[0, "group_load"] == pytest.approx(2.0 * run.reading_error_free.sum(), rel=1e-14)
+    assert not np.allclose(got, [row[f"axle_load_{i + 1}"] for i in range(bogie.n_axles)], rtol=1e-3)
     # another sensor seed: the same pass, other errors; the same seed: the same reading (deterministic)
     other = weigh(bogie, {**sample, "sensor_seed": sample["sensor_seed"] + 1}, "wim", spec)
     assert other["axle_load_1"] != row["axle_load_1"]

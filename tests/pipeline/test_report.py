@@ -337,11 +337,23 @@ def test_the_road_page_draws_the_wear_of_every_side_and_the_savings_and_says_the
     )  # fmt: skip
     assert drawn == pytest.approx(expected, abs=1e-6)
     for words in ("as a share of Austroads' group count", "Axles above the single-axle limit within "
-                  "legal groups", "an indicator, not an offence", "Directive 96/53/EC's by the group's position",
+                  "legal groups", "an indicator, not an offence",
+                  "Directive 96/53/EC's limits for the group's position",
                   "weighed at rest an axle is over only by unequal sharing", "0.26 (tandem) and 0.10 (tri-axle)",
                   "docs/pavement.md"):  # fmt: skip
         assert words in text, words
     assert set(m["savings"]["triaxle"]) == {"best", "air", "tilt_held"}
+    # the split of the WIM's figures between the dynamics and the sensor (issue 44 Must 3), and AASHTO's view (Must 2),
+    # each as the metrics give it
+    flat = " ".join(text.split())
+    for g, sus in m["wim_without_sensor_error"].items():
+        s0, s1, s2 = m["simulated"]["static"][g]["steel"], sus["steel"], m["simulated"]["wim"][g]["steel"]
+        said = f"{s0['n_hidden']} of {s0['n_groups']} / {s1['n_hidden']} / {s2['n_hidden']} of {s2['n_groups']}"
+        assert said in flat, said
+        wear = " / ".join(f"{100 * e['extra_wear_group_overall']:.1f} %" for e in (s0, s1, s2))
+        assert wear in flat, wear
+    for e in m["aashto"]["static"].values():
+        assert f"{e['group']:.2f} ESAL as a group" in flat and f"single axles {e['single_axles']:.2f} as shared" in flat
 
 
 # ---- the calibration page ---------------------------------------------------------------------------------------

@@ -106,14 +106,14 @@ def savings_bars(ax, savings: Mapping[str, Any]) -> None:
 def road_page(m: Mapping[str, Any], caption: Sequence[str]) -> Figure:
     """The page: the wear chart on top, the savings chart below it (when the design study ran), then the words."""
     savings = m.get("savings") or {}
-    fig = new_page(TITLE, body=(0.06, 0.42, 0.88, 0.51))
+    fig = new_page(TITLE, body=(0.06, 0.50, 0.88, 0.43))
     if savings:
         ax_w, ax_s = fig.subplots(2, 1, gridspec_kw={"height_ratios": (1.25, 1.0)})
         wear_bars(ax_w, m)
         savings_bars(ax_s, savings)
     else:
         wear_bars(fig.subplots(1, 1), m)
-    text_block(fig, 0.405, caption, size=8.0)
+    text_block(fig, 0.475, caption, size=8.0)
     return fig
 
 
