@@ -54,7 +54,8 @@ from pipeline.schema import read_checksummed, read_runs_frame
 from pipeline.survey import SURVEY_STUDY, read_runs
 
 __all__ = [
-    "AASHTO_PAVEMENT", "CONFIDENCE", "RESAMPLES", "aashto_means", "dynamics_and_sensor", "factors_table",
+    "AASHTO_PAVEMENT", "CONFIDENCE", "RESAMPLES", "aashto_means", "calibrated_wear", "dynamics_and_sensor",
+    "factors_table",
     "fleet_limits", "main", "observed_wear", "road_metrics",
 ]  # fmt: skip
 
@@ -88,15 +89,42 @@ def observed_wear(groups: pd.DataFrame, seed: int, spacing_step: float = 0.0) ->
                            confidence_level=CONFIDENCE, seed=seed, spacing_step_m=spacing_step)  # fmt: skip
 
 
-def factors_table(simulated: pd.DataFrame, observed: pd.DataFrame, observed_kind: str) -> pd.DataFrame:
+def factors_table(
+    simulated: pd.DataFrame, observed: pd.DataFrame, observed_kind: str,
+    calibrated: tuple[pd.DataFrame, str] | None = None,
+) -> pd.DataFrame:  # fmt: skip
     """``data/road/sharing_factors.csv``'s rows (:func:`bogie.weighings.pavement.sharing_factors`): the simulated
     fleet's trailer groups by protocol, size and suspension, then the observed survey's by size and position (its
-    protocol ``observed_kind``, its suspension as observed)."""
+    protocol ``observed_kind``, its suspension as observed), then the calibrated fleet's by size and suspension
+    (``calibrated``: its wear table and protocol, :func:`calibrated_wear`)."""
     parts = [sharing_factors(simulated, DAMAGE_EXPONENTS, source="simulated", position="trailer")]
     if len(observed):
         parts.append(sharing_factors(observed, DAMAGE_EXPONENTS, source="observed", protocol=observed_kind,
                                      suspension="as observed"))  # fmt: skip
+    if calibrated is not None and len(calibrated[0]):
+        parts.append(sharing_factors(calibrated[0], DAMAGE_EXPONENTS, source="calibrated", protocol=calibrated[1],
+                                     position="trailer"))  # fmt: skip
     return pd.concat(parts, ignore_index=True)
+
+
+def calibrated_wear(
+    table: Path, metrics: Path, legal_group: Mapping[str, float], legal_axle: float, seed: int
+) -> tuple[pd.DataFrame, str] | None:
+    """The calibrated fleet's figures by size and suspension (:func:`bogie.weighings.wear.wear_statistics`) and its
+    protocol: ``table`` is the calibrate stage's direct simulation of the fleet at the posterior's medians
+    (``data/calibration/calibrated.csv``: the calibration bogies' laden groups as the survey's protocol weighs them,
+    loads in kg), ``metrics`` its metrics file (the protocol); the intervals are over the groups, not over the
+    posterior. None without a calibration (the stage skipped, no table)."""
+    if not table.is_file():
+        return None
+    frame = pd.read_csv(table)
+    with open(metrics, encoding="utf-8") as fh:
+        protocol = str(json.load(fh)["protocol"])
+    frame = frame.assign(position="trailer", group=frame["group"].astype(str),
+                         suspension=frame["suspension"].astype(str))  # fmt: skip
+    wear = wear_statistics(frame, legal_group, legal_axle, by=["group", "suspension"], resamples=RESAMPLES,
+                           confidence_level=CONFIDENCE, seed=seed)  # fmt: skip
+    return wear, protocol
 
 
 #: the figures of a split of the WIM reading's (:func:`dynamics_and_sensor`)
@@ -206,6 +234,9 @@ def main(argv: list[str] | None = None) -> int:
     parser.add_argument("--observed", default="data/observed", help="observed groups (default: data/observed)")
     parser.add_argument("--design-runs", default="data/design_runs", help="default: data/design_runs")
     parser.add_argument("--design", default="data/design", help="design tables (default: data/design)")
+    parser.add_argument("--calibration", default="data/calibration", help="default: data/calibration")
+    parser.add_argument("--calibration-metrics", default="metrics/calibration.json",
+                        help="default: metrics/calibration.json")  # fmt: skip
     parser.add_argument("--observed-metrics", default="metrics/observed.json",
                         help="the observed stage's metrics, for the format its file was read in (default: "
                         "metrics/observed.json)")  # fmt: skip
@@ -232,6 +263,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         groups = read_checksummed(groups_file, rerun).to_pandas() if groups_file.exists() else pd.DataFrame()
         step = _spacing_step(Path(args.observed_metrics)) if len(groups) else 0.0
         design = _design_inputs(config, Path(args.design_runs), Path(args.design))
+        calibrated = calibrated_wear(Path(args.calibration) / "calibrated.csv", Path(args.calibration_metrics),
+                                     legal_group, legal_axle, config.seed)  # fmt: skip
     simulated = fleet_wear(runs, legal_group, legal_axle, min_load, resamples=RESAMPLES, confidence_level=CONFIDENCE,
                            seed=config.seed)  # fmt: skip
     split = dynamics_and_sensor(runs, legal_group, legal_axle, min_load, config.protocol.wim)
@@ -246,6 +279,7 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
     metrics = road_metrics(simulated, observed, savings, legal_group, legal_axle, min_load, note)
     metrics["wim_without_sensor_error"] = split
     metrics["aashto"] = aashto
+    metrics["calibrated"] = None if calibrated is None else wear_dict(calibrated[0], ["group", "suspension"])
     with atomic_outputs(files=[args.metrics], dirs=[args.out], stage="road", own=own) as ((tmp_json,), (tmp_dir,)):
         with open(tmp_json, "w", encoding="utf-8") as fh:
             json.dump(metrics, fh, indent=2, allow_nan=False)
@@ -254,7 +288,8 @@ def _stage(args: argparse.Namespace, own: Sequence[Path]) -> int:
         if len(observed):
             observed.assign(source="observed").to_csv(tmp_dir / "observed_wear.csv", index=False, float_format="%.6g")
         savings.to_csv(tmp_dir / "savings.csv", index=False, float_format="%.6g")
-        write_sharing_factors(factors_table(simulated, observed, config.observed.kind), tmp_dir / "sharing_factors.csv")
+        factors = factors_table(simulated, observed, config.observed.kind, calibrated)
+        write_sharing_factors(factors, tmp_dir / "sharing_factors.csv")
     told = "no observed survey" if not len(observed) else f"{int(observed['n_groups'].sum())} observed groups"
     print(
         f"road: {int(simulated['n_groups'].sum())} simulated laden readings, {told}; wrote {args.out}, {args.metrics}"

@@ -161,8 +161,9 @@ SHARING_FACTORS_HEADER: tuple[str, ...] = (
     "  tri-axle): 1 + (D - D_eq) / D_group. At k = 4 the two agree within 3 %; at k = 12 the guide factor is the one",
     "  to apply to a SAR12 count. _low, _high: the 95 % interval over the groups (bootstrap, or the delta method).",
     "k: 4 overall (ESA), 5 asphalt fatigue, 7 subgrade rutting, 12 cemented layers (Austroads AGPT02 chapter 7).",
-    "source: simulated (the fleet of params.yaml), observed (a WIM or weighbridge file); protocol: static or wim;",
-    "suspension: steel or air (simulated), 'as observed' (a survey does not say); n_groups [-]: laden groups.",
+    "source: simulated (the fleet of params.yaml), observed (a WIM or weighbridge file), calibrated (the fleet at the",
+    "  posterior's medians, fitted to that file; its interval over the groups only); protocol: static or wim;",
+    "suspension: steel or air (simulated, calibrated), 'as observed' (a survey does not say); n_groups: laden groups.",
     "Limits: a factor holds for the groups, loads and pavements it came from; multiply a group's equivalent damage",
     "  by it, not its load.",
 )
