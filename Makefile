@@ -33,6 +33,7 @@ $(PLOTS_TEMPLATE): $(STAMP) tools/plots_template.py
 
 repro: $(STAMP) $(PLOTS_TEMPLATE)
 	$(BIN)/dvc repro
+	$(BIN)/python tools/doc_figures.py  # the figures the README and docs/ quote, from the outputs just made
 
 # the report's plot series (reports/plots/*.csv, dvc.yaml's `plots:`) as dvc_plots/index.html, readable offline
 plots: $(STAMP) $(PLOTS_TEMPLATE)
