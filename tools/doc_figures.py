@@ -26,7 +26,8 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: one figure: the file, the key path, the optional ``neg``, the format; then the value as written
 FIGURE = re.compile(
-    r"<!-- fig (?P<file>\S+) (?P<path>\S+) (?:(?P<neg>neg) )?(?P<fmt>g\d+|f\d+|pct\d+|pts\d+|int) -->(?P<value>.*?)<!-- /fig -->",
+    r"<!-- fig (?P<file>\S+) (?P<path>\S+) (?:(?P<neg>neg) )?(?P<fmt>g\d+|f\d+|pct\d+|pts\d+|int) -->"
+    r"(?P<value>.*?)<!-- /fig -->",
     re.S,
 )
 
