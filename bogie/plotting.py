@@ -147,17 +147,25 @@ def case_history(result, title: str = "", note: str = "", case=None, ours: dict 
         axes[k].plot(result.t, result.p, lw=1.2, label="p (Eq. 2)")
         axes[k].plot(result.t, result.p1, lw=1.2, ls="--", label="P1 (Eq. 4)")
         axes[k].set_ylabel("wheel load\nparameter [-]")
+        _headroom(axes[k])
         axes[k].legend(fontsize=8, loc="upper right")
     for i in range(result.wheel_loads.shape[1]):
         axes[k + 1].plot(result.t, result.wheel_loads[:, i] / 1e3, lw=1.2, label=f"axle {i + 1}")
     axes[k + 1].set_ylabel("wheel load\n[kN]")
     axes[k + 1].set_xlabel("time [s]")
+    _headroom(axes[k + 1])
     axes[k + 1].legend(fontsize=8, loc="upper right", ncol=result.wheel_loads.shape[1])
     for ax in axes:
         ax.grid(True, lw=0.4, alpha=0.5)
     if title or note:
         fig.suptitle(title + (f"\n{note}" if note else ""), fontsize=10)
     return fig
+
+
+def _headroom(ax, share: float = 0.3) -> None:
+    """Raise ``ax``'s upper limit by ``share`` of its range: room for a legend above the curves, not over them."""
+    low, high = ax.get_ylim()
+    ax.set_ylim(low, high + share * (high - low))
 
 
 def _p1_newtons_panel(ax, result, case, ours: dict) -> None:

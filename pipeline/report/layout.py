@@ -8,15 +8,19 @@ assembled.
 
 from __future__ import annotations
 
-import textwrap
+import functools
 from collections.abc import Callable, Sequence
 from dataclasses import dataclass
 from typing import Any
 
 from matplotlib.axes import Axes
 from matplotlib.figure import Figure
+from matplotlib.font_manager import FontProperties
 from matplotlib.layout_engine import ConstrainedLayoutEngine
 from matplotlib.lines import Line2D
+from matplotlib.textpath import TextToPath
+
+from pipeline.report.style import STYLE
 
 __all__ = [
     "A4",
@@ -119,23 +123,50 @@ def line_height(size: float, spacing: float = LINE_SPACING) -> float:
 
 
 def chars_per_line(size: float, x: float = LEFT) -> int:
-    """How many characters of ``size`` point text fit between ``x`` and the right margin."""
-    return int((RIGHT - x) * A4[0] * 72.0 / (0.53 * size))  # DejaVu Sans averages about 0.53 em per character
+    """About how many characters of ``size`` point text fit between ``x`` and the right margin (an average: DejaVu
+    Sans runs about 0.53 em a character; digits are 0.64 em). :func:`wrap_paragraphs` measures instead."""
+    return int((RIGHT - x) * A4[0] * 72.0 / (0.53 * size))
+
+
+#: measures text by its glyphs (the font's advances and kerning, as the renderers set it)
+_TEXT_PATH = TextToPath()
+
+
+@functools.lru_cache(maxsize=65536)
+def text_width_pt(text: str, size: float, bold: bool = False) -> float:
+    """The width of ``text`` set in the report's font at ``size`` points, measured from the font's glyphs [pt]."""
+    prop = FontProperties(family=STYLE["font.family"], size=size, weight="bold" if bold else "normal")
+    return float(_TEXT_PATH.get_text_width_height_descent(text, prop, ismath=False)[0])
+
+
+def _wrap(text: str, width_pt: float, size: float, bold: bool, indent: str) -> list[str]:
+    """Greedy wrap of ``text`` at spaces (a no-break space joins) so that each line measures at most ``width_pt``."""
+    lines: list[str] = []
+    line = ""
+    for word in text.split(" "):
+        trial = word if not line else line + " " + word
+        if line and text_width_pt(trial, size, bold) > width_pt:
+            lines.append(line)
+            line = indent + word
+        else:
+            line = trial
+    return [*lines, line] if line or not lines else lines
 
 
 def wrap_paragraphs(paragraphs: Sequence[str], size: float = 9.0, x: float = LEFT) -> list[Block]:
-    """Wrap paragraphs to the width between ``x`` and the right margin.
+    """Wrap paragraphs to the width between ``x`` and the right margin, by the width the font gives each line.
 
     A paragraph starting with "## " is a bold subheading; "- " starts a bullet (its further lines indented); a
     number and its per cent sign are joined by a no-break space so a line never starts with "%".
     """
-    chars = chars_per_line(size, x)
+    width_pt = (RIGHT - x) * A4[0] * 72.0
     blocks = []
     for para in paragraphs:
         bold = para.startswith("## ")
-        text = para.removeprefix("## ").replace(" %", "\u00a0%")
+        # runs of spaces, line breaks and tabs are one space (as textwrap made them); a no-break space is kept
+        text = " ".join(w for w in para.removeprefix("## ").replace(" %", "\u00a0%").replace("\n", " ").split(" ") if w)
         indent = "  " if text.startswith("- ") else ""
-        lines = textwrap.wrap(text, chars, subsequent_indent=indent, break_on_hyphens=False) or [""]
+        lines = _wrap(text, width_pt, size, bold, indent) if text.strip() else [""]
         blocks.append(Block(tuple(lines), bold))
     return blocks
 

@@ -25,6 +25,7 @@ from pipeline import calibrate, design, observed, report, road, sensitivity, sur
 from pipeline.config import load_params, parse_config
 from pipeline.report import style
 from pipeline.report.context import Context
+from pipeline.report.faults import layout_faults
 from pipeline.report.pages.observed import page as build_observed_page
 from pipeline.sample import sample_studies, write_parquet_atomic
 from pipeline.schema import RESULT_COLUMNS, write_runs_file
@@ -295,7 +296,9 @@ def test_with_an_observed_survey_the_page_draws_and_quotes_it(project, tmp_path)
     spread = m["groups"]["triaxle"]["mean_spread_kg"]
     assert f"mean spread: observed {spread:.0f} kg" in page
     legends = [t.get_text() for ax in fig.get_axes() if ax.get_legend() for t in ax.get_legend().get_texts()]
-    assert f"observed, {m['groups']['tandem']['n_groups']}" in legends
+    assert f"observed, {m['groups']['tandem']['n_groups']} groups" in legends
+    with matplotlib.rc_context(style.STYLE):
+        assert layout_faults(fig) == []  # issue 45 Must 3, on the page a survey adds
 
 
 # ---- the summary a reader acts on ---------------------------------------------------------------------------------
@@ -316,6 +319,15 @@ def test_page_two_gives_three_findings_one_figure_and_what_to_do(built, pages):
     expected = sorted(round(100.0 * a[v]["mean_max_deviation"], 6) for a in ss["ablation"].values()
                       for v in ("baseline", *ss["ranking"], "all"))  # fmt: skip
     assert drawn == pytest.approx(expected, abs=0.0051)  # the metrics hold four decimals of a fraction
+
+
+# ---- layout faults (issue 45 Must 3) --------------------------------------------------------------------------------
+def test_no_page_has_a_layout_fault(pages):
+    # text outside the page or margins, text over text or over a chart, a legend over data, a table cell too narrow:
+    # from the renderer's bounding boxes (pipeline.report.faults; its own test: tests/pipeline/test_report_layout.py)
+    with matplotlib.rc_context(style.STYLE):
+        faults = [(k + 1, p.section, f) for k, p in enumerate(pages) for f in layout_faults(p.figure)]
+    assert not faults
 
 
 # ---- the road page ------------------------------------------------------------------------------------------------

@@ -24,12 +24,16 @@ def drawn_boxes(fig):
 
 @pytest.mark.parametrize("size", [7.5, 8.2, 9.0])
 def test_wrapped_lines_fit_the_measure_and_keep_numbers_with_their_per_cent(size):
-    chars = layout.chars_per_line(size)
+    measure = (layout.RIGHT - layout.LEFT) * layout.A4[0] * 72.0  # [pt]
     blocks = layout.wrap_paragraphs([LONG, "## A heading", "- " + LONG], size)
     assert [b.bold for b in blocks] == [False, True, False]
     assert blocks[1].lines == ("A heading",)
     for block in blocks:
-        assert all(len(line) <= chars for line in block.lines)
+        widths = [layout.text_width_pt(line, size, block.bold) for line in block.lines]
+        assert max(widths) <= measure
+        # greedy: each line but the last would be too wide with the next line's first word
+        for line, after in zip(block.lines, block.lines[1:]):
+            assert layout.text_width_pt(line + " " + after.split()[0], size, block.bold) > measure
         assert not any(line.startswith("%") for line in block.lines)
     assert len(blocks[0].lines) > 1
     assert "4.57\u00a0%" in " ".join(blocks[0].lines)
@@ -150,3 +154,49 @@ def test_a_frozen_page_keeps_its_layout_rounded_and_draws_without_the_engine():
     assert first.getvalue() == second.getvalue()
     # a colour bar's axes keeps its aspect inside the frozen box (a draw's apply_aspect), to well under 1e-6
     assert np.allclose([ax.get_position(original=False).bounds for ax in axes], frozen, rtol=0.0, atol=1e-6)
+
+
+def test_the_layout_faults_are_found_where_they_are_and_not_where_they_are_not():
+    from pipeline.report.faults import layout_faults
+
+    def page():
+        fig = Figure(figsize=layout.A4)
+        fig.text(layout.LEFT, 0.95, "A title inside the margins")
+        return fig
+
+    with matplotlib.rc_context(STYLE):
+        clean = page()
+        ax = clean.add_axes((0.1, 0.5, 0.8, 0.3))
+        ax.plot([0, 1], [0, 1], label="a line")
+        ax.legend(loc="upper left")  # the line runs from lower left to upper right: the upper left is free
+        assert layout_faults(clean) == []
+        wide = page()
+        wide.text(layout.LEFT, 0.5, "x" * 400)
+        assert any("outside the margins" in f for f in layout_faults(wide))
+        over = page()
+        over.text(layout.LEFT, 0.95, "A second text on the first")
+        assert any("page texts overlap" in f for f in layout_faults(over))
+        hidden = page()
+        ax = hidden.add_axes((0.1, 0.5, 0.8, 0.3))
+        ax.plot([i / 40 for i in range(41)], [1.0] * 41, label="a line along the top")
+        ax.set_ylim(0.0, 1.05)
+        ax.legend(loc="upper left")
+        assert any("legend over data" in f for f in layout_faults(hidden))
+        on_chart = page()
+        on_chart.add_axes((0.1, 0.5, 0.8, 0.3)).plot([0, 1], [0, 1])
+        on_chart.text(0.3, 0.6, "words over the chart")
+        assert any("page text over a chart" in f for f in layout_faults(on_chart))
+        table = page()
+        layout.table_axes(table, 0.8, ["a", "b"], [["a cell far too long for its narrow column", "b"]], [0.1, 0.1])
+        assert any("table cell overflows" in f for f in layout_faults(table))
+
+
+@pytest.mark.parametrize("size", [7.0, 8.2, 9.5])
+def test_a_measured_line_is_the_width_the_page_draws_it(size):
+    # the report's style sets text unhinted, as the PDF does: the width wrap_paragraphs measures is the drawn one
+    line = "Weigh-in-motion: 56.7\u00a0% of tandem and 87.4\u00a0% of tri-axle groups are outside 5\u00a0% (1,086 kg)"
+    with matplotlib.rc_context(STYLE):
+        fig = Figure(figsize=layout.A4)
+        fig.text(layout.LEFT, 0.5, line, fontsize=size)
+        (box,), _ = drawn_boxes(fig)
+    assert box.width * 72.0 / fig.dpi == pytest.approx(layout.text_width_pt(line, size), rel=0.01)

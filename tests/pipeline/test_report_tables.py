@@ -102,18 +102,18 @@ def test_summary_table_formats_indices_and_ablation_without_units():
             "all": {**entry, "mean_max_deviation": 0.0012, "share_outside_5pct": 0.0}}},
     }  # fmt: skip
     header, rows = summary_table(numbers)
-    assert len(header) == 7 == len(rows[0])
+    assert len(header) == 6 == len(rows[0])
     assert rows[0] == [
-        "contact roll radius", "1", "0.24\n(0.19 to 0.29)", "0.20\n(0.16 to 0.24)", "1.50", "1.71\n(1.61 to 1.81)",
+        "1. contact roll radius", "0.24\n(0.19 to 0.29)", "0.20\n(0.16 to 0.24)", "1.50", "1.71\n(1.61 to 1.81)",
         "25.0"
     ]  # fmt: skip
     # indices under 0.01 get four decimals, so that two small, different ones do not both read 0.00
     assert rows[1] == [
-        "spring-end friction coefficient", "2", "-0.0010\n(-0.0050 to 0.0030)", "-0.0020\n(-0.0050 to 0.0010)", "n/a",
+        "2. spring-end friction coefficient", "-0.0010\n(-0.0050 to 0.0030)", "-0.0020\n(-0.0050 to 0.0010)", "n/a",
         "–", "n/a"
     ]  # fmt: skip
-    assert rows[2] == ["all five removed", "", "", "", "0.12", "1.71\n(1.61 to 1.81)", "0.0"]
-    assert rows[3] == ["none removed", "", "", "", "3.21", "", "62.5"]
+    assert rows[2] == ["all five removed", "", "", "0.12", "1.71\n(1.61 to 1.81)", "0.0"]
+    assert rows[3] == ["none removed", "", "", "3.21", "", "62.5"]
 
 
 def test_worse_without_lists_the_removals_whose_whole_interval_is_worse():

@@ -29,7 +29,7 @@ def _panel(ax, panel: dict) -> None:
         ax.bar(labels, [panel["categories"][k] for k in labels], color="C0", alpha=0.8, label="sampled")
         if panel.get("expected"):
             ax.plot(labels, [panel["expected"][k] for k in labels], "k_", ms=18, mew=1.5, label="expected")
-        ax.set_ylim(0.0, 1.3 * max([*panel["categories"].values(), *(panel.get("expected") or {}).values(), 1]))
+        ax.set_ylim(0.0, 1.7 * max([*panel["categories"].values(), *(panel.get("expected") or {}).values(), 1]))
         ax.legend(loc="upper left", ncol=2)
     else:
         x = np.asarray(panel["values"], dtype=float)

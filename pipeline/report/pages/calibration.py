@@ -115,7 +115,7 @@ FIT_HEADER = (
     "quantity", "", "posterior\nmedian", "credible\ninterval", "prior-free minimum\n(bootstrap interval)", "bounds",
     "R-hat; ESS\nbulk/tail",
 )  # fmt: skip
-FIT_WIDTHS = (0.28, 0.06, 0.09, 0.15, 0.21, 0.09, 0.12)
+FIT_WIDTHS = (0.27, 0.05, 0.09, 0.16, 0.19, 0.09, 0.15)
 
 
 def _valley(
@@ -136,7 +136,7 @@ def _valley(
                 label="prior-free minimum")  # fmt: skip
     ax.set_xlabel(quantity_label(qx))
     ax.set_ylabel(quantity_label(qy))
-    ax.set_title("Valley: distance over the most correlated pair (others at the prior-free minimum)", fontsize=9)
+    ax.set_title("Valley: distance over the most correlated pair\n(the others at the prior-free minimum)", fontsize=9)
     ax.grid(False)
     ax.legend(loc="upper right", framealpha=0.85)
     cax.figure.colorbar(mesh, cax=cax, label="distance [-]")
@@ -179,7 +179,7 @@ def fit_page(m: Mapping[str, Any], tables: Mapping[str, pd.DataFrame], caption: 
         for k, q in enumerate(names):
             ax = fig.add_subplot(grid[slots[k]])
             _profile(ax, profiles[profiles["quantity"] == q], q, fitted[q], free.get(q), legend=k == 0)
-        top = table_axes(fig, bottom - 0.02, FIT_HEADER, rows, FIT_WIDTHS, size=type_size)
+        top = table_axes(fig, bottom - 0.02, FIT_HEADER, rows, FIT_WIDTHS, size=type_size - 0.6)
         return fig, text_block(fig, top - 0.012, caption, size=type_size)
 
     return first_fit(FIT_FITS, draw)
@@ -249,11 +249,12 @@ def _quantiles(ax, m: Mapping[str, Any], size: str) -> None:
             ax.plot([x - half * 0.6, x + half * 0.6], [qs["p05"]] * 2, color=color, lw=1.0)
             ax.plot([x - half * 0.6, x + half * 0.6], [qs["p95"]] * 2, color=color, lw=1.0)
             ax.plot([x - half, x + half], [qs["p50"]] * 2, color=color, lw=1.8)
-        handles.append(Patch(facecolor=color, alpha=0.45, edgecolor=color, label=f"{label}, {e['n_groups']}"))
+        handles.append(Patch(facecolor=color, alpha=0.45, edgecolor=color, label=f"{label}, {e['n_groups']} groups"))
     load_share_axes(ax, n)
-    ax.legend(handles=handles, loc="upper left", title="groups")
-    low, high = ax.get_ylim()
-    ax.set_ylim(low, high + 0.55 * (high - low))  # headroom for the legend
+    ax.set_title(title, pad=8 + 10 * -(-len(handles) // 2))  # above the legend's rows
+    # between the title and the chart: the boxes of the sides can reach any height
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=6.5,
+              frameon=False, borderaxespad=0.1, columnspacing=0.8, handletextpad=0.3)  # fmt: skip
 
 
 def _ablation(ax, ablation: pd.DataFrame) -> None:
@@ -386,7 +387,7 @@ def cause_rows(attribution: Mapping[str, Any]) -> list[list[str]]:
 CAUSE_HEADER = (
     "group", "groups", "observed", "shares", "resolution", "sensor", "tilt", "dynamics", "interaction", "at rest",
 )  # fmt: skip
-CAUSE_WIDTHS = (0.125, 0.06, 0.08, 0.1, 0.11, 0.11, 0.11, 0.11, 0.11, 0.065)
+CAUSE_WIDTHS = (0.12, 0.06, 0.08, 0.08, 0.117, 0.117, 0.117, 0.117, 0.117, 0.065)
 
 
 def cause_page(m: Mapping[str, Any], caption: Sequence[str]) -> Figure:

@@ -80,7 +80,7 @@ def design_page(
     caption
         Paragraphs under the charts.
     """
-    title = "Fleet correlations by design parameter (not a controlled experiment)"
+    title = "Fleet correlations by design parameter (no experiment)"
     fig = new_page(title, body=(0.06, 0.31, 0.88, 0.62))
     sub = fig.subfigures(2, 1, height_ratios=(1.0, 1.3))
     maps = sub[0].subplots(1, len(grids), squeeze=False)[0]

@@ -106,16 +106,15 @@ def title(ctx: Context, contents: Sequence[tuple[str, int]]) -> Page:
 
 # ---- summary -------------------------------------------------------------------------------------------------------
 SUMMARY_HEADER = [
-    "inhibitor",
-    "rank",
+    "inhibitor, by rank",
     "ST\n(interval)",
     "S1\n(interval)",
-    "max. dev.\nwithout [%]",
-    "reduction [points]\n(interval)",
+    "max. dev.\nwithout\n[%]",
+    "reduction\n[points]\n(interval)",
     "outside 5 %\nwithout [%]",
 ]
 #: the summary table's column widths [page width between the margins]
-SUMMARY_WIDTHS = (0.27, 0.05, 0.15, 0.15, 0.11, 0.15, 0.12)
+SUMMARY_WIDTHS = (0.29, 0.17, 0.19, 0.09, 0.15, 0.11)
 
 
 def _stacked(estimate: str) -> str:
@@ -141,8 +140,7 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
         i, a = sobol["indices"][f], abl.get(f, {})
         rows.append(
             [
-                factor_label(f),
-                str(rank),
+                f"{rank}. {factor_label(f)}",
                 _stacked(text.interval(i["ST"], i["ST_conf"])),
                 _stacked(text.interval(i["S1"], i["S1_conf"])),
                 *removed(a),
@@ -150,9 +148,9 @@ def summary_table(numbers: Mapping[str, Any]) -> tuple[list[str], list[list[str]
             ]
         )
     a, b = abl["all"], abl["baseline"]
-    rows.append([factor_label("all"), "", "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("all"), "", "", *removed(a), text.pct(a["share_outside_5pct"], unit=False)])
     baseline = text.pct(b["mean_max_deviation"], 2, unit=False)
-    rows.append([factor_label("baseline"), "", "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
+    rows.append([factor_label("baseline"), "", "", baseline, "", text.pct(b["share_outside_5pct"], unit=False)])
     return list(SUMMARY_HEADER), rows
 
 

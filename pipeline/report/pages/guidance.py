@@ -156,8 +156,9 @@ def _curves(ax, group: str, designs: pd.DataFrame, curves: pd.DataFrame, target:
     ax.set_ylim(-2, 102)
     ax.set_xlabel("chassis tilt, nose up + [degree]")
     ax.set_ylabel("within 5 % [%]")
-    ax.set_title(f"{GROUP_LABEL[group]}: at a set tilt")
-    ax.legend(loc="lower center", fontsize=6.8)
+    # the curves cross the whole chart: the legend between the title and the chart, not over them
+    ax.set_title(f"{GROUP_LABEL[group]}: at a set tilt", pad=16)
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, fontsize=6.8, frameon=False, borderaxespad=0.1)
 
 
 #: the design's columns in the tables: its kind, then each factor's short name and unit
@@ -171,7 +172,7 @@ FRONT_HEADER = [
     "within 10 %\n[%]",
     "tolerance down\n/ up [degree]",
 ]
-FRONT_WIDTHS = [0.07, *DESIGN_WIDTHS, 0.07, 0.1, 0.1, 0.13]
+FRONT_WIDTHS = [0.07, *DESIGN_WIDTHS, 0.07, 0.11, 0.11, 0.13]
 
 
 def front_rows(designs: pd.DataFrame) -> list[list[str]]:
@@ -303,7 +304,7 @@ def tolerance_page(tables: Mapping[str, pd.DataFrame], m: Mapping[str, Any], gri
     def draw(option: tuple[float, float]) -> tuple[Figure, float]:
         bottom, size = option
         fig = new_page(
-            "Design guidance: how much chassis tilt a bogie tolerates", body=(0.07, bottom, 0.86, 0.9 - bottom)
+            "Design guidance: how much chassis tilt a bogie tolerates", body=(0.07, bottom, 0.84, 0.88 - bottom)
         )
         sub = fig.add_gridspec(len(groups), len(panels))
         for r, group in enumerate(groups):
@@ -321,8 +322,9 @@ def tolerance_page(tables: Mapping[str, pd.DataFrame], m: Mapping[str, Any], gri
                     ax.set_ylabel("tolerated tilt [degree]")
                 else:
                     ax.tick_params(labelleft=False)
-                if r == 0 and c == 0 and line:
-                    ax.legend(fontsize=6.5, loc="lower left")
+                if r == 0 and c == 0 and line:  # one legend for the grid, above it, not over a panel's lines
+                    fig.legend(*ax.get_legend_handles_labels(), loc="lower left", bbox_to_anchor=(0.07, 0.895),
+                               ncol=4, fontsize=6.5, frameon=False)  # fmt: skip
         y = text_block(fig, bottom - 0.012, intro, size=size)
         top = table_axes(fig, y - 0.004, TOLERANCE_HEADER, rows, TOLERANCE_WIDTHS, size=size - 0.6)
         return fig, text_block(fig, top - 0.01, notes, size=size)

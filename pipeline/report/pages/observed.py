@@ -73,11 +73,12 @@ def _load_share_boxes(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
             medianprops={"color": color, "lw": 1.6},
         )
     load_share_axes(ax, n)
-    ax.set_title(title)
-    handles = [Patch(facecolor=SOURCE_COLOR[s], alpha=0.5, label=f"{SOURCE_LABEL[s]}, {len(sides[s])}") for s in sides]
-    ax.legend(handles=handles, loc="upper left", title="groups")
-    low, high = ax.get_ylim()
-    ax.set_ylim(low, high + 0.6 * (high - low))  # headroom for the legend
+    handles = [Patch(facecolor=SOURCE_COLOR[s], alpha=0.5, label=f"{SOURCE_LABEL[s]}, {len(sides[s])} groups")
+               for s in sides]  # fmt: skip
+    ax.set_title(title, pad=8 + 10 * -(-len(handles) // 2))  # above the legend's rows
+    # between the title and the chart: the boxes of the three sides can reach any height
+    ax.legend(handles=handles, loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=6.5,
+              frameon=False, borderaxespad=0.1, columnspacing=0.8, handletextpad=0.3)  # fmt: skip
 
 
 def _spread_distribution(ax, sides: Mapping[str, pd.DataFrame], size: str) -> None:
@@ -96,8 +97,11 @@ def _spread_distribution(ax, sides: Mapping[str, pd.DataFrame], size: str) -> No
     ax.set_ylim(0.0, 100.0)
     ax.set_xlabel("spread [kg]")
     ax.set_ylabel("groups up to this spread [%]")
-    ax.set_title(title)
-    ax.legend(loc="lower right")
+    handles = ax.get_legend_handles_labels()[0]
+    ax.set_title(title, pad=8 + 10 * -(-len(handles) // 2))  # above the legend's rows
+    # between the title and the chart: a small survey's steps can cross any corner
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=2, fontsize=6.5, frameon=False, borderaxespad=0.1,
+              columnspacing=0.8)  # fmt: skip
 
 
 def observed_page(groups: pd.DataFrame, simulated: pd.DataFrame, caption: Sequence[str]) -> Figure:

@@ -71,8 +71,9 @@ def wear_bars(ax, m: Mapping[str, Any]) -> list[str]:
                label=f"{label} (n = {entry['n_groups']})", error_kw={"lw": 0.7, "capsize": 1.5})  # fmt: skip
     ax.set_xticks(x, [DAMAGE_LABEL[k] for k in kinds])
     ax.set_ylabel("extra wear, share of the group count [%]")
-    ax.set_title("Extra wear of unequal sharing, share of Austroads' group count (SAR per group)")
-    ax.legend(loc="upper left", fontsize=7)
+    ax.set_title("Extra wear of unequal sharing, share of Austroads' group count")
+    ax.set_ylim(top=ax.get_ylim()[1] * 1.45)  # headroom: the legend above the bars, not over them
+    ax.legend(loc="upper left", fontsize=7, ncol=2)
     ax.grid(axis="y", lw=0.4, alpha=0.6)
     return [s[0] for s in sides]
 
@@ -98,10 +99,8 @@ def savings_bars(ax, savings: Mapping[str, Any]) -> None:
             error_kw={"lw": 0.8, "capsize": 2})  # fmt: skip
     ax.set_yticks(y, [r[0] for r in rows], fontsize=7.5)
     ax.axvline(0.0, color="0.3", lw=0.6)
-    ax.set_xlabel(
-        "extra wear at k = 4 saved against today's typical design, per axle (within 3 % of the group count's) [points]"
-    )
-    ax.set_title("What acting would save (static weighbridge, the design experiment's conditions, paired)")
+    ax.set_xlabel("extra wear at k = 4 saved against today's typical design, per axle [points]")
+    ax.set_title("What acting would save (weighbridge, paired over the design conditions)", loc="right")
     ax.grid(axis="x", lw=0.4, alpha=0.6)
 
 

@@ -76,7 +76,7 @@ def _spread_and_tolerance(ax_kg, ax_cum, ok: pd.DataFrame, groups: Sequence[str]
         )
         ax_kg.plot(means, pos, "D", color="C3", ms=4, label="mean")
         ax_kg.set_yticks(pos, labels)
-        ax_kg.legend(loc="lower right")
+        ax_kg.legend(loc="upper right")
     ax_kg.set_xlabel("heaviest minus lightest axle [kg]")
     ax_kg.set_title("Spread between axles")
     ax_cum.axvline(5.0, color="0.3", lw=0.8, ls=":")
@@ -139,10 +139,12 @@ def _tilt_scatter(ax, sub: pd.DataFrame, group: str, protocol: str) -> None:
             lw=0,
             label=f"{name} axle heaviest",
         )
-    ax.set_title(f"{GROUP_LABEL[group]}, {PROTOCOL_LABEL[protocol]}: every bogie")
+    ax.set_title(f"{GROUP_LABEL[group]}, {PROTOCOL_LABEL[protocol]}: every bogie", pad=16)
     ax.set_xlabel("chassis tilt, nose up + [degree]")
     ax.set_ylabel("max. deviation from the mean [%]")
-    ax.legend(loc="upper center", markerscale=2)
+    # between the title and the chart: a cloud of bogies can reach any corner
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, markerscale=2, fontsize=6.5, frameon=False,
+              borderaxespad=0.1, columnspacing=0.8, handletextpad=0.2)  # fmt: skip
 
 
 def _tilt_bands(ax, tilt: pd.DataFrame, group: str) -> None:
@@ -238,12 +240,14 @@ def tilt_page(
         _pair_scatter(ax_d, ax_s, pairs, groups)
     ax_d.set_xlabel("max. deviation, static weighbridge [%]")
     ax_d.set_ylabel("max. deviation, WIM [%]")
-    ax_d.set_title("Same bogie, both protocols")
-    ax_d.legend(loc="upper left")
+    # the clouds fill the charts: their legends between the title and the chart, not over the points
+    ax_d.set_title("Same bogie, both protocols", pad=22)
+    ax_d.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, fontsize=7, frameon=False, borderaxespad=0.2)
     ax_s.set_xlabel("load share, static weighbridge [-]")
     ax_s.set_ylabel("load share, WIM [-]")
-    ax_s.set_title("Each axle's share, both protocols")
-    ax_s.legend(loc="upper left", ncol=2, markerscale=2)
+    ax_s.set_title("Each axle's share, both protocols", pad=32)
+    ax_s.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, markerscale=2, fontsize=6.5, frameon=False,
+                borderaxespad=0.2, columnspacing=0.8, handletextpad=0.2)  # fmt: skip
     text_block(fig, 0.18, caption, size=8.2)
     return fig
 
