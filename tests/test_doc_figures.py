@@ -35,3 +35,9 @@ def test_a_figure_is_rewritten_from_its_output_and_a_missing_key_is_named(tmp_pa
     with pytest.raises(ValueError, match=r"t.md:2: figure m.json a.c"):
         doc_figures.rewrite("\n<!-- fig m.json a.c g2 -->1<!-- /fig -->", tmp_path, "t.md")
     assert doc_figures.written(1234.4, "int") == "1,234"
+    # a sentence the stage wrote, as it is; a number where a sentence is asked for is an error
+    (tmp_path / "s.json").write_text(json.dumps({"guidance": ["Keep the tilt within 0.7 degree.", 3]}))
+    new, stale = doc_figures.rewrite("<!-- fig s.json guidance.0 text -->old<!-- /fig -->", tmp_path, "t.md")
+    assert new == "<!-- fig s.json guidance.0 text -->Keep the tilt within 0.7 degree.<!-- /fig -->" and len(stale) == 1
+    with pytest.raises(ValueError, match="not a string"):
+        doc_figures.rewrite("<!-- fig s.json guidance.1 text -->3<!-- /fig -->", tmp_path, "t.md")

@@ -7,7 +7,7 @@ A figure that comes from an output is written between two HTML comments, invisib
 The opening comment names the output file (a JSON file relative to the project root), the path of keys into it
 (dots; a list's item by its index) and how to write it: ``g<n>`` (n significant figures), ``f<n>`` (n decimals),
 ``pct<n>`` (times 100, n decimals, then " %"), ``pts<n>`` (times 100, n decimals: percentage points, the unit
-written beside it), ``int``; a ``neg`` before it writes the value's negative (a reduction
+written beside it), ``int``, ``text`` (a string as it is: a sentence the stage wrote); a ``neg`` before it writes the value's negative (a reduction
 named as a rise). ``python tools/doc_figures.py`` rewrites every such figure of the tracked Markdown files from the
 outputs (``make repro`` runs it after ``dvc repro``, so the words move with the results they quote); ``--check``
 lists the stale ones and exits 1, which ``tests/test_doc_figures.py`` asserts never happens. A figure whose file or
@@ -26,19 +26,23 @@ ROOT = Path(__file__).resolve().parents[1]
 
 #: one figure: the file, the key path, the optional ``neg``, the format; then the value as written
 FIGURE = re.compile(
-    r"<!-- fig (?P<file>\S+) (?P<path>\S+) (?:(?P<neg>neg) )?(?P<fmt>g\d+|f\d+|pct\d+|pts\d+|int) -->"
+    r"<!-- fig (?P<file>\S+) (?P<path>\S+) (?:(?P<neg>neg) )?(?P<fmt>g\d+|f\d+|pct\d+|pts\d+|int|text) -->"
     r"(?P<value>.*?)<!-- /fig -->",
     re.S,
 )
 
 
-def _value(root: Path, file: str, path: str, cache: dict) -> float:
+def _value(root: Path, file: str, path: str, cache: dict, text: bool = False) -> float | str:
     if file not in cache:
         with open(root / file, encoding="utf-8") as fh:
             cache[file] = json.load(fh)
     node = cache[file]
     for key in path.split("."):
         node = node[int(key)] if isinstance(node, list) else node[key]
+    if text:
+        if not isinstance(node, str):
+            raise TypeError(f"{file}: {path} is {node!r}, not a string")
+        return node
     if not isinstance(node, (int, float)) or isinstance(node, bool):
         raise TypeError(f"{file}: {path} is {node!r}, not a number")
     return float(node)
@@ -67,10 +71,10 @@ def rewrite(text: str, root: Path = ROOT, where: str = "") -> tuple[str, list[tu
     def one(match: re.Match) -> str:
         line = text.count("\n", 0, match.start()) + 1
         try:
-            value = _value(root, match["file"], match["path"], cache)
+            value = _value(root, match["file"], match["path"], cache, match["fmt"] == "text")
         except (OSError, KeyError, IndexError, ValueError, TypeError) as exc:
             raise ValueError(f"{where}:{line}: figure {match['file']} {match['path']}: {exc!r}") from exc
-        new = written(-value if match["neg"] else value, match["fmt"])
+        new = value if match["fmt"] == "text" else written(-value if match["neg"] else value, match["fmt"])
         if new != match["value"]:
             stale.append((line, f"{match['file']} {match['path']}", match["value"], new))
         return match[0][: match.start("value") - match.start()] + new + "<!-- /fig -->"
