@@ -9,9 +9,10 @@ The opening comment names the output file (a JSON file relative to the project r
 ``pct<n>`` (times 100, n decimals, then " %"), ``pts<n>`` (times 100, n decimals: percentage points, the unit
 written beside it), ``int``, ``text`` (a string as it is: a sentence the stage wrote); a ``neg`` before it writes
 the value's negative (a reduction named as a rise). ``python tools/doc_figures.py`` rewrites every such figure of
-the tracked Markdown files from the outputs (``make repro`` runs it after ``dvc repro``, so the words move with the results they quote); ``--check``
-lists the stale ones and exits 1, which ``tests/test_doc_figures.py`` asserts never happens. A figure whose file or
-key is missing is an error naming the file, the key and the line, never a silent blank.
+the tracked Markdown files from the outputs (``make repro`` runs it after ``dvc repro``, so the words move with the
+results they quote); ``--check`` lists the stale ones and exits 1, which ``tests/test_doc_figures.py`` asserts never
+happens. A figure whose file or key is missing is an error naming the file, the key and the line, never a silent
+blank.
 """
 
 from __future__ import annotations
