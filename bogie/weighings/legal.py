@@ -137,7 +137,7 @@ def group_limits(
     if legal_axle is not None:
         return group_kg, np.full(len(groups), float(legal_axle))
     _needs(groups, ("position",), "legal_axle")
-    return group_kg, eu_axle_limit_kg(groups["position"].astype(str).to_numpy()) if len(groups) else np.zeros(0)
+    return group_kg, eu_axle_limit_kg(groups["position"].astype(str).to_numpy())
 
 
 def _needs(groups: pd.DataFrame, columns: tuple[str, ...], argument: str) -> None:

@@ -356,10 +356,6 @@ class _Tally:
 _COMPACT = ("group", "n_axles", "axle_load_1", "axle_load_2", "axle_load_3", "station_code")
 
 
-# the position codes _spill writes (the group's index less one, capped) index the legal table's positions
-assert LEGAL_POSITIONS == ("steer", "drive", "trailer")
-
-
 def _spill(spill: GroupSpill, groups: pd.DataFrame) -> None:
     """Write the tandems and tri-axles of a chunk's kept ``groups`` to the spill: axles, station code, three loads,
     position code and two spacings."""
@@ -367,7 +363,8 @@ def _spill(spill: GroupSpill, groups: pd.DataFrame) -> None:
     surveyed = (axles == 2) | (axles == 3)
     loads = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in axle_columns(3)])
     station = groups["station_code"].to_numpy()[surveyed] if "station_code" in groups else None
-    # the position's code by the group's index, as axle_groups labels it (1 steer, 2 drive, 3 and on trailer)
-    position = np.minimum(groups["group_index"].to_numpy()[surveyed], 3) - 1
+    # each group's own position label as its index in the legal table's positions
+    position = pd.Categorical(groups["position"].to_numpy()[surveyed], categories=LEGAL_POSITIONS).codes
+    assert (position >= 0).all(), "a group's position is not one of the legal table's (axle_groups labels them)"
     spacings = np.column_stack([groups[c].to_numpy(dtype=float)[surveyed] for c in ("spacing_1", "spacing_2")])
     spill.append(axles[surveyed], station, loads, position, spacings)

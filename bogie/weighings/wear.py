@@ -44,7 +44,7 @@ from bogie.params import GRAVITY
 from bogie.rounding import json_number
 from bogie.settings import check_value, refusal
 from bogie.weighings._records import REL_TOL
-from bogie.weighings.legal import group_limits
+from bogie.weighings.legal import EU_NON_DRIVING_AXLE_KG, group_limits
 from bogie.weighings.pavement import with_group_baseline
 from bogie.weighings.stats import _width, axle_columns
 
@@ -71,8 +71,9 @@ STANDARD_AXLE_KG: float = 80_000.0 / GRAVITY
 #: legal group loads of trailer axle groups, Directive 96/53/EC Annex I: 3.4, a trailer's tandem with its axles
 #: 1.3 m to under 1.8 m apart, 18 t; 3.5, a trailer's tri-axle with spacings over 1.3 m up to 1.4 m, 24 t [kg]
 EU_LEGAL_GROUP_KG: Mapping[str, float] = {"tandem": 18_000.0, "triaxle": 24_000.0}
-#: legal load of a single non-driving axle, Directive 96/53/EC Annex I 3.1, 10 t [kg]
-EU_LEGAL_AXLE_KG: float = 10_000.0
+#: legal load of a single non-driving axle, Directive 96/53/EC Annex I 3.1, 10 t (declared once, in
+#: :mod:`bogie.weighings.legal`) [kg]
+EU_LEGAL_AXLE_KG: float = EU_NON_DRIVING_AXLE_KG
 #: the columns of :func:`wear_statistics` per exponent name ``<k>`` (see there)
 WEAR_COLUMNS: tuple[str, ...] = (
     "extra_wear_{k}", "extra_wear_{k}_low", "extra_wear_{k}_high",
