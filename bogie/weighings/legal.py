@@ -112,10 +112,11 @@ def group_limits(
     does not name: NaN) and ``legal_axle`` (one limit) when given, a stated single limit; None: the directive's, by
     each row's ``position`` and spacing (:func:`eu_group_limit_kg` of ``spacing_1`` for a tandem, the shorter of
     ``spacing_1`` and ``spacing_2`` for a tri-axle; NaN for another size; :func:`eu_axle_limit_kg`).
-    ``spacing_step_m``: the step the file reads spacings at [m] (:func:`bogie.weighings.formats.spacing_step_m`;
-    0: as read). A spacing read as d may be anything within half a step of it, and every limit grows with the
-    spacing, so a group is judged at d + step / 2, in the vehicle's favour (a named choice, as an enforcement
-    weighing allows for its scale's error): a tri-axle 1.31 m apart read at 0.1 m as 1.3 m is given 24 t, not 21 t.
+    ``spacing_step_m``: the step the file reads spacings at [m] (:func:`spacing_step_m`; 0: as read). A spacing read
+    as d may be anything within half a step of it, and every limit grows with the spacing, so a group is judged at
+    d + step / 2, in the vehicle's favour: an ASSUMPTION (no source says how a spacing read at a coarse step is to be
+    judged; docs/pavement.md), so that a tri-axle 1.31 m apart read at 0.1 m as 1.3 m is given 24 t, not 21 t, and
+    a survey's legal figures do not depend on its file's format.
 
     Raises
     ------
