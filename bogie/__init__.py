@@ -44,6 +44,11 @@ from bogie.numerics import fix_compile_target as _fix_compile_target  # noqa: E4
 
 _fix_compile_target()
 
+# numba files the kernels by their place in the package, not by the clone's path (bogie/_numba_locator.py)
+from bogie._numba_locator import install as _install_locator  # noqa: E402
+
+_install_locator()
+
 from bogie import _moved  # noqa: E402
 
 _moved.install()  # the steel model's old module paths, for one release (bogie/_moved.py)

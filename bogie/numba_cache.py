@@ -4,9 +4,9 @@ numba invalidates a cached function only when its own file changes, not when a c
 another module) does, so ``import bogie`` points ``NUMBA_CACHE_DIR`` at a directory of its own per version of the
 sources (:func:`source_digest`: every module below ``bogie/``, subpackages included): ``<root>/<digest>/``, the root
 ``$XDG_CACHE_HOME/bogie-numba`` (``~/.cache`` without it, :func:`cache_root`). numba keys what it caches there by
-the path of each source file too (one subdirectory per clone, its index stamped with the file's modification time),
-so two clones of one version share the directory but not the files; sharing those would make each clone overwrite
-the other's index on every start.
+the path of each source file too (one subdirectory per clone), so two clones of one version would share the
+directory but not the files and each would compile again: :mod:`bogie._numba_locator` files them by their place in
+the package instead, stamped by content, so every clone and ``dvc exp run --temp`` copy of one version shares them.
 
 Every edit of a source is a new version, and nothing removed the old ones: the root grew by a directory per version
 and clone (75 MB after a day's work). So each process that sets the directory claims it (:func:`claim`: a shared
@@ -21,6 +21,7 @@ once. Nothing here may stop ``import bogie``: a root that cannot be written or l
 
 from __future__ import annotations
 
+import functools
 import hashlib
 import os
 import shutil
@@ -33,7 +34,18 @@ try:
 except ImportError:  # no flock (Windows): claim nothing, prune nothing
     fcntl = None  # type: ignore[assignment]
 
-__all__ = ["GRACE", "KEEP", "cache_root", "claim", "hash_sources", "is_cached", "prune", "source_digest"]
+__all__ = [
+    "GRACE",
+    "KEEP",
+    "cache_root",
+    "claim",
+    "hash_sources",
+    "is_cached",
+    "keyed_by_code",
+    "prune",
+    "source_digest",
+    "subpath",
+]
 
 #: the cache directories kept, the most recently used first, this process's own among them: the versions a day's
 #: switching between branches and clones comes back to (each is 0.5-25 MB; one not kept costs a recompilation,
@@ -49,17 +61,44 @@ _REMOVING = ".removing-"
 
 
 def is_cached(module_file: str | Path, cache_dir: str | Path | None = None, function: str = "*") -> bool:
-    """Whether numba's cache holds compiled ``function`` (default: any) of the source ``module_file`` for this
-    clone: an index (``<module>.<function>-<line>.py<version>.nbi``) in the subdirectory numba's user-provided cache
-    locator gives that file, ``<parent name>_<sha1 of the parent's absolute path>`` under ``cache_dir`` (None: the
-    ``NUMBA_CACHE_DIR`` ``import bogie`` set). A prediction for a progress message, not a guarantee: an index
-    without the signature asked for still compiles."""
+    """Whether numba's cache holds compiled ``function`` (default: any) of the source ``module_file``: an index
+    (``<module>.<function>-<line>.py<version>.nbi``) in the subdirectory the locator gives that file under
+    ``cache_dir`` (None: the ``NUMBA_CACHE_DIR`` ``import bogie`` set): in the directory keyed by the package's
+    sources, its place in the package (:func:`subpath`, the same in every clone); elsewhere
+    numba's own, ``<parent name>_<sha1 of the parent's absolute path>``. A prediction for a progress message, not a
+    guarantee: an index without the signature asked for still compiles."""
     directory = cache_dir or os.environ.get("NUMBA_CACHE_DIR")
     if not directory:
         return False
     parent = Path(module_file).resolve().parent
-    sub = Path(directory) / f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}"
+    place = subpath(module_file) if keyed_by_code(directory) else None
+    sub = Path(directory) / (place or f"{parent.name}_{hashlib.sha1(str(parent).encode()).hexdigest()}")
     return any(sub.glob(f"{Path(module_file).stem}.{function}-*.nbi"))
+
+
+#: the package whose modules :class:`bogie._numba_locator.PackageLocator` files by their place in it
+PACKAGE = Path(__file__).resolve().parent
+
+
+@functools.lru_cache(maxsize=1)
+def _own_digest() -> str:
+    return source_digest(PACKAGE)
+
+
+def subpath(py_file: str | Path) -> str | None:
+    """The subdirectory of the cache directory where the kernels of ``py_file`` lie: its directory's dotted place in
+    the package (``bogie``, ``bogie.steel.phases``), the same in every clone; None for a file outside the package."""
+    path = Path(py_file).resolve()
+    try:
+        relative = path.parent.relative_to(PACKAGE.parent)
+    except ValueError:
+        return None
+    return ".".join(relative.parts) if relative.parts and relative.parts[0] == PACKAGE.name else None
+
+
+def keyed_by_code(cache_dir: str | Path | None) -> bool:
+    """Whether ``cache_dir`` is the directory ``import bogie`` keys by the package's sources (:func:`source_digest`)."""
+    return bool(cache_dir) and Path(cache_dir).name == _own_digest()
 
 
 def cache_root() -> Path:

@@ -202,6 +202,8 @@ EVERY_KERNEL = textwrap.dedent(
                 pick = frame[(frame["suspension"] == suspension) & (frame["group"] == group)].iloc[:1]
                 rows = {c: pick[c].tolist() for c in pick.columns if c != "study"}
                 chunk_table(rows, study_protocols(config, study))
+    import bogie
+    print(bogie.__file__)
     print(" ".join(sorted(set(compiled))) or "nothing")
     """
 )
@@ -213,7 +215,8 @@ def _cache_files(root: Path) -> dict[str, tuple[int, int]]:
 
 
 def test_a_fresh_process_compiles_nothing_and_writes_nothing_once_the_cache_is_warm(tmp_path):
-    # issue 39 Must 6: a function made anew in each process (a closure) missed the cache and compiled every time
+    # issue 39 Must 6: a function made anew in each process (a closure) missed the cache and compiled every time;
+    # issue 45 Must 6: another clone of the same code (or dvc exp run --temp's copy) compiled everything again
     import yaml
 
     raw = yaml.safe_load((ROOT / "params.yaml").read_text(encoding="utf-8"))
@@ -224,20 +227,28 @@ def test_a_fresh_process_compiles_nothing_and_writes_nothing_once_the_cache_is_w
     env = {k: v for k, v in os.environ.items() if not k.startswith("NUMBA_")}
     env["XDG_CACHE_HOME"] = str(tmp_path / "cache")  # an empty cache: the first process compiles everything
 
-    def run() -> str:
-        out = subprocess.run([sys.executable, "-c", EVERY_KERNEL, str(params)], cwd=ROOT, env=env,
+    def run(where: Path) -> str:
+        out = subprocess.run([sys.executable, "-c", EVERY_KERNEL, str(params)], cwd=where, env=env,
                              capture_output=True, text=True, timeout=1200)  # fmt: skip
         assert out.returncode == 0, out.stderr[-3000:]
-        return out.stdout.strip().splitlines()[-1]
+        imported, compiled = out.stdout.strip().splitlines()[-2:]
+        assert Path(imported).resolve().is_relative_to(where.resolve()), imported  # this copy's bogie, not another
+        return compiled
 
-    first = run()
+    first = run(ROOT)
     assert first != "nothing" and "matmul" in first.split()  # the listener does see compilations
     before = _cache_files(tmp_path / "cache")
     assert before
-    second = run()
+    second = run(ROOT)
     assert second == "nothing", f"compiled again in a new process: {second}"
     after = _cache_files(tmp_path / "cache")
     assert after == before, f"cache entries written again: {sorted(set(after.items()) - set(before.items()))[:5]}"
+    clone = tmp_path / "elsewhere" / "another-clone"  # the same code at another path, its files just written
+    for package in ("bogie", "pipeline"):
+        shutil.copytree(ROOT / package, clone / package, ignore=shutil.ignore_patterns("__pycache__"))
+    third = run(clone)
+    assert third == "nothing", f"another clone of the same code compiled again: {third}"
+    assert _cache_files(tmp_path / "cache") == before, "another clone of the same code wrote cache entries again"
 
 
 def test_a_pruner_does_not_mark_a_directory_used_before_it_removes_it(tmp_path, monkeypatch):

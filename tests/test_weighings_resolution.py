@@ -148,7 +148,7 @@ def test_the_observed_stage_reports_the_resolution_and_applies_the_one_set(tmp_p
     path = mon_file(tmp_path / "site.mon", loads)
     raw = (Path(__file__).parents[1] / "params.yaml").read_text()
     params = tmp_path / "params.yaml"
-    params.write_text(raw.replace("  resolution_kg: null ", "  resolution_kg: 200  "))
+    params.write_text(raw.replace("  resolution_kg:      ", "  resolution_kg: 200  ", 1))
     config = load_config(params)
     assert config.observed.resolution_kg == 200.0
     _, stats = observed_table(path, config.observed)
@@ -157,6 +157,6 @@ def test_the_observed_stage_reports_the_resolution_and_applies_the_one_set(tmp_p
     assert str(tmp_path) not in json.dumps(stats)
     _, stats = observed_table(path, load_config(Path(__file__).parents[1] / "params.yaml").observed)
     assert stats["records"]["weight_step_kg"] == 100.0 and stats["records"]["resolution"]["source"] == "detected"
-    params.write_text(raw.replace("  resolution_kg: null ", "  resolution_kg: -5   "))
+    params.write_text(raw.replace("  resolution_kg:      ", "  resolution_kg: -5   ", 1))
     with pytest.raises(Exception, match=r"observed.resolution_kg"):
         load_config(params)

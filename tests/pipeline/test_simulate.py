@@ -545,6 +545,29 @@ def test_numbas_cache_is_found_where_its_locator_puts_a_modules_index(tmp_path):
     assert not is_cached(_phases_core.__file__, tmp_path / "elsewhere_0123")
 
 
+def test_in_the_directory_keyed_by_the_code_a_modules_kernels_lie_by_their_place_in_the_package(tmp_path):
+    # issue 45 Must 6: every clone of one version finds them (bogie/_numba_locator.py)
+    from bogie import numba_cache
+    from bogie.numba_cache import PACKAGE
+    from bogie.steel.phases import _core as _phases_core
+
+    keyed = tmp_path / numba_cache.source_digest(PACKAGE)
+    (keyed / f"{_phases_core.__file__.split('/')[-2]}_0123").mkdir(parents=True)  # numba's own layout: not here
+    (keyed / f"{_phases_core.__file__.split('/')[-2]}_0123" / "_core.run_phases-512.py311.nbi").write_text("")
+    assert not is_cached_in(keyed)
+    (keyed / "bogie.steel.phases").mkdir()
+    (keyed / "bogie.steel.phases" / "_core.run_phases-512.py311.nbi").write_text("")
+    assert is_cached_in(keyed)
+    assert not numba_cache.is_cached(_phases_core.__file__, tmp_path / "0123456789abcdef", function="run_phases")
+
+
+def is_cached_in(directory):
+    from bogie import numba_cache
+    from bogie.steel.phases import _core as _phases_core
+
+    return numba_cache.is_cached(_phases_core.__file__, directory, function="run_phases")
+
+
 def test_the_kernels_compile_once_before_the_workers_with_a_line_before_and_after(monkeypatch):
     import pipeline.simulate as S
     from bogie import numba_cache
