@@ -2,7 +2,8 @@
 
 ``dvc metrics show`` prints every metric of every file on one line; ``metrics/survey.json`` and
 ``metrics/sensitivity.json`` hold over two hundred. ``python -m pipeline.headline`` reads them (and the status
-column of every run) and writes the headline: the inhibitors' ranking with their total Sobol' indices and chassis
+column of every run) and writes the headline: the inhibitors' total Sobol' indices, most influential first (the
+ranking is their order; a string of it was the widest column of ``dvc exp show``, issue 45 Must 2), and chassis
 tilt's, the share of groups outside the 5 % tolerance, the mean heaviest-minus-lightest spread [kg] and the extra
 pavement wear at the fourth power (metrics/road.json) for each axle group and protocol, and the runs and failures
 of all studies. ``dvc metrics show metrics/headline.json`` reads
@@ -35,14 +36,14 @@ def headline(
 ) -> dict[str, Any]:
     """The headline figures from the metrics files and the ``status`` of every run (all studies).
 
-    Keys: ``ranking`` (the inhibitors, most influential first, as one string), ``ST_<factor>`` (total Sobol' index
-    of the ranking measure for the five inhibitors and chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
+    Keys: ``ST_<factor>`` (total Sobol' index of the ranking measure for the five inhibitors, most influential
+    first, then chassis tilt), ``outside_5pct_<protocol>_<group>`` (share of
     groups whose lightest axle is more than 5 % below the heaviest [-]), ``spread_kg_<protocol>_<group>`` (mean
     heaviest minus lightest axle load [kg]), ``extra_wear_<protocol>_<group>`` (the extra pavement wear at the
     fourth power of the laden steel groups over equal sharing [-], from ``road``: metrics/road.json, None: none),
     ``runs`` and ``failed`` [-]. A figure the metrics lack is left out.
     """
-    out: dict[str, Any] = {"ranking": " > ".join(sensitivity["ranking"])}
+    out: dict[str, Any] = {}
     indices = sensitivity["sobol"]["indices"]
     for factor in (*sensitivity["ranking"], "chassis_tilt"):
         if factor in indices:
@@ -84,9 +85,10 @@ def _stage(args: argparse.Namespace) -> int:
         # every part file verified (pipeline.schema.read_runs_frame): a damaged one is refused, not counted
         status = read_runs_frame(args.runs, columns=["status"])["status"].astype(str)
     figures = headline(survey, sensitivity, status, road)
+    ranking = " > ".join(sensitivity["ranking"])
     with atomic_file(Path(args.out)) as tmp:
         tmp.write_text(json.dumps(figures, indent=2) + "\n", encoding="utf-8")
-    print(f"headline: {figures['ranking']}; {figures['runs']} runs, {figures['failed']} failed; wrote {args.out}")
+    print(f"headline: {ranking}; {figures['runs']} runs, {figures['failed']} failed; wrote {args.out}")
     return 0
 
 
