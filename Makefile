@@ -39,18 +39,22 @@ repro: $(STAMP) $(PLOTS_TEMPLATE)
 plots: $(STAMP) $(PLOTS_TEMPLATE)
 	$(BIN)/dvc plots show
 
-# The report's tests render its pages with poppler's pdftoppm: installed here when missing and we are root (Debian),
-# otherwise those checks are skipped with the reason; a failed install never fails `make test`.
+# The report's tests render its pages with poppler's pdftoppm, and the plots page's test opens `dvc plots show`'s page
+# in headless Chromium: each installed here when missing and we are root (Debian), otherwise those checks are skipped
+# with the reason; a failed install never fails `make test`.
 test: $(STAMP) $(PLOTS_TEMPLATE)
-	@command -v pdftoppm >/dev/null 2>&1 || { \
+	@for need in pdftoppm:poppler-utils chromium:chromium; do \
+	  tool=$${need%%:*}; package=$${need#*:}; \
+	  command -v $$tool >/dev/null 2>&1 && continue; \
 	  if [ "$$(id -u)" = 0 ] && command -v apt-get >/dev/null 2>&1; then \
-	    echo "make test: installing poppler-utils (pdftoppm) for the report's rendering checks"; \
-	    { apt-get update -qq && apt-get install -y -qq poppler-utils; } \
-	      || echo "make test: could not install poppler-utils; the report's rendering checks will be skipped"; \
+	    echo "make test: installing $$package ($$tool) for the report's and the plots page's rendering checks"; \
+	    { apt-get update -qq && DEBIAN_FRONTEND=noninteractive apt-get install -y -qq $$package >/dev/null; } \
+	      || echo "make test: could not install $$package; the checks that need $$tool will be skipped"; \
 	  else \
-	    echo "make test: pdftoppm not found (installing it needs root and apt-get); the report's rendering checks" \
-	      "will be skipped (install poppler-utils, e.g. sudo apt-get install poppler-utils)"; \
-	  fi; }
+	    echo "make test: $$tool not found (installing it needs root and apt-get); the checks that need it will be" \
+	      "skipped (install $$package, e.g. sudo apt-get install $$package)"; \
+	  fi; \
+	done
 	$(BIN)/python -m pytest
 
 lint: $(STAMP)

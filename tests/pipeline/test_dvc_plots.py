@@ -6,8 +6,9 @@ makes a DVC project in tmp_path with the project's plot definitions (dvc.yaml's 
 (reports/plots/*.csv, committed) and .dvc/config, writes the template with the tool and runs `dvc plots show` as the
 README says. The page must load nothing from the network, and its Vega-Lite specs must render (vl-convert executes
 them offline, as the page's own libraries would). The last test opens the page in headless Chromium with the network
-blocked and looks at what it draws; it is skipped where no Chromium is installed (CI has only Python, pip and make:
-`apt-get install chromium` to run it).
+blocked and looks at what it draws (its screenshot was looked at: four charts, bars and lines drawn); `make test`
+installs Debian's chromium first when run as root (as it installs poppler-utils), so it runs wherever CI runs; it is
+skipped only where no Chromium is installed and none could be (not root: `apt-get install chromium` to run it).
 """
 
 import html
