@@ -1,0 +1,154 @@
+"""Do the calibration's posterior intervals hold their truths as often as they say? Simulation-based calibration of
+the calibrate stage's posterior (issue 43's "done when"), with truths drawn from the priors.
+
+One fixed truth in a prior's tail (``bench_calibrate``'s) cannot tell a fault of the intervals from bad luck: a 90 %
+interval misses one truth in ten whatever is right. Here each of ``--surveys`` synthetic 5,000-vehicle surveys is made
+from its own truth, drawn from the posterior's own priors within the fit's bounds
+(:func:`bogie.fleet.calibration.priors.prior_draws`, the priors of :func:`~bogie.fleet.calibration.fitting.priors_for`),
+on its own fleet and site (master seed ``--first-seed + i``: its own road, bogies and site bias), and calibrated
+as the stage calibrates it: the prior-free minimum (the chains' start), then the posterior with params.yaml's draws,
+chains and between-site covariance, on one table built once (the table depends on params.yaml, not on the survey).
+The bootstrap, the checks and the attribution are left out: they do not change the posterior.
+
+If the posterior is calibrated, each truth's rank among its posterior's draws (the share of draws below it) is
+uniform on [0, 1] and each interval at ``confidence_level`` holds its truth with that probability (Talts et al. 2018,
+"Validating Bayesian inference algorithms with simulation-based calibration", arXiv:1804.06788). Printed per
+quantity: the truths, the ranks, the intervals that miss, and the count of misses against the binomial's 95 % range
+for that many surveys; then every interval over all quantities, and how many posteriors piled at a bound or did not
+converge. Each survey's rows go to ``--out`` (a csv) as they come, so a long run can be read before it ends.
+
+Run alone: ``python -m bench.bench_sbc [--surveys N] [--skip K] [--first-seed S] [--vehicles V] [--out FILE]`` (2-3
+minutes per survey on 2 cores); ``--skip K`` continues a run of K surveys (the same truths and seeds as one run of
+K + N), and ``--summarise FILE...`` prints the summary of earlier runs' csv files together.
+"""
+
+from __future__ import annotations
+
+import argparse
+import copy
+import math
+import os
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+import pandas as pd
+import yaml
+
+from bench.bench_calibrate import FIT, N_VEHICLES
+
+ROOT = Path(__file__).resolve().parent.parent
+#: the first survey's master seed (survey i: FIRST_SEED + i), away from bench_calibrate's 777-779
+FIRST_SEED = 9001
+#: seed of the truths' draws from the priors
+TRUTH_SEED = 43
+
+
+def binomial_range(n: int, p: float, mass: float = 0.95) -> tuple[int, int]:
+    """The central ``mass`` range of a binomial(n, p) count: the smallest k_low and largest k_high with at most
+    (1 - mass) / 2 of the probability below and above."""
+    pmf = [math.comb(n, k) * p**k * (1.0 - p) ** (n - k) for k in range(n + 1)]
+    tail = (1.0 - mass) / 2.0
+    low = next(k for k in range(n + 1) if sum(pmf[: k + 1]) > tail)
+    high = next(k for k in range(n, -1, -1) if sum(pmf[k:]) > tail)
+    return low, high
+
+
+def main(argv: list[str] | None = None) -> None:
+    from bogie.fleet.calibration import checks as K
+    from bogie.fleet.calibration.fitting import priors_for
+    from bogie.fleet.calibration.posterior import posterior
+    from bogie.fleet.calibration.priors import default_priors, prior_draws
+    from bogie.fleet.calibration.problem import fit, make_problem
+    from pipeline import calibrate as C
+    from pipeline.config import parse_config
+
+    parser = argparse.ArgumentParser(prog="python -m bench.bench_sbc", description=__doc__.splitlines()[0])
+    parser.add_argument("--surveys", type=int, default=10, help="synthetic surveys, each its own truth (default 10)")
+    parser.add_argument("--first-seed", type=int, default=FIRST_SEED, help=f"first survey's seed ({FIRST_SEED})")
+    parser.add_argument("--skip", type=int, default=0,
+                        help="surveys of an earlier run: their truths drawn and passed over (default 0)")  # fmt: skip
+    parser.add_argument("--vehicles", type=int, default=N_VEHICLES, help=f"survey size (default {N_VEHICLES})")
+    parser.add_argument("--out", type=Path, default=Path("sbc.csv"), help="each survey's rows (default sbc.csv)")
+    parser.add_argument("--summarise", type=Path, nargs="+", default=None,
+                        help="only summarise these csv files of earlier runs together")  # fmt: skip
+    args = parser.parse_args(argv)
+    raw = yaml.safe_load((ROOT / "params.yaml").read_text())
+    if args.summarise:
+        rows = pd.concat([pd.read_csv(f) for f in args.summarise], ignore_index=True)
+        summarise(rows, raw["calibrate"]["confidence_level"])
+        return
+    raw["calibrate"]["fit"] = copy.deepcopy(FIT)
+    print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} on {os.cpu_count()} CPUs", flush=True)
+    start = time.perf_counter()
+    with tempfile.TemporaryDirectory() as tmp:
+        raw["observed"].update(path="observed/synthetic.csv", format="csv")
+        config = parse_config(raw)
+        settings = C.method_settings(config)
+        mapper = C.workers_map(config.execution)
+        table = C.build_table(config, lambda text: None)
+        base = C.defaults(config)
+        print(f"table built in {time.perf_counter() - start:.0f} s", flush=True)
+        names = [q for q in FIT]
+        priors = default_priors(base, {q: t.mean_range() for q, t in table.tilted.items()})
+        truths = prior_draws(priors, names, [tuple(FIT[q]) for q in names], args.skip + args.surveys,
+                             np.random.default_rng(TRUTH_SEED))  # fmt: skip
+        rows: list[dict] = []
+        for i in range(args.skip, args.skip + args.surveys):
+            t0 = time.perf_counter()
+            truth = dict(zip(names, (float(v) for v in truths[i])))
+            truth_raw = copy.deepcopy(raw)
+            truth_raw["seed"] = args.first_seed + i
+            truth_raw["calibrate"]["table_sites"] = 1  # the survey is made at one site, whatever the table's
+            truth_raw["fleet"]["n_bogies"] = args.vehicles
+            truth_raw["ablation"]["n_bogies"] = min(raw["ablation"]["n_bogies"], args.vehicles // 4)
+            truth_raw["calibrate"]["n_bogies"] = args.vehicles
+            made = parse_config(truth_raw)
+            frame = K.filtered(K.simulate_fleet(C.crn_table(made), {**C.defaults(made), **truth}, executor=mapper), 0.0)
+            survey = Path(tmp) / "observed" / "synthetic.csv"
+            K.write_csv_survey(frame, survey)
+            observed, _ = C.observed_groups(survey, config)
+            problem = make_problem(table, observed, settings.fit, base, config.observed.min_group_load)
+            best, _, _ = fit(problem, settings.seed, settings.maxiter, settings.popsize)
+            used = priors_for(problem, settings)
+            post = posterior(problem, used, best, settings.posterior_draws, settings.seed, settings.confidence_level,
+                             chains=settings.chains, sites=settings.sites, executor=mapper)  # fmt: skip
+            seconds = time.perf_counter() - t0
+            for q in names:
+                s, draws = post.summary[q], post.draws[q].to_numpy()
+                rows.append({
+                    "survey": i, "seed": args.first_seed + i, "quantity": q, "truth": truth[q],
+                    "median": s["median"], "low": s["low"], "high": s["high"],
+                    "inside": bool(s["low"] <= truth[q] <= s["high"]), "rank": float(np.mean(draws < truth[q])),
+                    "piled": s["piled"], "rhat": s["rhat"], "ess_bulk": s["ess_bulk"], "converged": post.converged,
+                    "seconds": seconds,
+                })  # fmt: skip
+            pd.DataFrame(rows).to_csv(args.out, index=False)
+            missed = [r["quantity"] for r in rows if r["survey"] == i and not r["inside"]]
+            print(f"survey {i} (seed {args.first_seed + i}) in {seconds:.0f} s, load {os.getloadavg()[0]:.2f}: "
+                  f"misses {missed or 'none'}; converged {post.converged}", flush=True)  # fmt: skip
+    summarise(pd.DataFrame(rows), settings.confidence_level)
+    print(f"total {time.perf_counter() - start:.0f} s; load average {os.getloadavg()[0]:.2f} after")
+
+
+def summarise(rows: pd.DataFrame, level: float) -> None:
+    """Per quantity: the misses against the binomial range, the ranks; then all intervals together."""
+    n = rows["survey"].nunique()
+    low, high = binomial_range(n, 1.0 - level)
+    print(f"{n} surveys, {level:.0%} intervals: each quantity's misses should lie in [{low}, {high}] (binomial 95 %)")
+    for q, part in rows.groupby("quantity", sort=False):
+        ranks = " ".join(f"{r:.2f}" for r in part["rank"])
+        misses = int((~part["inside"].astype(bool)).sum())
+        flag = "" if low <= misses <= high else "  OUTSIDE the binomial range"
+        print(f"  {q:28s} misses {misses}/{n}{flag}; ranks {ranks}")
+    total = len(rows)
+    misses = int((~rows["inside"].astype(bool)).sum())
+    t_low, t_high = binomial_range(total, 1.0 - level)
+    print(f"all intervals: {misses} of {total} miss (binomial 95 % range [{t_low}, {t_high}]); "
+          f"piled at a bound: {int(rows['piled'].notna().sum())}; surveys unconverged: "
+          f"{int((~rows.groupby('survey')['converged'].first().astype(bool)).sum())}")  # fmt: skip
+
+
+if __name__ == "__main__":
+    main()
