@@ -162,7 +162,7 @@ def analysed(config: Config, exp: DesignExperiment, runs: pd.DataFrame) -> tuple
     spec = settings(config)
     runs = experiment_runs(exp, runs)
     analysis = analyse_designs(runs, exp.designs, exp.tilts, spec.target_share, spec.confidence_level)
-    text = guidance_sentences(analysis.designs, exp.tilts, spec.target_share)
+    text = guidance_sentences(analysis.designs, exp.tilts, spec.target_share, dict(config.fleet_study.presets))
     return analysis, metrics(analysis, spec, exp.tilts, typical_design(config.fleet_study), text)
 
 

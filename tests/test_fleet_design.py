@@ -14,6 +14,7 @@ import numpy as np
 import pandas as pd
 import pytest
 from _fleets import DISTS, fleet
+from _fleets import PRESETS as PRESETS_
 
 import bogie.fleet as bf
 from bogie.fleet.design import analysis as A
@@ -214,3 +215,68 @@ def test_a_small_study_weighed_here_and_in_worker_processes_gives_the_same_table
     for name in ("designs", "curves", "check"):
         pd.testing.assert_frame_equal(getattr(there.analysis, name), getattr(here.analysis, name), check_exact=True)
     assert there.guidance == here.guidance
+
+
+# ---- the designer's own bogie (issue 45 Must 4) ------------------------------------------------------------------
+EXAMPLE = __import__("pathlib").Path(__file__).resolve().parents[1] / "bogies" / "example_triaxle.yaml"
+
+
+def test_a_bogie_file_base_is_weighed_as_its_own_named_design_with_the_files_values():
+    from bogie.bogie_file import base_bogie
+    from bogie.fleet.sampling.sample import bogie_from_sample
+
+    f = fleet(presets={**PRESETS_, "triaxle": str(EXAMPLE)})
+    settings = bf.DesignSettings(grid={"bush_stiffness": [1.0]}, groups=("triaxle",), n_conditions=2,
+                                 tilt_step_deg=2.0, n_space_filling=0)  # fmt: skip
+    exp = bf.design_experiment(f, settings, seed=7)
+    assert exp.designs["design"].tolist() == ["triaxle-typical", "triaxle-own", "triaxle-grid-00", "triaxle-air"]
+    own = exp.designs.set_index("design").loc["triaxle-own"]
+    # the example file's values (bogies/example_triaxle.yaml), in SI
+    expected = {"bush_stiffness": 1000.0, "equaliser_arm": 0.18, "contact_roll_radius": 0.075,
+                "friction_coefficient": 0.25, "spring_friction_band": 500.0, "bush_damping": 0.0,
+                "spring_friction_decay": 0.005}  # fmt: skip
+    assert {k: own[k] for k in expected} == pytest.approx(expected, rel=1e-12)
+    assert own["kind"] == "own" and 0.0 < own["distance"] < 1.2
+    # its rows build the file's bogie, under each condition's tilt, wear and payload
+    row = exp.samples[exp.samples["design"] == "triaxle-own"].iloc[0]
+    built, file = bogie_from_sample(row.to_dict()), base_bogie(str(EXAMPLE))
+    for field in ("bush_stiffness", "contact_roll_radius", "equaliser_front_arm", "equaliser_rear_arm",
+                  "spring_front_half_length", "spring_rear_half_length", "spring_friction_band"):  # fmt: skip
+        assert getattr(built, field) == pytest.approx(getattr(file, field), rel=1e-12), field
+
+
+def test_a_files_arms_of_several_lengths_are_kept_as_they_are(tmp_path):
+    from bogie.fleet.sampling.sample import bogie_from_sample
+
+    text = EXAMPLE.read_text(encoding="utf-8")
+    text = text.replace("equaliser_rear_arm_mm: [180, 180]", "equaliser_rear_arm_mm: [200, 200]")
+    text = text.replace("spring_front_half_length_mm: [500, 500, 500]", "spring_front_half_length_mm: [500, 480, 480]")
+    path = tmp_path / "uneven.yaml"
+    path.write_text(text, encoding="utf-8")
+    f = fleet(presets={**PRESETS_, "triaxle": str(path)})
+    settings = bf.DesignSettings(grid={"bush_stiffness": [1.0]}, groups=("triaxle",), n_conditions=2)
+    exp = bf.design_experiment(f, settings, seed=7)
+    own = exp.designs.set_index("design").loc["triaxle-own"]
+    assert math.isnan(own["equaliser_arm"]) and math.isfinite(own["distance"])
+    built = bogie_from_sample(exp.samples[exp.samples["design"] == "triaxle-own"].iloc[0].to_dict())
+    assert built.equaliser_front_arm == pytest.approx((0.18, 0.18)) and built.equaliser_rear_arm == pytest.approx(
+        (0.2, 0.2)
+    )
+    assert built.spring_front_half_length == pytest.approx((0.5, 0.48, 0.48))
+    assert "its own arms of several lengths" in A.describe(own.to_dict())
+
+
+def test_the_own_design_is_weighed_and_its_sentence_names_the_file_beside_the_typical_and_the_best():
+    f = fleet(presets={**PRESETS_, "triaxle": str(EXAMPLE)})
+    settings = bf.DesignSettings(grid={"bush_stiffness": [1.0]}, groups=("triaxle",), n_conditions=2,
+                                 tilt_step_deg=2.0, n_space_filling=0)  # fmt: skip
+    study = bf.study_designs(f, settings, seed=7, static=STATIC)
+    table = study.analysis.designs.set_index("design")
+    assert table.loc["triaxle-own", "n_runs"] == 2 * 4 and table.loc["triaxle-own", "n_failed"] == 0
+    # per group: tolerance, typical, own, fleet, air
+    assert len(study.guidance) == 5
+    sentence = study.guidance[2]
+    share = table.loc["triaxle-own", "share_within_5pct"]
+    assert sentence.startswith(f"Your tri-axle ({EXAMPLE}), with a 1000 N m/rad bush, 75 mm pads and a 180 mm arm")
+    assert f"keeps {100 * share:.0f} % (" in sentence and "today's typical" in sentence
+    assert "the best of the 3 designs" in sentence

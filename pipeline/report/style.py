@@ -79,7 +79,10 @@ class Quantity(NamedTuple):
         return f"{self.name} [{self.unit}]"
 
     def value(self, si: float) -> str:
-        """A value given in SI, in ``unit`` and without it: ``value(0.04)`` of a radius in mm is "40"."""
+        """A value given in SI, in ``unit`` and without it: ``value(0.04)`` of a radius in mm is "40"; a value the
+        design has not one of (NaN: a bogie file's arms of several lengths) is "own"."""
+        if si != si:
+            return "own"
         return self.fmt.format(si * self.scale)
 
 

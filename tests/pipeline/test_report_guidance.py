@@ -49,6 +49,20 @@ def test_the_kinds_follow_the_design_stage_whichever_sentences_it_writes():
     assert G.sentences(m, "tolerance") == [m["guidance"][i] for i in (0, 1, 4)]
 
 
+def test_the_designers_own_bogie_has_its_sentence_on_the_tolerance_page():
+    # issue 45 Must 4: a group whose base bogie is a bogie file has an "own" design, said after the typical one
+    table = pd.DataFrame([
+        _row("triaxle", "typical", "steel", 0.65, 0.7), _row("triaxle", "own", "steel", 0.8, 1.2),
+        _row("triaxle", "grid", "steel", 0.9, 2.0), _row("triaxle", "air", "air", 1.0, 2.0),
+    ])  # fmt: skip
+    m = _metrics(table)
+    assert G.sentence_kinds(m) == [("triaxle", "tolerance"), ("triaxle", "typical"), ("triaxle", "own"),
+                                   ("triaxle", "fleet"), ("triaxle", "air")]  # fmt: skip
+    assert m["guidance"][2].startswith("Your tri-axle, with a 55 N m/rad bush")
+    assert G.sentences(m, "tolerance") == m["guidance"][:3]
+    assert G.design_cells({"suspension": "steel", "kind": "own", **FACTORS})[0] == "your file"
+
+
 def test_sentences_that_do_not_add_up_are_refused():
     m = _metrics(pd.DataFrame([_row("tandem", "typical", "steel", 0.65, 0.7)]))
     assert len(G.sentence_kinds(m)) == 3

@@ -284,8 +284,10 @@ def describe(row: Mapping[str, Any]) -> str:
     bearing = "a free bearing" if bush <= 10.0 else f"a {bush:.0f} N m/rad bush"
     radius = 1e3 * row["contact_roll_radius"]
     pads = "fixed contact points (0 mm pads)" if radius < 0.5 else f"{radius:.0f} mm pads"
+    arm = row["equaliser_arm"]
+    arms = "its own arms of several lengths" if pd.isna(arm) else f"a {1e3 * arm:.0f} mm arm"
     return (
-        f"{bearing}, {pads} and a {1e3 * row['equaliser_arm']:.0f} mm arm (friction "
+        f"{bearing}, {pads} and {arms} (friction "
         f"{row['friction_coefficient']:.2f}, springs' band {row['spring_friction_band'] / 1e3:.1f} kN)"
     )
 
@@ -339,6 +341,28 @@ def _tolerance_sentences(g: pd.DataFrame, group: str, tilts: np.ndarray, pct: st
     return out
 
 
+def _own_sentence(g: pd.DataFrame, group: str, tilts: np.ndarray, pct: str, file: str | None) -> str | None:
+    """The user's own design of a group (kind ``own``: the base bogie's file), beside today's typical and the best;
+    None when the group has none."""
+    own = g[g["kind"] == "own"]
+    if not len(own):
+        return None
+    o, name = own.iloc[0], _NAMES[group][1]
+    typ = g[g["kind"] == "typical"]
+    best = g["share_within_5pct"].max()
+    others = (f"today's typical {100 * typ.iloc[0]['share_within_5pct']:.0f} %; " if len(typ) else "") + (
+        f"the best of the {len(g)} designs {100 * best:.0f} %"
+    )  # fmt: skip
+    level = f"{100 * o['share_within_5pct_level']:.0f} %"
+    tilt = (f"keeps {pct} within 5 % {_band(o, tilts)}" if _has_tolerance(o) else
+            f"does not keep {pct} within 5 % even on level ground ({level})")  # fmt: skip
+    return (
+        f"Your {name}{f' ({file})' if file else ''}, with {describe(o)}, keeps {100 * o['share_within_5pct']:.0f} % "
+        f"({100 * o['share_within_5pct_low']:.0f}-{100 * o['share_within_5pct_high']:.0f} %) within 5 % across the "
+        f"fleet's own tilts, wear, payloads and roads ({others}), and {tilt}."
+    )
+
+
 def _fleet_sentence(g: pd.DataFrame, group: str, target: float, pct: str) -> str:
     """The best share across the fleet's own conditions of a group's steel designs ``g``, against the target."""
     name = _NAMES[group][1]
@@ -360,7 +384,9 @@ def _fleet_sentence(g: pd.DataFrame, group: str, target: float, pct: str) -> str
     )
 
 
-def guidance_sentences(table: pd.DataFrame, tilts: Sequence[float], target_share: float) -> list[str]:
+def guidance_sentences(
+    table: pd.DataFrame, tilts: Sequence[float], target_share: float, own_files: Mapping[str, str] | None = None
+) -> list[str]:
     """Sentences a designer and an operator can act on, generated from the design table (``docs/design.md``).
 
     Parameters
@@ -371,19 +397,24 @@ def guidance_sentences(table: pd.DataFrame, tilts: Sequence[float], target_share
         The tilt grid [degree]: a tolerance at its end reads "at least".
     target_share
         The share within 5 % a design must keep [-].
+    own_files
+        Group -> the bogie file its ``own`` design is (the fleet's ``presets``), named in its sentence (None: unnamed).
 
     Returns
     -------
     list of str
         Per group, in this order: the widest tolerance (or that no design keeps the target on level ground), today's
-        typical design's tolerance (if it was studied), the best share across the fleet's conditions, the air
-        reference (if studied).
+        typical design's tolerance (if it was studied), the user's own design (if the group's base bogie is a bogie
+        file), the best share across the fleet's conditions, the air reference (if studied).
     """
     out = []
     pct = f"{100 * target_share:.0f} %"
     for group in dict.fromkeys(table["group"]):
         g = table[(table["group"] == group) & (table["suspension"] == "steel")]
         out += _tolerance_sentences(g, group, tilts, pct)
+        own = _own_sentence(g, group, np.asarray(tilts), pct, (own_files or {}).get(group))
+        if own is not None:
+            out.append(own)
         out.append(_fleet_sentence(g, group, target_share, pct))
         air = table[(table["group"] == group) & (table["suspension"] == "air")]
         if len(air):

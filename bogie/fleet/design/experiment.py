@@ -37,6 +37,7 @@ import numpy as np
 import pandas as pd
 from scipy.stats import qmc
 
+from bogie.bogie_file import base_bogie, is_bogie_file
 from bogie.fleet.design.analysis import (
     FACTORS,
     FLEET_SLOT,
@@ -64,7 +65,7 @@ from bogie.settings import check_value
 __all__ = [
     "CONDITION_DIMENSIONS", "FACTORS", "FACTOR_UNITS", "FLEET_SLOT", "HELD", "DesignError", "DesignExperiment",
     "DesignSettings", "DesignStudy", "conditions", "design_experiment", "design_points", "design_samples",
-    "experiment_runs", "study_designs", "tilt_grid", "typical_design", "weigh_designs",
+    "experiment_runs", "own_design", "study_designs", "tilt_grid", "typical_design", "weigh_designs",
 ]  # fmt: skip
 
 #: the operating conditions, in the order of their design's dimensions (the order is part of the draws)
@@ -121,6 +122,20 @@ def _rank(dist: Distribution, x: float) -> float:
     u = np.linspace(0.0, 1.0, 20001)
     q = dist.ppf(np.clip(u, 1e-12, 1.0 - 1e-12))
     return float(np.interp(x, q, u))
+
+
+def own_design(name: str) -> dict[str, float] | None:
+    """The design of a group's base bogie when it is the user's bogie file (issue 45 Must 4): its own
+    :data:`FACTORS` and :data:`HELD` [SI], to be weighed beside today's typical design and the best; None for a
+    preset (its values are not a design anyone chose: the fleet's distributions replace them). The experiment's
+    ``equaliser_arm`` sets every arm to one length; a file whose arms are not all one length keeps its own arms
+    (``equaliser_arm`` NaN: :func:`bogie.fleet.sampling.sample.bogie_from_sample` leaves them as they are)."""
+    if not is_bogie_file(name):
+        return None
+    b = base_bogie(name)
+    arms = {*b.equaliser_front_arm, *b.equaliser_rear_arm}
+    values = {f: float(getattr(b, f)) for f in (*FACTORS, *HELD) if f != "equaliser_arm"}
+    return {**values, "equaliser_arm": float(arms.pop()) if len(arms) == 1 else math.nan}
 
 
 def typical_design(fleet: Fleet) -> dict[str, float]:
@@ -204,12 +219,15 @@ def _space_filling(fleet: Fleet, k: int, seed: int) -> list[dict[str, float]]:
 
 
 def design_points(fleet: Fleet, settings: DesignSettings, seed: int) -> pd.DataFrame:
-    """Every design studied, per group: ``typical``, the ``grid`` combinations, the ``space-filling`` designs and the
-    ``air`` reference; with each factor [SI] and its distance from the typical design in fleet ranks [-].
+    """Every design studied, per group: ``typical``, the ``own`` design of a group whose base bogie is a bogie file
+    (:func:`own_design`; always run, even if it equals another), the ``grid`` combinations, the ``space-filling``
+    designs and the ``air`` reference; with each factor [SI] and its distance from the typical design in fleet
+    ranks [-].
 
     The distance is sqrt(sum_f (F_f(x_f) - 1/2)^2) over the five factors, F_f the fleet's distribution of factor f:
     how far into the tails of today's fleet a design lies (0: the typical design; a design at a corner of the fleet's
-    ranges: sqrt(5) / 2 = 1.12). A grid design equal to the typical one is not run twice.
+    ranges: sqrt(5) / 2 = 1.12; an own design's arms of several lengths are left out of it). A grid design equal to
+    the typical one is not run twice.
 
     Parameters
     ----------
@@ -237,14 +255,17 @@ def design_points(fleet: Fleet, settings: DesignSettings, seed: int) -> pd.DataF
     for group in settings.groups:
         seen: set[tuple[float, ...]] = set()
         entries = [("typical", typ)]
+        own = own_design(fleet.presets[group])
+        if own is not None:
+            entries.append(("own", own))
         entries += [(f"grid-{i:02d}", {**typ, **{k: float(v) for k, v in c.items()}}) for i, c in enumerate(combos)]
         entries += [(f"space-{i:02d}", {**typ, **p}) for i, p in enumerate(space)]
         for name, values in entries:
             key = tuple(round(values[f], 12) for f in FACTORS)
-            if key in seen:
+            if key in seen and name != "own":
                 continue
             seen.add(key)
-            ranks = [_rank(fleet.distributions[f], values[f]) for f in FACTORS]
+            ranks = [_rank(fleet.distributions[f], values[f]) for f in FACTORS if not math.isnan(values[f])]
             rows.append({
                 "design": f"{group}-{name}", "group": group, "kind": name.split("-")[0], "suspension": "steel",
                 **{f: values[f] for f in (*FACTORS, *HELD)},
@@ -366,5 +387,5 @@ def study_designs(
     analysis = analyse_designs(
         runs, experiment.designs, experiment.tilts, settings.target_share, settings.confidence_level
     )
-    text = guidance_sentences(analysis.designs, experiment.tilts, settings.target_share)
+    text = guidance_sentences(analysis.designs, experiment.tilts, settings.target_share, dict(fleet.presets))
     return DesignStudy(experiment, runs, analysis, text)

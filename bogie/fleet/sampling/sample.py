@@ -14,6 +14,7 @@ of row order, chunking and the number of workers.
 from __future__ import annotations
 
 import functools
+import math
 import warnings
 from collections.abc import Mapping
 from dataclasses import dataclass
@@ -331,14 +332,17 @@ def bogie_from_sample(row: Mapping[str, Any]) -> Bogie | AirBogie:
     # one after another took a tenth of a weighing's Python); the same fields as the steps below
     fields = dict(_base_fields(str(row["preset"])))  # the values are immutable: a shallow copy is a new bogie's
     fields.update(changes)
-    # a longer arm on the same axle layout shortens the springs beside it; the design loads stay equal
-    fields.update(equaliser_arm_changes(fields, float(row["equaliser_arm"])))
+    # a longer arm on the same axle layout shortens the springs beside it; the design loads stay equal. NaN: the
+    # base bogie's own arms (a designer's file with arms of several lengths, bogie.fleet.design.experiment.own_design)
+    arm = float(row["equaliser_arm"])
+    if not math.isnan(arm):
+        fields.update(equaliser_arm_changes(fields, arm))
     try:
         return Bogie(**fields)
     except ValueError:
         pass  # the steps raise the error they always raised (the first of several, say)
     bogie = _base_bogie(str(row["preset"])).replace(**changes)
-    return with_equaliser_arms(bogie, float(row["equaliser_arm"]))
+    return bogie if math.isnan(arm) else with_equaliser_arms(bogie, arm)
 
 
 # ---- the fleet ------------------------------------------------------------------------------------------------

@@ -37,8 +37,9 @@ __all__ = [
 FACTORS: tuple[str, ...] = (
     "bush_stiffness", "equaliser_arm", "contact_roll_radius", "friction_coefficient", "spring_friction_band",
 )  # fmt: skip
-KIND_MARKER = {"typical": "*", "grid": "o", "space": "s"}
-KIND_LABEL = {"typical": "today's typical", "grid": "grid design", "space": "space-filling design"}
+KIND_MARKER = {"typical": "*", "own": "D", "grid": "o", "space": "s"}
+KIND_LABEL = {"typical": "today's typical", "own": "your bogie file's", "grid": "grid design",
+              "space": "space-filling design"}  # fmt: skip
 
 
 def _tol(x: Any) -> str:
@@ -60,17 +61,18 @@ def design_cells(row: Mapping[str, Any]) -> list[str]:
     group has none of them."""
     if row["suspension"] == "air":
         return ["air-sprung", "-", "-", "-", "-", "-"]
-    kind = {"typical": "typical", "grid": "grid", "space": "space-filling"}[row["kind"]]
+    kind = {"typical": "typical", "own": "your file", "grid": "grid", "space": "space-filling"}[row["kind"]]
     return [kind, *(QUANTITY[f].value(row[f]) for f in FACTORS)]
 
 
 # ---- the design stage's sentences -----------------------------------------------------------------------------------
 #: the page each kind of guidance sentence goes under. Per group,
 #: :func:`bogie.fleet.design.analysis.guidance_sentences` writes, in this order: ``tolerance`` (the widest tilt
-#: tolerance, or that none is tolerated), ``typical`` (today's typical design, when the group has one), ``fleet`` (the
-#: best design across the fleet's own conditions), ``air`` (the air-sprung group, when it ran)
-SENTENCE_PAGE: dict[str, str] = {"tolerance": "tolerance", "typical": "tolerance", "fleet": "experiment",
-                                 "air": "experiment"}  # fmt: skip
+#: tolerance, or that none is tolerated), ``typical`` (today's typical design, when the group has one), ``own`` (the
+#: user's bogie file, when the group's base bogie is one), ``fleet`` (the best design across the fleet's own
+#: conditions), ``air`` (the air-sprung group, when it ran)
+SENTENCE_PAGE: dict[str, str] = {"tolerance": "tolerance", "typical": "tolerance", "own": "tolerance",
+                                 "fleet": "experiment", "air": "experiment"}  # fmt: skip
 
 
 def sentence_kinds(m: Mapping[str, Any]) -> list[tuple[str, str]]:
@@ -87,11 +89,14 @@ def sentence_kinds(m: Mapping[str, Any]) -> list[tuple[str, str]]:
     if len(summaries) != len(m["designs"]):
         raise ValueError(f"design.json: {len(m['designs'])} designs but {len(summaries)} design_summaries")
     typical = {d["group"] for d, s in zip(m["designs"], summaries, strict=True) if s["kind"] == "typical"}
+    own = {d["group"] for d, s in zip(m["designs"], summaries, strict=True) if s["kind"] == "own"}
     kinds: list[tuple[str, str]] = []
     for group in dict.fromkeys(d["group"] for d in m["designs"]):
         kinds.append((group, "tolerance"))
         if group in typical:
             kinds.append((group, "typical"))
+        if group in own:
+            kinds.append((group, "own"))
         kinds.append((group, "fleet"))
         if group in m["air"]:
             kinds.append((group, "air"))
