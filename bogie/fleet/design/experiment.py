@@ -27,6 +27,7 @@ counted in ``n_failed``. Same arguments and seed, same tables: whatever the exec
 
 from __future__ import annotations
 
+import dataclasses
 import math
 import warnings
 from concurrent.futures import Executor
@@ -38,6 +39,7 @@ import pandas as pd
 from scipy.stats import qmc
 
 from bogie.bogie_file import base_bogie, is_bogie_file
+from bogie.fleet.constants import GROUP_AXLES
 from bogie.fleet.design.analysis import (
     FACTORS,
     FLEET_SLOT,
@@ -66,6 +68,7 @@ __all__ = [
     "CONDITION_DIMENSIONS", "FACTORS", "FACTOR_UNITS", "FLEET_SLOT", "HELD", "DesignError", "DesignExperiment",
     "DesignSettings", "DesignStudy", "conditions", "design_experiment", "design_points", "design_samples",
     "experiment_runs", "own_design", "study_designs", "tilt_grid", "typical_design", "weigh_designs",
+    "weigh_own_design",
 ]  # fmt: skip
 
 #: the operating conditions, in the order of their design's dimensions (the order is part of the draws)
@@ -388,4 +391,38 @@ def study_designs(
         runs, experiment.designs, experiment.tilts, settings.target_share, settings.confidence_level
     )
     text = guidance_sentences(analysis.designs, experiment.tilts, settings.target_share, dict(fleet.presets))
+    return DesignStudy(experiment, runs, analysis, text)
+
+
+def weigh_own_design(
+    fleet: Fleet, path: str, settings: DesignSettings, seed: int, static: StaticProtocol,
+    executor: Executor | None = None,
+) -> DesignStudy:  # fmt: skip
+    """A designer's bogie file weighed over ``fleet``'s conditions beside today's typical design, and nothing else
+    (``bogie design show FILE --fleet params.yaml``; the design study's own design, :func:`own_design`, in seconds):
+    the two designs of the file's group (by its axle count) over the experiment's ``n_conditions`` conditions at
+    their own tilts and on the tilt grid, seeded as the study is, so the figures are the study's for those two.
+
+    Raises
+    ------
+    DesignError
+        If ``path`` is not a bogie file, or a file of no group's axle count.
+    """
+    if not is_bogie_file(path):
+        raise DesignError(f"path = {path!r}: must be a bogie file's path (.yaml), docs/bogie-file.md")
+    n_axles = base_bogie(path).n_axles
+    groups = [g for g, n in GROUP_AXLES.items() if n == n_axles]
+    if not groups:
+        raise DesignError(f"path = {path!r}: a bogie of {n_axles} axles is no axle group's ({dict(GROUP_AXLES)})")
+    group = groups[0]
+    mine = dataclasses.replace(fleet, presets={**fleet.presets, group: path})
+    spec = dataclasses.replace(settings, groups=(group,), n_space_filling=0)
+    tilts = tilt_grid(mine, spec.tilt_step_deg)
+    conds = conditions(mine, spec.n_conditions, seed)
+    designs = design_points(mine, spec, seed)
+    designs = designs[designs["kind"].isin(("typical", "own"))].reset_index(drop=True)
+    experiment = DesignExperiment(tilts, conds, designs, design_samples(mine, designs, conds, tilts))
+    runs = weigh_designs(experiment, static, executor)
+    analysis = analyse_designs(runs, designs, tilts, spec.target_share, spec.confidence_level)
+    text = guidance_sentences(analysis.designs, tilts, spec.target_share, {group: path})
     return DesignStudy(experiment, runs, analysis, text)
