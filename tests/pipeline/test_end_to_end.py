@@ -159,6 +159,21 @@ def test_a_second_repro_changes_nothing(project):
 
 
 @pytest.mark.slow
+def test_dvc_checkout_restores_the_report_of_the_workspaces_results(project):
+    # issue 45 Must 3: back from an experiment, the PDF and the figures were those of the last one built (outputs
+    # outside DVC's cache); they are cached now, so `dvc checkout` puts back the ones dvc.lock records
+    path, _ = project
+    pdf = path / "reports" / "sensitivity_report.pdf"
+    figure = sorted((path / "reports" / "figures" / "report").glob("*.png"))[0]
+    before = pdf.read_bytes(), figure.read_bytes()
+    pdf.write_bytes(b"%PDF-1.4 another experiment's report\n")  # what building another experiment leaves
+    figure.write_bytes(b"another figure")
+    dvc(path, "checkout", "--force")
+    assert (pdf.read_bytes(), figure.read_bytes()) == before
+    assert "Data and pipelines are up to date" in dvc(path, "status")
+
+
+@pytest.mark.slow
 def test_an_observed_survey_given_then_changed_reruns_the_observed_stage_only(project):
     path, _ = project
     shutil.copy(ROOT / "tests" / "data" / "weighings" / "site.csv", path / "observed" / "site.csv")
