@@ -206,13 +206,13 @@ def _paired_effect(value: np.ndarray, baseline: np.ndarray, draws: _PairedDraws,
     if draws.n == 0:
         return dict.fromkeys(EFFECT_COLUMNS, np.nan)
     with warnings.catch_warnings():
-        # a statistic that is constant over the resamples (e.g. no group outside 10 % in any variant) is a
+        # a statistic that is constant over the resamples (e.g. no group over 10 % in any variant) is a
         # degenerate, zero-width interval, which is the right answer here
         warnings.simplefilter("ignore", stats.DegenerateDataWarning)  # numerics-ok: a warning class
         diff_low, diff_high = _percentile_bootstrap(_difference, value, baseline, draws, conf_level)
         rel_low, rel_high = _percentile_bootstrap(_relative_reduction, value, baseline, draws, conf_level)
     base_mean = baseline.mean()
-    # a baseline with no inequality (e.g. no group outside 10 %) has no relative reduction: NaN
+    # a baseline with no inequality (e.g. no group over 10 %) has no relative reduction: NaN
     point = 1.0 - value.mean() / base_mean if base_mean != 0 else np.nan
     difference = float(np.mean(value - baseline))
     return {
