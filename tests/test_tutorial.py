@@ -47,6 +47,8 @@ def test_the_tutorial_runs_and_gives_what_it_says():
     printed = out.getvalue()
     for source in ("observed", "static", "wim"):
         assert source in printed
+    # the headline columns are printed, none hidden behind "..." (issue 45: the first print hid them)
+    assert "..." not in printed and all(c in printed for c in ("share_outside_5pct", "mean_spread_kg", "n_groups"))
     # the comparison's observed rows are the observed survey's own statistics
     table = namespace["bf"].compare(runs, namespace["observed"], position="trailer")
     observed = table[table["source"] == "observed"].drop(columns="source").reset_index(drop=True)
