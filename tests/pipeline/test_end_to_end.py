@@ -9,6 +9,7 @@ copy's files are identical and are what DVC hashes as the stages' dependencies.
 import copy
 import json
 import os
+import re
 import shutil
 import subprocess
 import sys
@@ -156,6 +157,37 @@ def test_a_second_repro_changes_nothing(project):
     assert "Running stage" not in out
     assert {p: p.stat().st_mtime_ns for p in sorted((path / "data" / "runs").glob("study=*/part-*.parquet"))} == before
     assert (path / "dvc.lock").read_text() == lock
+
+
+#: a name that reads as a column (a statistic's prefix, or a unit suffix): checked against the outputs
+COLUMNISH = re.compile(
+    r"^(n|share|mean|median|sd|frac|min|max|p\d\d)_[a-z0-9_]+$|^[a-z0-9_]+_(kg|pct|deg|mm|m|t|s|kn|n)$"
+)
+
+
+@pytest.mark.slow
+def test_every_column_the_docs_tables_name_is_in_the_output_they_name(project):
+    # issue 45 Must 1: a renamed column left its old name in docs/outputs.md. Each row "| `file` | ... | columns |" of
+    # a table in docs/ whose file the stages wrote: every column-like name in it is the file's column, a value of one
+    # of its text columns (a quantity, a statistic) or a column of the runs
+    path, _ = project
+    folders = [d for d in (path / "data").iterdir() if d.is_dir()]
+    checked, wrong = 0, []
+    for doc in sorted((ROOT / "docs").glob("*.md")):
+        for line in doc.read_text(encoding="utf-8").splitlines():
+            row = re.match(r"\| `([^`/]+\.(?:csv|parquet))` \|([^|]*)\|(.*)\|\s*$", line)
+            found = [d / row.group(1) for d in folders if (d / row.group(1)).is_file()] if row else []
+            if not found:
+                continue
+            frame = pd.read_csv(found[0]) if found[0].suffix == ".csv" else pd.read_parquet(found[0])
+            names = {*frame.columns, *RUN_COLUMNS}
+            names |= {str(v) for c in frame.columns if not pd.api.types.is_numeric_dtype(frame[c])
+                      for v in frame[c].dropna().unique()}  # fmt: skip
+            named = set(re.findall(r"`([a-z][a-z0-9_]*)`", row.group(2) + row.group(3)))
+            wrong += [(doc.name, row.group(1), n) for n in sorted(named) if COLUMNISH.match(n) and n not in names]
+            checked += 1
+    assert checked >= 12, checked  # the survey's and the sensitivity stage's tables at least
+    assert not wrong, wrong
 
 
 @pytest.mark.slow
