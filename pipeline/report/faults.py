@@ -9,6 +9,7 @@ text's window extent compared. What counts:
   :data:`~pipeline.report.layout.RIGHT`, with :data:`SLACK` of the page's width);
 - **overlap**: two page texts whose boxes intersect by more than :data:`SLACK` of the page's height, or a page
   text over a chart's area (its axes with their labels);
+- **charts' texts overlap**: a legend or title of one chart over another chart's (a legend wider than its chart);
 - **legend over data**: a legend's box holding a plotted point of its chart (a line's vertices, a bar's top, a
   marker) within the chart's view, so that the legend hides data; or over its chart's title. A line is seen by its
   vertices: one drawn straight across the legend between two vertices outside it is not found.
@@ -129,6 +130,27 @@ def layout_faults(fig: Figure) -> list[str]:
                 (points[:, 0] > box.x0) & (points[:, 0] < box.x1) & (points[:, 1] > box.y0) & (points[:, 1] < box.y1)
             ):
                 faults.append(f"legend over data: chart {_short(ax.get_title())!r}")
+    return faults + _between_charts(charts, renderer)
+
+
+def _between_charts(charts: list[Axes], renderer) -> list[str]:
+    """Two charts' legends or titles over each other (a legend wider than its chart, centred over it, runs into its
+    neighbour's)."""
+    boxes = []
+    for ax in charts:
+        legend = ax.get_legend()
+        if legend is not None and legend.get_visible():
+            boxes.append((ax, "legend", legend.get_window_extent(renderer)))
+        if ax.title.get_text():
+            boxes.append((ax, "title", ax.title.get_window_extent(renderer)))
+    faults = []
+    for i, (ax_a, kind_a, box_a) in enumerate(boxes):
+        for ax_b, kind_b, box_b in boxes[i + 1 :]:
+            if ax_a is not ax_b and _overlap(box_a, box_b, 0.0):
+                faults.append(
+                    f"charts' texts overlap: the {kind_a} of {_short(ax_a.get_title())!r} and the {kind_b} of "
+                    f"{_short(ax_b.get_title())!r}"
+                )
     return faults
 
 

@@ -61,6 +61,9 @@ def test_the_designers_own_bogie_has_its_sentence_on_the_tolerance_page():
     assert m["guidance"][2].startswith("Your tri-axle, with a 55 N m/rad bush")
     assert G.sentences(m, "tolerance") == m["guidance"][:3]
     assert G.design_cells({"suspension": "steel", "kind": "own", **FACTORS})[0] == "your file"
+    # the tolerance page's table: typical, then the file's own design, then the widest others, then the air group
+    rows = G.tolerance_rows(table.assign(share_within_5pct_at_tolerance=0.95))
+    assert [r[1] for r in rows] == ["typical", "your file", "grid", "air-sprung"]
 
 
 def test_sentences_that_do_not_add_up_are_refused():

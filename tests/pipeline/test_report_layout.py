@@ -186,6 +186,13 @@ def test_the_layout_faults_are_found_where_they_are_and_not_where_they_are_not()
         on_chart.add_axes((0.1, 0.5, 0.8, 0.3)).plot([0, 1], [0, 1])
         on_chart.text(0.3, 0.6, "words over the chart")
         assert any("page text over a chart" in f for f in layout_faults(on_chart))
+        side = page()  # two charts side by side, each with a legend above it, centred and wider than its chart
+        for x in (0.1, 0.52):
+            ax = side.add_axes((x, 0.5, 0.36, 0.3))
+            for k in range(4):
+                ax.plot([0, 1], [k, k], label=f"a long series label {k}")
+            ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=4, frameon=False)
+        assert any("charts' texts overlap: the legend of" in f for f in layout_faults(side))
         table = page()
         layout.table_axes(table, 0.8, ["a", "b"], [["a cell far too long for its narrow column", "b"]], [0.1, 0.1])
         assert any("table cell overflows" in f for f in layout_faults(table))

@@ -140,13 +140,17 @@ def _front(ax, group: str, designs: pd.DataFrame, target: float) -> None:
 
 
 def _curves(ax, group: str, designs: pd.DataFrame, curves: pd.DataFrame, target: float) -> None:
-    """Share within 5 % against chassis tilt: the typical design, the widest tolerance and the air group."""
+    """Share within 5 % against chassis tilt: the typical design, the user's own (a bogie file's, when the group has
+    one), the widest tolerance and the air group."""
     g = designs[designs["group"] == group]
     steel = g[g["suspension"] == "steel"].dropna(subset=["tilt_tolerance_nose_up_deg"])
     picks: list[tuple[str, str, str]] = []
     typ = g[g["kind"] == "typical"]
     if len(typ):
         picks.append((typ["design"].iloc[0], "today's typical", "0.45"))
+    own = g[g["kind"] == "own"]
+    if len(own):
+        picks.append((own["design"].iloc[0], "your bogie file", "tab:purple"))
     if len(steel):
         picks.append((steel.loc[tolerance_width(steel).idxmax(), "design"], "widest tolerance", GROUP_COLOR[group]))
     air = g[g["suspension"] == "air"]
@@ -161,14 +165,17 @@ def _curves(ax, group: str, designs: pd.DataFrame, curves: pd.DataFrame, target:
     ax.set_ylim(-2, 102)
     ax.set_xlabel("chassis tilt, nose up + [degree]")
     ax.set_ylabel("within 5 % [%]")
-    # the curves cross the whole chart: the legend between the title and the chart, not over them
-    ax.set_title(f"{GROUP_LABEL[group]}: at a set tilt", pad=16)
-    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=3, fontsize=6.8, frameon=False, borderaxespad=0.1)
+    # the curves cross the whole chart: the legend between the title and the chart, not over them; four entries
+    # (with the user's own design) in two rows, so that it stays within its chart's width
+    ncol = len(picks) if len(picks) <= 3 else 2
+    ax.set_title(f"{GROUP_LABEL[group]}: at a set tilt", pad=16 if ncol == len(picks) else 26)
+    ax.legend(loc="lower center", bbox_to_anchor=(0.5, 1.0), ncol=ncol, fontsize=6.8, frameon=False,
+              borderaxespad=0.1)  # fmt: skip
 
 
 #: the design's columns in the tables: its kind, then each factor's short name and unit
 DESIGN_HEADER = ["design", *(f"{QUANTITY[f].short}\n[{QUANTITY[f].unit}]" for f in FACTORS)]
-DESIGN_WIDTHS = [0.1, 0.08, 0.06, 0.08, 0.07, 0.06]
+DESIGN_WIDTHS = [0.1, 0.08, 0.06, 0.09, 0.07, 0.06]
 FRONT_HEADER = [
     "group",
     *DESIGN_HEADER,
@@ -177,7 +184,7 @@ FRONT_HEADER = [
     "within 10 %\n[%]",
     "tolerance down\n/ up [degree]",
 ]
-FRONT_WIDTHS = [0.07, *DESIGN_WIDTHS, 0.07, 0.11, 0.11, 0.13]
+FRONT_WIDTHS = [0.07, *DESIGN_WIDTHS, 0.07, 0.12, 0.12, 0.13]
 
 
 def front_rows(designs: pd.DataFrame) -> list[list[str]]:
@@ -212,9 +219,8 @@ def experiment_page(tables: Mapping[str, pd.DataFrame], m: Mapping[str, Any], gr
         for c, group in enumerate(groups):
             _front(fig.add_subplot(grid[0, c]), group, designs, target)
             _curves(fig.add_subplot(grid[1, c]), group, designs, curves, target)
-        handles = [
-            Line2D([], [], marker=KIND_MARKER[k], ls="", color="0.45", label=KIND_LABEL[k]) for k in KIND_MARKER
-        ] + [
+        kinds = [k for k in KIND_MARKER if (designs["kind"] == k).any()]  # "your bogie file's" only with one
+        handles = [Line2D([], [], marker=KIND_MARKER[k], ls="", color="0.45", label=KIND_LABEL[k]) for k in kinds] + [
             Line2D([], [], color="0.2", marker="o", label="Pareto front (group colour)"),
             Line2D([], [], color="0.3", ls=":", label="air-sprung group"),
             Line2D([], [], color="0.2", ls="--", label=f"target {100 * target:.0f} %"),
@@ -278,12 +284,14 @@ TOLERANCE_WIDTHS = [0.07, *DESIGN_WIDTHS, 0.1, 0.1, 0.1, 0.13]
 
 
 def tolerance_rows(designs: pd.DataFrame, best: int = 4) -> list[list[str]]:
-    """The table of page 2 per group: today's typical design, the ``best`` widest tolerances, the air group."""
+    """The table of page 2 per group: today's typical design, the user's own (a bogie file's, when the group has
+    one), the ``best`` widest tolerances, the air group."""
     rows = []
     for group in dict.fromkeys(designs["group"]):
         g = designs[(designs["group"] == group) & (designs["suspension"] == "steel")]
         top = g.loc[tolerance_width(g).fillna(-1.0).sort_values(ascending=False, kind="stable").index[:best]]
-        picks = [*g[g["kind"] == "typical"].to_dict("records"), *top[top["kind"] != "typical"].to_dict("records")]
+        named = g[g["kind"].isin(("typical", "own"))].sort_values("kind", key=lambda k: k != "typical", kind="stable")
+        picks = [*named.to_dict("records"), *top[~top["kind"].isin(("typical", "own"))].to_dict("records")]
         picks += designs[(designs["group"] == group) & (designs["suspension"] == "air")].to_dict("records")
         for r in picks:
             rows.append([
