@@ -252,38 +252,6 @@ def static_verdict(loads: Sequence[float]) -> str:
     return f"static verdict: {verdict} (the lightest axle {gap:.1f} % below the heaviest)"
 
 
-def _fleet_verdict(path: str, params: str) -> list[str]:
-    """``bogie design show``'s lines on a bogie file over the fleet's conditions of ``params`` (a params.yaml):
-    :func:`bogie.fleet.design.experiment.weigh_own_design`, in this process."""
-    import time
-
-    from bogie.fleet.design.analysis import describe
-    from bogie.fleet.design.experiment import weigh_own_design
-    from bogie.fleet.design.settings import DesignSettings
-    from pipeline.config import load_config
-
-    config = load_config(params)
-    spec = config.design or DesignSettings(grid={"bush_stiffness": [1.0]})  # the grid is not weighed here
-    start = time.perf_counter()
-    study = weigh_own_design(config.fleet_study, path, spec, config.seed, config.protocol.static)
-    pct = f"{100 * spec.target_share:.0f} %"
-
-    def line(row) -> str:
-        up, down = row["tilt_tolerance_nose_up_deg"], row["tilt_tolerance_nose_down_deg"]
-        tolerance = (f"{pct} within 5 % from {down:.1f} degrees nose down to {up:.1f} degrees nose up"
-                     if up is not None and up == up else f"none ({pct} within 5 % not reached even level)")  # fmt: skip
-        share, low, high, level = (100 * row[f"share_within_5pct{e}"] for e in ("", "_low", "_high", "_level"))
-        return f"{share:.0f} % ({low:.0f}-{high:.0f} %) within 5 %; level {level:.0f} %; tilt tolerance: {tolerance}"
-
-    rows = {r["kind"]: r for r in study.analysis.designs.to_dict("records")}
-    return [
-        f"over the fleet's conditions of {params} ({spec.n_conditions} conditions: tilt, tyre wear, payload, approach "
-        f"road; static weighbridge; {len(study.runs)} runs in {time.perf_counter() - start:.1f} s):",
-        f"  your design:     {line(rows['own'])}",
-        f"  today's typical: {line(rows['typical'])} ({describe(rows['typical'])})",
-    ]
-
-
 def _cmd_design_show(args: argparse.Namespace) -> int:
     from bogie.bogie_file import base_bogie, is_bogie_file
 
@@ -293,11 +261,8 @@ def _cmd_design_show(args: argparse.Namespace) -> int:
     print(static_verdict(loads))
     if not is_bogie_file(args.bogie):
         print("a preset is the fleet's base bogie, not a design: the design study weighs it as today's typical")
-    elif args.fleet is None:
-        print("over a fleet's conditions: give --fleet params.yaml (its fleet, design and static weighbridge)")
     else:
-        for line in _fleet_verdict(args.bogie, args.fleet):
-            print(line)
+        print(f"over a fleet's conditions: python -m pipeline.own_design {args.bogie} --params params.yaml")
     if args.out:
         import math
 
@@ -426,11 +391,6 @@ def _add_design(sub) -> None:
         help="chassis tilt, nose up positive [degree] (default 0)",
     )  # fmt: skip
     show.add_argument("--out", help="write the side view to this image file (.png, .pdf, .svg)")
-    show.add_argument(
-        "--fleet", metavar="PARAMS", default=None,
-        help="a params.yaml: weigh the file's design over its fleet's conditions beside today's typical design (its "
-        "share within 5 %% and tilt tolerance, as the design study would; seconds once the kernels are compiled)",
-    )  # fmt: skip
     show.set_defaults(func=_cmd_design_show, parser=show)
 
 

@@ -399,7 +399,7 @@ def weigh_own_design(
     executor: Executor | None = None,
 ) -> DesignStudy:  # fmt: skip
     """A designer's bogie file weighed over ``fleet``'s conditions beside today's typical design, and nothing else
-    (``bogie design show FILE --fleet params.yaml``; the design study's own design, :func:`own_design`, in seconds):
+    (``python -m pipeline.own_design FILE``; the design study's own design, :func:`own_design`, in seconds):
     the two designs of the file's group (by its axle count) over the experiment's ``n_conditions`` conditions at
     their own tilts and on the tilt grid, seeded as the study is, so the figures are the study's for those two.
 
