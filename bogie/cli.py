@@ -246,9 +246,11 @@ def design_loads_table(name: str, bogie, chassis_tilt_deg: float) -> tuple[str, 
 
 def static_verdict(loads: Sequence[float]) -> str:
     """Whether a group's static tyre loads are within 5 %: its lightest axle at most 5 % below its heaviest (the
-    project's tolerance, ``bogie.weighings.stats``), with the gap."""
+    project's tolerance, :data:`bogie.weighings.stats.PAIR_TOLERANCE`), with the gap."""
+    from bogie.weighings.stats import PAIR_TOLERANCE
+
     gap = 100.0 * (max(loads) - min(loads)) / max(loads)
-    verdict = "within 5 %" if gap <= 5.0 else "NOT within 5 %"
+    verdict = "within 5 %" if gap <= 100.0 * PAIR_TOLERANCE else "NOT within 5 %"
     return f"static verdict: {verdict} (the lightest axle {gap:.1f} % below the heaviest)"
 
 
