@@ -174,19 +174,61 @@ def _legal_groups(args: argparse.Namespace) -> dict[str, float] | None:
 
 
 def _cmd_weighings(args: argparse.Namespace) -> int:
+    """``bogie weighings``: one file as before; several files (each a site), or ``--by-site``, also the sites side by
+    side (:func:`bogie.weighings.sites.compare_sites`)."""
     import json
 
+    from bogie.weighings.sites import compare_sites, sites_text
+
+    paths = list(args.path)
+    if len(paths) > 1 and args.sharing_factors is not None:
+        print("bogie: error: --sharing-factors: one file at a time (given several)", file=sys.stderr)
+        return 2
+    if len(set(paths)) < len(paths):
+        print(f"bogie: error: path: a file given twice ({', '.join(sorted({p for p in paths if paths.count(p) > 1}))})",
+              file=sys.stderr)  # fmt: skip
+        return 2
+    surveys, sites = {}, {}
+    for path in paths:
+        survey = _one_weighings(args, path)
+        if survey is None:
+            return 2
+        surveys[path] = survey
+        sites.update(survey.site_counts(Path(path).name if len(paths) > 1 else "site"))
+    if (len(paths) > 1 or args.by_site) and len(sites) < 2:
+        print(f"bogie: error: --by-site: {paths[0]} holds one site (no station column of several stations); give "
+              "several files, each a site", file=sys.stderr)  # fmt: skip
+        return 2
+    table = compare_sites(sites) if len(paths) > 1 or args.by_site else None
+    if args.json:
+        site_rows = None if table is None else json.loads(table.to_json(orient="records"))
+        if len(paths) == 1:
+            out = surveys[paths[0]].to_dict() | ({} if site_rows is None else {"sites": site_rows})
+        else:
+            out = {"surveys": {p: s.to_dict() for p, s in surveys.items()}, "sites": site_rows}
+        print(json.dumps(out, indent=2, allow_nan=False))
+        return 0
+    for path, survey in surveys.items():
+        _print_weighings(args, path, survey, brief=len(paths) > 1)
+    if table is not None:
+        print("\n" + sites_text(table))
+    return 0
+
+
+def _one_weighings(args: argparse.Namespace, path: str):
+    """One file's survey under the command's filters (its road figures' sharing factors written when asked), or
+    None after saying why on stderr."""
     from bogie.weighings.survey import observed_survey
 
     try:
-        survey = observed_survey(args.path, args.format, min_group_load_kg=1000.0 * args.min_group_load_t,
+        survey = observed_survey(path, args.format, min_group_load_kg=1000.0 * args.min_group_load_t,
                                  group_spacing_m=args.group_spacing_m, position=args.position,
                                  legal_group_kg=_legal_groups(args), legal_axle_kg=args.legal_axle_kg,
                                  resolution_kg=args.resolution_kg, grouping=args.grouping,
                                  keep_groups=False)  # fmt: skip
     except OSError as exc:
-        print(f"bogie: error: {args.path}: {exc.strerror or exc}", file=sys.stderr)
-        return 2
+        print(f"bogie: error: {path}: {exc.strerror or exc}", file=sys.stderr)
+        return None
     if args.sharing_factors is not None:
         from bogie.weighings.pavement import sharing_factors, write_sharing_factors
         from bogie.weighings.wear import DAMAGE_EXPONENTS
@@ -197,12 +239,14 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
             write_sharing_factors(factors, args.sharing_factors)
         except OSError as exc:
             print(f"bogie: error: --sharing-factors {args.sharing_factors}: {exc.strerror or exc}", file=sys.stderr)
-            return 2
-    if args.json:
-        print(json.dumps(survey.to_dict(), indent=2, allow_nan=False))
-        return 0
+            return None
+    return survey
+
+
+def _print_weighings(args: argparse.Namespace, path: str, survey, brief: bool) -> None:
+    """One file's readable output: what was read and kept, and (``brief`` False) its statistics' tables."""
     shown = args.format if args.format != "auto" else f"format auto: {survey.read.format}"
-    print(f"{args.path} ({shown}): {survey.read.summary()}; {survey.read.describe_resolution()}")
+    print(f"{path} ({shown}): {survey.read.summary()}; {survey.read.describe_resolution()}")
     counts = "; ".join(
         f"{where} {sum(sizes.values())} ({', '.join(f'{n} {size}' for size, n in sizes.items() if n)})"
         if sum(sizes.values()) else f"{where} 0"
@@ -216,8 +260,8 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     for station, entry in (survey.stations or {}).items():
         sizes = ", ".join(f"{entry['groups'][s]['n_groups']} {s}" for s in entry["groups"])
         print(f"station {station}: {entry['vehicles']} vehicles, {sizes} kept (--json has its statistics)")
-    print(_weighings_table(survey))
-    return 0
+    if not brief:
+        print(_weighings_table(survey))
 
 
 def design_loads_table(name: str, bogie, chassis_tilt_deg: float) -> tuple[str, list[float]]:
@@ -330,7 +374,7 @@ def _add_weighings(sub) -> None:
         description="Read a file of weighings, split the vehicles into axle groups, keep the groups that pass the "
         "filters and print the survey statistics of the tandems and tri-axles.",
     )
-    weigh.add_argument("path", help="the file of records")
+    weigh.add_argument("path", nargs="+", help="the file of records; several files: each a site, compared side by side")
     weigh.add_argument(
         "--format",
         default="auto",
@@ -370,6 +414,10 @@ def _add_weighings(sub) -> None:
         help="the file's weight resolution [kg], a multiple of the format's unit (default: detected from the axle "
         "loads, tolerant of a one-unit offset, and reported with its evidence)",
     )  # fmt: skip
+    weigh.add_argument("--by-site", action="store_true",
+                       help="the sites side by side: each station of a file of several (a state-wide TMG file), or "
+                       "each file of several (always then); shares with 95 %% intervals, a site that disagrees with "
+                       "the others flagged (docs/weighings.md, 'Many sites')")  # fmt: skip
     weigh.add_argument("--json", action="store_true", help="print the statistics as JSON (shares as fractions)")
     weigh.add_argument("--sharing-factors", metavar="FILE", default=None,
                        help="also write the file's sharing factors for pavement design tools to FILE (csv with a "

@@ -178,6 +178,22 @@ def test_a_state_wide_file_is_tabulated_by_station(tmp_path):
     # tandems 6.8/7.0 t: spread 200 kg; 7.5/7.5: 0 -> mean 100 kg at 06-000101
     assert out["stations"]["06-000101"]["groups"]["tandem"]["mean_spread_kg"] == 100.0
     assert out["settings"]["grouping"].startswith("us-tandem: consecutive axles more than 40 in")
+    # the counts the sites' comparison takes (issue 46): 6.8/7.0 t spreads 0.2 / 7.0 = 0.029 of the heavier,
+    # within 5 %; 7.5/7.5 equal
+    assert out["stations"]["06-000101"]["groups"]["tandem"]["n_outside_5pct"] == 0
+    assert survey.site_counts("state.dat")["state.dat:06-000102"]["triaxle"]["n_groups"] == 1
+
+
+def test_bogie_weighings_by_site_compares_a_state_wide_files_stations(tmp_path, capsys):
+    path = write(tmp_path, "state.dat", [A_2001, A_2001, DUMMY_2001, B_2001])
+    from bogie.cli import main
+
+    assert main(["weighings", str(path), "--grouping", "us-tandem", "--by-site"]) == 0
+    out = capsys.readouterr().out
+    rows = [line for line in out[out.index("sites side by side") :].splitlines() if line.startswith("tandem ")]
+    # 06-000101's four tandems and 06-000102's one, each within 5 %; too few to test: "few", no flag
+    assert [line.split()[1] for line in rows] == ["site:06-000101", "site:06-000102", "all"]
+    assert rows[0].split()[2] == "4" and rows[0].endswith("few")
 
 
 def test_a_state_wide_file_streamed_with_its_groups_spilled_is_tabulated_by_station_alike(tmp_path):

@@ -44,6 +44,7 @@ from bogie.weighings.groups import (
 from bogie.weighings.legal import EU_SOURCE, spacing_step_m
 from bogie.weighings.legal import POSITIONS as LEGAL_POSITIONS
 from bogie.weighings.readers import ReadResult, stream_weighings
+from bogie.weighings.sites import COUNT_KEYS, counts_of_statistics
 from bogie.weighings.stats import STATISTICS_COLUMNS, axle_columns, statistics_dict, survey_statistics
 from bogie.weighings.wear import DAMAGE_EXPONENTS, wear_dict, wear_statistics
 
@@ -93,6 +94,17 @@ class ObservedSurvey:
     settings: dict[str, Any] | None = None
     stations: dict[str, dict[str, Any]] | None = None
     n_kept: int | None = None
+
+    def site_counts(self, name: str) -> dict[str, dict[str, dict[str, Any]]]:
+        """Each site's counts for :func:`bogie.weighings.sites.compare_sites`: the file as the site ``name``, or, for a
+        file of several stations, each station as ``name:station``."""
+        if self.stations:
+            return {
+                f"{name}:{station}": {size: {key: e.get(key, 0 if key.startswith("n_") else None) for key in COUNT_KEYS}
+                                      for size, e in entry["groups"].items()}
+                for station, entry in self.stations.items()
+            }  # fmt: skip
+        return {name: counts_of_statistics(self.statistics)}
 
     def to_dict(self) -> dict[str, Any]:
         """The JSON of ``bogie weighings --json``: records read and skipped, then the statistics per group size.
@@ -345,6 +357,9 @@ class _Tally:
         for name in sorted(self.station_names):
             table = statistics_of(self.station_names[name])
             stats = statistics_dict(table) if table is not None and len(table) else {}
+            counts = counts_of_statistics(table) if table is not None and len(table) else {}
+            for size, entry in stats.items():  # the shares' counts, exact, for the sites' comparison
+                entry.update(n_outside_5pct=counts[size]["n_outside_5pct"], n_over_10pct=counts[size]["n_over_10pct"])
             out[str(name)] = {
                 "vehicles": int(self.vehicles_at[name]),
                 "groups": {size: stats.get(size, {"n_groups": 0}) for size in SURVEYED},
