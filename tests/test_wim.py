@@ -167,5 +167,25 @@ def test_a_bad_site_is_refused_naming_the_value_and_range():
     road = ISO8608Profile("A", length=100.0, seed=0)
     with pytest.raises(ValueError, match=r"before = -1.0 is out of range: must be >= 0 m"):
         SiteRoad(road, 60.0, -1.0, 25.0, 0.5)
-    with pytest.raises(ValueError, match=r"scale = 1.5 is out of range: must be in \[0, 1\]"):
-        SiteRoad(road, 60.0, 50.0, 25.0, 1.5)
+    with pytest.raises(ValueError, match=r"scale = -0.5 is out of range: must be >= 0"):
+        SiteRoad(road, 60.0, 50.0, 25.0, -0.5)
+
+
+@pytest.mark.parametrize("road_class", ["A", "B", "C"])
+def test_the_site_has_the_roughness_asked_for_on_every_road_even_a_smoother_one(road_class):
+    # issue 43: r was capped at 1, so a site of 3.5 m/km on a class A road (its own 2.17 m/km) was the road itself,
+    # 2.17 m/km: the calibration's roughness above it changed nothing when its site lay on class A, and read otherwise
+    # when the survey's did not. IRI is proportional to sqrt(G_d(n0)), so r = IRI_site / IRI_road, above 1 on A
+    import dataclasses
+
+    from bogie.fleet import WimProtocol
+    from bogie.fleet.weighing.protocols import wim_site
+
+    road = ISO8608Profile(road_class, length=200.0, seed=3)
+    spec = WimProtocol(speed=22.0, approach_length=60.0, dt=1e-3)
+    spec = dataclasses.replace(spec, site_iri=3.5, site_length_before=50.0, site_length_after=25.0)
+    site = wim_site(road, road_class, spec)
+    own_iri = {"A": 2.172553, "B": 4.345106, "C": 8.690212}[road_class]  # docs/wim-site.md's table, from G_d(n0)
+    assert site.scale == pytest.approx(3.5 / own_iri, rel=1e-6)
+    on = np.linspace(spec.approach_length - spec.site_length_before + 1.0, spec.approach_length + 1.0, 101)
+    assert site(on) == pytest.approx(site.scale * road(on), rel=1e-12, abs=1e-15)

@@ -263,12 +263,13 @@ SITE_BLEND_LENGTH = 5.0
 
 @dataclass(frozen=True)
 class SiteRoad:
-    """A sampled road made smoother over a WIM site: h(x) = road(x) (1 - (1 - r) b(x)).
+    """A sampled road with a WIM site's roughness over the site: h(x) = road(x) (1 - (1 - r) b(x)).
 
     b is 1 from ``before`` ahead of the sensor to ``after`` past it and tapers to 0 over
-    :data:`SITE_BLEND_LENGTH` outside (a cosine); r = min(1, sqrt(site_gd_n0 / road_gd_n0)) scales the road's
-    heights to the site's roughness (the ISO 8608 heights scale with sqrt(G_d)), so the site keeps the shape of the
-    road it was built on, smoothed, and a road already smoother than the site is left as it is.
+    :data:`SITE_BLEND_LENGTH` outside (a cosine); r = sqrt(site_gd_n0 / road_gd_n0) scales the road's heights to the
+    site's roughness (the ISO 8608 heights scale with sqrt(G_d)), so the site keeps the shape of the road it was built
+    on: smoothed (r < 1), or rougher than its road (r > 1, a worn site on a smooth road). Not capped at 1 (issue 43):
+    the site's roughness is then the one asked for on every road, as a measured site's is, whatever its road's class.
 
     Parameters
     ----------
@@ -279,7 +280,7 @@ class SiteRoad:
     before, after
         Site length ahead of and past the sensor [m], >= 0; both 0: no site.
     scale
-        r [-], in [0, 1].
+        r [-], finite and >= 0.
     """
 
     road: Callable[[ArrayLike], NDArray[np.float64]]
@@ -292,7 +293,7 @@ class SiteRoad:
         for name in ("before", "after"):
             if not getattr(self, name) >= 0.0:  # inf allowed: a site the whole road long
                 raise ValueError(refusal(name, getattr(self, name), "m", low=0.0))
-        check_value("scale", self.scale, "-", low=0.0, high=1.0)
+        check_value("scale", self.scale, "-", low=0.0)
 
     def site_weight(self, x: ArrayLike) -> NDArray[np.float64]:
         """b(x) [-]: 1 on the site, 0 on the sampled road, a cosine taper between."""

@@ -279,11 +279,12 @@ def _air_static(
 def wim_site(road: ApproachRoad, road_class: str, spec: WimProtocol) -> wim.SiteRoad:
     """The approach road with the WIM site of ``spec`` around the sensor, at ``spec.approach_length`` [m].
 
-    The site's heights are the sampled road's scaled by r = min(1, sqrt(G_site / G_road))
+    The site's heights are the sampled road's scaled by r = sqrt(G_site / G_road)
     (:class:`bogie.road.wim.SiteRoad`), G_site the ISO 8608 G_d(n0) of the site's IRI
-    (:func:`bogie.road.wim.gd_n0_for_iri`) and G_road that of the sampled class.
+    (:func:`bogie.road.wim.gd_n0_for_iri`) and G_road that of the sampled class: above 1 on a road smoother than the
+    site (no cap: the site has its own roughness on every road, docs/wim-site.md).
     """
-    scale = min(1.0, math.sqrt(wim.gd_n0_for_iri(spec.site_iri) / ISO8608_CLASSES[road_class.upper()]))
+    scale = math.sqrt(wim.gd_n0_for_iri(spec.site_iri) / ISO8608_CLASSES[road_class.upper()])
     return wim.SiteRoad(road, spec.approach_length, spec.site_length_before, spec.site_length_after, scale)
 
 
