@@ -189,12 +189,14 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
               file=sys.stderr)  # fmt: skip
         return 2
     surveys, sites = {}, {}
-    for path in paths:
+    names = [Path(p).name for p in paths]  # a site is named by its file's name, or its path if two names are alike
+    names = [n if names.count(n) == 1 else p for n, p in zip(names, paths)] if len(paths) > 1 else ["site"]
+    for path, name in zip(paths, names):
         survey = _one_weighings(args, path)
         if survey is None:
             return 2
         surveys[path] = survey
-        sites.update(survey.site_counts(Path(path).name if len(paths) > 1 else "site"))
+        sites.update(survey.site_counts(name))
     if (len(paths) > 1 or args.by_site) and len(sites) < 2:
         print(f"bogie: error: --by-site: {paths[0]} holds one site (no station column of several stations); give "
               "several files, each a site", file=sys.stderr)  # fmt: skip

@@ -121,6 +121,16 @@ def test_bogie_weighings_compares_several_files(tmp_path, capsys):
     assert (rows["north.csv"]["n_outside_5pct"], rows["south.csv"]["n_outside_5pct"]) == (5, 30)
 
 
+def test_two_files_of_one_name_in_two_folders_are_two_sites(tmp_path, capsys):
+    for folder, kinds in (("a", {"within": 35, "outside": 5}), ("b", {"within": 10, "outside": 30})):
+        (tmp_path / folder).mkdir()
+        site_file(tmp_path / folder / "site.csv", kinds)
+    files = [str(tmp_path / "a" / "site.csv"), str(tmp_path / "b" / "site.csv")]
+    assert main(["weighings", *files, "--position", "trailer", "--json"]) == 0
+    rows = json.loads(capsys.readouterr().out)["sites"]
+    assert sorted(r["site"] for r in rows) == sorted(files)
+
+
 def test_bogie_weighings_by_site_needs_several_sites(tmp_path, capsys):
     site_file(tmp_path / "one.csv", {"within": 5})
     assert main(["weighings", str(tmp_path / "one.csv"), "--by-site"]) == 2
