@@ -25,7 +25,9 @@ converge. Each survey's rows go to ``--out`` (a csv) as they come, so a long run
 
 Run alone: ``python -m bench.bench_sbc [--surveys N] [--skip K] [--first-seed S] [--vehicles V] [--out FILE]`` (2-3
 minutes per survey on 2 cores); ``--skip K`` continues a run of K surveys (the same truths and seeds as one run of
-K + N), and ``--summarise FILE...`` prints the summary of earlier runs' csv files together.
+K + N), ``--only Q,...`` fits only those quantities with the others held at their truths (the same truths and
+surveys: a quantity's own bias apart from its trade-offs), and ``--summarise FILE...`` prints the summary of earlier
+runs' csv files together.
 """
 
 from __future__ import annotations
@@ -81,6 +83,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=Path("sbc.csv"), help="each survey's rows (default sbc.csv)")
     parser.add_argument("--table-per-survey", action="store_true",
                         help="each survey's table anew on its own site (seed TABLE_SEED + i)")  # fmt: skip
+    parser.add_argument("--only", default=None,
+                        help="fit only these quantities (comma-separated), the others held at their truths: one "
+                        "quantity's own bias apart from its trade-offs (the full run's truths, surveys)")  # fmt: skip
     parser.add_argument("--summarise", type=Path, nargs="+", default=None,
                         help="only summarise these csv files of earlier runs together")  # fmt: skip
     args = parser.parse_args(argv)
@@ -101,6 +106,10 @@ def main(argv: list[str] | None = None) -> None:
         base = C.defaults(config)
         print(f"table built in {time.perf_counter() - start:.0f} s", flush=True)
         names = [q for q in FIT]
+        only = names if args.only is None else [q.strip() for q in args.only.split(",")]
+        unknown = [q for q in only if q not in FIT]
+        if unknown:
+            parser.error(f"--only: {', '.join(unknown)} not fitted; the quantities are {', '.join(names)}")
         priors = default_priors(base, {q: t.mean_range() for q, t in table.tilted.items()})
         truths = prior_draws(priors, names, [tuple(FIT[q]) for q in names], args.skip + args.surveys,
                              np.random.default_rng(TRUTH_SEED))  # fmt: skip
@@ -123,13 +132,18 @@ def main(argv: list[str] | None = None) -> None:
             survey = Path(tmp) / "observed" / "synthetic.csv"
             K.write_csv_survey(frame, survey)
             observed, _ = C.observed_groups(survey, config)
-            problem = make_problem(table, observed, settings.fit, base, config.observed.min_group_load)
+            held = {q: v for q, v in truth.items() if q not in only}  # the quantities not fitted, at their truths
+            fitted = {q: FIT[q] for q in only}
+            problem = make_problem(table, observed, fitted, {**base, **held}, config.observed.min_group_load)
             best, _, _ = fit(problem, settings.seed, settings.maxiter, settings.popsize)
-            used = priors_for(problem, settings)
+            # the priors of the full fit (a prior centred on the base value, the sensor's, keeps params.yaml's centre)
+            used = {q: p for q, p in priors_for(make_problem(table, observed, settings.fit, base,
+                                                             config.observed.min_group_load), settings).items()
+                    if q in only}  # fmt: skip
             post = posterior(problem, used, best, settings.posterior_draws, settings.seed, settings.confidence_level,
                              chains=settings.chains, sites=settings.sites, executor=mapper)  # fmt: skip
             seconds = time.perf_counter() - t0
-            for q in names:
+            for q in only:
                 s, draws = post.summary[q], post.draws[q].to_numpy()
                 rows.append({
                     "survey": i, "seed": args.first_seed + i, "quantity": q, "truth": truth[q],
