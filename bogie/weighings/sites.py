@@ -10,7 +10,8 @@ groups, those outside 5 % and those over 10 % (``docs/weighings.md``). Per site 
 * each share against the same share of the other sites that agree with each other, pooled, by the two-proportion z
   test with the pooled variance: z = (p_s - p_r) / sqrt(p (1 - p) (1 / n_s + 1 / n_r)), p = (k_s + k_r) / (n_s +
   n_r), two-sided p-value erfc(|z| / sqrt 2) (a normal approximation: good when each of the four counts k and n - k
-  of the site and of the rest is at least about 5; the table says ``few`` otherwise and flags nothing on it);
+  of the site and of the rest is at least about 5, a rule of thumb and an assumption here, :data:`FEWEST`; the table
+  says ``few`` otherwise and flags nothing on it);
 * ``disagrees`` when a site's p-value for either share is below 0.05 / (2 m), m the sites of that size: Bonferroni's
   correction for the 2 m tests, so that a network of sites that all share one truth flags any site in at most about
   5 % of surveys. Step by step: the most extreme site under the threshold is flagged and leaves the reference of
@@ -42,7 +43,10 @@ SITE_COLUMNS = (
     "share_outside_5pct_high", "p_outside_5pct", "share_over_10pct", "share_over_10pct_low", "share_over_10pct_high",
     "p_over_10pct", "mean_spread_kg", "few", "disagrees",
 )  # fmt: skip
-#: a count below which the z test's normal approximation is not trusted (each of k and n - k, site and rest)
+#: each share's count column and share column, in the order the table gives them
+SHARES = (("n_outside_5pct", "share_outside_5pct"), ("n_over_10pct", "share_over_10pct"))
+#: a count below which the z test's normal approximation is not trusted (each of k and n - k, site and rest): the
+#: textbook rule of thumb for a normal approximation to a binomial, an assumption here, not a sourced threshold
 FEWEST = 5
 #: the network's family-wise level of the disagreement flags (Bonferroni over every test of one size) [-]
 FAMILY_LEVEL = 0.05
@@ -127,22 +131,22 @@ def compare_sites(sites: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> pd.Da
     for size in sorted({size for entry in sites.values() for size in entry}):
         given = {name: entry[size] for name, entry in sites.items() if entry.get(size, {}).get("n_groups", 0) > 0}
         for name, c in given.items():
-            for key in ("n_outside_5pct", "n_over_10pct"):
+            for key, _ in SHARES:
                 if not (float(c[key]).is_integer() and 0 <= c[key] <= c["n_groups"]):
                     raise ValueError(f"sites[{name!r}][{size!r}][{key!r}] = {c[key]!r}: must be a whole number in "
                                      f"[0, n_groups = {c['n_groups']}] [-]")  # fmt: skip
         threshold = FAMILY_LEVEL / (2 * len(given))
-        tests = {key: _stepwise(given, key, threshold) for key in ("n_outside_5pct", "n_over_10pct")}
+        tests = {key: _stepwise(given, key, threshold) for key, _ in SHARES}
         for name, c in given.items():
             n = int(c["n_groups"])
             row: dict[str, Any] = {"group": size, "site": name, "n_groups": n}
-            for key, share in (("n_outside_5pct", "share_outside_5pct"), ("n_over_10pct", "share_over_10pct")):
+            for key, share in SHARES:
                 k = int(c[key])
                 low, high = wilson_interval(np.array([k]), np.array([n]))
                 row.update({key: k, share: k / n, f"{share}_low": float(low[0]), f"{share}_high": float(high[0]),
                             f"p_{share.removeprefix('share_')}": tests[key][name][0]})  # fmt: skip
-            row["few"] = tests["n_outside_5pct"][name][1] and tests["n_over_10pct"][name][1]
-            row["disagrees"] = tests["n_outside_5pct"][name][2] or tests["n_over_10pct"][name][2]
+            row["few"] = all(tests[key][name][1] for key, _ in SHARES)
+            row["disagrees"] = any(tests[key][name][2] for key, _ in SHARES)
             spread = c.get("mean_spread_kg")
             row["mean_spread_kg"] = math.nan if spread is None else float(spread)
             rows.append(row)
@@ -150,6 +154,11 @@ def compare_sites(sites: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> pd.Da
     if len(frame):
         frame = frame.sort_values(["group", "share_outside_5pct", "site"], ascending=[True, False, True])
     return frame.reset_index(drop=True)
+
+
+def _share_text(share: float, low: float, high: float) -> str:
+    """A share and its interval in per cent, as the table prints them: ``" 75.0 (59.8- 85.8)"``."""
+    return f"{100 * share:5.1f} ({100 * low:4.1f}-{100 * high:5.1f})"
 
 
 def sites_text(frame: pd.DataFrame) -> str:
@@ -161,18 +170,17 @@ def sites_text(frame: pd.DataFrame) -> str:
     ]
     for size, part in frame.groupby("group", sort=True):
         for row in part.to_dict("records"):
-            shares = [f"{100 * row[s]:5.1f} ({100 * row[f'{s}_low']:4.1f}-{100 * row[f'{s}_high']:5.1f})"
-                      for s in ("share_outside_5pct", "share_over_10pct")]  # fmt: skip
+            shares = [_share_text(row[s], row[f"{s}_low"], row[f"{s}_high"]) for _, s in SHARES]
             flag = "disagrees" if row["disagrees"] else ("few" if row["few"] else "")
             spread = "-" if math.isnan(row["mean_spread_kg"]) else f"{row['mean_spread_kg']:.0f}"
             lines.append(f"{size:<8} {row['site'][:24]:<24} {row['n_groups']:>6} {shares[0]:>22} {shares[1]:>22} "
                          f"{spread:>11}  {flag}".rstrip())  # fmt: skip
         n = int(part["n_groups"].sum())
         pooled = []
-        for key in ("n_outside_5pct", "n_over_10pct"):
+        for key, _ in SHARES:
             k = int(part[key].sum())
             low, high = wilson_interval(np.array([k]), np.array([n]))
-            pooled.append(f"{100 * k / n:5.1f} ({100 * low[0]:4.1f}-{100 * high[0]:5.1f})")
+            pooled.append(_share_text(k / n, low[0], high[0]))
         lines.append(f"{size:<8} {f'all {len(part)} sites':<24} {n:>6} {pooled[0]:>22} {pooled[1]:>22}")
     lines += [
         f"flag: disagrees = a share differs from the pooled share of the sites that agree (two-proportion z test, p "
