@@ -15,6 +15,7 @@ departure from the average site is shared by all of them, so their ranks are not
 covariance in the likelihood allows for that departure, but one draw of it moves every survey's posterior the same
 way). ``--table-per-survey`` builds each survey's table anew on its own site (master seed :data:`TABLE_SEED` + i),
 as the method's randomness is drawn anew for each dataset in simulation-based calibration; about 100 s more each.
+``--table-sites K`` spreads each table's bogies over K sites (``calibrate.table_sites``), the surveys still at one.
 
 If the posterior is calibrated, each truth's rank among its posterior's draws (the share of draws below it) is
 uniform on [0, 1] and each interval at ``confidence_level`` holds its truth with that probability (Talts et al. 2018,
@@ -83,6 +84,9 @@ def main(argv: list[str] | None = None) -> None:
     parser.add_argument("--out", type=Path, default=Path("sbc.csv"), help="each survey's rows (default sbc.csv)")
     parser.add_argument("--table-per-survey", action="store_true",
                         help="each survey's table anew on its own site (seed TABLE_SEED + i)")  # fmt: skip
+    parser.add_argument("--table-sites", type=int, default=None,
+                        help="WIM sites the table's bogies are spread over (calibrate.table_sites; default: "
+                        "params.yaml's); the surveys stay at one site each")  # fmt: skip
     parser.add_argument("--only", default=None,
                         help="fit only these quantities (comma-separated), the others held at their truths: one "
                         "quantity's own bias apart from its trade-offs (the full run's truths, surveys)")  # fmt: skip
@@ -95,6 +99,8 @@ def main(argv: list[str] | None = None) -> None:
         summarise(rows, raw["calibrate"]["confidence_level"])
         return
     raw["calibrate"]["fit"] = copy.deepcopy(FIT)
+    if args.table_sites is not None:
+        raw["calibrate"]["table_sites"] = args.table_sites
     print(f"load average {os.getloadavg()[0]:.2f} {os.getloadavg()[1]:.2f} on {os.cpu_count()} CPUs", flush=True)
     start = time.perf_counter()
     with tempfile.TemporaryDirectory() as tmp:
