@@ -29,9 +29,10 @@ import sys
 import tempfile
 import weakref
 from collections.abc import Mapping, Sequence
-from pathlib import Path
+from pathlib import Path, PurePosixPath
 from typing import Any
 
+import numpy as np
 import pandas as pd
 import pyarrow as pa
 
@@ -46,6 +47,7 @@ from bogie.fleet.weighing.observed import (
 )
 from bogie.rounding import json_number
 from bogie.weighings.groups import GROUP_TABLE_COLUMNS
+from bogie.weighings.sites import compare_sites
 from bogie.weighings.survey import observed_survey
 from pipeline.atomic import atomic_outputs, run_stage, stage_inputs
 from pipeline.config import ObservedConfig, WimProtocol, load_config, observed_file
@@ -68,6 +70,10 @@ COLUMN_TYPES: dict[str, tuple[pa.DataType, str]] = {
     "load_share_": (pa.float64(), "-"), "spread_kg": (pa.float64(), "kg"), "spread_pct": (pa.float64(), "%"),
     "outside_5pct": (pa.bool_(), "-"), "over_10pct": (pa.bool_(), "-"),
 }  # fmt: skip
+
+
+#: decimals of the sites' shares [-], intervals [-], p-values [-] and mean spreads [kg] in metrics/observed.json
+SITE_DIGITS = 6
 
 
 def arrow_schema(columns: Sequence[str]) -> pa.Schema:
@@ -170,7 +176,25 @@ def observed_table(
         "sha256": _sha256(path),
     }  # fmt: skip
     groups.file.close()
+    if survey.stations:  # a file of several stations (a state-wide TMG file): each a site, side by side (issue 46)
+        table = compare_sites(survey.site_counts(PurePosixPath(observed.path).name))
+        stats["sites"] = site_rows(table)
     return groups, {**header, **stats, "n_kept": survey.n_kept}
+
+
+def site_rows(table: pd.DataFrame) -> list[dict[str, Any]]:
+    """:func:`bogie.weighings.sites.compare_sites`' table as JSON rows: the shares, their intervals, p-values and
+    mean spreads rounded to :data:`SITE_DIGITS` decimals (the shares' and p-values' last bits are the C library's
+    ``erfc`` and ``sqrt``: rounded, the metrics are the same bytes on every machine; a p-value under 5e-7 reads 0),
+    an undefined value None."""
+    rows = []
+    for row in table.to_dict("records"):
+        rows.append({
+            key: (json_number(float(v), SITE_DIGITS) if isinstance(v, float) else bool(v) if isinstance(v, np.bool_)
+                  else int(v) if isinstance(v, np.integer) else v)
+            for key, v in row.items()
+        })  # fmt: skip
+    return rows
 
 
 def wim_model(wim: WimProtocol) -> dict[str, Any]:

@@ -55,6 +55,15 @@ def test_an_odd_site_is_flagged_and_does_not_make_the_others_look_odd():
     assert row.loc["C", "share_outside_5pct"] == 0.3 and row.loc["C", "n_outside_5pct"] == 60
 
 
+def test_a_size_no_site_saw_has_no_row_and_stops_nothing():
+    # a network of tandems alone: the tri-axles of both sites have no group (a state-wide file's stations gave
+    # n_groups 0 and None); before, the Bonferroni threshold divided by the zero sites of that size
+    none = {"n_groups": 0, "n_outside_5pct": 0, "n_over_10pct": 0, "mean_spread_kg": None}
+    tandems = [{"n_groups": 30, "n_outside_5pct": k, "n_over_10pct": k, "mean_spread_kg": 500.0} for k in (6, 24)]
+    frame = compare_sites({"A": {"tandem": tandems[0], "triaxle": none}, "B": {"tandem": tandems[1], "triaxle": none}})
+    assert list(frame["group"]) == ["tandem", "tandem"] and list(frame["site"]) == ["B", "A"]
+
+
 def test_two_sites_that_differ_are_both_flagged_and_small_counts_flag_nothing():
     frame = compare_sites({"A": counts(40, 5, 0), "B": counts(40, 30, 5)}).set_index("site")
     assert bool(frame.loc["A", "disagrees"]) and bool(frame.loc["B", "disagrees"])

@@ -33,7 +33,7 @@ import pandas as pd
 
 from bogie.intervals import wilson_interval
 
-__all__ = ["COUNT_KEYS", "SITE_COLUMNS", "compare_sites", "counts_of_statistics", "sites_text"]
+__all__ = ["COUNT_KEYS", "SITE_COLUMNS", "compare_sites", "counts_of_statistics", "share_text", "sites_text"]
 
 #: what each site gives per size: groups, groups outside 5 %, groups over 10 % [-]; and the mean spread [kg]
 COUNT_KEYS = ("n_groups", "n_outside_5pct", "n_over_10pct", "mean_spread_kg")
@@ -130,6 +130,8 @@ def compare_sites(sites: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> pd.Da
     rows = []
     for size in sorted({size for entry in sites.values() for size in entry}):
         given = {name: entry[size] for name, entry in sites.items() if entry.get(size, {}).get("n_groups", 0) > 0}
+        if not given:  # a size no site saw (a network of tandems alone): no row, nothing to test
+            continue
         for name, c in given.items():
             for key, _ in SHARES:
                 if not (float(c[key]).is_integer() and 0 <= c[key] <= c["n_groups"]):
@@ -156,7 +158,7 @@ def compare_sites(sites: Mapping[str, Mapping[str, Mapping[str, Any]]]) -> pd.Da
     return frame.reset_index(drop=True)
 
 
-def _share_text(share: float, low: float, high: float) -> str:
+def share_text(share: float, low: float, high: float) -> str:
     """A share and its interval in per cent, as the table prints them: ``" 75.0 (59.8- 85.8)"``."""
     return f"{100 * share:5.1f} ({100 * low:4.1f}-{100 * high:5.1f})"
 
@@ -170,7 +172,7 @@ def sites_text(frame: pd.DataFrame) -> str:
     ]
     for size, part in frame.groupby("group", sort=True):
         for row in part.to_dict("records"):
-            shares = [_share_text(row[s], row[f"{s}_low"], row[f"{s}_high"]) for _, s in SHARES]
+            shares = [share_text(row[s], row[f"{s}_low"], row[f"{s}_high"]) for _, s in SHARES]
             flag = "disagrees" if row["disagrees"] else ("few" if row["few"] else "")
             spread = "-" if math.isnan(row["mean_spread_kg"]) else f"{row['mean_spread_kg']:.0f}"
             lines.append(f"{size:<8} {row['site'][:24]:<24} {row['n_groups']:>6} {shares[0]:>22} {shares[1]:>22} "
@@ -180,7 +182,7 @@ def sites_text(frame: pd.DataFrame) -> str:
         for key, _ in SHARES:
             k = int(part[key].sum())
             low, high = wilson_interval(np.array([k]), np.array([n]))
-            pooled.append(_share_text(k / n, low[0], high[0]))
+            pooled.append(share_text(k / n, low[0], high[0]))
         lines.append(f"{size:<8} {f'all {len(part)} sites':<24} {n:>6} {pooled[0]:>22} {pooled[1]:>22}")
     lines += [
         f"flag: disagrees = a share differs from the pooled share of the sites that agree (two-proportion z test, p "

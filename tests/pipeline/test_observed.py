@@ -8,6 +8,7 @@ and quoted in docs/weighings.md.
 import copy
 import hashlib
 import json
+import math
 import shutil
 import tempfile
 import typing
@@ -357,3 +358,62 @@ def test_a_runs_part_with_one_flipped_bit_is_refused_naming_it(tmp_path, capsys,
     err = capsys.readouterr().err.strip()
     assert err.startswith(f"observed: {damaged} is damaged: its SHA-256 does not match") and "\n" not in err, err
     assert not (root / "data" / "observed").exists() and not (root / "metrics").exists()
+
+
+def tmg_2001(station: str, hour: int, loads_t: list[float], spacings_m: list[float]) -> str:
+    """A TMG 2001 "W" record (../shared/reference/tmg-weight-record.md: state 2-3, station 4-9, direction 10, lane
+    11, yy mm dd hh 12-19, class 20-21, open 22-24, gross 25-28 in 100 kg, axles 29-30, then per axle its weight in
+    100 kg (3 columns) and the spacing to the next in 0.1 m (3)), as tests/test_weighings_tmg.py types them."""
+    weights = [round(10 * w) for w in loads_t]
+    axles = "".join(f"{w:3d}{round(10 * s):3d}" for w, s in zip(weights, spacings_m)) + f"{weights[-1]:3d}"
+    return f"W06{station}1126031{hour % 10}{hour // 10:02d} 9   {sum(weights):4d}{len(weights):2d}" + axles
+
+
+def test_a_state_wide_file_puts_its_stations_side_by_side_and_flags_the_odd_one(tmp_path):
+    # two stations of one TMG 2001 file, 30 trucks each: a steer axle of 5 t 4 m ahead of a tandem 1.3 m apart,
+    # either 7.5 / 7.5 t (equal) or 9.0 / 6.5 t ((9.0 - 6.5) / 9.0 = 27.8 %: outside 5 % and over 10 %, spread
+    # 2500 kg). Station 000101 has 6 unequal of 30, 000102 has 24: shares 0.2 and 0.8, mean spreads 500 and 2000 kg
+    lines = []
+    for station, unequal in (("000101", 6), ("000102", 24)):
+        for k in range(30):
+            tandem = [9.0, 6.5] if k < unequal else [7.5, 7.5]
+            lines.append(tmg_2001(station, k % 24, [5.0, *tandem], [4.0, 1.3]))
+    root = project(tmp_path, path="observed/state.dat", fmt="tmg2001", position="all")
+    (root / "observed").mkdir()
+    (root / "observed" / "state.dat").write_text("\n".join(lines) + "\n")
+    assert main(args(root)) == 0
+    obs = metrics(root)["observed"]
+    assert obs["records"]["read"] == 60 and obs["groups"]["tandem"]["n_groups"] == 60
+    assert set(obs["stations"]) == {"06-000101", "06-000102"}
+    rows = {r["site"]: r for r in obs["sites"]}
+    assert list(rows) == ["state.dat:06-000102", "state.dat:06-000101"]  # the most unequal sharing first
+    a, b = rows["state.dat:06-000101"], rows["state.dat:06-000102"]
+    assert (a["group"], a["n_groups"], a["n_outside_5pct"], a["n_over_10pct"]) == ("tandem", 30, 6, 6)
+    assert (b["n_outside_5pct"], b["share_outside_5pct"], b["mean_spread_kg"], a["mean_spread_kg"]) == (
+        24, 0.8, 2000.0, 500.0,
+    )  # fmt: skip
+    # the pooled two-proportion z test: p = 30 / 60 = 0.5, z = 0.6 / sqrt(0.25 x 2 / 30) = 4.648, two-sided p-value
+    # erfc(z / sqrt 2) = 3.4e-6, under 0.05 / (2 x 2): both sites of the two that differ are flagged
+    z = 0.6 / (0.25 * 2 / 30) ** 0.5
+    assert a["p_outside_5pct"] == pytest.approx(math.erfc(z / 2**0.5), abs=1e-6) and a["p_outside_5pct"] < 0.0125
+    assert a["disagrees"] and b["disagrees"] and not a["few"]
+    # Wilson's 95 % interval of 6 of 30 holds 0.2 and lies within (0.08, 0.39) (its closed form: 0.0951-0.3857)
+    assert 0.09 < a["share_outside_5pct_low"] < 0.2 < a["share_outside_5pct_high"] < 0.39
+
+
+def test_the_report_sets_the_sites_side_by_side(tmp_path):
+    from pipeline.report.pages.observed import SITE_HEADER, site_table, sites_pages
+
+    row = {"group": "tandem", "site": "state.dat:06-000101", "n_groups": 30, "share_outside_5pct": 0.2,
+           "share_outside_5pct_low": 0.0951, "share_outside_5pct_high": 0.3857, "share_over_10pct": 0.2,
+           "share_over_10pct_low": 0.0951, "share_over_10pct_high": 0.3857, "mean_spread_kg": 500.0, "few": False,
+           "disagrees": True}  # fmt: skip
+    assert site_table([row]) == [["tandem", "state.dat:06-000101", "30", "20.0 ( 9.5- 38.6)", "20.0 ( 9.5- 38.6)",
+                                  "500", "disagrees"]]  # fmt: skip
+    assert len(SITE_HEADER) == len(site_table([row])[0])
+    observed = {"path": "observed/state.dat", "stations": {"06-000101": {}, "06-000102": {}}, "sites": [row]}
+    pages = sites_pages(observed)
+    assert len(pages) == 1 and pages[0].section == "Observed: the sites side by side"
+    words = " ".join(t.get_text() for t in pages[0].figure.texts)
+    assert "observed/state.dat holds 2 stations" in words and "1 site disagrees" in words
+    assert sites_pages({"path": "observed/site.csv"}) == []  # one site: no page

@@ -15,12 +15,13 @@ from matplotlib.figure import Figure
 from matplotlib.patches import Patch
 
 from bogie.fleet.constants import n_axles
+from bogie.weighings.sites import FAMILY_LEVEL, FEWEST, share_text
 from pipeline.report import text
 from pipeline.report.context import Context, Page
-from pipeline.report.layout import first_fit, new_page, text_block
+from pipeline.report.layout import first_fit, new_page, table_pages, text_block
 from pipeline.report.style import GROUP_LABEL, GROUPS, SOURCE_COLOR, SOURCE_LABEL, load_share_axes
 
-__all__ = ["SIZES", "SOURCES", "observed_page", "page", "sources"]
+__all__ = ["SIZES", "SITE_HEADER", "SOURCES", "observed_page", "page", "site_table", "sources"]
 
 #: the group sizes compared
 SIZES: tuple[str, ...] = GROUPS
@@ -136,10 +137,45 @@ def observed_page(groups: pd.DataFrame, simulated: pd.DataFrame, caption: Sequen
 FITS = ((0.5, 7.9), (0.5, 7.5), (0.53, 7.5), (0.53, 7.1), (0.56, 7.1), (0.58, 6.8))
 
 
+#: the columns of the sites' table, and their widths [table fraction]
+SITE_HEADER = ("group", "site", "groups", "outside 5 % [%]\n(95 % interval)", "over 10 % [%]\n(95 % interval)",
+               "mean spread\n[kg]", "flag")  # fmt: skip
+SITE_WIDTHS = (0.09, 0.26, 0.07, 0.18, 0.18, 0.11, 0.11)
+
+
+def site_table(rows: Sequence[Mapping]) -> list[list[str]]:
+    """The rows of the sites' table from metrics/observed.json's ``observed.sites`` (the library's
+    :func:`bogie.weighings.sites.compare_sites`, in its order: by size, the most unequal sharing first)."""
+    out = []
+    for r in rows:
+        shares = [share_text(r[s], r[f"{s}_low"], r[f"{s}_high"]).strip() for s in ("share_outside_5pct",
+                                                                                    "share_over_10pct")]  # fmt: skip
+        spread = "-" if r["mean_spread_kg"] is None else f"{r['mean_spread_kg']:.0f}"
+        flag = "disagrees" if r["disagrees"] else ("few" if r["few"] else "")
+        out.append([GROUP_LABEL.get(r["group"], r["group"]), r["site"], str(r["n_groups"]), *shares, spread, flag])
+    return out
+
+
+def sites_pages(observed: Mapping) -> list[Page]:
+    """The sites side by side (issue 46 Must 1): a file of several stations, each a site; none otherwise."""
+    rows = observed.get("sites") or []
+    if not rows:
+        return []
+    flagged = sorted({f"{r['site']} ({GROUP_LABEL.get(r['group'], r['group'])})" for r in rows if r["disagrees"]})
+    intro = text.render("sites.j2", m=observed, flagged=flagged, fewest=FEWEST, level=f"{FAMILY_LEVEL:g}")
+    title = "Observed: the sites side by side"
+    figures = table_pages(title, SITE_HEADER, site_table(rows), intro, SITE_WIDTHS)
+    return [Page(title if k == 0 else "", "", fig) for k, fig in enumerate(figures)]
+
+
 def page(ctx: Context) -> list[Page]:
-    """The observed page: from data/observed and metrics/observed.json."""
+    """The observed page: from data/observed and metrics/observed.json; then the sites side by side, if the survey
+    holds several."""
     inputs = ctx.inputs
     caption = text.render("observed.j2", m=inputs.observed_metrics, sizes=SIZES)
     tables = inputs.observed
     fig = observed_page(tables["groups.parquet"], tables["simulated.parquet"], caption)
-    return [Page("Observed against simulated", "observed", fig)]
+    return [
+        Page("Observed against simulated", "observed", fig),
+        *sites_pages(inputs.observed_metrics.get("observed") or {}),
+    ]
