@@ -140,6 +140,15 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
     obs = config.observed
     survey = observed_survey(path, obs.format, min_group_load_kg=obs.min_group_load, group_spacing_m=obs.group_spacing,
                              position=obs.position, resolution_kg=obs.resolution_kg)  # fmt: skip
+    if survey.stations:  # several sites pooled would read as one site: the site terms and covariance are one site's
+        names = sorted(survey.stations)
+        raise CalibrationError(
+            f"observed.path = {obs.path!r} holds {len(names)} stations ({', '.join(names[:3])}"
+            f"{', ...' if len(names) > 3 else ''}), each a WIM site; the calibration fits one site's survey (its site "
+            "roughness, bias and between-site covariance are one site's: docs/calibration.md, 'The site'), and a "
+            "network's calibration (issue 46 Must 2) is not yet in. Give one station's records, or set calibrate: "
+            "null to set the stations side by side on the report's observed pages without calibrating"
+        )
     try:
         return calibration.observed_groups(survey), survey.groups
     except CalibrationError as exc:
