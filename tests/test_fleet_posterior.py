@@ -113,10 +113,11 @@ def test_the_summaries_by_hand():
     tri = np.array([[0.9, 1.0, 1.1, 20.0], [1.1, 1.0, 0.9, 20.0]])
     tandem = np.array([[0.95, 1.05, 10.0], [1.05, 0.95, 10.0]])
     s = P.summaries({"tandem": tandem, "triaxle": tri}, {"tandem": np.array([3.0, 1.0]), "triaxle": np.ones(2)})
-    # tandem: mean share 0 = (3 x 0.95 + 1.05) / 4 = 0.975; its weighted sd sqrt(3/4 x 0.025^2 + 1/4 x 0.075^2);
-    # spread mean 10, sd 0. Tri-axle: mean shares 1.0, 1.0; sds 0.1, 0, 0.1; spread 20, sd 0
-    sd_t = math.sqrt(0.75 * 0.025**2 + 0.25 * 0.075**2)
-    np.testing.assert_allclose(s, [0.975, sd_t, 10.0, 0.0, 1.0, 1.0, 0.1, 0.0, 0.1, 20.0, 0.0], atol=1e-12)
+    # tandem: mean share 0 = (3 x 0.95 + 1.05) / 4 = 0.975; its weighted squares 3 x 0.025^2 + 0.075^2 = 0.0075 over
+    # V1 - V2 / V1 = 4 - 10 / 4 = 1.5 (reliability weights): sd sqrt(0.005); spread mean 10, sd 0. Tri-axle: mean
+    # shares 1.0, 1.0; squares 2 x 0.01 over 2 - 1: sds sqrt(0.02), 0, sqrt(0.02); spread 20, sd 0
+    sd_t, sd_3 = math.sqrt(0.005), math.sqrt(0.02)
+    np.testing.assert_allclose(s, [0.975, sd_t, 10.0, 0.0, 1.0, 1.0, sd_3, 0.0, sd_3, 20.0, 0.0], atol=1e-12)
 
 
 @pytest.fixture(scope="module")

@@ -113,21 +113,45 @@ def test_a_table_over_several_sites_puts_bogie_i_on_site_i_mod_k_and_the_others_
 
 def test_the_summaries_of_a_table_over_several_sites_take_each_sd_within_its_site():
     # two sites, tri-axle front shares 0.9, 1.1 on site 0 and 1.3, 1.5 on site 1 (equal weights): the mean is 1.2;
-    # about the whole mean the sd is sqrt((0.09 + 0.01 + 0.01 + 0.09) / 4) = 0.2236, within each site 0.1
+    # about the whole mean the squares sum to 0.09 + 0.01 + 0.01 + 0.09 = 0.2 over 4 - 1 degrees of freedom, within
+    # each site to 4 x 0.01 = 0.04 over 4 - 2 (each site's mean costs one): sd sqrt(0.02)
     q = np.array([[0.9, 1.0, 1.1, 5.0], [1.1, 1.0, 0.9, 5.0], [1.3, 0.9, 0.8, 9.0], [1.5, 0.8, 0.7, 11.0]])
     w = {"triaxle": np.ones(4)}
     whole = P.summaries({"triaxle": q}, w)
     pooled = P.summaries({"triaxle": q}, w, {"triaxle": np.array([0, 0, 1, 1])})
     assert whole[0] == pytest.approx(1.2, abs=1e-12) and pooled[0] == pytest.approx(1.2, abs=1e-12)  # means alike
-    assert whole[2] == pytest.approx(math.sqrt(0.05), abs=1e-12) and pooled[2] == pytest.approx(0.1, abs=1e-12)
-    # the spread: 5, 5 | 9, 11: within the sites sqrt((0 + 0 + 1 + 1) / 4) = 0.7071; about the mean 7.5,
-    # sqrt((6.25 + 6.25 + 2.25 + 12.25) / 4) = sqrt(6.75)
-    assert pooled[6] == pytest.approx(math.sqrt(0.5), abs=1e-12) and whole[6] == pytest.approx(
-        math.sqrt(6.75), abs=1e-12
+    assert whole[2] == pytest.approx(math.sqrt(0.2 / 3), abs=1e-12) and pooled[2] == pytest.approx(
+        math.sqrt(0.02), abs=1e-12
     )
+    # the spread: 5, 5 | 9, 11: within the sites (0 + 0 + 1 + 1) / 2 = 1; about the mean 7.5,
+    # (6.25 + 6.25 + 2.25 + 12.25) / 3 = 9
+    assert pooled[6] == pytest.approx(1.0, abs=1e-12) and whole[6] == pytest.approx(3.0, abs=1e-12)
     # one site: the same numbers as no sites at all
     same = P.summaries({"triaxle": q}, w, {"triaxle": np.zeros(4, dtype=int)})
     assert np.array_equal(same, whole)
+
+
+def test_the_pooled_sd_is_unbiased_whatever_the_sites_and_the_weights():
+    # 12 groups on K sites (site offsets of sd 3, far above the groups' sd 1), reliability weights uniform on
+    # [0.2, 1]: the variance pooled within sites has expectation 1 for K = 1, 3 and 6. Over 4,000 surveys its mean
+    # has a standard error under 0.012 (the variance of a variance of ~6-11 degrees of freedom, 2 / dof, over 4,000),
+    # so 0.04 is over three of them; the plug-in (dividing by the weights' sum) would read 11/12, 9/12, 6/12 low
+    rng = np.random.default_rng(7)
+    for k in (1, 3, 6):
+        sites = np.arange(12) % k
+        reads = []
+        for _ in range(4000):
+            x = rng.normal(0.0, 1.0, 12) + rng.normal(0.0, 3.0, k)[sites]
+            q = np.column_stack([1.0 + 0.01 * x, 1.0 - 0.01 * x, 10.0 + x])  # a tandem: shares, then the spread
+            reads.append(P.summaries({"tandem": q}, {"tandem": rng.uniform(0.2, 1.0, 12)}, {"tandem": sites})[3] ** 2)
+        assert np.mean(reads) == pytest.approx(1.0, abs=0.04), k
+
+
+def test_a_size_with_one_group_on_each_site_has_no_sd():
+    q = np.array([[0.9, 1.1, 5.0], [1.1, 0.9, 7.0]])
+    s = P.summaries({"tandem": q}, {"tandem": np.ones(2)}, {"tandem": np.array([0, 1])})
+    assert s[0] == pytest.approx(1.0, abs=1e-12) and s[2] == pytest.approx(6.0, abs=1e-12)
+    assert np.isnan(s[1]) and np.isnan(s[3])
 
 
 # ---- the site's bias ---------------------------------------------------------------------------------------------

@@ -77,8 +77,22 @@ SITE_BOGIES = 32
 SITE_POINTS = 8
 
 
-def _weighted_sd(x: np.ndarray, w: np.ndarray, mean: np.ndarray) -> np.ndarray:
-    return np.sqrt(np.maximum((w[:, None] * (x - mean) ** 2).sum(axis=0) / w.sum(), 0.0))
+def _weighted_sd(x: np.ndarray, w: np.ndarray, about: np.ndarray, sites: np.ndarray | None) -> np.ndarray:
+    """The weighted sd of ``x``'s columns about ``about`` (each row's own site's weighted mean), unbiased for
+    reliability weights: the squares' weighted sum over the sum, over the sites, of ``V1 - V2 / V1`` (``V1``, ``V2``
+    a site's sum of weights and of their squares: ``V1 (1 - 1 / n_eff)``, Kish's effective count ``n_eff``), so that
+    ``n`` equal weights on one site divide by ``n - 1`` and on ``K`` sites by ``n - K``: a survey's one site and a
+    table's ``K`` are read alike (docs/calibration.md, "A table over several sites"). NaN when no site has two
+    effective groups."""
+    labels = np.zeros(len(w), dtype=int) if sites is None else np.asarray(sites)
+    dof = 0.0
+    for k in np.unique(labels):
+        wk = w[labels == k]
+        v1 = float(wk.sum())
+        dof += v1 - float((wk * wk).sum()) / v1 if v1 > 0.0 else 0.0
+    if dof <= 0.0:
+        return np.full(x.shape[1], math.nan)
+    return np.sqrt(np.maximum((w[:, None] * (x - about) ** 2).sum(axis=0) / dof, 0.0))
 
 
 def summaries(
@@ -90,7 +104,8 @@ def summaries(
     last (the shares' mean is 1), the sd of each position's share (a tandem's first only: its two are equal), the
     spread's mean and sd. NaN where a size has no weight. With ``sites`` (per size, each row's WIM site: a table
     spread over several), each sd is about the row's own site's weighted mean (pooled within sites), so that it is
-    one site's sd, as a survey's is, not widened by the sites' differences."""
+    one site's sd, as a survey's is, not widened by the sites' differences. Each sd is unbiased for the weights
+    (:func:`_weighted_sd`: each site's mean costs its degree of freedom)."""
     out = []
     for size, q in quantities.items():
         n, w = q.shape[1] - 1, weights[size]
@@ -104,7 +119,7 @@ def summaries(
             for k in np.unique(sites[size]):
                 at = sites[size] == k
                 about[at] = (w[at, None] * q[at]).sum(axis=0) / w[at].sum() if w[at].sum() > 0.0 else 0.0
-        sd = _weighted_sd(q, w, about)
+        sd = _weighted_sd(q, w, about, None if sites is None else sites[size])
         out.extend([*mean[: n - 1], *sd[: (n if n > 2 else 1)], mean[n], sd[n]])
     return np.asarray(out, dtype=float)
 
