@@ -22,7 +22,9 @@ uniform on [0, 1] and each interval at ``confidence_level`` holds its truth with
 "Validating Bayesian inference algorithms with simulation-based calibration", arXiv:1804.06788). Printed per
 quantity: the truths, the ranks, the intervals that miss, and the count of misses against the binomial's 95 % range
 for that many surveys; then every interval over all quantities, and how many posteriors piled at a bound or did not
-converge. Each survey's rows go to ``--out`` (a csv) as they come, so a long run can be read before it ends.
+converge. Each survey's rows go to ``--out`` (a csv) as they come, so a long run can be read before it ends, with the
+log-likelihood at the truth and at the posterior's medians (a miss the likelihood makes, not the sampler, reads a
+truth far less likely than the medians) and the truth's largest residual in the likelihood's sd.
 
 Run alone: ``python -m bench.bench_sbc [--surveys N] [--skip K] [--first-seed S] [--vehicles V] [--out FILE]`` (2-3
 minutes per survey on 2 cores); ``--skip K`` continues a run of K surveys (the same truths and seeds as one run of
@@ -149,6 +151,8 @@ def main(argv: list[str] | None = None) -> None:
             post = posterior(problem, used, best, settings.posterior_draws, settings.seed, settings.confidence_level,
                              chains=settings.chains, sites=settings.sites, executor=mapper)  # fmt: skip
             seconds = time.perf_counter() - t0
+            at = likelihood_at(post.likelihood, [truth[q] for q in problem.fitted],
+                               [post.summary[q]["median"] for q in problem.fitted])  # fmt: skip
             for q in only:
                 s, draws = post.summary[q], post.draws[q].to_numpy()
                 rows.append({
@@ -156,14 +160,28 @@ def main(argv: list[str] | None = None) -> None:
                     "median": s["median"], "low": s["low"], "high": s["high"],
                     "inside": bool(s["low"] <= truth[q] <= s["high"]), "rank": float(np.mean(draws < truth[q])),
                     "piled": s["piled"], "rhat": s["rhat"], "ess_bulk": s["ess_bulk"], "converged": post.converged,
-                    "seconds": seconds,
+                    "seconds": seconds, **at,
                 })  # fmt: skip
             pd.DataFrame(rows).to_csv(args.out, index=False)
             missed = [r["quantity"] for r in rows if r["survey"] == i and not r["inside"]]
             print(f"survey {i} (seed {args.first_seed + i}) in {seconds:.0f} s, load {os.getloadavg()[0]:.2f}: "
-                  f"misses {missed or 'none'}; converged {post.converged}", flush=True)  # fmt: skip
+                  f"misses {missed or 'none'}; converged {post.converged}; log-likelihood at the truth "
+                  f"{at['loglike_truth']:.1f}, at the medians {at['loglike_median']:.1f}; the truth's largest residual "
+                  f"z {at['worst_z_truth']:+.1f} (summary {at['worst_summary']})", flush=True)  # fmt: skip
     summarise(pd.DataFrame(rows), settings.confidence_level)
     print(f"total {time.perf_counter() - start:.0f} s; load average {os.getloadavg()[0]:.2f} after")
+
+
+def likelihood_at(like, truth: list[float], medians: list[float]) -> dict[str, float]:
+    """Whether a miss is the likelihood's or the sampler's: the synthetic log-likelihood at the truth and at the
+    posterior's medians (a truth far less likely than the medians: the likelihood prefers another fleet, whatever the
+    sampler does), and the truth's largest residual in sd of the likelihood's covariance, with its summary's index
+    (:func:`bogie.fleet.calibration.posterior.summaries`' order)."""
+    t = np.asarray(truth, dtype=float)
+    z = (like.observed - like.simulated(t)) / np.sqrt(np.diag(np.linalg.inv(like.precision)))
+    k = int(np.nanargmax(np.abs(z)))
+    return {"loglike_truth": float(like(t)), "loglike_median": float(like(np.asarray(medians, dtype=float))),
+            "worst_z_truth": float(z[k]), "worst_summary": k}  # fmt: skip
 
 
 def summarise(rows: pd.DataFrame, level: float) -> None:
