@@ -68,7 +68,7 @@ from pipeline.portable import warn_if_unportable
 from pipeline.resources import worker_count
 from pipeline.sample import STUDIES
 from pipeline.schema import failed_runs, read_checksummed, runs_frame, table_from_rows
-from pipeline.workers import Feed, OtherNumericsError, check_numerics, local_executor
+from pipeline.workers import Feed, OtherNumericsError, check_numerics, dask_client, local_executor, scheduler_text
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -132,13 +132,11 @@ def _results(chunks: Sequence[Chunk], execution: ExecutionConfig) -> Iterator[Re
     if execution.backend != "dask":
         yield from _local_results(chunks, execution.n_jobs)
         return
-    from dask.distributed import Client
-
     tasks = (delayed(_task)(*_chunk_arguments(c)) for c in chunks)
     # joblib's dask backend uses every worker thread of the cluster: n_jobs does not apply; dask's nanny starts its
     # workers with OMP/MKL/OPENBLAS_NUM_THREADS=1. A chunk is seconds of work: joblib's automatic batching would
     # only coarsen the progress and the resumption
-    with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+    with dask_client(execution) as client, parallel_config(backend="dask", client=client):
         yield from Parallel(return_as="generator_unordered", batch_size=1)(tasks)
 
 
@@ -333,7 +331,7 @@ def _plan_line(
     return (
         f"simulate: {len(chunks)} chunks of up to {execution.chunk_size} samples: {len(done)} up to date, "
         f"{len(pending)} to run ({total} runs) on {execution.backend}"
-        + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {execution.dask_scheduler}")
+        + (f" with n_jobs={execution.n_jobs}" if execution.backend == "loky" else f" at {scheduler_text(execution)}")
     )
 
 

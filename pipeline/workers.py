@@ -21,6 +21,8 @@ from joblib.externals.loky import get_reusable_executor
 
 from pipeline.chunks import process_numerics
 from pipeline.config import ExecutionConfig
+from pipeline.config.errors import ConfigError
+from pipeline.config.rules import DASK_ADDRESS, DASK_ENV
 
 #: how often a loky worker looks whether the main process that started it still runs [s]
 MAIN_PROCESS_POLL = 1.0
@@ -88,6 +90,48 @@ def local_executor(max_workers: int) -> Any:
     )  # fmt: skip
 
 
+def dask_scheduler(execution: ExecutionConfig) -> dict[str, str]:
+    """Where the dask cluster of ``execution`` is, as ``dask.distributed.Client``'s keyword: ``{"address": ...}`` from
+    ``execution.dask_scheduler`` or, when that is null, from ``DASK_SCHEDULER_ADDRESS`` (dask's own variable,
+    :data:`~pipeline.config.rules.DASK_ENV`); ``{"scheduler_file": ...}`` for a path ending in ``.json`` (the file
+    ``dask scheduler --scheduler-file`` writes, relative to the working directory: the project root under DVC).
+
+    Raises
+    ------
+    ConfigError
+        Naming ``execution.dask_scheduler``: none given and the variable unset, or a scheduler file that is not
+        there (the scheduler not started yet, or another path)."""
+    given = execution.dask_scheduler
+    if given is None:
+        address = os.environ.get(DASK_ENV, "").strip()
+        if not address:
+            raise ConfigError("execution.dask_scheduler", f"execution.dask_scheduler = None: backend dask needs the "
+                              f"scheduler: {DASK_ADDRESS}, or {DASK_ENV} set")  # fmt: skip
+        return {"address": address}
+    if "://" in given:
+        return {"address": given}
+    if not os.path.isfile(given):
+        raise ConfigError("execution.dask_scheduler", f"execution.dask_scheduler = {given!r}: no such scheduler file "
+                          f"(looked for {os.path.abspath(given)}); start the scheduler with dask scheduler "
+                          f"--scheduler-file {given}, or give its address")  # fmt: skip
+    return {"scheduler_file": given}
+
+
+def dask_client(execution: ExecutionConfig) -> Any:
+    """A ``dask.distributed.Client`` of the cluster :func:`dask_scheduler` names."""
+    from dask.distributed import Client
+
+    return Client(**dask_scheduler(execution))
+
+
+def scheduler_text(execution: ExecutionConfig) -> str:
+    """Where the dask cluster is, in words, for the stages' lines."""
+    given = execution.dask_scheduler
+    if given is None:
+        return f"{os.environ.get(DASK_ENV, '').strip()} ({DASK_ENV})"
+    return given if "://" in given else f"the scheduler of {given}"
+
+
 def _numbered(func: Callable[[Any], Any], item: Any) -> tuple[Any, str]:
     """``func(item)`` and the numerics of the process that computed it (:func:`process_numerics`)."""
     return func(item), process_numerics()
@@ -100,10 +144,8 @@ def map_ordered(func: Callable[[Any], Any], items: Sequence[Any], execution: Exe
     numerics (:func:`check_numerics`, ``what`` naming the work in the message). The one executor of the stages that
     weigh besides simulate's chunks (the calibration's table)."""
     if execution.backend == "dask":
-        from dask.distributed import Client
-
         here = process_numerics()
-        with Client(execution.dask_scheduler) as client, parallel_config(backend="dask", client=client):
+        with dask_client(execution) as client, parallel_config(backend="dask", client=client):
             done = Parallel(batch_size=1)(delayed(_numbered)(func, item) for item in items)
         for index, (_, numerics) in enumerate(done):
             check_numerics(numerics, here, what, index)

@@ -19,6 +19,7 @@ most :data:`MAX_RUNS`, and the pipeline's peak memory, :data:`BYTES_PER_RUN` a r
 from __future__ import annotations
 
 import math
+import os
 from collections.abc import Callable, Iterator, Mapping, Sequence
 from typing import Any
 
@@ -133,12 +134,17 @@ def _wim_site(view: View) -> Iterator[RuleError]:
 
 
 #: an address of a dask scheduler, in words (execution.dask_scheduler)
-DASK_ADDRESS = 'an address such as "tcp://127.0.0.1:8786"'
+DASK_ADDRESS = 'an address such as "tcp://127.0.0.1:8786" or a scheduler file such as "scheduler.json"'
+#: dask's own environment variable of the scheduler's address (dask.config's ``scheduler-address``): used when
+#: execution.dask_scheduler is null
+DASK_ENV = "DASK_SCHEDULER_ADDRESS"
 
 
 def _dask_scheduler(view: View) -> Iterator[RuleError]:
     if view.get("execution.backend") == "dask" and view.get("execution.dask_scheduler") is None:
-        yield RuleError("execution.dask_scheduler", None, f"backend dask needs the scheduler's address: {DASK_ADDRESS}")
+        if not os.environ.get(DASK_ENV, "").strip():
+            yield RuleError("execution.dask_scheduler", None,
+                            f"backend dask needs the scheduler: {DASK_ADDRESS}, or {DASK_ENV} set")  # fmt: skip
 
 
 def _calibration_levels(view: View) -> Iterator[RuleError]:

@@ -204,10 +204,17 @@ DASK_SCHEMES: tuple[str, ...] = ("tcp", "tls", "ucx", "ws", "wss")
 def _address(value: str | None) -> str | None:
     if value is None:
         return None
+    if "://" not in value and value.endswith(".json") and value.strip() == value:  # a scheduler file (its path)
+        return value
     scheme, sep, host = value.partition("://")
     if not sep or scheme.lower() not in DASK_SCHEMES or not host.strip("/"):
         schemes = ", ".join(f"{s}://" for s in DASK_SCHEMES)
-        raise config_error("", value, f"must be null or {_ADDRESS}: a scheme of {schemes} and a host")
+        raise config_error(
+            "",
+            value,
+            f"must be null or {_ADDRESS}: a scheme of {schemes} and a host, or a path "
+            "ending in .json (the file dask scheduler --scheduler-file writes)",
+        )
     return value
 
 
@@ -224,7 +231,8 @@ class Execution(Strict):
     dask_scheduler: Annotated[str | None, AfterValidator(_address)] = Field(
         json_schema_extra={"expected": f"null or {_ADDRESS}"}
     )
-    """The dask scheduler's address (backend ``dask``), else None."""
+    """The dask scheduler's address, or the path of its scheduler file (``dask scheduler --scheduler-file``;
+    relative to the project root), for backend ``dask``; None: ``DASK_SCHEDULER_ADDRESS`` (dask's own variable)."""
 
 
 def observed_path(value: str | None) -> str | None:

@@ -61,7 +61,7 @@ LINES = {
     "triaxle_stage1 axles, 1.8 t",
     "protocol.wim.site_length_before_m": "protocol.wim.site_length_before_m = 100.0: must not exceed "
     "approach_length_m = 60 m",
-    "execution.dask_scheduler": "execution.dask_scheduler = None: backend dask needs the scheduler's address",
+    "execution.dask_scheduler": "execution.dask_scheduler = None: backend dask needs the scheduler: an address",
     "calibrate.fit.air_share": "calibrate.fit.air_share = [1.0, 0.0]: bounds inverted or equal: low must be below "
     "high [-]",
     "calibrate.fit.sensor_error_pct": "calibrate.fit.sensor_error_pct = [0.0, 99.0]: must lie within [0, 30] %",
