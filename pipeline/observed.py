@@ -24,6 +24,7 @@ from __future__ import annotations
 import argparse
 import hashlib
 import json
+import math
 import shutil
 import sys
 import tempfile
@@ -72,7 +73,8 @@ COLUMN_TYPES: dict[str, tuple[pa.DataType, str]] = {
 }  # fmt: skip
 
 
-#: decimals of the sites' shares [-], intervals [-], p-values [-] and mean spreads [kg] in metrics/observed.json
+#: decimals of the sites' shares [-], intervals [-] and mean spreads [kg], significant digits of their p-values [-],
+#: in metrics/observed.json
 SITE_DIGITS = 6
 
 
@@ -183,18 +185,24 @@ def observed_table(
 
 
 def site_rows(table: pd.DataFrame) -> list[dict[str, Any]]:
-    """:func:`bogie.weighings.sites.compare_sites`' table as JSON rows: the shares, their intervals, p-values and
-    mean spreads rounded to :data:`SITE_DIGITS` decimals (the shares' and p-values' last bits are the C library's
-    ``erfc`` and ``sqrt``: rounded, the metrics are the same bytes on every machine; a p-value under 5e-7 reads 0),
-    an undefined value None."""
+    """:func:`bogie.weighings.sites.compare_sites`' table as JSON rows: the shares, their intervals and mean spreads
+    rounded to :data:`SITE_DIGITS` decimals, the p-values to as many significant digits (their last bits are the C
+    library's ``erfc`` and ``sqrt``, scalar, and rounded they are the same bytes on every machine; a p-value of
+    3.4e-6 stays one), an undefined value None."""
     rows = []
     for row in table.to_dict("records"):
-        rows.append({
-            key: (json_number(float(v), SITE_DIGITS) if isinstance(v, float) else bool(v) if isinstance(v, np.bool_)
-                  else int(v) if isinstance(v, np.integer) else v)
-            for key, v in row.items()
-        })  # fmt: skip
+        rows.append({key: _site_value(key, v) for key, v in row.items()})
     return rows
+
+
+def _site_value(key: str, v: Any) -> Any:
+    """One value of :func:`site_rows`: a p-value to :data:`SITE_DIGITS` significant digits, any other float to as
+    many decimals, None for NaN; numpy's booleans and integers as Python's."""
+    if isinstance(v, float):
+        if key.startswith("p_"):
+            return None if math.isnan(v) else float(f"{v:.{SITE_DIGITS}g}")
+        return json_number(v, SITE_DIGITS)
+    return bool(v) if isinstance(v, np.bool_) else int(v) if isinstance(v, np.integer) else v
 
 
 def wim_model(wim: WimProtocol) -> dict[str, Any]:

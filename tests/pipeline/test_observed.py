@@ -395,10 +395,15 @@ def test_a_state_wide_file_puts_its_stations_side_by_side_and_flags_the_odd_one(
     # the pooled two-proportion z test: p = 30 / 60 = 0.5, z = 0.6 / sqrt(0.25 x 2 / 30) = 4.648, two-sided p-value
     # erfc(z / sqrt 2) = 3.4e-6, under 0.05 / (2 x 2): both sites of the two that differ are flagged
     z = 0.6 / (0.25 * 2 / 30) ** 0.5
-    assert a["p_outside_5pct"] == pytest.approx(math.erfc(z / 2**0.5), abs=1e-6) and a["p_outside_5pct"] < 0.0125
+    assert a["p_outside_5pct"] == pytest.approx(math.erfc(z / 2**0.5), rel=1e-5) and a["p_outside_5pct"] < 0.0125
     assert a["disagrees"] and b["disagrees"] and not a["few"]
     # Wilson's 95 % interval of 6 of 30 holds 0.2 and lies within (0.08, 0.39) (its closed form: 0.0951-0.3857)
     assert 0.09 < a["share_outside_5pct_low"] < 0.2 < a["share_outside_5pct_high"] < 0.39
+    # the observed page's words say the stations are pooled there and set side by side on the next page
+    from pipeline.report import text
+
+    words = " ".join(text.render("observed.j2", m=metrics(root), sizes=("tandem", "triaxle")))
+    assert "The file holds 2 stations, pooled here; the next page sets them side by side." in words
 
 
 def test_the_report_sets_the_sites_side_by_side(tmp_path):
