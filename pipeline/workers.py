@@ -22,7 +22,7 @@ from joblib.externals.loky import get_reusable_executor
 from pipeline.chunks import process_numerics
 from pipeline.config import ExecutionConfig
 from pipeline.config.errors import ConfigError
-from pipeline.config.rules import DASK_ADDRESS, DASK_ENV
+from pipeline.config.rules import DASK_ENV, DASK_MISSING
 
 #: how often a loky worker looks whether the main process that started it still runs [s]
 MAIN_PROCESS_POLL = 1.0
@@ -105,8 +105,7 @@ def dask_scheduler(execution: ExecutionConfig) -> dict[str, str]:
     if given is None:
         address = os.environ.get(DASK_ENV, "").strip()
         if not address:
-            raise ConfigError("execution.dask_scheduler", f"execution.dask_scheduler = None: backend dask needs the "
-                              f"scheduler: {DASK_ADDRESS}, or {DASK_ENV} set")  # fmt: skip
+            raise ConfigError("execution.dask_scheduler", f"execution.dask_scheduler = None: {DASK_MISSING}")
         return {"address": address}
     if "://" in given:
         return {"address": given}

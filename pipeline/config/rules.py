@@ -138,13 +138,14 @@ DASK_ADDRESS = 'an address such as "tcp://127.0.0.1:8786" or a scheduler file su
 #: dask's own environment variable of the scheduler's address (dask.config's ``scheduler-address``): used when
 #: execution.dask_scheduler is null
 DASK_ENV = "DASK_SCHEDULER_ADDRESS"
+#: what backend dask lacks when neither is given (validate's rule and the stages' client say it alike)
+DASK_MISSING = f"backend dask needs the scheduler: {DASK_ADDRESS}, or {DASK_ENV} set"
 
 
 def _dask_scheduler(view: View) -> Iterator[RuleError]:
     if view.get("execution.backend") == "dask" and view.get("execution.dask_scheduler") is None:
         if not os.environ.get(DASK_ENV, "").strip():
-            yield RuleError("execution.dask_scheduler", None,
-                            f"backend dask needs the scheduler: {DASK_ADDRESS}, or {DASK_ENV} set")  # fmt: skip
+            yield RuleError("execution.dask_scheduler", None, DASK_MISSING)
 
 
 def _calibration_levels(view: View) -> Iterator[RuleError]:

@@ -204,7 +204,9 @@ DASK_SCHEMES: tuple[str, ...] = ("tcp", "tls", "ucx", "ws", "wss")
 def _address(value: str | None) -> str | None:
     if value is None:
         return None
-    if "://" not in value and value.endswith(".json") and value.strip() == value:  # a scheduler file (its path)
+    # a scheduler file (its path): told from an address by its ending, .json, our convention (dask's docs name it
+    # scheduler.json; dask itself takes any name), so that "localhost:8786" without its scheme is still refused
+    if "://" not in value and value.endswith(".json") and value.strip() == value:
         return value
     scheme, sep, host = value.partition("://")
     if not sep or scheme.lower() not in DASK_SCHEMES or not host.strip("/"):

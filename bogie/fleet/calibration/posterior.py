@@ -79,7 +79,8 @@ SITE_POINTS = 8
 
 def _weighted_sd(x: np.ndarray, w: np.ndarray, about: np.ndarray, sites: np.ndarray | None) -> np.ndarray:
     """The weighted sd of ``x``'s columns about ``about`` (each row's own site's weighted mean), unbiased for
-    reliability weights: the squares' weighted sum over the sum, over the sites, of ``V1 - V2 / V1`` (``V1``, ``V2``
+    reliability weights (the GNU Scientific Library's ``gsl_stats_wvariance`` factor, per site): the squares'
+    weighted sum over the sum, over the sites, of ``V1 - V2 / V1`` (``V1``, ``V2``
     a site's sum of weights and of their squares: ``V1 (1 - 1 / n_eff)``, Kish's effective count ``n_eff``), so that
     ``n`` equal weights on one site divide by ``n - 1`` and on ``K`` sites by ``n - K``: a survey's one site and a
     table's ``K`` are read alike (docs/calibration.md, "A table over several sites"). NaN when no site has two
