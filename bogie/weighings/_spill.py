@@ -77,6 +77,22 @@ class GroupSpill:
         self.count += m
         self.sizes += np.bincount(np.asarray(n_axles, np.int64) - 2, minlength=2)[:2]
 
+    def mark(self) -> tuple:
+        """Where the spill stands (its groups, stations, sizes and each file's length): :meth:`rewind` goes back."""
+        for fh in self._files.values():
+            fh.flush()
+        return self.count, self.stations, self.sizes.copy(), {name: fh.tell() for name, fh in self._files.items()}
+
+    def rewind(self, mark: tuple) -> None:
+        """Forget every group appended since :meth:`mark` gave ``mark`` (a survey of several files reading one of them
+        again: :func:`bogie.weighings.survey.observed_survey`)."""
+        self.count, self.stations, sizes, at = mark
+        self.sizes = sizes.copy()
+        for name, fh in self._files.items():
+            fh.flush()
+            fh.seek(at[name])
+            fh.truncate()
+
     def blocks(self) -> Iterator[tuple[np.ndarray, np.ndarray, np.ndarray]]:
         """(size code, station code, loads (m, 3)) of :data:`SPILL_BLOCK` groups at a time, in file order."""
         return self._read("loads", 3)

@@ -1,4 +1,5 @@
-"""An observed survey from Python: read a file of weighings, split it into axle groups, filter, tabulate.
+"""An observed survey from Python: read a file of weighings (or several, each a site), split it into axle groups,
+filter, tabulate.
 
 :func:`observed_survey` is what ``bogie weighings`` prints; its statistics are those of
 :func:`bogie.weighings.stats.survey_statistics`, the function the pipeline's survey stage applies to the simulated
@@ -14,6 +15,16 @@ figures, so that memory does not depend on the file's length (``bogie weighings`
 each chunk's kept groups (every size, all columns) as they are made, after a ``start()`` before every pass over the
 file (the pipeline's observed stage writes its groups file so). ``write`` runs on the reader's second thread (one
 call at a time, in file order; :func:`bogie.weighings.readers.stream_weighings`), ``start`` on the calling thread.
+For a survey of several files the sink also needs ``next_file(site)``, called before each file's first pass: a
+``start()`` then discards only what was written since (that file's groups), not the files before it.
+
+**Several files** (issue 46): ``path`` a folder or a list of files, each a site
+(:func:`bogie.weighings._several.survey_files`). They are read one after another into one tally, so the statistics,
+road figures and positions are those of all their groups pooled, computed once, as if the files were one; a file
+read again (its resolution not its first chunk's) goes back to where the tally stood before it
+(:meth:`_Tally.begin_file`). ``stations`` then holds each site (``name``, or ``name:station`` for a file of
+stations), and ``files`` each file's records. Repeats are looked for within a file, not across files (another site
+weighs other passes).
 """
 
 from __future__ import annotations
@@ -30,6 +41,7 @@ import pandas as pd
 
 from bogie.group_names import GROUP_NAMES
 from bogie.weighings import _records
+from bogie.weighings._several import check_alike, file_entry, pooled_read, survey_files
 from bogie.weighings._spill import GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
 from bogie.weighings.groups import (
@@ -83,7 +95,13 @@ class ObservedSurvey:
         grouping rule, the legal loads and the damage exponents (``to_dict()["settings"]``).
     stations
         For a file of more than one station (a state-wide TMG file): per station, its vehicles and the statistics
-        of its tandems and tri-axles (``{station: {"vehicles": n, "groups": {size: {...}}}}``); empty otherwise.
+        of its tandems and tri-axles (``{station: {"vehicles": n, "groups": {size: {...}}}}``); for several files,
+        the same per site (a file, or a file's station: ``name:station``); empty otherwise.
+    n_kept
+        The groups kept by the filters, every size [-].
+    files
+        For several files: per file, its path, site, format and records (:func:`bogie.weighings._several.file_entry`);
+        None for one file.
     """
 
     groups: pd.DataFrame
@@ -94,14 +112,19 @@ class ObservedSurvey:
     settings: dict[str, Any] | None = None
     stations: dict[str, dict[str, Any]] | None = None
     n_kept: int | None = None
+    files: list[dict[str, Any]] | None = None
 
     def site_counts(self, name: str) -> dict[str, dict[str, dict[str, Any]]]:
         """Each site's counts for :func:`bogie.weighings.sites.compare_sites`: the file as the site ``name``, or, for a
-        file of several stations, each station as ``name:station``."""
+        file of several stations, each station as ``name:station``; for several files, each site by its own name
+        (``name`` unused)."""
         if self.stations:
+            prefix = "" if self.files else f"{name}:"
             return {
-                f"{name}:{station}": {size: {key: e.get(key, 0 if key.startswith("n_") else None) for key in COUNT_KEYS}
-                                      for size, e in entry["groups"].items()}
+                f"{prefix}{station}": {
+                    size: {key: e.get(key, 0 if key.startswith("n_") else None) for key in COUNT_KEYS}
+                    for size, e in entry["groups"].items()
+                }
                 for station, entry in self.stations.items()
             }  # fmt: skip
         return {name: counts_of_statistics(self.statistics)}
@@ -132,11 +155,12 @@ class ObservedSurvey:
             "groups": {size: stats.get(size, empty) for size in SURVEYED},
             "road": {size: road.get(size, {"n_groups": 0}) for size in SURVEYED},
             **({"stations": self.stations} if self.stations else {}),
+            **({"files": self.files} if self.files else {}),
         }
 
 
 def observed_survey(
-    path: str | Path,
+    path: str | Path | Sequence[str | Path],
     fmt: str,
     *,
     min_group_load_kg: float = 0.0,
@@ -156,7 +180,8 @@ def observed_survey(
     Parameters
     ----------
     path, fmt
-        The file and its format (:func:`bogie.weighings.readers.read_weighings`).
+        The file and its format (:func:`bogie.weighings.readers.read_weighings`); or a folder or a list of files, each
+        a site, of one format and one weight resolution (the module docstring, "Several files").
     min_group_load_kg, group_spacing_m
         Smallest group load kept [kg]; largest spacing of two axles of one group [m]. Keywords only (issue 42).
     position, speed_kmh
@@ -166,14 +191,12 @@ def observed_survey(
         limit within legal groups [kg]; None: Directive 96/53/EC's by each group's position and spacing
         (:func:`bogie.weighings.legal.group_limits`).
     resolution_kg
-        The file's weight resolution [kg]; None: detected from its loads
-        (:func:`bogie.weighings.readers.read_weighings`).
+        The file's weight resolution [kg]; None: detected (:func:`bogie.weighings.readers.read_weighings`).
     grouping
         ``spacing`` (axles at most ``group_spacing_m`` apart) or ``us-tandem`` (23 CFR 658.5's 40-96 in band;
         :func:`bogie.weighings.groups.axle_groups`).
     chunk_bytes
-        Bytes of records read at a time (:func:`bogie.weighings.readers.stream_weighings`): the file is streamed,
-        and the statistics do not depend on it.
+        Bytes of records read at a time (:func:`stream_weighings`): the statistics do not depend on it.
     keep_groups, sink
         True (default): ``groups`` holds every kept group in memory; False: they are spilled to disk, in bounded
         memory (the module docstring, "Memory"). None, or an object with ``start()`` and ``write(groups)`` given
@@ -182,19 +205,42 @@ def observed_survey(
     Raises
     ------
     ValueError
-        A file refused by the reader, or a parameter out of its range (named, with its unit).
+        A file refused by the reader, a parameter out of its range (named, with its unit), several files unalike.
     """
+    files = survey_files(path)
     legal = (None if legal_group_kg is None else dict(legal_group_kg), legal_axle_kg)
     tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink, legal)
     try:
-        # the groups held in memory: a file past MAX_FILE_BYTES refused; spilled to disk: any length
-        cap = _records.MAX_FILE_BYTES if keep_groups else None
-        read = stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap)
+        reads = _read_files(files, fmt, resolution_kg, tally, chunk_bytes)
+        read = reads[0] if len(files) == 1 else pooled_read(reads, [site for _, site in files])
         groups, statistics, road, stations = _survey_tables(tally, spacing_step_m(read.format))
     finally:
         tally.close()
-    settings = _settings(path, fmt, read, tally)
-    return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept)
+    settings = _settings([str(p) for p, _ in files] if len(files) > 1 else path, fmt, read, tally)
+    several = [file_entry(p, site, r) for (p, site), r in zip(files, reads)] if len(files) > 1 else None
+    return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept, several)
+
+
+def _read_files(files: list[tuple[Path, str | None]], fmt, resolution_kg, tally: _Tally, chunk_bytes) -> list:
+    """Stream each of ``files`` into ``tally``; their read results. Held in memory (``keep_groups``), the
+    files' records together must be at most :data:`bogie.weighings._records.MAX_FILE_BYTES`; spilled, any length."""
+    cap = _records.MAX_FILE_BYTES if tally.keep_groups else None
+    if cap is not None and len(files) > 1:
+        total = sum(_records.uncompressed_size(p) for p, _ in files)
+        if total > cap:
+            raise ValueError(
+                f"path: the {len(files)} files hold {total / 2**30:.2f} GiB of records, more than the "
+                f"{cap / 2**30:g} GiB read with the groups held in memory (bogie.weighings._records.MAX_FILE_BYTES): "
+                "read them with keep_groups=False (spilled to disk, any length)"
+            )
+    reads = []
+    for path, site in files:
+        if site is not None:
+            tally.begin_file(site)
+        reads.append(stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap))
+        if len(reads) > 1:  # a file unlike the first refused before the next is read
+            check_alike(reads, [s for _, s in files[: len(reads)]])
+    return reads
 
 
 def _survey_tables(tally: _Tally, step_m: float) -> tuple:
@@ -223,14 +269,14 @@ def _survey_tables(tally: _Tally, step_m: float) -> tuple:
     return groups, statistics, road, stations
 
 
-def _settings(path: str | Path, fmt: str, read: ReadResult, tally: _Tally) -> dict[str, Any]:
-    """What the survey was computed with (:attr:`ObservedSurvey.settings`): the file, its format, the resolution's
-    source, the filters and grouping rule of ``tally``, the legal loads and the damage exponents."""
+def _settings(path: str | Path | list[str], fmt: str, read: ReadResult, tally: _Tally) -> dict[str, Any]:
+    """What the survey was computed with (:attr:`ObservedSurvey.settings`): the file (or the files), its format, the
+    resolution's source, the filters and grouping rule of ``tally``, the legal loads and the damage exponents."""
     min_group_load_kg, position, speed_kmh = tally.filters
     group_spacing_m, grouping = tally.grouping
     legal_group_kg, legal_axle_kg = tally.legal
     return {
-        "file": str(path), "format": read.format, "format_asked": fmt,
+        "file": path if isinstance(path, list) else str(path), "format": read.format, "format_asked": fmt,
         "resolution": read.describe_resolution(),
         "filters": {"min_group_load_kg": min_group_load_kg, "position": position,
                     "speed_kmh": None if speed_kmh is None else [float(v) for v in speed_kmh]},
@@ -259,12 +305,35 @@ class _Tally:
         self.grouping = (group_spacing_m, grouping)
         self.keep_groups = keep_groups
         self.sink = sink
+        self.site: str | None = None  # the file being read, of a survey of several (None: one file)
+        self._mark: tuple | None = None
         self._reset()
+
+    def begin_file(self, site: str) -> None:
+        """Before the first pass over the next file of a survey of several (named ``site``): mark where the tally
+        stands, so that a pass over this file begins afresh from there, and tell the sink."""
+        self.site = site
+        spill = None if self.spill is None else self.spill.mark()
+        counts = {where: dict(by_size) for where, by_size in self.positions.items()}
+        self._mark = (counts, len(self.kept), self.n_kept, dict(self.station_names), Counter(self.vehicles_at), spill)
+        if self.sink is not None:
+            if not hasattr(self.sink, "next_file"):
+                raise ValueError("sink: a survey of several files needs a sink with next_file(site) as well as "
+                                 "start() and write(groups) (bogie.weighings.survey, 'The sink')")  # fmt: skip
+            self.sink.next_file(site)
 
     def start(self) -> None:
         """Begin afresh, before every pass over the file (the reader reads it again when its resolution was not the
-        first chunk's)."""
-        self._reset()
+        first chunk's): from nothing, or for a file of a survey of several from where :meth:`begin_file` marked."""
+        if self._mark is None:
+            self._reset()
+        else:
+            counts, n_groups, self.n_kept, names, vehicles_at, spill = self._mark
+            self.positions = {where: dict(by_size) for where, by_size in counts.items()}
+            del self.kept[n_groups:]
+            self.station_names, self.vehicles_at = dict(names), Counter(vehicles_at)
+            if spill is not None:
+                self.spill.rewind(spill)
         if self.sink is not None:
             self.sink.start()
 
@@ -301,8 +370,8 @@ class _Tally:
         self.n_kept += len(groups)
         if self.sink is not None:
             self.sink.write(groups)
-        if "station" in vehicles.columns:
-            names = vehicles["station"].to_numpy()
+        names = self._stations_of(vehicles)
+        if names is not None:
             self.vehicles_at.update(names.tolist())
             codes = np.array([self.station_names.setdefault(x, len(self.station_names)) for x in names], np.int32)
             line_code = pd.Series(codes, index=vehicles["line"].to_numpy())
@@ -311,6 +380,16 @@ class _Tally:
             self.kept.append(groups.reset_index(drop=True))
         else:
             _spill(self.spill, groups)
+
+    def _stations_of(self, vehicles: pd.DataFrame) -> np.ndarray | None:
+        """Each vehicle's station: the file's ``station`` column, or for a file of a survey of several its site
+        (``site:station`` where the file has the column); None for one file without the column."""
+        has = "station" in vehicles.columns
+        if self.site is None:
+            return vehicles["station"].to_numpy() if has else None
+        if not has:
+            return np.full(len(vehicles), self.site, dtype=object)
+        return np.array([f"{self.site}:{s}" for s in vehicles["station"].to_numpy()], dtype=object)
 
     def _all(self) -> pd.DataFrame:
         if not self.kept:

@@ -1,0 +1,110 @@
+"""A survey of several files (issue 46 Must 1): each file a site, read one after another into one tally.
+
+- **The files** (:func:`survey_files`): a list of files, or a folder (its regular files whose names do not begin with
+  a dot, in name order). Each is a site named by its file name, or by its path as given if two files share a name; a
+  file of a station column (a state-wide TMG file) is a site per station, ``name:station``.
+- **One read** (:func:`pooled_read`): the files' records, skips and dummy records summed; the first line numbers of
+  each skip reason named by their file (``a.mon:12``). The files must be of one format and one weight resolution:
+  a survey's statistics, and the simulated readings held against them, are at one resolution; the message says
+  which file differs and how to give them (``resolution_kg``, or separate surveys). The pooled resolution's
+  evidence (loads on, below and above a step) is the files' summed; its chance bound the product of the files'
+  (their log10s summed: the files are independent draws).
+"""
+
+from __future__ import annotations
+
+import dataclasses
+from collections import Counter
+from collections.abc import Sequence
+from pathlib import Path
+from typing import Any
+
+from bogie.weighings._records import EXAMPLES
+from bogie.weighings.readers import ReadResult
+
+__all__ = ["file_entry", "pooled_read", "survey_files"]
+
+
+def survey_files(path: str | Path | Sequence[str | Path]) -> list[tuple[Path, str | None]]:
+    """The files of a survey and their site names: ``[(file, None)]`` for one file, as before issue 46; each file of
+    a folder or a list of two or more, named by its file name (by its path as given where two names are alike).
+
+    Raises
+    ------
+    ValueError
+        A folder with no file, an empty list, a file given twice.
+    """
+    if isinstance(path, (str, Path)):
+        path = Path(path)
+        if not path.is_dir():
+            return [(path, None)]
+        files = sorted((p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")), key=lambda p: p.name)
+        if not files:
+            raise ValueError(
+                f"path: the folder {path} holds no file of records (names beginning with '.' are left out)"
+            )
+        return [(p, p.name) for p in files]
+    given = [str(p) for p in path]
+    if not given:
+        raise ValueError("path: an empty list of files; give one file, a folder, or a list of files")
+    twice = sorted({p for p in given if given.count(p) > 1})
+    if twice:
+        raise ValueError(f"path: a file given twice ({', '.join(twice)}); each file is one site")
+    if len(given) == 1:
+        return [(Path(given[0]), None)]
+    names = [Path(p).name for p in given]
+    return [(Path(p), n if names.count(n) == 1 else p) for p, n in zip(given, names)]
+
+
+def pooled_read(reads: Sequence[ReadResult], sites: Sequence[str]) -> ReadResult:
+    """One :class:`ReadResult` of the files' ``reads`` (in their order; ``sites`` their names): the module's "One
+    read". Raises a ValueError naming the files when their formats or weight resolutions differ."""
+    check_alike(reads, sites)
+    first = reads[0]
+    skipped: Counter = Counter()
+    bad_lines: dict[str, list[Any]] = {}
+    counted: Counter = Counter()
+    for read, site in zip(reads, sites):
+        skipped.update(read.skipped)
+        counted.update(read.counted)
+        for reason, lines in read.bad_lines.items():
+            bad_lines[reason] = (bad_lines.get(reason, []) + [f"{site}:{line}" for line in lines])[:EXAMPLES]
+    resolution = first.resolution
+    if resolution is not None and all(r.resolution is not None for r in reads):
+        resolution = dataclasses.replace(
+            resolution, **{key: sum(getattr(r.resolution, key) for r in reads)
+                           for key in ("n_loads", "on", "below", "above", "chance_log10")},
+        )  # fmt: skip
+    n = sum(r.n_read for r in reads)
+    return ReadResult(first.vehicles.iloc[:0], first.format, skipped, bad_lines, resolution, dict(counted), n)
+
+
+def check_alike(reads: Sequence[ReadResult], sites: Sequence[str]) -> None:
+    """Raise a ValueError if the files read so far (``reads``, named ``sites``) differ in format or weight step."""
+    first, name = reads[0], sites[0]
+    for read, site in zip(reads[1:], sites[1:]):
+        if read.format != first.format:
+            raise ValueError(
+                f"path: the files of one survey must be of one format: {name} is {first.format}, {site} is "
+                f"{read.format}; survey them apart (bogie weighings with several files compares their sites)"
+            )
+        if read.weight_step_kg != first.weight_step_kg:
+            raise ValueError(
+                f"path: the files of one survey must be read at one weight resolution: {name} at "
+                f"{_step(first.weight_step_kg)}, {site} at {_step(read.weight_step_kg)}; set resolution_kg to the "
+                "coarser for all of them, or survey them apart"
+            )
+
+
+def _step(step_kg: float | None) -> str:
+    return "none (loads not whole kilograms)" if step_kg is None else f"{step_kg:g} kg"
+
+
+def file_entry(path: Path, site: str, read: ReadResult) -> dict[str, Any]:
+    """What :attr:`bogie.weighings.survey.ObservedSurvey.files` says of one file: its path and site, the format read,
+    its records read and skipped (by reason), its weight resolution [kg]."""
+    return {
+        "path": str(path), "site": site, "format": read.format,
+        "records": {"read": read.n_read, "skipped": read.n_skipped, "weight_step_kg": read.weight_step_kg,
+                    "skipped_by_reason": dict(sorted(read.skipped.items()))},
+    }  # fmt: skip
