@@ -129,6 +129,18 @@ def _each(func: Callable[[Any], Any], part: Sequence[Any]) -> list:
     return [func(item) for item in part]
 
 
+#: why a survey of several sites is not calibrated (a folder of files, or a file of stations)
+ONE_SITE = (
+    "the calibration fits one site's survey (its site roughness, bias and between-site covariance are one site's: "
+    "docs/calibration.md, 'The site'), and a network's calibration (issue 46 Must 2) is not yet in: the calibration "
+    "is skipped; the report's observed pages set the sites side by side. Give one site's records to calibrate"
+)
+
+
+class SeveralSites(CalibrationError):
+    """A survey of several sites: the stage skips the calibration, saying why (:data:`ONE_SITE`)."""
+
+
 def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]:
     """The observed survey's laden tandem and tri-axle groups under ``observed:``'s filters, and its groups table.
 
@@ -142,12 +154,9 @@ def observed_groups(path: Path, config: Config) -> tuple[Observed, pd.DataFrame]
                              position=obs.position, resolution_kg=obs.resolution_kg)  # fmt: skip
     if survey.stations:  # several sites pooled would read as one site: the site terms and covariance are one site's
         names = sorted(survey.stations)
-        raise CalibrationError(
+        raise SeveralSites(
             f"observed.path = {obs.path!r} holds {len(names)} stations ({', '.join(names[:3])}"
-            f"{', ...' if len(names) > 3 else ''}), each a WIM site; the calibration fits one site's survey (its site "
-            "roughness, bias and between-site covariance are one site's: docs/calibration.md, 'The site'), and a "
-            "network's calibration (issue 46 Must 2) is not yet in. Give one station's records, or set calibrate: "
-            "null to set the stations side by side on the report's observed pages without calibrating"
+            f"{', ...' if len(names) > 3 else ''}), each a WIM site; {ONE_SITE}"
         )
     try:
         return calibration.observed_groups(survey), survey.groups
@@ -243,14 +252,20 @@ def _stage(args: argparse.Namespace, log: Callable[[str], None], own: Sequence[P
     with stage_inputs("calibrate"):
         config = load_config(args.params, note=lambda line: log(f"calibrate: {line}"))
         path = observed_file(config.observed, Path(args.params).resolve().parent)
-        if path is None or config.calibrate is None:
+        reason = None
+        if path is None or config.calibrate is None or path.is_dir():
             reason = (
-                "no observed survey given (observed.path is null in params.yaml; docs/observed.md)"
-                if path is None else "no calibrate section in params.yaml (calibrate: null)"
+                "no observed survey given (observed.path is null in params.yaml; docs/observed.md)" if path is None
+                else "no calibrate section in params.yaml (calibrate: null)" if config.calibrate is None
+                else f"observed.path = {config.observed.path!r} is a folder of files, each a site; {ONE_SITE}"
             )  # fmt: skip
-            metrics, tables = skipped_metrics(reason), {}
         else:
-            metrics, tables = run(config, path, log)
+            try:
+                metrics, tables = run(config, path, log)
+            except SeveralSites as exc:
+                reason = str(exc)
+        if reason is not None:
+            metrics, tables = skipped_metrics(reason), {}
     write_outputs(metrics, tables, args.out, args.metrics, own)
     if metrics["skipped"]:
         print(f"calibrate: skipped, {metrics['reason']}")

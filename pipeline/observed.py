@@ -36,6 +36,7 @@ from typing import Any
 import numpy as np
 import pandas as pd
 import pyarrow as pa
+import pyarrow.parquet as pq
 
 from bogie.fleet.weighing.observed import (
     INEQUALITY_COLUMNS,
@@ -104,19 +105,59 @@ class GroupsFile:
     """``groups.parquet`` filled chunk by chunk as the survey streams (:func:`bogie.weighings.survey.observed_survey`'s
     ``sink``): each chunk's kept groups with their inequality, one row group, written to a temporary directory, so
     that the stage never holds the whole group table (issue 41 Must 4); :func:`write_outputs` moves the sealed file
-    into place. The directory is removed when the object is collected."""
+    into place. The directory is removed when the object is collected.
+
+    A survey of several files (a folder, issue 46): each file's groups go to a part of their own, begun afresh when
+    the file is read again, and are copied into ``groups.parquet`` a row group at a time once the file is done
+    (:meth:`next_file`, :meth:`close`), in file order."""
 
     def __init__(self) -> None:
         self.dir = Path(tempfile.mkdtemp(prefix="bogie-observed-"))
         self._cleanup = weakref.finalize(self, shutil.rmtree, self.dir, True)
         self.path = self.dir / "groups.parquet"
+        self.part: Path | None = None  # the part of the file being read, of several
+        self.file: ChecksummedWriter | None = None
+
+    def next_file(self, site: str) -> None:
+        self._copy_part()
+        if self.file is None:
+            self.file = ChecksummedWriter(GROUPS_SCHEMA, self.path)
+        self.part = self.dir / "part.parquet"
+        self._part_writer = None
 
     def start(self) -> None:
-        self.file = ChecksummedWriter(GROUPS_SCHEMA, self.path)
+        if self.part is None:  # one file: written in place
+            self.file = ChecksummedWriter(GROUPS_SCHEMA, self.path)
+        else:
+            self._close_part()
+            self._part_writer = pq.ParquetWriter(str(self.part), GROUPS_SCHEMA)
 
     def write(self, groups: pd.DataFrame) -> None:
         if len(groups):
-            self.file.write(_table(with_inequality(groups), GROUPS_SCHEMA))
+            target = self.file if self.part is None else self._part_writer
+            target.write(_table(with_inequality(groups), GROUPS_SCHEMA))
+
+    def close(self) -> None:
+        """Seal ``groups.parquet`` (a survey of several files: after copying the last file's part into it)."""
+        self._copy_part()
+        self.file.close()
+
+    def _close_part(self) -> None:
+        if getattr(self, "_part_writer", None) is not None:
+            self._part_writer.close()
+            self._part_writer = None
+
+    def _copy_part(self) -> None:
+        """The part of the file just read into ``groups.parquet``, its row groups as they were."""
+        if self.part is None:
+            return
+        self._close_part()
+        if self.part.exists():
+            parts = pq.ParquetFile(self.part)
+            for k in range(parts.num_row_groups):
+                self.file.write(parts.read_row_group(k))
+            parts.close()
+            self.part.unlink()
 
 
 def _sha256(path: Path) -> str:
@@ -136,7 +177,7 @@ def observed_table(
     Parameters
     ----------
     path
-        The file of records, or None when no survey is given.
+        The file of records, a folder of files (each a site, pooled: issue 46), or None when no survey is given.
     observed
         The ``observed`` section (format, filters).
 
@@ -148,7 +189,9 @@ def observed_table(
     statistics : dict or None
         ``{"path", "format" (the one read), "format_asked" (``auto`` or that one), "sha256", "records": {"read",
         "skipped", "weight_step_kg", "resolution", "skipped_by_reason"}, "groups": {"tandem", "triaxle"}}``, or
-        None for no survey.
+        None for no survey; for several sites (a folder, a file of stations) also ``"stations"`` and ``"sites"``
+        (:func:`site_rows`), for a folder ``"files"`` (each file's path, site, format, records and sha256; the
+        folder's ``sha256`` is :func:`_folder_sha256`).
 
     Raises
     ------
@@ -173,15 +216,26 @@ def observed_table(
     # the file as params.yaml names it, relative to the project: the outputs must not depend on where the project is
     stats["settings"]["file"] = observed.path
     stats["records"]["skipped_by_reason"] = dict(sorted(survey.read.skipped.items()))
-    header = {
-        "path": observed.path, "format": survey.read.format, "format_asked": observed.format,
-        "sha256": _sha256(path),
-    }  # fmt: skip
-    groups.file.close()
-    if survey.stations:  # a file of several stations (a state-wide TMG file): each a site, side by side (issue 46)
+    groups.close()
+    if survey.files:  # a folder: each file a site (issue 46), named in the project's terms, with its own digest
+        for entry in stats["files"]:
+            name = Path(entry["path"]).name
+            entry.update(path=f"{observed.path}/{name}", sha256=_sha256(path / name))
+        digest = _folder_sha256(stats["files"])
+    else:
+        digest = _sha256(path)
+    header = {"path": observed.path, "format": survey.read.format, "format_asked": observed.format, "sha256": digest}
+    if survey.stations:  # several stations (a state-wide TMG file) or files: each a site, side by side (issue 46)
         table = compare_sites(survey.site_counts(PurePosixPath(observed.path).name))
         stats["sites"] = site_rows(table)
     return groups, {**header, **stats, "n_kept": survey.n_kept}
+
+
+def _folder_sha256(files: Sequence[Mapping[str, Any]]) -> str:
+    """A folder's digest: the SHA-256 of its files' names and digests, a line each in file order (``sha256sum``'s
+    lines), so that a renamed, changed, added or removed file changes it."""
+    lines = "".join(f"{entry['sha256']}  {PurePosixPath(entry['path']).name}\n" for entry in files)
+    return hashlib.sha256(lines.encode()).hexdigest()
 
 
 def site_rows(table: pd.DataFrame) -> list[dict[str, Any]]:

@@ -1,8 +1,9 @@
 """A survey of several files (issue 46 Must 1): each file a site, read one after another into one tally.
 
-- **The files** (:func:`survey_files`): a list of files, or a folder (its regular files whose names do not begin with
-  a dot, in name order). Each is a site named by its file name, or by its path as given if two files share a name; a
-  file of a station column (a state-wide TMG file) is a site per station, ``name:station``.
+- **The files** (:func:`bogie.weighings.files.survey_files`): a list of files, or a folder (its files, in name
+  order, but for hidden ones and DVC pointers; not its subfolders). Each is a site named by its file name, or by its
+  path as given if two files share a name; a file of a station column (a state-wide TMG file) is a site per
+  station, ``name:station``.
 - **One read** (:func:`pooled_read`): the files' records, skips and dummy records summed; the first line numbers of
   each skip reason named by their file (``a.mon:12``). The files must be of one format and one weight resolution:
   a survey's statistics, and the simulated readings held against them, are at one resolution; the message says
@@ -22,38 +23,7 @@ from typing import Any
 from bogie.weighings._records import EXAMPLES
 from bogie.weighings.readers import ReadResult
 
-__all__ = ["file_entry", "pooled_read", "survey_files"]
-
-
-def survey_files(path: str | Path | Sequence[str | Path]) -> list[tuple[Path, str | None]]:
-    """The files of a survey and their site names: ``[(file, None)]`` for one file, as before issue 46; each file of
-    a folder or a list of two or more, named by its file name (by its path as given where two names are alike).
-
-    Raises
-    ------
-    ValueError
-        A folder with no file, an empty list, a file given twice.
-    """
-    if isinstance(path, (str, Path)):
-        path = Path(path)
-        if not path.is_dir():
-            return [(path, None)]
-        files = sorted((p for p in path.iterdir() if p.is_file() and not p.name.startswith(".")), key=lambda p: p.name)
-        if not files:
-            raise ValueError(
-                f"path: the folder {path} holds no file of records (names beginning with '.' are left out)"
-            )
-        return [(p, p.name) for p in files]
-    given = [str(p) for p in path]
-    if not given:
-        raise ValueError("path: an empty list of files; give one file, a folder, or a list of files")
-    twice = sorted({p for p in given if given.count(p) > 1})
-    if twice:
-        raise ValueError(f"path: a file given twice ({', '.join(twice)}); each file is one site")
-    if len(given) == 1:
-        return [(Path(given[0]), None)]
-    names = [Path(p).name for p in given]
-    return [(Path(p), n if names.count(n) == 1 else p) for p, n in zip(given, names)]
+__all__ = ["check_alike", "file_entry", "pooled_read"]
 
 
 def pooled_read(reads: Sequence[ReadResult], sites: Sequence[str]) -> ReadResult:

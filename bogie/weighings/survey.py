@@ -19,7 +19,7 @@ For a survey of several files the sink also needs ``next_file(site)``, called be
 ``start()`` then discards only what was written since (that file's groups), not the files before it.
 
 **Several files** (issue 46): ``path`` a folder or a list of files, each a site
-(:func:`bogie.weighings._several.survey_files`). They are read one after another into one tally, so the statistics,
+(:func:`bogie.weighings.files.survey_files`). They are read one after another into one tally, so the statistics,
 road figures and positions are those of all their groups pooled, computed once, as if the files were one; a file
 read again (its resolution not its first chunk's) goes back to where the tally stood before it
 (:meth:`_Tally.begin_file`). ``stations`` then holds each site (``name``, or ``name:station`` for a file of
@@ -41,9 +41,10 @@ import pandas as pd
 
 from bogie.group_names import GROUP_NAMES
 from bogie.weighings import _records
-from bogie.weighings._several import check_alike, file_entry, pooled_read, survey_files
+from bogie.weighings._several import check_alike, file_entry, pooled_read
 from bogie.weighings._spill import GroupSpill, spilled_statistics, spilled_wear
 from bogie.weighings._stream import CHUNK_BYTES
+from bogie.weighings.files import survey_files
 from bogie.weighings.groups import (
     GROUP_SPACING_M,
     GROUP_TABLE_COLUMNS,

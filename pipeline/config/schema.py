@@ -250,7 +250,8 @@ def observed_path(value: str | None) -> str | None:
         raise config_error(
             "",
             value,
-            f"must be null or a file in {OBSERVED_DIR}/, relative to the project root (e.g. {OBSERVED_DIR}/site.mon): "
+            f"must be null or a file or folder in {OBSERVED_DIR}/, relative to the project root (e.g. "
+            f"{OBSERVED_DIR}/site.mon, or {OBSERVED_DIR}/network for a folder of files, each a site): "
             f"dvc.yaml tracks {OBSERVED_DIR}/, so only there does a changed file rerun the stage",
         )
     return "/".join(parts)
@@ -260,9 +261,10 @@ class _ObservedFile(Strict):
     """``observed:`` an observed survey (WIM or weighbridge records) to hold against the simulated fleet."""
 
     path: Annotated[str | None, AfterValidator(observed_path)] = Field(
-        json_schema_extra={"expected": f"null or a file in {OBSERVED_DIR}/, e.g. {OBSERVED_DIR}/site.mon"}
+        json_schema_extra={"expected": f"null or a file or folder in {OBSERVED_DIR}/, e.g. {OBSERVED_DIR}/site.mon"}
     )
-    """The file of records, a POSIX path relative to the project root inside ``observed/``; None: no survey given."""
+    """The file of records, or a folder of files each a site (issue 46), a POSIX path relative to the project root
+    inside ``observed/``; None: no survey given."""
     # a default, so that a params.yaml written before the key still reads: a WIM file, as it then had to be
     kind: Literal[tuple(SURVEY_PROTOCOLS)] = named("survey kind", default="wim")  # type: ignore[valid-type]
     """What the file's records are: ``wim`` (weigh-in-motion readings) or ``weighbridge`` (static weighings); a

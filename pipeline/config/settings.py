@@ -31,6 +31,7 @@ from bogie.fleet.constants import GROUP_AXLES, WIM_QUANTITIES
 from bogie.fleet.sampling.sample import SAMPLINGS
 from bogie.fleet.weighing.settings import StaticProtocol, WimProtocol
 from bogie.guarded_yaml import DuplicateKeyError, read_yaml_file
+from bogie.weighings.files import survey_files
 from bogie.weighings.readers import (
     MAX_FILE_BYTES,
     MEMORY_PER_BYTE,
@@ -247,7 +248,12 @@ def check_params(path: str | Path = "params.yaml", note: Callable[[str], None] |
         config = parse_config(raw, note)
     except ConfigError as exc:
         raise _with_observed_file(exc, raw, root) from None
-    observed_file(config.observed, root, held=config.calibrate is not None)
+    path = observed_file(config.observed, root, held=config.calibrate is not None)
+    if path is not None and path.is_dir() and config.calibrate is not None and note is not None:
+        note(
+            f"observed.path {config.observed.path} is a folder of {len(survey_files(path))} files, each a site: the "
+            "calibrate stage skips it (one site's survey is calibrated; a network's, issue 46 Must 2, is not yet in)"
+        )
     return config
 
 
@@ -265,6 +271,25 @@ def _with_observed_file(exc: ConfigError, raw: Mapping[str, Any], root: Path) ->
         errors = [*exc.errors, ("observed.path", str(missing))]
         return ConfigError(exc.key, "\n".join(line for _, line in errors), errors)
     return exc
+
+
+def _survey_folder(folder: Path, allowed: Path, given: str) -> Path:
+    """A folder of survey files, each a site (:func:`bogie.weighings.files.survey_files`: its files not named
+    ``.*`` nor ``*.dvc``); each must resolve inside ``allowed`` (the project's ``observed/``) and at least one be
+    there."""
+    try:
+        files = survey_files(folder)
+    except ValueError as exc:
+        raise ConfigError("observed.path", f"{given}: {str(exc).removeprefix('path: ')}") from None
+    for file, _ in files:
+        target = file.resolve()
+        if not target.is_relative_to(allowed):
+            raise ConfigError(
+                "observed.path",
+                f"{given}: its file {file.name} points to {target}, outside the project's {OBSERVED_DIR}/ ({allowed}; "
+                f"symlinks followed): copy the survey's records into {OBSERVED_DIR}/ (docs/observed.md)",
+            )
+    return folder
 
 
 def observed_file(observed: ObservedConfig, root: str | Path, held: bool = True) -> Path | None:
@@ -317,6 +342,8 @@ def _survey_file(name: str, root: str | Path, held: bool = True) -> Path:
             f"it must be a file in {OBSERVED_DIR}/ or a symlink to one there; copy the survey's records into "
             f"{OBSERVED_DIR}/ (docs/observed.md)",
         )
+    if target.is_dir():  # a survey of several sites (issue 46): the calibration does not hold it (it skips)
+        return _survey_folder(target, allowed, given)
     if not target.is_file():
         raise ConfigError(
             "observed.path",

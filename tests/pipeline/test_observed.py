@@ -424,15 +424,16 @@ def test_the_report_sets_the_sites_side_by_side(tmp_path):
     assert sites_pages({"path": "observed/site.csv"}) == []  # one site: no page
 
 
-def test_the_calibration_refuses_a_file_of_several_stations_naming_them(tmp_path):
-    # the calibration's site terms are one site's: pooling two stations would read as one site (issue 46 Must 2)
-    from bogie.fleet.calibration.problem import CalibrationError
-    from pipeline.calibrate import observed_groups
+def test_the_calibration_skips_a_file_of_several_stations_naming_them(tmp_path):
+    # the calibration's site terms are one site's: pooling two stations would read as one site (issue 46 Must 2); the
+    # stage catches SeveralSites and writes its skipped metrics with this reason (as for a folder of files:
+    # tests/pipeline/test_observed_folder.py)
+    from pipeline.calibrate import SeveralSites, observed_groups
 
     lines = [tmg_2001(station, k, [5.0, 7.5, 7.5], [4.0, 1.3]) for station in ("000101", "000102") for k in range(12)]
     path = tmp_path / "state.dat"
     path.write_text("\n".join(lines) + "\n")
     config = parse_config(raw_params(path="observed/state.dat", fmt="tmg2001", position="all"))
-    with pytest.raises(CalibrationError, match=r"holds 2 stations \(06-000101, 06-000102\), each a WIM site.*"
-                       r"set calibrate: null"):  # fmt: skip
+    with pytest.raises(SeveralSites, match=r"holds 2 stations \(06-000101, 06-000102\), each a WIM site.*"
+                       r"the calibration is skipped"):  # fmt: skip
         observed_groups(path, config)

@@ -175,4 +175,4 @@ def test_a_survey_path_the_schema_refuses_is_named_once_and_no_file_is_looked_fo
     with pytest.raises(ConfigError) as err:
         check_params(params)
     assert [key for key, _ in err.value.errors] == ["fleet.n_bogies", "observed.path"]
-    assert "a file in observed/" in str(err.value) and "no such file" not in str(err.value)
+    assert "a file or folder in observed/" in str(err.value) and "no such file" not in str(err.value)
