@@ -13,6 +13,13 @@ The process reports its own peak resident memory (``ru_maxrss``) and the wall ti
 start and the end. Nothing here passes or fails.
 
 Run alone: ``python -m bench.bench_weighings [--records 1000000 10000000]``.
+
+**A network's year** (issue 46 Musts 3 and 5): ``python -m bench.bench_weighings --network 10000000 --stations 20``
+writes the records as 20 station files (seeds 141, 142, ...) in a folder and reads the folder as one survey, each
+file a site (:func:`bogie.weighings.survey.observed_survey` of the folder, groups spilled, the pipeline's observed
+stage's way), in a fresh process; then the same bytes as one file, the peer, measured in the same run. It prints
+both times and peak memories, and their ratio (issue 46: bounded memory, at most 2 GiB, and time linear in the
+records).
 """
 
 from __future__ import annotations
@@ -52,6 +59,18 @@ print(json.dumps({"code": code, "seconds": seconds, "peak_kib": resource.getrusa
 """
 
 
+NETWORK_CHILD = r"""
+import json, resource, sys, time
+start = time.perf_counter()
+from bogie.weighings.survey import observed_survey
+survey = observed_survey(sys.argv[1], "mon", min_group_load_kg=15000.0, position="trailer", keep_groups=False)
+seconds = time.perf_counter() - start
+print(json.dumps({"seconds": seconds, "peak_kib": resource.getrusage(resource.RUSAGE_SELF).ru_maxrss,
+                  "read": survey.read.n_read, "skipped": survey.read.n_skipped, "sites": len(survey.stations),
+                  "groups": survey.n_kept}))
+"""
+
+
 def write_mon(path: Path, n: int) -> None:
     """``n`` synthetic MON records (``bench_readers.fleet``, seeds 41, 42, ... a million at a time)."""
     with open(path, "wb") as fh:
@@ -59,10 +78,11 @@ def write_mon(path: Path, n: int) -> None:
             fh.write(mon_bytes(fleet(min(PIECE, n - start), seed=41 + k)))
 
 
-def run_command(path: Path) -> dict:
-    """``bogie weighings PATH --json`` in a fresh process: its report and the wall time around it."""
+def run_command(path: Path, child: str = CHILD) -> dict:
+    """``bogie weighings PATH --json`` (or another ``child``) in a fresh process: its report and the wall time around
+    it."""
     start = time.perf_counter()
-    done = subprocess.run([sys.executable, "-c", CHILD, str(path)], cwd=ROOT, capture_output=True, text=True)
+    done = subprocess.run([sys.executable, "-c", child, str(path)], cwd=ROOT, capture_output=True, text=True)
     wall = time.perf_counter() - start
     if done.returncode != 0:
         return {"error": done.stderr.strip().splitlines()[-1:], "wall": wall}
@@ -72,8 +92,14 @@ def run_command(path: Path) -> dict:
 def main(argv: list[str] | None = None) -> None:
     parser = argparse.ArgumentParser(prog="python -m bench.bench_weighings", description=__doc__.splitlines()[0])
     parser.add_argument("--records", type=int, nargs="+", default=list(SIZES), help="sizes (default 10^6 10^7)")
+    parser.add_argument("--network", type=int, default=None, help="records of a network's year (e.g. 10000000)")
+    parser.add_argument("--stations", type=int, default=20, help="its station files (default 20)")
     args = parser.parse_args(argv)
     print(f"commit {_commit(ROOT)}; load average at start {_load()}")
+    if args.network is not None:
+        network(args.network, args.stations)
+        print(f"load average at end {_load()}")
+        return
     with tempfile.TemporaryDirectory(prefix="bench-weighings-") as tmp:
         tmp = Path(tmp)
         small = tmp / "small.mon"
@@ -116,6 +142,48 @@ def main(argv: list[str] | None = None) -> None:
               f"records; peak memory at most {max(r['peak_kib'] for _, _, r in rows) / 1024:,.0f} MiB (target "
               f"{TARGET_MIB:,})")  # fmt: skip
     print(f"load average at end {_load()}")
+
+
+def network(n: int, stations: int) -> None:
+    """A network's ``n`` records over ``stations`` files read as one survey, against the same bytes as one file."""
+    with tempfile.TemporaryDirectory(prefix="bench-network-") as tmp:
+        tmp = Path(tmp)
+        small = tmp / "small.mon"
+        write_mon(small, 2_000)
+        run_command(small, NETWORK_CHILD)  # the warm-up
+        folder = tmp / "network"
+        folder.mkdir()
+        per = n // stations
+        for k in range(stations):
+            with open(folder / f"station-{k:03d}.mon", "wb") as fh:
+                for start in range(0, per, PIECE):
+                    fh.write(mon_bytes(fleet(min(PIECE, per - start), seed=141 + k * 100 + start // PIECE)))
+        whole = tmp / "whole.mon"
+        with open(whole, "wb") as out:
+            for path in sorted(folder.iterdir()):
+                out.write(path.read_bytes())
+        size = whole.stat().st_size
+        rows = [("folder", run_command(folder, NETWORK_CHILD)), ("one file", run_command(whole, NETWORK_CHILD))]
+    print(
+        f"\n{stations * per:,} records over {stations} station files ({size / 1e6:,.0f} MB), read as one survey "
+        "(groups spilled, laden trailer groups kept):"
+    )
+    print(f"{'read as':>9} {'time':>8} {'per 10^6':>9} {'peak':>9} {'sites':>6} {'groups':>10}  read / skipped")
+    for name, r in rows:
+        if "error" in r:
+            print(f"{name:>9}  failed: {r['error']}")
+            continue
+        print(
+            f"{name:>9} {r['wall']:>6.1f} s {r['wall'] / (stations * per) * 1e6:>7.2f} s "
+            f"{r['peak_kib'] / 1024:>6,.0f} MiB {r['sites']:>6} {r['groups']:>10,}  {r['read']:,} / {r['skipped']:,}"
+        )
+    if all("wall" in r for _, r in rows):
+        (_, a), (_, b) = rows
+        same = (a["read"], a["skipped"], a["groups"]) == (b["read"], b["skipped"], b["groups"])
+        print(
+            f"the folder takes {a['wall'] / b['wall']:.2f} times the one file's time; the same records and groups: "
+            f"{same}; peak memory {max(a['peak_kib'], b['peak_kib']) / 1024:,.0f} MiB (issue 46: at most 2,048)"
+        )
 
 
 if __name__ == "__main__":
