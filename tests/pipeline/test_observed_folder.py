@@ -147,6 +147,7 @@ def test_the_report_says_the_folders_files_are_pooled_and_side_by_side(tmp_path)
     pages = sites_pages(m["observed"])
     page_words = " ".join(t.get_text() for t in pages[0].figure.texts)
     assert "observed/network holds 2 files, each a WIM site here, named by its file" in page_words
+    assert "sites in all). Per site and axle group:" in " ".join(page_words.split())
 
 
 @pytest.mark.parametrize("cut", [0, 9])
