@@ -68,7 +68,7 @@ from pipeline.portable import warn_if_unportable
 from pipeline.resources import worker_count
 from pipeline.sample import STUDIES
 from pipeline.schema import failed_runs, read_checksummed, runs_frame, table_from_rows
-from pipeline.workers import Feed, OtherNumericsError, check_numerics, dask_client, local_executor, scheduler_text
+from pipeline.workers import OtherNumericsError, check_numerics, dask_client, fed_results, scheduler_text
 
 
 def study_protocols(config: Config, study: str) -> Protocols:
@@ -160,21 +160,8 @@ def _local_results(chunks: Sequence[Chunk], n_jobs: int) -> Iterator[Result]:
         while todo:
             yield _task(*todo.popleft())
         return
-    feed = Feed(local_executor(n_jobs - 1), _task, todo)
-    try:
-        for _ in range(WORKER_CHUNKS * (n_jobs - 1)):
-            feed.send_next()
-        while True:
-            yield from feed.done_now()
-            arguments = feed.next_here()
-            if arguments is None:
-                break
-            yield _task(*arguments)
-        yield from feed.the_rest()
-    except BaseException:
-        # an error, an interrupt or a consumer gone: no chunk of the workers would be written, stop them now
-        feed.executor.shutdown(wait=False, kill_workers=True)
-        raise
+    # an error, an interrupt or a consumer gone stops the workers at once: no chunk of theirs would be written
+    yield from fed_results(_task, todo, n_jobs - 1, WORKER_CHUNKS)
 
 
 class Progress:

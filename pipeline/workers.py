@@ -13,7 +13,7 @@ import queue
 import threading
 import time
 from collections.abc import Callable, Iterator, Sequence
-from concurrent.futures import Future
+from concurrent.futures import BrokenExecutor, Future
 from typing import Any
 
 from joblib import Parallel, delayed, parallel_config
@@ -151,7 +151,40 @@ def map_ordered(func: Callable[[Any], Any], items: Sequence[Any], execution: Exe
         return [value for value, _ in done]
     if execution.n_jobs <= 1:
         return [func(item) for item in items]
-    return list(local_executor(execution.n_jobs).map(func, items))
+    done = dict(fed_results(_indexed, collections.deque((func, k, item) for k, item in enumerate(items)),
+                            execution.n_jobs - 1))  # fmt: skip
+    return [done[k] for k in range(len(items))]
+
+
+def _indexed(func: Callable[[Any], Any], index: int, item: Any) -> tuple[int, Any]:
+    """``(index, func(item))``: a result that arrives out of order with its place."""
+    return index, func(item)
+
+
+def fed_results(task: Callable[..., Any], todo: collections.deque, n_workers: int, held: int = 2) -> Iterator[Any]:
+    """``task(*arguments)`` of each of ``todo``, each as it is done, on ``n_workers`` local loky workers (each fed
+    ``held`` tasks at a time, :class:`Feed`, a lost worker's tasks given again) and this process, which runs the
+    tasks no worker has taken yet. On an error, an interrupt or a consumer gone, the workers are stopped at once."""
+    feed = Feed(lambda: local_executor(n_workers), task, todo)
+    try:
+        for _ in range(held * n_workers):
+            feed.send_next()
+        while True:
+            yield from feed.done_now()
+            arguments = feed.next_here()
+            if arguments is None:
+                break
+            yield task(*arguments)
+        yield from feed.the_rest()
+    except BaseException:
+        feed.executor.shutdown(wait=False, kill_workers=True)
+        raise
+
+
+#: how many times a task whose worker was lost (killed, out of memory, its machine gone) is given to a fresh pool
+#: before the stage stops with the error [-]: the task is a pure function of its arguments, so the retry computes the
+#: same bits (``tests/pipeline/test_lost_worker.py``)
+LOST_WORKER_RETRIES = 2
 
 
 class Feed:
@@ -161,41 +194,71 @@ class Feed:
     task from loky's result thread as soon as it returns one, so it never waits for the main process. The main
     process runs the tasks no worker has taken yet itself (:meth:`next_here`) and collects the workers' results as
     they are done (:meth:`done_now`, then :meth:`the_rest`).
+
+    **A lost worker** (issue 46 Must 4): loky then breaks the pool, and every task in the workers' hands fails with
+    :class:`concurrent.futures.BrokenExecutor`. Each such task is given again, to a fresh pool (``make_executor``
+    called again: loky's reusable executor replaces a broken one), up to :data:`LOST_WORKER_RETRIES` times; its result
+    is the one an undisturbed run gives. Any other error of a task stops the run as before.
     """
 
-    def __init__(self, executor: Any, task: Callable[..., Any], todo: collections.deque) -> None:
-        self.executor = executor
+    def __init__(self, make_executor: Callable[[], Any], task: Callable[..., Any], todo: collections.deque) -> None:
+        self.make_executor = make_executor
+        self.executor = make_executor()
         self.task = task
         self.todo = todo  # argument tuples not yet taken, by a worker or by the main process
-        self.returned: queue.SimpleQueue = queue.SimpleQueue()  # the workers' done futures, or a submission's error
+        # (arguments, done future or a submission's error) of each task the workers were given
+        self.returned: queue.SimpleQueue = queue.SimpleQueue()
         self.lock = threading.Lock()  # over todo and in_flight, shared with loky's result thread
         self.in_flight = 0
+        self.retried: collections.Counter = collections.Counter()  # by id of the arguments: the same tuple again
+        self.lost = 0  # tasks given again after their worker was lost
 
-    def send_next(self, done: Future | None = None) -> None:
-        """Queue ``done`` (a worker's finished task) and give the pool the next task, if one is left."""
-        if done is not None:
-            self.returned.put(done)
+    def send_next(self) -> None:
+        """Give the pool the next task, if one is left."""
         with self.lock:
             if not self.todo:
                 return
             arguments = self.todo.popleft()
             self.in_flight += 1
-        try:
-            self.executor.submit(self.task, *arguments).add_done_callback(self.send_next)
-        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread raises it
-            self.returned.put(exc)
+        self._submit(arguments)
 
-    def _take(self, item: Future | BaseException) -> Any:
+    def _submit(self, arguments: tuple) -> None:
+        try:
+            future = self.executor.submit(self.task, *arguments)
+        except BaseException as exc:  # noqa: BLE001 - a broken or shut down pool: the main thread sees it
+            self.returned.put((arguments, exc))
+            return
+        future.add_done_callback(lambda done: self._done(arguments, done))
+
+    def _done(self, arguments: tuple, done: Future) -> None:
+        """loky's result thread: queue a worker's finished task and give the pool the next one."""
+        self.returned.put((arguments, done))
+        self.send_next()
+
+    def _take(self, item: tuple[tuple, Future | BaseException]) -> tuple[bool, Any]:
+        """(True, the task's result), or (False, None) for a task given again after its worker was lost."""
+        arguments, outcome = item
         with self.lock:
             self.in_flight -= 1
-        if isinstance(item, BaseException):
-            raise item
-        return item.result()
+        error = outcome if isinstance(outcome, BaseException) else outcome.exception()
+        if error is None:
+            return True, outcome.result()
+        if not isinstance(error, BrokenExecutor) or self.retried[id(arguments)] >= LOST_WORKER_RETRIES:
+            raise error
+        self.retried[id(arguments)] += 1
+        self.lost += 1
+        self.executor = self.make_executor()  # a fresh pool for a broken one
+        with self.lock:
+            self.in_flight += 1
+        self._submit(arguments)
+        return False, None
 
     def done_now(self) -> Iterator[Any]:
         """The results the workers have returned so far."""
         while not self.returned.empty():
-            yield self._take(self.returned.get())
+            ok, result = self._take(self.returned.get())
+            if ok:
+                yield result
 
     def next_here(self) -> tuple | None:
         """The next task's arguments for the main process to run itself, or None when every task is taken."""
@@ -208,4 +271,6 @@ class Feed:
             with self.lock:
                 if not self.in_flight:
                     return
-            yield self._take(self.returned.get())
+            ok, result = self._take(self.returned.get())
+            if ok:
+                yield result
