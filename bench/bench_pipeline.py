@@ -28,12 +28,16 @@ from pipeline.sample import sample_fleet, sample_studies
 from pipeline.simulate import simulate_samples, study_protocols
 
 ROOT = Path(__file__).resolve().parent.parent
-#: bogies per chunk in every timed run [-]
-CHUNK_SIZE = 8
-#: fleet size of the 1- against 2-worker comparison [-]
-SPEEDUP_FLEET = 256
+#: bogies per chunk in every timed run [-]: the default execution.chunk_size
+CHUNK_SIZE = 64
+#: fleet size of the 1- against 2-worker comparison [-]: since a run costs about 1.5 ms (8 December 2026), 256 bogies
+#: took under a second and measured the start and the last chunk more than the runs
+SPEEDUP_FLEET = 4096
 #: fleet sizes of the growth series, 2 workers [-]
-GROWTH_FLEETS = (128, 256, 512)
+GROWTH_FLEETS = (1024, 2048, 4096)
+#: the study of issue 46 Must 5's worked estimate: bogies (each weighed static and by WIM) and cluster cores [-]
+NETWORK_BOGIES = 1_000_000
+CLUSTER_CORES = (32, 128)
 #: timed repeats of each setting; the best is kept (the machine is shared)
 REPEATS = 2
 
@@ -115,8 +119,13 @@ def machine() -> str:
     )
 
 
+def _load() -> str:
+    return ", ".join(f"{x:.2f}" for x in os.getloadavg())
+
+
 def main() -> None:
     print(machine())
+    print(f"load average at start {_load()}")
     start = time.perf_counter()
     run_fleet(4, 2)  # starts the loky workers and loads the compiled kernels in them
     startup = time.perf_counter() - start
@@ -130,7 +139,8 @@ def main() -> None:
     print("|---|---|---|")
     print(f"| 1 | {serial:.2f} | {n / serial:.1f} |")
     print(f"| 2 | {parallel:.2f} | {n / parallel:.1f} |")
-    print(f"speed-up 1 -> 2 workers: {serial / parallel:.2f} x (target >= 1.8 x)")
+    print(f"speed-up 1 -> 2 workers: {serial / parallel:.2f} x (target >= 1.8 x); runs per second per core: "
+          f"{n / serial:.0f} on 1 worker, {n / parallel / 2:.0f} on 2")  # fmt: skip
     assert serial_runs.equals(runs), "the runs differ between 1 and 2 workers"
     print(f"worker start-up (2 loky workers: imports and compiled-kernel load), paid once per stage: {startup:.1f} s")
     cost = run_costs()
@@ -155,6 +165,12 @@ def main() -> None:
         f"\ndefault `make repro` simulate stage: {n_default} runs, estimated {estimate / 60:.1f} min on 2 workers "
         f"(+ {startup:.0f} s start-up; mean run times above, parallelism {parallelism:.2f})"
     )
+    per_core = n / parallel / 2  # runs per second per core, two workers sharing a machine
+    for cores in CLUSTER_CORES:
+        hours = 2 * NETWORK_BOGIES / (per_core * cores) / 3600
+        print(f"{NETWORK_BOGIES:,} bogies x 2 protocols on {cores} cores at {per_core:.0f} runs/s a core: "
+              f"{60 * hours:.1f} min of simulate ({2 * NETWORK_BOGIES / per_core / 3600:.2f} core-hours)")  # fmt: skip
+    print(f"load average at end {_load()}")
 
 
 if __name__ == "__main__":
