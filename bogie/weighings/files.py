@@ -13,8 +13,9 @@ __all__ = ["survey_files"]
 
 
 def survey_files(path: str | Path | Sequence[str | Path]) -> list[tuple[Path, str | None]]:
-    """The files of a survey and their site names: ``[(file, None)]`` for one file, as before issue 46; each file of
-    a folder or a list of two or more, named by its file name (by its path as given where two names are alike).
+    """The files of a survey and their site names: ``[(file, None)]`` for one file (or a list of one), as before
+    issue 46; each file of a folder (even of one file) or a list of two or more, named by its file name (by its path
+    as given where two names are alike).
 
     Raises
     ------

@@ -213,12 +213,13 @@ def observed_survey(
     tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink, legal)
     try:
         reads = _read_files(files, fmt, resolution_kg, tally, chunk_bytes)
-        read = reads[0] if len(files) == 1 else pooled_read(reads, [site for _, site in files])
+        named = files[0][1] is not None  # a folder (even of one file) or a list: each file a site
+        read = pooled_read(reads, [site for _, site in files]) if named else reads[0]
         groups, statistics, road, stations = _survey_tables(tally, spacing_step_m(read.format))
     finally:
         tally.close()
-    settings = _settings([str(p) for p, _ in files] if len(files) > 1 else path, fmt, read, tally)
-    several = [file_entry(p, site, r) for (p, site), r in zip(files, reads)] if len(files) > 1 else None
+    settings = _settings([str(p) for p, _ in files] if named else path, fmt, read, tally)
+    several = [file_entry(p, site, r) for (p, site), r in zip(files, reads)] if named else None
     return ObservedSurvey(groups, statistics, read, tally.positions, road, settings, stations, tally.n_kept, several)
 
 

@@ -159,6 +159,23 @@ def test_a_folder_with_an_empty_or_bad_file_is_refused_with_the_readers_message(
     assert not (root / "metrics" / "observed.json").exists()  # nothing written
 
 
+def test_a_folder_of_one_file_is_that_files_survey_named_as_a_folder(tmp_path):
+    one, folder = single_project(tmp_path / "one"), project_of(tmp_path / "folder")
+    (folder / "observed" / "network").mkdir(parents=True)
+    (folder / "observed" / "network" / "site.csv").write_bytes(SITE.read_bytes())
+    assert main(args(one)) == 0 and main(args(folder)) == 0
+    a, b = metrics(one)["observed"], metrics(folder)["observed"]
+    assert a["groups"] == b["groups"] and a["road"] == b["road"]
+    assert [f["path"] for f in b["files"]] == ["observed/network/site.csv"] and "sites" not in b  # one site: no table
+    listing = f"{hashlib.sha256(SITE.read_bytes()).hexdigest()}  site.csv\n"
+    assert b["sha256"] == hashlib.sha256(listing.encode()).hexdigest()
+
+
+def project_of(tmp_path):
+    tmp_path.mkdir(parents=True, exist_ok=True)
+    return project(tmp_path, path="observed/network")
+
+
 def test_the_folders_path_in_params_is_kept_as_given(tmp_path):
     root = folder_project(tmp_path)
     assert main(args(root)) == 0
