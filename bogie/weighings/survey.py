@@ -199,9 +199,8 @@ def observed_survey(
     chunk_bytes
         Bytes of records read at a time (:func:`stream_weighings`): the statistics do not depend on it.
     keep_groups, sink
-        True (default): ``groups`` holds every kept group in memory; False: they are spilled to disk, in bounded
-        memory (the module docstring, "Memory"). None, or an object with ``start()`` and ``write(groups)`` given
-        each chunk's kept groups (the module docstring, "The sink").
+        True (default): ``groups`` holds every kept group in memory; False: spilled to disk, in bounded memory (the
+        module docstring, "Memory"). None, or a sink given each chunk's kept groups (the module docstring).
 
     Raises
     ------
@@ -209,11 +208,11 @@ def observed_survey(
         A file refused by the reader, a parameter out of its range (named, with its unit), several files unalike.
     """
     files = survey_files(path)
+    named = files[0][1] is not None  # a folder (even of one file) or a list: each file a site
     legal = (None if legal_group_kg is None else dict(legal_group_kg), legal_axle_kg)
     tally = _Tally(min_group_load_kg, group_spacing_m, position, speed_kmh, grouping, keep_groups, sink, legal)
     try:
         reads = _read_files(files, fmt, resolution_kg, tally, chunk_bytes)
-        named = files[0][1] is not None  # a folder (even of one file) or a list: each file a site
         read = pooled_read(reads, [site for _, site in files]) if named else reads[0]
         groups, statistics, road, stations = _survey_tables(tally, spacing_step_m(read.format))
     finally:
