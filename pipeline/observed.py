@@ -70,7 +70,7 @@ COLUMN_TYPES: dict[str, tuple[pa.DataType, str]] = {
     "n_axles": (pa.int64(), "-"), "group": (pa.string(), "-"), "position": (pa.string(), "-"),
     "group_load": (pa.float64(), "kg"), "axle_load_": (pa.float64(), "kg"), "spacing_": (pa.float64(), "m"),
     "load_share_": (pa.float64(), "-"), "spread_kg": (pa.float64(), "kg"), "spread_pct": (pa.float64(), "%"),
-    "outside_5pct": (pa.bool_(), "-"), "over_10pct": (pa.bool_(), "-"),
+    "outside_5pct": (pa.bool_(), "-"), "over_10pct": (pa.bool_(), "-"), "site": (pa.string(), "-"),
 }  # fmt: skip
 
 
@@ -89,8 +89,9 @@ def arrow_schema(columns: Sequence[str]) -> pa.Schema:
     return pa.schema(fields)
 
 
-#: data/observed/groups.parquet: the columns of bogie.weighings.groups.axle_groups, then the inequality quantities
-GROUPS_SCHEMA = arrow_schema((*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS))
+#: data/observed/groups.parquet: the columns of bogie.weighings.groups.axle_groups, then the inequality quantities,
+#: then each group's site (a survey of several sites: its file, its station, or ``file:station``; null otherwise)
+GROUPS_SCHEMA = arrow_schema((*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS, "site"))
 #: data/observed/simulated.parquet: one row per simulated reading kept
 #: (bogie.fleet.weighing.observed.SIMULATED_COLUMNS), loads in kg as the observed ones
 SIMULATED_SCHEMA = arrow_schema(SIMULATED_COLUMNS)
@@ -134,6 +135,8 @@ class GroupsFile:
 
     def write(self, groups: pd.DataFrame) -> None:
         if len(groups):
+            if "site" not in groups:  # one site: the column is null
+                groups = groups.assign(site=None)
             target = self.file if self.part is None else self._part_writer
             target.write(_table(with_inequality(groups), GROUPS_SCHEMA))
 

@@ -79,7 +79,8 @@ class ObservedSurvey:
     ----------
     groups
         One row per group (:func:`bogie.weighings.groups.axle_groups`), every size, after the filters (empty for a
-        survey streamed with ``keep_groups=False``).
+        survey streamed with ``keep_groups=False``); for a survey of sites (several files, a file of stations) also
+        ``site``, each group's site as :attr:`stations` names it.
     statistics
         :func:`bogie.weighings.stats.survey_statistics` of the tandems and tri-axles, one row each.
     read
@@ -369,14 +370,15 @@ class _Tally:
         min_group_load_kg, position, speed_kmh = self.filters
         groups = filter_groups(every, min_group_load_kg=min_group_load_kg, position=position, speed_kmh=speed_kmh)
         self.n_kept += len(groups)
-        if self.sink is not None:
-            self.sink.write(groups)
         names = self._stations_of(vehicles)
-        if names is not None:
+        if names is not None:  # each group's site (its file, its station, or both) and the site's code
             self.vehicles_at.update(names.tolist())
             codes = np.array([self.station_names.setdefault(x, len(self.station_names)) for x in names], np.int32)
-            line_code = pd.Series(codes, index=vehicles["line"].to_numpy())
-            groups = groups.assign(station_code=line_code.reindex(groups["line"].to_numpy()).to_numpy())
+            by_line = pd.DataFrame({"site": names, "code": codes}, index=vehicles["line"].to_numpy())
+            by_line = by_line.reindex(groups["line"].to_numpy())
+            groups = groups.assign(site=by_line["site"].to_numpy(), station_code=by_line["code"].to_numpy())
+        if self.sink is not None:
+            self.sink.write(groups.drop(columns="station_code", errors="ignore"))
         if self.keep_groups:
             self.kept.append(groups.reset_index(drop=True))
         else:
@@ -400,7 +402,8 @@ class _Tally:
         return self.kept[0]
 
     def groups(self) -> pd.DataFrame:
-        """The kept groups (every size; or only the surveyed sizes' compact columns), without the station codes."""
+        """The kept groups (every size; or only the surveyed sizes' compact columns), without the station codes (a
+        survey of several sites: with each group's ``site``)."""
         return self._all().drop(columns=["station_code"], errors="ignore")
 
     def surveyed(self) -> pd.DataFrame:

@@ -92,7 +92,7 @@ def test_the_tables_columns_are_the_librarys_each_with_a_type_and_a_unit():
     from bogie.fleet.weighing.observed import INEQUALITY_COLUMNS, SIMULATED_COLUMNS
     from bogie.weighings.groups import GROUP_TABLE_COLUMNS
 
-    assert tuple(GROUPS_SCHEMA.names) == (*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS)
+    assert tuple(GROUPS_SCHEMA.names) == (*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS, "site")
     assert tuple(SIMULATED_SCHEMA.names) == SIMULATED_COLUMNS
     units = {f.name: f.metadata[b"unit"].decode() for f in (*GROUPS_SCHEMA, *SIMULATED_SCHEMA)}
     assert units["speed"] == "m/s" and units["axle_load_3"] == "kg" and units["spacing_2"] == "m"
@@ -385,6 +385,8 @@ def test_a_state_wide_file_puts_its_stations_side_by_side_and_flags_the_odd_one(
     obs = metrics(root)["observed"]
     assert obs["records"]["read"] == 60 and obs["groups"]["tandem"]["n_groups"] == 60
     assert set(obs["stations"]) == {"06-000101", "06-000102"}
+    groups = pd.read_parquet(root / "data" / "observed" / "groups.parquet")  # each group's site as stations names it
+    assert groups["site"].value_counts().to_dict() == {"06-000101": 30, "06-000102": 30}
     rows = {r["site"]: r for r in obs["sites"]}
     assert list(rows) == ["state.dat:06-000102", "state.dat:06-000101"]  # the most unequal sharing first
     a, b = rows["state.dat:06-000101"], rows["state.dat:06-000102"]

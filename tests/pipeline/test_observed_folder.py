@@ -75,8 +75,17 @@ def test_a_folder_pooled_is_the_file_its_files_make_and_each_file_is_a_site(tmp_
     # the groups file: the single file's groups, in file order, each file's lines its own
     ga = pd.read_parquet(one / "data" / "observed" / "groups.parquet")
     gb = pd.read_parquet(several / "data" / "observed" / "groups.parquet")
-    assert ga.drop(columns="line").equals(gb.drop(columns="line"))
+    assert ga.drop(columns=["line", "site"]).equals(gb.drop(columns=["line", "site"]))
     assert (gb["line"].to_numpy() <= 1 + len(RECORDS)).all()
+    assert ga["site"].isna().all()  # one file: no site
+    # each group named by its file: a.csv's records are site.csv's first five (its lines 2-6), b.csv's the rest
+    assert (gb["site"] == "a.csv").sum() == len(gb) - (gb["site"] == "b.csv").sum() > 0
+    assert (
+        gb.loc[gb["site"] == "a.csv"]
+        .drop(columns=["line", "site"])
+        .reset_index(drop=True)
+        .equals(ga.loc[ga["line"] <= 1 + 5].drop(columns=["line", "site"]).reset_index(drop=True))
+    )
 
 
 def test_the_outputs_of_a_folder_are_byte_reproducible(tmp_path):
