@@ -163,3 +163,19 @@ def test_the_bad_lines_of_a_survey_of_several_files_are_named_by_their_file(tmp_
     assert pooled.read.n_read == 299 and pooled.read.n_skipped == 1
     assert "site1.mon:10" in pooled.read.summary()
     assert pooled.files[1]["records"]["skipped"] == 1 and pooled.files[0]["records"]["skipped"] == 0
+
+
+def test_bogie_weighings_reads_a_folder_pooled_and_sets_its_files_side_by_side(tmp_path, capsys):
+    import json
+
+    from bogie.cli import main
+
+    written(tmp_path, split(fleet(600, seed=5), [200, 400]))
+    assert main(["weighings", str(tmp_path / "network"), "--by-site", "--json"]) == 0
+    out = json.loads(capsys.readouterr().out)
+    assert out["records"]["read"] == 600 and [f["site"] for f in out["files"]] == [
+        "site0.mon",
+        "site1.mon",
+        "site2.mon",
+    ]
+    assert {row["site"] for row in out["sites"]} == {"site0.mon", "site1.mon", "site2.mon"}
