@@ -25,6 +25,7 @@ from bogie.fleet.sampling.sensitivity import sensitivity_design
 from bogie.params import INHIBITORS
 from pipeline.atomic import run_stage, stage_inputs
 from pipeline.config import Config, ConfigError, load_config
+from pipeline.config.view import BYTES_PER_RUN
 from pipeline.resources import available_memory
 from pipeline.schema import write_checksummed
 
@@ -98,10 +99,9 @@ def write_parquet_atomic(frame: pd.DataFrame, path: str | Path) -> None:
     write_checksummed(frame, path)
 
 
-#: memory one sampled bogie costs at the pipeline's peak: its sample row and design point (about 0.6 KiB with
-#: pandas' overheads) and, in the survey, its runs under every protocol with their derived columns (about 1 KiB
-#: each) [bytes]
-BYTES_PER_BOGIE = 3 * 1024
+#: memory one sampled bogie costs at the pipeline's peak [bytes]: validate's figure, declared once
+#: (:data:`pipeline.config.view.BYTES_PER_RUN`; bench/README.md, ``bench_stage_memory``, measures the stages)
+BYTES_PER_BOGIE = BYTES_PER_RUN
 
 
 def memory_needed(config: Config) -> int:

@@ -25,8 +25,9 @@ from pipeline.config.errors import locate
 MAX_RUNS = 10_000_000
 
 #: memory one sample row or run costs at a stage's peak: its sample row (about 0.6 KiB with pandas' overheads) and its
-#: runs' results with their derived columns (about 1 KiB each under each protocol) [bytes]; the same as
-#: pipeline.sample.BYTES_PER_BOGIE
+#: runs' results with their derived columns (about 1 KiB each under each protocol) [bytes]; pipeline.sample's
+#: BYTES_PER_BOGIE is this figure. Measured (bench/README.md, bench_stage_memory, 8 December 2026): the survey stage
+#: grows about 1.6 kB a fleet run, 3.3 kB a bogie of two protocols, about 12 % above this at 10^6 bogies
 BYTES_PER_RUN = 3 * 1024
 
 #: runs of each ablation bogie: the baseline, each inhibitor off, all off
