@@ -184,13 +184,14 @@ def _cmd_weighings(args: argparse.Namespace) -> int:
     if len(paths) > 1 and args.sharing_factors is not None:
         print("bogie: error: --sharing-factors: one file at a time (given several)", file=sys.stderr)
         return 2
-    if len(set(paths)) < len(paths):
-        print(f"bogie: error: path: a file given twice ({', '.join(sorted({p for p in paths if paths.count(p) > 1}))})",
-              file=sys.stderr)  # fmt: skip
+    from bogie.weighings.files import survey_files
+
+    try:  # a site is named by its file's name, or its path if two names are alike (one rule with observed_survey's)
+        names = [site or "site" for _, site in survey_files(paths)]
+    except ValueError as exc:  # a file given twice
+        print(f"bogie: error: {exc}", file=sys.stderr)
         return 2
     surveys, sites = {}, {}
-    names = [Path(p).name for p in paths]  # a site is named by its file's name, or its path if two names are alike
-    names = [n if names.count(n) == 1 else p for n, p in zip(names, paths)] if len(paths) > 1 else ["site"]
     for path, name in zip(paths, names):
         survey = _one_weighings(args, path)
         if survey is None:

@@ -90,7 +90,8 @@ def arrow_schema(columns: Sequence[str]) -> pa.Schema:
 
 
 #: data/observed/groups.parquet: the columns of bogie.weighings.groups.axle_groups, then the inequality quantities,
-#: then each group's site (a survey of several sites: its file, its station, or ``file:station``; null otherwise)
+#: then each group's site (its file in a folder, its station, or ``file:station``; null for one file without a
+#: station column)
 GROUPS_SCHEMA = arrow_schema((*GROUP_TABLE_COLUMNS, *INEQUALITY_COLUMNS, "site"))
 #: data/observed/simulated.parquet: one row per simulated reading kept
 #: (bogie.fleet.weighing.observed.SIMULATED_COLUMNS), loads in kg as the observed ones
@@ -118,13 +119,13 @@ class GroupsFile:
         self.path = self.dir / "groups.parquet"
         self.part: Path | None = None  # the part of the file being read, of several
         self.file: ChecksummedWriter | None = None
+        self._part_writer: pq.ParquetWriter | None = None
 
     def next_file(self, site: str) -> None:
         self._copy_part()
         if self.file is None:
             self.file = ChecksummedWriter(GROUPS_SCHEMA, self.path)
         self.part = self.dir / "part.parquet"
-        self._part_writer = None
 
     def start(self) -> None:
         if self.part is None:  # one file: written in place
@@ -146,7 +147,7 @@ class GroupsFile:
         self.file.close()
 
     def _close_part(self) -> None:
-        if getattr(self, "_part_writer", None) is not None:
+        if self._part_writer is not None:
             self._part_writer.close()
             self._part_writer = None
 

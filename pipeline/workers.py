@@ -183,7 +183,9 @@ def fed_results(task: Callable[..., Any], todo: collections.deque, n_workers: in
 
 #: how many times a task whose worker was lost (killed, out of memory, its machine gone) is given to a fresh pool
 #: before the stage stops with the error [-]: the task is a pure function of its arguments, so the retry computes the
-#: same bits (``tests/pipeline/test_lost_worker.py``)
+#: same bits (``tests/pipeline/test_lost_worker.py``). The number is a choice, not a sourced figure: enough for a
+#: worker killed once, few enough that a task that kills every worker it meets stops the stage soon (dask's own
+#: default, ``distributed.scheduler.allowed-failures``, is 3)
 LOST_WORKER_RETRIES = 2
 
 

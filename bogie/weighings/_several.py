@@ -27,9 +27,8 @@ __all__ = ["check_alike", "file_entry", "pooled_read"]
 
 
 def pooled_read(reads: Sequence[ReadResult], sites: Sequence[str]) -> ReadResult:
-    """One :class:`ReadResult` of the files' ``reads`` (in their order; ``sites`` their names): the module's "One
-    read". Raises a ValueError naming the files when their formats or weight resolutions differ."""
-    check_alike(reads, sites)
+    """One :class:`ReadResult` of the files' ``reads`` (in their order; ``sites`` their names), each already held to
+    the first by :func:`check_alike` as it was read: the module's "One read"."""
     first = reads[0]
     skipped: Counter = Counter()
     bad_lines: dict[str, list[Any]] = {}
@@ -49,21 +48,20 @@ def pooled_read(reads: Sequence[ReadResult], sites: Sequence[str]) -> ReadResult
     return ReadResult(first.vehicles.iloc[:0], first.format, skipped, bad_lines, resolution, dict(counted), n)
 
 
-def check_alike(reads: Sequence[ReadResult], sites: Sequence[str]) -> None:
-    """Raise a ValueError if the files read so far (``reads``, named ``sites``) differ in format or weight step."""
-    first, name = reads[0], sites[0]
-    for read, site in zip(reads[1:], sites[1:]):
-        if read.format != first.format:
-            raise ValueError(
-                f"path: the files of one survey must be of one format: {name} is {first.format}, {site} is "
-                f"{read.format}; survey them apart (bogie weighings with several files compares their sites)"
-            )
-        if read.weight_step_kg != first.weight_step_kg:
-            raise ValueError(
-                f"path: the files of one survey must be read at one weight resolution: {name} at "
-                f"{_step(first.weight_step_kg)}, {site} at {_step(read.weight_step_kg)}; set resolution_kg to the "
-                "coarser for all of them, or survey them apart"
-            )
+def check_alike(first: ReadResult, name: str, read: ReadResult, site: str) -> None:
+    """Raise a ValueError if the file just read (``read``, named ``site``) differs in format or weight step from the
+    survey's first (``first``, named ``name``)."""
+    if read.format != first.format:
+        raise ValueError(
+            f"path: the files of one survey must be of one format: {name} is {first.format}, {site} is "
+            f"{read.format}; survey them apart (bogie weighings with several files compares their sites)"
+        )
+    if read.weight_step_kg != first.weight_step_kg:
+        raise ValueError(
+            f"path: the files of one survey must be read at one weight resolution: {name} at "
+            f"{_step(first.weight_step_kg)}, {site} at {_step(read.weight_step_kg)}; set resolution_kg to the "
+            "coarser for all of them, or survey them apart"
+        )
 
 
 def _step(step_kg: float | None) -> str:

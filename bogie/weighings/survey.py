@@ -241,7 +241,7 @@ def _read_files(files: list[tuple[Path, str | None]], fmt, resolution_kg, tally:
             tally.begin_file(site)
         reads.append(stream_weighings(path, fmt, resolution_kg, tally.start, tally.consume, chunk_bytes, cap))
         if len(reads) > 1:  # a file unlike the first refused before the next is read
-            check_alike(reads, [s for _, s in files[: len(reads)]])
+            check_alike(reads[0], files[0][1], reads[-1], site)
     return reads
 
 

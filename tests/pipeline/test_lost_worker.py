@@ -11,7 +11,6 @@ import pytest
 from _dying import always_die, square_or_die
 from test_observed import ROOT
 
-from pipeline import workers
 from pipeline.config import load_config
 from pipeline.workers import fed_results, map_ordered
 
@@ -39,4 +38,3 @@ def test_a_worker_lost_every_time_stops_the_run_once_the_retries_are_spent():
     todo = collections.deque((v,) for v in range(6))
     with pytest.raises(BrokenExecutor):
         list(fed_results(always_die, todo, n_workers=1, held=1))
-    assert workers.LOST_WORKER_RETRIES == 2
